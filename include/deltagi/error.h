@@ -1,0 +1,24 @@
+// Errors raised for bad input: files, JSON, meshes, images, options.
+//
+// Following Falcor's three tiers: programmer mistakes are asserts, bad input raises InputError (carrying
+// where it was: a file and, for scene files, the JSON path of the key), and expected failures return codes.
+// The CLI turns an InputError into one line on stderr and a non-zero exit.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace deltagi {
+
+class InputError : public std::runtime_error {
+public:
+    // `where` names the file and/or key, e.g. "scenes/box.json: options.volume.resolution".
+    InputError(std::string where, const std::string& what)
+        : std::runtime_error(where.empty() ? what : where + ": " + what), where_(std::move(where)) {}
+    const std::string& where() const { return where_; }
+
+private:
+    std::string where_;
+};
+
+}  // namespace deltagi

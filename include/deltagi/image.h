@@ -1,0 +1,52 @@
+// Images: linear float pixels, row-major, top row first, channels interleaved.
+#pragma once
+
+#include <filesystem>
+#include <span>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace deltagi {
+
+class Image {
+public:
+    Image() = default;
+    Image(int width, int height, int channels, float fill = 0.0f)
+        : width_(width), height_(height), channels_(channels),
+          pixels_(static_cast<size_t>(width) * height * channels, fill) {}
+    Image(const Image&) = default;  // images are values; copies are explicit at call sites that need them
+    Image(Image&&) noexcept = default;
+    Image& operator=(const Image&) = default;
+    Image& operator=(Image&&) noexcept = default;
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    int channels() const { return channels_; }
+    bool empty() const { return pixels_.empty(); }
+    size_t pixelCount() const { return static_cast<size_t>(width_) * height_; }
+
+    float& at(int x, int y, int c) { return pixels_[(static_cast<size_t>(y) * width_ + x) * channels_ + c]; }
+    float at(int x, int y, int c) const { return pixels_[(static_cast<size_t>(y) * width_ + x) * channels_ + c]; }
+    // RGB of a pixel (a 1-channel image repeats its value).
+    glm::vec3 rgb(int x, int y) const;
+    void setRgb(int x, int y, glm::vec3 v);
+
+    std::span<float> data() { return pixels_; }
+    std::span<const float> data() const { return pixels_; }
+
+private:
+    int width_ = 0, height_ = 0, channels_ = 0;
+    std::vector<float> pixels_;
+};
+
+// Reads PNG/JPEG (decoded from sRGB to linear), EXR and HDR (linear), as 3 linear channels (grey images are
+// expanded, alpha is dropped). Throws InputError naming the file when it is missing or unreadable, and when a
+// pixel is NaN or infinite.
+Image readImage(const std::filesystem::path& path);
+
+// Writes by extension: .png (8-bit sRGB, clamped to [0,1]), .exr (32-bit float, linear), .hdr (linear).
+// NaN/Inf pixels are written as 0. Throws InputError when the file cannot be written.
+void writeImage(const Image& image, const std::filesystem::path& path);
+
+}  // namespace deltagi

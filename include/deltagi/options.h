@@ -1,0 +1,91 @@
+// Every tuning factor of the pipeline, with its default and unit. Read from the scene file's "options" object
+// (the JSON key of each field is given in its comment) and written back by sceneOptionsToJson().
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+namespace deltagi {
+
+// options.volume: the region covered by the four volumes (§3.4) and their resolution.
+struct VolumeOptions {
+    int resolution = 128;  // "resolution": voxels along each axis; a power of two in [4, 1024]
+    // "extent_scale": when no region is given, the region is this multiple of the virtual objects' bounding box
+    // (§3.4 uses twice the bounding box), made cubic around its centre.
+    float extentScale = 2.0f;
+    // "center" [x,y,z] and "size" (world units, edge length of the cube): an explicit region. Both or neither.
+    std::optional<glm::vec3> center;
+    std::optional<float> size;
+};
+
+// options.rsm: reflective shadow maps (Dachsbacher & Stamminger 2005), one per light.
+struct RsmOptions {
+    int resolution = 512;  // "resolution": texels along each side of one RSM face
+};
+
+// options.diffuse: the diffuse cones of §3.1, covering the hemisphere, cosine weighted.
+struct DiffuseConeOptions {
+    int count = 9;  // "count": number of cones in [1, 64]
+    // "aperture_deg": full apex angle of each cone in degrees; 0 derives it from the count so that the cones'
+    // solid angles add up to the hemisphere (half-angle = acos(1 - 1/count)).
+    float apertureDeg = 0.0f;
+};
+
+// options.specular: the one specular cone along the reflected view ray.
+struct SpecularConeOptions {
+    // "min_aperture_deg" / "max_aperture_deg": the aperture derived from a material's roughness is clamped to
+    // this range (degrees, full apex angle). A narrow cone costs many small steps (Table 1 of the paper).
+    float minApertureDeg = 2.0f;
+    float maxApertureDeg = 90.0f;
+};
+
+// options.shadow: the shadow cone towards each light (§3.5).
+struct ShadowConeOptions {
+    // "aperture_deg": full apex angle in degrees of the shadow cone of a light without a "radius".
+    // A light with a radius r at distance d uses 2*atan(r/d) instead.
+    float apertureDeg = 4.0f;
+};
+
+// options.trace: the cone marcher shared by all cones.
+struct TraceOptions {
+    // "step_scale": distance between samples as a fraction of the cone diameter there (dimensionless).
+    float stepScale = 0.5f;
+    // "start_offset": the cone starts this many voxels (level-0 voxel edges) away from the surface, along the
+    // normal and the cone axis, so that a surface does not occlude itself.
+    float startOffset = 1.5f;
+    // "max_occlusion": a cone stops once its accumulated occlusion reaches this value (in [0.5, 1]).
+    float maxOcclusion = 0.98f;
+    // "normal_weight": how strongly the stored average normal adapts the occlusion (§3.1): 0 = isotropic
+    // occlusion, 1 = a voxel whose normals all agree occludes a grazing cone in proportion to |cos|.
+    float normalWeight = 0.5f;
+    // "accumulation": "paper" uses the accumulator formulas of §3.1 as printed
+    //   light = light*occ + light_local*occ_local*(1-occ); occ = occ + occ_local*(1-occ),
+    // "front_to_back" uses the usual emission-absorption compositing light += light_local*occ_local*(1-occ).
+    std::string accumulation = "paper";
+};
+
+// options.render: the camera pass.
+struct RenderOptions {
+    // "samples_per_pixel": sub-pixel samples for the G-buffer; the object mask is their coverage, which
+    // anti-aliases the silhouette. 1, 4, 9 or 16 (a square grid).
+    int samplesPerPixel = 4;
+    // "indirect": trace the diffuse and specular cones (false: direct light and shadow cones only).
+    bool indirect = true;
+    // "double_shadow_fix": relight real surfaces with the object's shadow only where the real scene does not
+    // already shadow them (§3.2). false reproduces the double shadow of a single shared visibility volume.
+    bool doubleShadowFix = true;
+};
+
+struct Options {
+    VolumeOptions volume;
+    RsmOptions rsm;
+    DiffuseConeOptions diffuse;
+    SpecularConeOptions specular;
+    ShadowConeOptions shadow;
+    TraceOptions trace;
+    RenderOptions render;
+};
+
+}  // namespace deltagi

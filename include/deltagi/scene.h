@@ -1,0 +1,87 @@
+// The scene: camera, background photo, real reconstruction, virtual objects, lights and options.
+// Everything is in world space (right-handed; any unit, used consistently), already transformed.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "deltagi/image.h"
+#include "deltagi/math.h"
+#include "deltagi/options.h"
+
+namespace deltagi {
+
+// Lambertian diffuse + a normalized Phong glossy lobe around the mirror direction:
+//   f(wi, wo) = albedo/pi + specular * (n+2)/(2 pi) * max(0, dot(reflect(-wo), wi))^n,  n = phongExponent().
+// albedo + specular must not exceed 1 per channel (energy conservation).
+struct Material {
+    glm::vec3 albedo{0.8f};    // "albedo": diffuse reflectance in [0,1]
+    glm::vec3 specular{0.0f};  // "specular": glossy reflectance in [0,1]
+    float roughness = 1.0f;    // "roughness" in (0,1], or "glossiness" = 1 - roughness
+
+    // Phong exponent of the glossy lobe (the Blinn-Phong/Beckmann correspondence n = 2/r^2 - 2).
+    float phongExponent() const {
+        float r = std::max(roughness, 1e-3f);
+        return std::max(2.0f / (r * r) - 2.0f, 0.0f);
+    }
+};
+
+struct TriangleMesh {
+    std::string name;                    // for messages: file name or shape name, and sub-mesh
+    std::vector<glm::vec3> positions;    // world space
+    std::vector<glm::vec3> normals;      // world space, unit length, one per position
+    std::vector<glm::uvec3> triangles;   // indices into positions
+    Material material;
+
+    Bounds3f bounds() const;
+    size_t triangleCount() const { return triangles.size(); }
+};
+
+// A pinhole camera. Pixel (i, j) has its centre at (i + 0.5, j + 0.5), origin top-left, +y down. Camera space
+// follows OpenGL: +x right, +y up, looking down -z.
+struct Camera {
+    int width = 640;
+    int height = 480;
+    float fx = 0, fy = 0, cx = 0, cy = 0;  // pixels
+    glm::mat4 worldFromCamera{1.0f};
+
+    glm::vec3 position() const { return glm::vec3(worldFromCamera[3]); }
+    // Unnormalized world-space direction through image point (px, py) in pixels.
+    glm::vec3 rayDirection(float px, float py) const {
+        glm::vec3 cameraDir((px - cx) / fx, -(py - cy) / fy, -1.0f);
+        return glm::mat3(worldFromCamera) * cameraDir;
+    }
+};
+
+struct Light {
+    enum class Type { Point, Spot, Directional };
+    Type type = Type::Point;
+    glm::vec3 color{1.0f};        // "color": linear RGB, multiplied by intensity
+    float intensity = 1.0f;       // "intensity": radiant intensity (W/sr) of point and spot lights; irradiance
+                                  // (W/m^2, per world unit squared) of directional lights
+    glm::vec3 position{0.0f};     // "position": point and spot lights
+    glm::vec3 direction{0, -1, 0};  // "direction": unit, the direction light travels (spot and directional)
+    float innerAngleDeg = 30.0f;  // "inner_angle_deg": spot full intensity inside this half-angle
+    float outerAngleDeg = 45.0f;  // "outer_angle_deg": spot zero intensity outside this half-angle
+    float radius = 0.0f;          // "radius": size of the emitter in world units (softens shadow cones); 0 = use
+                                  // options.shadow.aperture_deg
+
+    glm::vec3 power() const { return color * intensity; }
+};
+
+struct Scene {
+    std::filesystem::path file;     // the scene file, for messages; relative paths were resolved against it
+    Camera camera;
+    std::optional<Image> background;  // the real camera image, linear RGB, camera-sized; absent: rendered
+    std::filesystem::path backgroundFile;
+    std::vector<TriangleMesh> real;      // "scene": the reconstruction of the real scene
+    std::vector<TriangleMesh> virtuals;  // "virtual": the virtual objects
+    std::vector<Light> lights;
+    Options options;
+};
+
+}  // namespace deltagi
