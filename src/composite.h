@@ -1,0 +1,26 @@
+// Stage 8: the differential composite (Debevec 1998). Real pixels: background + change, never below 0.
+// Virtual pixels: the shaded object, blended over the real pixel by its coverage (anti-aliased silhouette).
+#pragma once
+
+#include <span>
+
+#include "deltagi/image.h"
+#include "gbuffer.h"
+
+namespace deltagi {
+
+struct CompositeImages {
+    Image composite;   // RGB
+    Image objectMask;  // 1 channel, the coverage
+    Image delta;       // composite - background
+};
+
+// `objectRadiance` and `realChange` hold one value per pixel (row-major).
+CompositeImages differentialComposite(const Image& background, const GBuffer& gbuffer,
+                                      std::span<const glm::vec3> objectRadiance,
+                                      std::span<const glm::vec3> realChange);
+
+// Replaces NaN and infinite values by 0 (the last guard before an image leaves the pipeline).
+void sanitize(Image& image);
+
+}  // namespace deltagi

@@ -1,0 +1,163 @@
+#include "cone_trace.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace deltagi {
+
+ConeTraceSettings coneTraceSettings(const TraceOptions& o) {
+    return {o.stepScale, o.startOffset, o.maxOcclusion, o.normalWeight, o.accumulation == "paper"};
+}
+
+glm::vec3 coneOrigin(glm::vec3 position, glm::vec3 normal, glm::vec3 direction, const VolumeRegion& region,
+                     const ConeTraceSettings& settings) {
+    const float offset = settings.startOffset * region.voxelSize();
+    // Along the normal, so the start leaves the surface's voxel; a little along the axis for grazing cones.
+    return position + offset * normal + 0.5f * offset * direction;
+}
+
+namespace {
+
+// The part [tEnter, tExit] of a ray inside the volume [0, n]^3 (voxel units); empty when tEnter >= tExit.
+std::pair<float, float> clipToVolume(glm::vec3 origin, glm::vec3 dir, float n) {
+    float tEnter = 0.0f, tExit = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(dir[a]) < 1e-12f) {
+            if (origin[a] < 0.0f || origin[a] > n) return {1.0f, 0.0f};
+            continue;
+        }
+        float inv = 1.0f / dir[a];
+        float t0 = (0.0f - origin[a]) * inv, t1 = (n - origin[a]) * inv;
+        if (t0 > t1) std::swap(t0, t1);
+        tEnter = std::max(tEnter, t0);
+        tExit = std::min(tExit, t1);
+    }
+    return {tEnter, tExit};
+}
+
+// Occlusion of a visibility sample seen along `dir` (§3.1: "adapted with the normal stored in the volume"):
+// a voxel whose normals agree (|mean normal| near 1) occludes a cone in proportion to |cos| between them;
+// incoherent normals (|mean normal| near 0, e.g. both sides of a thin part) occlude isotropically.
+inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float normalWeight) {
+    const float occupancy = v.x;
+    if (occupancy <= 1e-6f) return 0.0f;
+    const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / occupancy;
+    const float coherence = std::min(glm::length(meanNormal), 1.0f);
+    const float projected = std::min(std::abs(glm::dot(meanNormal, dir)), coherence);
+    return std::min(occupancy * (1.0f - normalWeight * (coherence - projected)), 1.0f);
+}
+
+// Opacity of a sample that covers a segment as long as the cone is wide, applied over a shorter step.
+inline float stepOpacity(float alpha, float stepScale) {
+    return stepScale == 1.0f ? alpha : 1.0f - std::pow(std::max(1.0f - alpha, 0.0f), stepScale);
+}
+
+// Marches the cone through the volume and calls visit(voxelPos, level) at each step until visit returns false.
+template <typename Visit>
+void marchCone(const Cone& cone, const VolumeRegion& region, const ConeTraceSettings& settings, Visit&& visit) {
+    const float invVoxel = 1.0f / region.voxelSize();
+    const glm::vec3 origin = (cone.origin - region.origin) * invVoxel;
+    const float n = static_cast<float>(region.resolution);
+    auto [tEnter, tExit] = clipToVolume(origin, cone.direction, n);
+    tExit = std::min(tExit, cone.maxDistance * invVoxel);
+    const float maxLevel = std::log2(n);
+    for (float t = tEnter; t < tExit;) {
+        const float diameter = std::max(1.0f, 2.0f * t * cone.tanHalfAngle);
+        const float level = std::min(std::log2(diameter), maxLevel);
+        if (!visit(origin + t * cone.direction, level)) return;
+        t += diameter * settings.stepScale;
+    }
+}
+
+const VolumeRegion& regionOf(const MipVolume* a, const MipVolume* b) { return a ? a->region() : b->region(); }
+
+}  // namespace
+
+glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const VisibilityVolumes& visibility,
+                         const ConeTraceSettings& settings) {
+    glm::vec3 lightAcc(0.0f);
+    float occlusionAcc = 0.0f;
+    marchCone(cone, light.region(), settings, [&](glm::vec3 p, float level) {
+        float transmittance = 1.0f;
+        if (visibility.scene)
+            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->sample(p, level), cone.direction,
+                                                     settings.normalWeight);
+        if (visibility.object)
+            transmittance *= 1.0f - adaptedOcclusion(visibility.object->sample(p, level), cone.direction,
+                                                     settings.normalWeight);
+        const float occlusionLocal = stepOpacity(1.0f - transmittance, settings.stepScale);
+        if (occlusionLocal > 0.0f) {
+            const glm::vec4 l = light.sample(p, level);
+            const glm::vec3 lightLocal = l.w > 1e-6f ? glm::vec3(l) / l.w : glm::vec3(0.0f);
+            // §3.1: light_acc = light_acc*occ_acc + light_local*occ_local*(1 - occ_acc) (as printed), or the
+            // usual front-to-back compositing light_acc += light_local*occ_local*(1 - occ_acc).
+            const glm::vec3 contribution = lightLocal * (occlusionLocal * (1.0f - occlusionAcc));
+            lightAcc = settings.paperAccumulation ? lightAcc * occlusionAcc + contribution : lightAcc + contribution;
+            occlusionAcc += occlusionLocal * (1.0f - occlusionAcc);
+        }
+        return occlusionAcc < settings.maxOcclusion;
+    });
+    return lightAcc;
+}
+
+ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
+                                const ConeTraceSettings& settings) {
+    ShadowOcclusion acc;
+    if (!visibility.scene && !visibility.object) return acc;
+    marchCone(cone, regionOf(visibility.scene, visibility.object), settings, [&](glm::vec3 p, float level) {
+        float scene = 0.0f, object = 0.0f;
+        if (visibility.scene)
+            scene = stepOpacity(
+                adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, settings.normalWeight),
+                settings.stepScale);
+        if (visibility.object)
+            object = stepOpacity(
+                adaptedOcclusion(visibility.object->sample(p, level), cone.direction, settings.normalWeight),
+                settings.stepScale);
+        const float combined = scene + object - scene * object;  // exactly `scene` without objects
+        acc.scene += scene * (1.0f - acc.scene);
+        acc.object += object * (1.0f - acc.object);
+        acc.combined += combined * (1.0f - acc.combined);
+        // Stop once nothing more can change: the combined and the scene-only occlusion are both saturated.
+        return acc.combined < settings.maxOcclusion || acc.scene < settings.maxOcclusion;
+    });
+    return acc;
+}
+
+DiffuseConeSet makeDiffuseCones(int count, float apertureDeg) {
+    DiffuseConeSet set;
+    count = std::max(count, 1);
+    constexpr float kMaxHalfAngle = std::numbers::pi_v<float> / 3.0f;  // 60 degrees: wider cones over-blur
+    float halfAngle = apertureDeg > 0.0f ? 0.5f * glm::radians(apertureDeg)
+                                         : std::acos(1.0f - 1.0f / static_cast<float>(count));
+    set.tanHalfAngle = std::tan(std::min(halfAngle, kMaxHalfAngle));
+    if (count == 1) {
+        set.directions = {glm::vec3(0, 0, 1)};
+        set.weights = {1.0f};
+        return set;
+    }
+    // Equal-area bands in cos(theta), each cone at its band's centre; azimuths by the golden angle.
+    const float goldenAngle = std::numbers::pi_v<float> * (3.0f - std::sqrt(5.0f));
+    float weightSum = 0.0f;
+    for (int i = 0; i < count; ++i) {
+        const float cosTheta = 1.0f - (static_cast<float>(i) + 0.5f) / static_cast<float>(count);
+        const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
+        const float phi = goldenAngle * static_cast<float>(i);
+        set.directions.emplace_back(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta);
+        set.weights.push_back(cosTheta);  // equal solid angles: the cosine is the whole irradiance weight
+        weightSum += cosTheta;
+    }
+    for (float& w : set.weights) w /= weightSum;
+    return set;
+}
+
+float specularConeTanHalfAngle(float phongExponent, float minApertureDeg, float maxApertureDeg) {
+    // cos^n(theta) = 1/2 at the cone's edge.
+    float halfAngle = phongExponent > 0.0f ? std::acos(std::pow(0.5f, 1.0f / phongExponent))
+                                           : std::numbers::pi_v<float> / 2.0f;
+    halfAngle = std::clamp(halfAngle, 0.5f * glm::radians(minApertureDeg), 0.5f * glm::radians(maxApertureDeg));
+    return std::tan(std::min(halfAngle, glm::radians(89.0f)));
+}
+
+}  // namespace deltagi

@@ -1,0 +1,68 @@
+// Stage 6: voxel cone tracing (Crassin et al. 2011) with the accumulation of §3.1 of the paper.
+//
+// A cone is marched through the volumes; at each step it reads the mip level whose voxels are as wide as the
+// cone there, and the step is a fraction of that width (§3.1: "the step size ... is adjusted to the voxel
+// size"). Occlusion comes from the visibility volumes, adapted by their stored average normal; light from one
+// light volume. Shadow cones (§3.5) read only occlusion.
+#pragma once
+
+#include <limits>
+#include <vector>
+
+#include "deltagi/options.h"
+#include "volume.h"
+
+namespace deltagi {
+
+struct ConeTraceSettings {
+    float stepScale = 0.5f;
+    float startOffset = 1.5f;  // level-0 voxels
+    float maxOcclusion = 0.98f;
+    float normalWeight = 0.5f;
+    bool paperAccumulation = true;
+};
+ConeTraceSettings coneTraceSettings(const TraceOptions& options);
+
+// The visibility volumes a cone is occluded by; either may be null (absent).
+struct VisibilityVolumes {
+    const MipVolume* scene = nullptr;
+    const MipVolume* object = nullptr;
+};
+
+struct Cone {
+    glm::vec3 origin{0.0f};     // world space, already offset from the surface (coneOrigin)
+    glm::vec3 direction{0, 0, 1};  // unit
+    float tanHalfAngle = 0.5f;
+    float maxDistance = std::numeric_limits<float>::infinity();  // world units from origin
+};
+
+// Moves a surface point off its surface along the normal and the cone axis by `startOffset` voxels, so that
+// the surface's own voxel does not occlude its cones.
+glm::vec3 coneOrigin(glm::vec3 position, glm::vec3 normal, glm::vec3 direction, const VolumeRegion& region,
+                     const ConeTraceSettings& settings);
+
+// Light arriving along the cone: radiance from `light`, occluded by both visibility volumes.
+glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const VisibilityVolumes& visibility,
+                         const ConeTraceSettings& settings);
+
+// Occlusion accumulated along a shadow cone, by the scene volume alone, the object volume alone and both.
+struct ShadowOcclusion {
+    float scene = 0.0f, object = 0.0f, combined = 0.0f;
+};
+ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
+                                const ConeTraceSettings& settings);
+
+// Directions of the diffuse cones around +z (a spiral of equal-solid-angle cells over the hemisphere), their
+// cosine weights (summing to 1) and the half-angle that makes their solid angles cover the hemisphere.
+struct DiffuseConeSet {
+    std::vector<glm::vec3> directions;  // tangent space, z = normal
+    std::vector<float> weights;
+    float tanHalfAngle = 0.0f;
+};
+DiffuseConeSet makeDiffuseCones(int count, float apertureDeg);
+
+// Half-angle tangent of the specular cone for a Phong exponent: the lobe falls to half its peak at the cone's
+// edge; clamped to the options' aperture range.
+float specularConeTanHalfAngle(float phongExponent, float minApertureDeg, float maxApertureDeg);
+
+}  // namespace deltagi

@@ -1,0 +1,69 @@
+#include "inject.h"
+
+#include <algorithm>
+#include <numbers>
+
+#include "parallel.h"
+
+namespace deltagi {
+
+Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
+                  std::span<const VoxelGeometry* const> geometry) {
+    const int n = region.resolution;
+    const float invVoxel = 1.0f / region.voxelSize();
+
+    // All texels of all lights, in light and texel order, each with its voxel.
+    struct Splat {
+        const RsmTexel* texel;
+        uint32_t voxel;
+        int z;
+    };
+    std::vector<Splat> splats;
+    for (const ReflectiveShadowMap& rsm : rsms) {
+        for (const RsmTexel& t : rsm.texels) {
+            glm::ivec3 v = glm::clamp(glm::ivec3(glm::floor((t.position - region.origin) * invVoxel)),
+                                      glm::ivec3(0), glm::ivec3(n - 1));
+            splats.push_back({&t, static_cast<uint32_t>((static_cast<size_t>(v.z) * n + v.y) * n + v.x), v.z});
+        }
+    }
+    const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
+    const SlabBins bins = binBySlab(splats.size(), slabCount, [&](size_t i) {
+        int s = splats[i].z / kSlabThickness;
+        return std::pair{s, s};
+    });
+
+    // Per voxel: reflected flux (rgb) and the texels' footprint area.
+    Grid3 accum(n);
+    parallelFor(0, slabCount, 1, [&](int64_t s) {
+        for (uint32_t i : bins.slab(s)) {
+            const Splat& sp = splats[i];
+            accum[sp.voxel] += glm::vec4(sp.texel->flux, sp.texel->area);
+        }
+    });
+
+    Grid3 light(n);
+    parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) {
+        float occupancy = 0.0f, area = 0.0f;
+        for (const VoxelGeometry* g : geometry) {
+            occupancy = std::max(occupancy, g->visibility[i].x);
+            area += g->area[i];
+        }
+        const glm::vec4 a = accum[i];
+        if (a.w > 0.0f) occupancy = 1.0f;
+        const float denominator = std::numbers::pi_v<float> * std::max(area, a.w);
+        const glm::vec3 radiance = denominator > 0.0f ? glm::vec3(a) / denominator : glm::vec3(0.0f);
+        light[i] = glm::vec4(radiance * occupancy, occupancy);
+    });
+    return light;
+}
+
+Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {
+    Grid3 delta(full.resolution());
+    parallelFor(0, static_cast<int64_t>(delta.size()), 1 << 14, [&](int64_t i) {
+        const glm::vec4 f = full[i], s = sceneOnly[i];
+        delta[i] = glm::vec4(f.x - s.x, f.y - s.y, f.z - s.z, f.w);
+    });
+    return delta;
+}
+
+}  // namespace deltagi

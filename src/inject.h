@@ -1,0 +1,23 @@
+// Stage 3: light injection (§3.2). The reflective shadow maps' texels are scattered into a light volume that
+// stores, per voxel, the radiance its surfaces reflect diffusely. The delta volume is the full light volume
+// (real scene + virtual objects) minus the real-scene-only one: negative where a virtual object now blocks
+// light that reached real surfaces, positive on the lit virtual objects.
+#pragma once
+
+#include <span>
+
+#include "reflective_shadow_map.h"
+#include "voxelize.h"
+
+namespace deltagi {
+
+// Radiance of a voxel = reflected flux / (pi * surface area), with the area being the geometry's area in the
+// voxel (or the texels' footprints when they cover more). Voxels are (radiance * occupancy, occupancy), with
+// occupancy 1 where any of `geometry` touches the voxel. Deterministic for any thread count.
+Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
+                  std::span<const VoxelGeometry* const> geometry);
+
+// full - sceneOnly in the radiance channels; the occupancy of `full` (which covers both).
+Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly);
+
+}  // namespace deltagi

@@ -1,0 +1,33 @@
+#include "mipmap.h"
+
+#include <cassert>
+
+#include "parallel.h"
+
+namespace deltagi {
+
+Grid3 downsample(const Grid3& fine) {
+    assert(fine.resolution() % 2 == 0);
+    const int n = fine.resolution() / 2;
+    Grid3 coarse(n);
+    parallelFor(0, static_cast<int64_t>(n) * n, 16, [&](int64_t zy) {
+        const int z = static_cast<int>(zy / n), y = static_cast<int>(zy % n);
+        for (int x = 0; x < n; ++x) {
+            glm::vec4 sum(0.0f);
+            for (int dz = 0; dz < 2; ++dz)
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx) sum += fine.at(2 * x + dx, 2 * y + dy, 2 * z + dz);
+            coarse.at(x, y, z) = sum * 0.125f;
+        }
+    });
+    return coarse;
+}
+
+MipVolume buildMipChain(const VolumeRegion& region, Grid3 level0) {
+    std::vector<Grid3> levels;
+    levels.push_back(std::move(level0));
+    while (levels.back().resolution() > 1) levels.push_back(downsample(levels.back()));
+    return MipVolume(region, std::move(levels));
+}
+
+}  // namespace deltagi

@@ -1,0 +1,53 @@
+// Ray casting against the scene with Embree 3: the camera's G-buffer and the reflective shadow maps are
+// rendered by casting one ray per sample instead of rasterizing. Embree types stay inside ray_scene.cpp.
+#pragma once
+
+#include <limits>
+#include <memory>
+#include <span>
+
+#include <glm/glm.hpp>
+
+#include "deltagi/math.h"
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+struct RayHit {
+    float t = std::numeric_limits<float>::infinity();  // distance along the (unit) ray direction
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};  // interpolated shading normal, unit, facing the ray's origin (two-sided surfaces)
+    const Material* material = nullptr;
+    bool isVirtual = false;
+    bool hit() const { return material != nullptr; }
+};
+
+// Which meshes a RayScene holds.
+enum class SceneContent { RealOnly, RealAndVirtual };
+
+// Owns an Embree device and scene (RAII). Holds pointers into `scene`'s meshes: the Scene must outlive it.
+class RayScene {
+public:
+    RayScene(const Scene& scene, SceneContent content);
+    ~RayScene();
+    RayScene(const RayScene&) = delete;
+    RayScene& operator=(const RayScene&) = delete;
+
+    // Closest hit along origin + t * direction (direction unit length), t in (tMin, tMax).
+    RayHit intersect(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
+                     float tMax = std::numeric_limits<float>::infinity()) const;
+    Bounds3f bounds() const { return bounds_; }
+    bool empty() const { return meshes_.empty(); }
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+    struct MeshRef {
+        const TriangleMesh* mesh;
+        bool isVirtual;
+    };
+    std::vector<MeshRef> meshes_;  // indexed by Embree geometry ID
+    Bounds3f bounds_;
+};
+
+}  // namespace deltagi

@@ -1,0 +1,30 @@
+// Stage 2: reflective shadow maps (Dachsbacher & Stamminger 2005), one per light: the surfaces the light sees
+// directly, with position, normal and the flux they reflect diffusely. Rendered by casting one ray per texel
+// from the light; rendered once for the real scene with the virtual objects and once for the real scene alone
+// (§3.2). Only texels whose surface lies inside the volume region are kept, since only they are injected.
+#pragma once
+
+#include <vector>
+
+#include "deltagi/renderer.h"
+#include "ray_scene.h"
+
+namespace deltagi {
+
+struct RsmTexel {
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};  // facing the light
+    glm::vec3 flux{0.0f};    // diffusely reflected flux (W): albedo * flux arriving through the texel
+    float area = 0.0f;       // surface area the texel covers (world units^2)
+};
+
+struct ReflectiveShadowMap {
+    int resolution = 0;  // texels per face side
+    int faces = 0;       // 1 (a frustum fitted to the region, or orthographic) or 6 (light inside the region)
+    std::vector<RsmTexel> texels;  // the texels that hit a surface inside the region, in texel order
+};
+
+ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
+                                              const VolumeRegion& region, int resolution);
+
+}  // namespace deltagi

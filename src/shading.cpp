@@ -1,0 +1,130 @@
+#include "shading.h"
+
+#include <numbers>
+
+#include "lights.h"
+#include "parallel.h"
+
+namespace deltagi {
+
+namespace {
+
+constexpr int64_t kPointGrain = 256;
+
+// A frame with z along n.
+inline glm::mat3 tangentFrame(glm::vec3 n) {
+    glm::vec3 helper = std::abs(n.z) < 0.9f ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
+    glm::vec3 t = glm::normalize(glm::cross(helper, n));
+    return glm::mat3(t, glm::cross(n, t), n);
+}
+
+float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
+    switch (mode) {
+        case ShadowMode::Shaded: return 1.0f - o.combined;
+        case ShadowMode::SceneOnly: return 1.0f - o.scene;
+        case ShadowMode::DeltaShadow: return o.scene - o.combined;
+        case ShadowMode::DeltaSingleVisibility: return -o.combined;
+    }
+    return 0.0f;
+}
+
+}  // namespace
+
+std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
+                                              const VisibilityVolumes& visibility, const Options& options) {
+    std::vector<ShadowOcclusion> out(points.size() * lights.size());
+    if (lights.empty() || (!visibility.scene && !visibility.object)) return out;
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const VolumeRegion& region = visibility.scene ? visibility.scene->region() : visibility.object->region();
+    const float defaultTan = std::tan(0.5f * glm::radians(options.shadow.apertureDeg));
+    parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        if (!p.valid()) return;
+        for (size_t l = 0; l < lights.size(); ++l) {
+            const LightSample s = sampleLight(lights[l], p.position);
+            if (glm::dot(s.wi, p.normal) <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
+            Cone cone;
+            cone.origin = coneOrigin(p.position, p.normal, s.wi, region, settings);
+            cone.direction = s.wi;
+            cone.maxDistance = s.distance;
+            cone.tanHalfAngle = lights[l].radius > 0.0f && std::isfinite(s.distance)
+                                    ? lights[l].radius / s.distance
+                                    : defaultTan;
+            out[i * lights.size() + l] = traceShadowCone(cone, visibility, settings);
+        }
+    });
+    return out;
+}
+
+std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
+                                         const VisibilityVolumes& visibility, const Options& options) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        if (!p.valid() || p.material->albedo == glm::vec3(0.0f)) return;
+        const glm::mat3 frame = tangentFrame(p.normal);
+        glm::vec3 sum(0.0f);
+        for (size_t k = 0; k < cones.directions.size(); ++k) {
+            Cone cone;
+            cone.direction = frame * cones.directions[k];
+            cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
+            cone.tanHalfAngle = cones.tanHalfAngle;
+            sum += cones.weights[k] * traceLightCone(cone, light, visibility, settings);
+        }
+        out[i] = sum;
+    });
+    return out;
+}
+
+std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, const MipVolume& light,
+                                          const VisibilityVolumes& visibility, const Options& options) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        if (!p.valid() || p.material->specular == glm::vec3(0.0f)) return;
+        Cone cone;
+        cone.direction = glm::normalize(glm::reflect(-p.toEye, p.normal));
+        cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
+        cone.tanHalfAngle = specularConeTanHalfAngle(p.material->phongExponent(), options.specular.minApertureDeg,
+                                                     options.specular.maxApertureDeg);
+        out[i] = traceLightCone(cone, light, visibility, settings);
+    });
+    return out;
+}
+
+glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
+    const LightSample s = sampleLight(light, point.position);
+    const float cosTheta = glm::dot(s.wi, point.normal);
+    if (cosTheta <= 0.0f) return glm::vec3(0.0f);
+    const Material& m = *point.material;
+    glm::vec3 brdf = m.albedo * std::numbers::inv_pi_v<float>;
+    if (m.specular != glm::vec3(0.0f)) {
+        const float n = m.phongExponent();
+        const glm::vec3 mirror = glm::reflect(-point.toEye, point.normal);
+        const float c = std::max(glm::dot(mirror, s.wi), 0.0f);
+        brdf += m.specular * ((n + 2.0f) * 0.5f * std::numbers::inv_pi_v<float> * std::pow(c, n));
+    }
+    return brdf * s.irradiance * cosTheta;
+}
+
+std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
+                                       std::span<const ShadowOcclusion> shadows, ShadowMode mode,
+                                       std::span<const glm::vec3> diffuse, std::span<const glm::vec3> specular) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    parallelFor(0, static_cast<int64_t>(points.size()), 4096, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        if (!p.valid()) return;
+        glm::vec3 radiance(0.0f);
+        for (size_t l = 0; l < lights.size(); ++l)
+            radiance += directRadiance(p, lights[l]) * shadowFactor(shadows[i * lights.size() + l], mode);
+        if (!diffuse.empty()) radiance += p.material->albedo * diffuse[i];
+        if (!specular.empty()) radiance += p.material->specular * specular[i];
+        out[i] = radiance;
+    });
+    return out;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,50 @@
+// Stages 6 and 7: the cone passes over G-buffer surfaces, and shading vs relighting (§3.3).
+//
+// Shading (virtual surfaces): direct light with shadow cones against both visibility volumes, plus indirect
+// diffuse and specular from the full light volume. Relighting (real surfaces): the change the objects make:
+// indirect from the delta volume (cones occluded by both visibility volumes) and, for direct light, the
+// object's soft shadow only where the real scene does not shadow the surface already (§3.2).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "cone_trace.h"
+#include "deltagi/scene.h"
+#include "gbuffer.h"
+
+namespace deltagi {
+
+// Shadow cones (§3.5): for every point and light (index point * lights + light) the occlusion by the scene
+// alone, the objects alone and both. Invalid points get zero occlusion.
+std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
+                                              const VisibilityVolumes& visibility, const Options& options);
+
+// Diffuse cones: cosine-weighted incoming radiance sum_k w_k L_k (so that albedo times it is the reflected
+// radiance). Zero for invalid points.
+std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
+                                         const VisibilityVolumes& visibility, const Options& options);
+
+// The specular cone along the mirrored view direction, aperture from the material's roughness. Zero for
+// invalid points and materials without a specular part.
+std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, const MipVolume& light,
+                                          const VisibilityVolumes& visibility, const Options& options);
+
+// The BRDF of deltagi::Material times cos(theta_i) times the light's irradiance: unshadowed direct radiance.
+glm::vec3 directRadiance(const SurfacePoint& point, const Light& light);
+
+// How a surface's direct light is shadowed.
+enum class ShadowMode {
+    Shaded,          // virtual surface: lit where neither scene nor objects occlude (1 - combined)
+    SceneOnly,       // real surface rendered alone: (1 - scene)
+    DeltaShadow,     // real surface relit: the change (1 - combined) - (1 - scene) (§3.2, no double shadow)
+    DeltaSingleVisibility,  // real surface relit with one shared visibility: (1 - combined) - 1 (double shadow)
+};
+
+// Per point: sum over lights of direct radiance times the shadow factor of `mode`, plus albedo * diffuse
+// plus specular colour * specular (either span may be empty: no indirect light).
+std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
+                                       std::span<const ShadowOcclusion> shadows, ShadowMode mode,
+                                       std::span<const glm::vec3> diffuse, std::span<const glm::vec3> specular);
+
+}  // namespace deltagi

@@ -1,0 +1,145 @@
+#include "voxelize.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "parallel.h"
+
+namespace deltagi {
+
+bool triangleBoxOverlap(glm::vec3 boxCenter, glm::vec3 h, glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    const glm::vec3 v[3] = {a - boxCenter, b - boxCenter, c - boxCenter};
+    // 1. The box's face normals: the triangle's bounds against the box.
+    for (int i = 0; i < 3; ++i) {
+        float mn = std::min({v[0][i], v[1][i], v[2][i]}), mx = std::max({v[0][i], v[1][i], v[2][i]});
+        if (mn > h[i] || mx < -h[i]) return false;
+    }
+    // 2. The triangle's plane.
+    const glm::vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
+    glm::vec3 n = glm::cross(e[0], e[1]);
+    float r = glm::dot(h, glm::abs(n));
+    if (std::abs(glm::dot(n, v[0])) > r) return false;
+    // 3. The nine cross products of box axes and triangle edges.
+    for (int k = 0; k < 3; ++k) {
+        for (int i = 0; i < 3; ++i) {
+            glm::vec3 axis(0.0f);
+            axis[i] = 1.0f;
+            glm::vec3 l = glm::cross(axis, e[k]);
+            float p0 = glm::dot(l, v[0]), p1 = glm::dot(l, v[1]), p2 = glm::dot(l, v[2]);
+            float rad = glm::dot(h, glm::abs(l));
+            if (std::min({p0, p1, p2}) > rad || std::max({p0, p1, p2}) < -rad) return false;
+        }
+    }
+    return true;
+}
+
+float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMin, glm::vec3 boxMax) {
+    // A triangle clipped by 6 planes has at most 9 vertices.
+    std::array<glm::vec3, 12> polyA{a, b, c}, polyB{};
+    int count = 3;
+    glm::vec3* in = polyA.data();
+    glm::vec3* out = polyB.data();
+    for (int plane = 0; plane < 6 && count > 0; ++plane) {
+        const int axis = plane / 2;
+        const bool keepAbove = plane % 2 == 0;  // keep p[axis] >= min, or p[axis] <= max
+        const float bound = keepAbove ? boxMin[axis] : boxMax[axis];
+        auto inside = [&](const glm::vec3& p) { return keepAbove ? p[axis] >= bound : p[axis] <= bound; };
+        int outCount = 0;
+        for (int i = 0; i < count; ++i) {
+            const glm::vec3& p = in[i];
+            const glm::vec3& q = in[(i + 1) % count];
+            const bool pIn = inside(p), qIn = inside(q);
+            if (pIn) out[outCount++] = p;
+            if (pIn != qIn) {
+                float t = (bound - p[axis]) / (q[axis] - p[axis]);
+                out[outCount++] = p + t * (q - p);
+            }
+        }
+        count = outCount;
+        std::swap(in, out);
+    }
+    glm::vec3 sum(0.0f);
+    for (int i = 1; i + 1 < count; ++i) sum += glm::cross(in[i] - in[0], in[i + 1] - in[0]);
+    return 0.5f * glm::length(sum);
+}
+
+namespace {
+
+struct VoxelTriangle {
+    glm::vec3 p[3];    // level-0 voxel coordinates
+    glm::vec3 normal;  // unit face normal (winding order)
+    glm::ivec3 lo, hi;  // voxel bounds, clamped to the grid
+};
+
+std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
+    std::vector<VoxelTriangle> tris;
+    const float invVoxel = 1.0f / region.voxelSize();
+    const int n = region.resolution;
+    for (const TriangleMesh& mesh : meshes) {
+        for (const glm::uvec3& t : mesh.triangles) {
+            VoxelTriangle vt;
+            for (int k = 0; k < 3; ++k) vt.p[k] = (mesh.positions[t[k]] - region.origin) * invVoxel;
+            glm::vec3 cr = glm::cross(vt.p[1] - vt.p[0], vt.p[2] - vt.p[0]);
+            float len = glm::length(cr);
+            if (!(len > 0.0f)) continue;  // degenerate: covers no area
+            vt.normal = cr / len;
+            glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
+            glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
+            if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
+            vt.lo = glm::clamp(glm::ivec3(glm::floor(mn)), glm::ivec3(0), glm::ivec3(n - 1));
+            vt.hi = glm::clamp(glm::ivec3(glm::floor(mx)), glm::ivec3(0), glm::ivec3(n - 1));
+            tris.push_back(vt);
+        }
+    }
+    return tris;
+}
+
+}  // namespace
+
+VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
+    const int n = region.resolution;
+    VoxelGeometry out{Grid3(n), std::vector<float>(static_cast<size_t>(n) * n * n, 0.0f)};
+    const std::vector<VoxelTriangle> tris = toVoxelSpace(meshes, region);
+    const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
+    const SlabBins bins = binBySlab(tris.size(), slabCount, [&](size_t i) {
+        return std::pair{tris[i].lo.z / kSlabThickness, tris[i].hi.z / kSlabThickness};
+    });
+    const glm::vec3 half(0.5f);
+    parallelFor(0, slabCount, 1, [&](int64_t s) {
+        const int zBegin = static_cast<int>(s) * kSlabThickness;
+        const int zEnd = std::min(zBegin + kSlabThickness, n);
+        for (uint32_t ti : bins.slab(s)) {
+            const VoxelTriangle& t = tris[ti];
+            for (int z = std::max(zBegin, t.lo.z); z < std::min(zEnd, t.hi.z + 1); ++z)
+                for (int y = t.lo.y; y <= t.hi.y; ++y)
+                    for (int x = t.lo.x; x <= t.hi.x; ++x) {
+                        glm::vec3 boxMin(x, y, z);
+                        if (!triangleBoxOverlap(boxMin + half, half, t.p[0], t.p[1], t.p[2])) continue;
+                        float a = clippedTriangleArea(t.p[0], t.p[1], t.p[2], boxMin, boxMin + 1.0f);
+                        size_t i = out.visibility.index(x, y, z);
+                        glm::vec4& v = out.visibility[i];
+                        v.x = 1.0f;
+                        v.y += t.normal.x * a;
+                        v.z += t.normal.y * a;
+                        v.w += t.normal.z * a;
+                        out.area[i] += a;
+                    }
+        }
+    });
+    // Normal sums to area-weighted means; areas from voxel units to world units.
+    const float voxelArea = region.voxelSize() * region.voxelSize();
+    parallelFor(0, static_cast<int64_t>(out.area.size()), 1 << 14, [&](int64_t i) {
+        glm::vec4& v = out.visibility[i];
+        float a = out.area[i];
+        if (a > 0.0f) {
+            v.y /= a;
+            v.z /= a;
+            v.w /= a;
+        }
+        out.area[i] = a * voxelArea;
+    });
+    return out;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,59 @@
+// Stage 1: voxelization into a visibility volume (§3.2): occlusion 1 in every voxel that any triangle touches
+// (exact triangle/box overlap, Akenine-Möller 2001) and the area-weighted average normal of the geometry in it.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "deltagi/scene.h"
+#include "volume.h"
+
+namespace deltagi {
+
+struct VoxelGeometry {
+    Grid3 visibility;        // level 0: (occlusion, occlusion * average normal); occlusion is 0 or 1
+    std::vector<float> area;  // surface area of the geometry inside each voxel (world units^2), same indexing
+};
+
+// Voxelizes `meshes` over `region`. Deterministic for any thread count (each voxel sums its triangles in
+// mesh and triangle order).
+VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region);
+
+// Exact overlap test of a triangle with the axis-aligned box centre +- halfSize (separating axis theorem).
+bool triangleBoxOverlap(glm::vec3 boxCenter, glm::vec3 halfSize, glm::vec3 a, glm::vec3 b, glm::vec3 c);
+
+// Area of the part of triangle abc inside the box [boxMin, boxMax] (Sutherland-Hodgman clipping).
+float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMin, glm::vec3 boxMax);
+
+// Counting sort of items into consecutive z-slabs of a grid, keeping item order inside a slab: the basis of
+// the deterministic parallel scatter used by voxelization and light injection. `slabOf(item, first, last)`
+// gives the range of slabs an item touches.
+struct SlabBins {
+    std::vector<uint32_t> offsets;  // slabCount + 1 entries
+    std::vector<uint32_t> items;    // item indices, grouped by slab
+    std::span<const uint32_t> slab(size_t s) const {
+        return std::span<const uint32_t>(items).subspan(offsets[s], offsets[s + 1] - offsets[s]);
+    }
+};
+template <typename SlabRange>
+SlabBins binBySlab(size_t itemCount, size_t slabCount, SlabRange&& slabRange) {
+    SlabBins bins;
+    bins.offsets.assign(slabCount + 1, 0);
+    for (size_t i = 0; i < itemCount; ++i) {
+        auto [first, last] = slabRange(i);
+        for (int s = first; s <= last; ++s) ++bins.offsets[s + 1];
+    }
+    for (size_t s = 0; s < slabCount; ++s) bins.offsets[s + 1] += bins.offsets[s];
+    bins.items.resize(bins.offsets[slabCount]);
+    std::vector<uint32_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
+    for (size_t i = 0; i < itemCount; ++i) {
+        auto [first, last] = slabRange(i);
+        for (int s = first; s <= last; ++s) bins.items[cursor[s]++] = static_cast<uint32_t>(i);
+    }
+    return bins;
+}
+
+// Level-0 voxel layers per slab of the scatter passes.
+inline constexpr int kSlabThickness = 2;
+
+}  // namespace deltagi
