@@ -1,0 +1,340 @@
+#include "json_reader.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "deltagi/error.h"
+#include "deltagi/scene_io.h"
+
+namespace deltagi {
+
+using nlohmann::json;
+
+std::string Interval::str() const {
+    auto bound = [](double v) {
+        return std::isinf(v) ? std::string(v < 0 ? "-inf" : "inf") : fmt::format("{}", v);
+    };
+    return fmt::format("{}{}, {}{}", loOpen ? '(' : '[', bound(lo), bound(hi), hiOpen ? ')' : ']');
+}
+
+std::string describeType(const json& value) {
+    switch (value.type()) {
+        case json::value_t::null:
+            return "null";
+        case json::value_t::boolean:
+            return "a boolean";
+        case json::value_t::number_integer:
+        case json::value_t::number_unsigned:
+            return "an integer";
+        case json::value_t::number_float:
+            return "a number";
+        case json::value_t::string:
+            return "a string";
+        case json::value_t::array:
+            return "an array";
+        case json::value_t::object:
+            return "an object";
+        default:
+            return "an unsupported value";
+    }
+}
+
+std::string describeValue(const json& value) {
+    constexpr size_t kMaxChars = 40;  // keep messages on one readable line
+    std::string text = value.dump();
+    if (text.size() > kMaxChars) text = text.substr(0, kMaxChars - 3) + "...";
+    return describeType(value) + " " + text;
+}
+
+std::string JsonNode::where() const {
+    return path_.empty() ? file_ : file_ + ": " + path_;
+}
+
+void JsonNode::fail(const std::string& what) const {
+    throw InputError(where(), what);
+}
+
+std::string JsonNode::childWhere(std::string_view key) const {
+    return file_ + ": " + (path_.empty() ? std::string(key) : path_ + "." + std::string(key));
+}
+
+void JsonNode::requireObject() const {
+    if (!value_->is_object()) fail("expected an object {...}, got " + describeValue(*value_));
+}
+
+bool JsonNode::has(std::string_view key) const {
+    requireObject();
+    return value_->contains(key);
+}
+
+JsonNode JsonNode::child(std::string_view key) const {
+    if (!has(key)) throw InputError(childWhere(key), "required key is missing");
+    return *find(key);
+}
+
+std::optional<JsonNode> JsonNode::find(std::string_view key) const {
+    requireObject();
+    auto it = value_->find(key);
+    if (it == value_->end()) return std::nullopt;
+    return JsonNode(*it, file_, path_.empty() ? std::string(key) : path_ + "." + std::string(key));
+}
+
+void JsonNode::allowKeys(std::initializer_list<std::string_view> allowed) const {
+    requireObject();
+    for (const auto& item : value_->items()) {
+        if (std::find(allowed.begin(), allowed.end(), item.key()) != allowed.end()) continue;
+        std::string list;
+        for (std::string_view key : allowed) list += (list.empty() ? "" : ", ") + std::string(key);
+        throw InputError(childWhere(item.key()), "unknown key; expected one of: " + list);
+    }
+}
+
+void JsonNode::requireArray() const {
+    if (!value_->is_array()) fail("expected an array [...], got " + describeValue(*value_));
+}
+
+JsonNode JsonNode::element(size_t index) const {
+    requireArray();
+    return JsonNode((*value_)[index], file_, fmt::format("{}[{}]", path_, index));
+}
+
+double JsonNode::number(const Interval& range) const {
+    if (!value_->is_number()) fail("expected a number, got " + describeValue(*value_));
+    double v = value_->get<double>();
+    // The renderer works in float: a value that overflows a float is as unusable as an infinite one.
+    if (!std::isfinite(v) || std::abs(v) > std::numeric_limits<float>::max())
+        fail("expected a finite number (within the range of a 32-bit float), got " + value_->dump());
+    if (!range.contains(v)) fail(fmt::format("expected a number in {}, got {}", range.str(), v));
+    return v;
+}
+
+int64_t JsonNode::integer64() const {
+    if (value_->is_number_float())
+        fail("expected an integer (written without a fraction or exponent), got " + value_->dump());
+    if (!value_->is_number_integer()) fail("expected an integer, got " + describeValue(*value_));
+    if (value_->is_number_unsigned() && value_->get<uint64_t>() > uint64_t{INT64_MAX})
+        fail("expected an integer, got " + value_->dump() + ", which is too large");
+    return value_->get<int64_t>();
+}
+
+int JsonNode::integer(int lo, int hi) const {
+    int64_t v = integer64();
+    if (v < lo || v > hi) fail(fmt::format("expected an integer in [{}, {}], got {}", lo, hi, v));
+    return static_cast<int>(v);
+}
+
+bool JsonNode::boolean() const {
+    if (!value_->is_boolean()) fail("expected true or false, got " + describeValue(*value_));
+    return value_->get<bool>();
+}
+
+std::string JsonNode::string() const {
+    if (!value_->is_string()) fail("expected a string, got " + describeValue(*value_));
+    return value_->get<std::string>();
+}
+
+glm::vec3 JsonNode::vec3(const Interval& range) const {
+    if (!value_->is_array() || value_->size() != 3)
+        fail("expected an array of 3 numbers [x, y, z], got " + describeValue(*value_));
+    return {element(0).floatNumber(range), element(1).floatNumber(range), element(2).floatNumber(range)};
+}
+
+glm::vec3 JsonNode::colour(const Interval& range) const {
+    if (value_->is_number()) return glm::vec3(floatNumber(range));
+    if (!value_->is_array() || value_->size() != 3)
+        fail("expected [r, g, b] or one number, got " + describeValue(*value_));
+    return vec3(range);
+}
+
+glm::mat4 JsonNode::matrix4() const {
+    auto isRow = [](const json& row) { return row.is_array() && row.size() == 4; };
+    if (!value_->is_array() || value_->size() != 4 || !std::all_of(value_->begin(), value_->end(), isRow))
+        fail("expected a 4x4 matrix as 4 rows of 4 numbers, got " + describeValue(*value_));
+    glm::mat4 m(1.0f);
+    for (int row = 0; row < 4; ++row)
+        for (int col = 0; col < 4; ++col)
+            m[col][row] = element(row).element(col).floatNumber();  // glm: m[col]
+    return m;
+}
+
+// ---- options ----------------------------------------------------------------------------------------------
+
+namespace {
+
+bool isPowerOfTwo(int64_t v) {
+    return v > 0 && (v & (v - 1)) == 0;
+}
+
+constexpr int kMinVolumeResolution = 4, kMaxVolumeResolution = 1024;
+
+void readVolume(const JsonNode& node, VolumeOptions& volume) {
+    node.allowKeys({"resolution", "extent_scale", "center", "size"});
+    if (auto n = node.find("resolution")) {
+        int64_t r = n->integer64();
+        if (!isPowerOfTwo(r) || r < kMinVolumeResolution || r > kMaxVolumeResolution)
+            n->fail(fmt::format("expected a power of two in [{}, {}], got {}", kMinVolumeResolution,
+                                kMaxVolumeResolution, r));
+        volume.resolution = static_cast<int>(r);
+    }
+    if (auto n = node.find("extent_scale")) volume.extentScale = n->floatNumber(kPositive);
+    // null means "not set", so that the output of optionsToJson() reads back.
+    auto center = node.find("center"), size = node.find("size");
+    if (center && !center->value().is_null()) volume.center = center->vec3();
+    if (size && !size->value().is_null()) volume.size = size->floatNumber(kPositive);
+    if (volume.center.has_value() != volume.size.has_value()) {
+        if (volume.center) center->fail("given without options.volume.size; give both or neither");
+        size->fail("given without options.volume.center; give both or neither");
+    }
+}
+
+void readTrace(const JsonNode& node, TraceOptions& trace) {
+    node.allowKeys({"step_scale", "start_offset", "max_occlusion", "normal_weight", "backface_weight",
+                    "jitter", "accumulation"});
+    if (auto n = node.find("step_scale")) trace.stepScale = n->floatNumber({0.05, 4.0});
+    if (auto n = node.find("start_offset")) trace.startOffset = n->floatNumber({0.0, 16.0});
+    if (auto n = node.find("max_occlusion")) trace.maxOcclusion = n->floatNumber({0.5, 1.0});
+    if (auto n = node.find("normal_weight")) trace.normalWeight = n->floatNumber(kUnit);
+    if (auto n = node.find("backface_weight")) trace.backfaceWeight = n->floatNumber(kUnit);
+    if (auto n = node.find("jitter")) trace.jitter = n->floatNumber(kUnit);
+    if (auto n = node.find("accumulation")) {
+        std::string mode = n->string();
+        if (mode != "paper" && mode != "front_to_back")
+            n->fail("expected \"paper\" or \"front_to_back\", got \"" + mode + "\"");
+        trace.accumulation = mode;
+    }
+}
+
+void readRender(const JsonNode& node, RenderOptions& render) {
+    node.allowKeys({"samples_per_pixel", "indirect", "double_shadow_fix"});
+    if (auto n = node.find("samples_per_pixel")) {
+        int spp = n->integer(1, 16);
+        if (spp != 1 && spp != 4 && spp != 9 && spp != 16)
+            n->fail(fmt::format("expected 1, 4, 9 or 16 (a square grid), got {}", spp));
+        render.samplesPerPixel = spp;
+    }
+    if (auto n = node.find("indirect")) render.indirect = n->boolean();
+    if (auto n = node.find("double_shadow_fix")) render.doubleShadowFix = n->boolean();
+}
+
+}  // namespace
+
+Options readOptions(const JsonNode& node) {
+    node.allowKeys({"volume", "rsm", "diffuse", "specular", "shadow", "trace", "render"});
+    Options options;
+    if (auto n = node.find("volume")) readVolume(*n, options.volume);
+    if (auto n = node.find("rsm")) {
+        n->allowKeys({"resolution"});
+        if (auto r = n->find("resolution")) options.rsm.resolution = r->integer(16, 8192);
+    }
+    if (auto n = node.find("diffuse")) {
+        n->allowKeys({"count", "aperture_deg"});
+        if (auto c = n->find("count")) options.diffuse.count = c->integer(1, 64);
+        if (auto a = n->find("aperture_deg"))
+            options.diffuse.apertureDeg = a->floatNumber({0.0, 180.0, false, true});
+    }
+    if (auto n = node.find("specular")) {
+        n->allowKeys({"min_aperture_deg", "max_aperture_deg"});
+        constexpr Interval kAperture{0.0, 180.0, true, true};
+        if (auto a = n->find("min_aperture_deg")) options.specular.minApertureDeg = a->floatNumber(kAperture);
+        if (auto a = n->find("max_aperture_deg")) options.specular.maxApertureDeg = a->floatNumber(kAperture);
+        if (options.specular.minApertureDeg > options.specular.maxApertureDeg)
+            throw InputError(n->childWhere("min_aperture_deg"),
+                             fmt::format("expected at most max_aperture_deg ({}), got {}",
+                                         options.specular.maxApertureDeg, options.specular.minApertureDeg));
+    }
+    if (auto n = node.find("shadow")) {
+        n->allowKeys({"aperture_deg"});
+        if (auto a = n->find("aperture_deg"))
+            options.shadow.apertureDeg = a->floatNumber({0.0, 90.0, true, false});
+    }
+    if (auto n = node.find("trace")) readTrace(*n, options.trace);
+    if (auto n = node.find("render")) readRender(*n, options.render);
+    return options;
+}
+
+json optionsToJson(const Options& o) {
+    json volume = {{"resolution", o.volume.resolution},
+                   {"extent_scale", o.volume.extentScale},
+                   {"center", nullptr},
+                   {"size", nullptr}};
+    if (o.volume.center) volume["center"] = {o.volume.center->x, o.volume.center->y, o.volume.center->z};
+    if (o.volume.size) volume["size"] = *o.volume.size;
+    return {
+        {"volume", volume},
+        {"rsm", {{"resolution", o.rsm.resolution}}},
+        {"diffuse", {{"count", o.diffuse.count}, {"aperture_deg", o.diffuse.apertureDeg}}},
+        {"specular",
+         {{"min_aperture_deg", o.specular.minApertureDeg}, {"max_aperture_deg", o.specular.maxApertureDeg}}},
+        {"shadow", {{"aperture_deg", o.shadow.apertureDeg}}},
+        {"trace",
+         {{"step_scale", o.trace.stepScale},
+          {"start_offset", o.trace.startOffset},
+          {"max_occlusion", o.trace.maxOcclusion},
+          {"normal_weight", o.trace.normalWeight},
+          {"backface_weight", o.trace.backfaceWeight},
+          {"jitter", o.trace.jitter},
+          {"accumulation", o.trace.accumulation}}},
+        {"render",
+         {{"samples_per_pixel", o.render.samplesPerPixel},
+          {"indirect", o.render.indirect},
+          {"double_shadow_fix", o.render.doubleShadowFix}}},
+    };
+}
+
+// ---- memory estimate --------------------------------------------------------------------------------------
+
+namespace {
+
+constexpr int kVolumeCount = 4;                  // two visibility and two light volumes
+constexpr double kBytesPerVoxel = 16.0;          // 4 floats
+constexpr double kMipChainFactor = 8.0 / 7.0;    // 1 + 1/8 + 1/64 + ...
+constexpr double kRsmFaces = 6.0;                // a cube map per light (the worst case: point lights)
+constexpr double kBytesPerRsmTexel = 48.0;       // position, normal, flux (3 floats each) and depth, padded
+constexpr double kBytesPerGBufferSample = 64.0;  // position, normal, albedo, specular, roughness, ids
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+
+struct MemoryParts {
+    double volumes, rsms, gbuffer;
+    double total() const { return volumes + rsms + gbuffer; }
+};
+
+MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lightCount) {
+    double r = options.volume.resolution, rsm = options.rsm.resolution;
+    return {kVolumeCount * kBytesPerVoxel * r * r * r * kMipChainFactor,
+            rsm * rsm * kRsmFaces * kBytesPerRsmTexel * static_cast<double>(lightCount),
+            static_cast<double>(camera.width) * camera.height * options.render.samplesPerPixel *
+                kBytesPerGBufferSample};
+}
+
+}  // namespace
+
+uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount) {
+    return static_cast<uint64_t>(memoryParts(options, camera, lightCount).total());
+}
+
+void checkRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
+                       uint64_t physicalMemoryBytes, const std::string& file) {
+    MemoryParts parts = memoryParts(options, camera, lightCount);
+    if (parts.total() <= static_cast<double>(physicalMemoryBytes)) return;
+    std::string key = parts.rsms > parts.volumes ? "options.rsm.resolution" : "options.volume.resolution";
+    throw InputError(
+        file + ": " + key,
+        fmt::format("the render needs about {:.1f} GiB (volumes {:.1f} GiB, reflective shadow maps "
+                    "{:.1f} GiB, G-buffer {:.1f} GiB), more than the {:.1f} GiB of physical memory",
+                    parts.total() / kGiB, parts.volumes / kGiB, parts.rsms / kGiB, parts.gbuffer / kGiB,
+                    static_cast<double>(physicalMemoryBytes) / kGiB));
+}
+
+uint64_t physicalMemoryBytes() {
+    long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || pageSize <= 0) return std::numeric_limits<uint64_t>::max();  // unknown: do not refuse
+    return static_cast<uint64_t>(pages) * static_cast<uint64_t>(pageSize);
+}
+
+}  // namespace deltagi

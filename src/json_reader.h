@@ -1,0 +1,100 @@
+// Reading JSON values with their path, so that every error names the file and the key:
+//   scene.json: options.volume.resolution: expected a power of two in [4, 1024], got 100
+// Also the readers of the scene file's "options" section, which only need JSON (scene_io.cpp does the rest).
+#pragma once
+
+#include <cstdint>
+#include <initializer_list>
+#include <limits>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include "deltagi/options.h"
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+// An interval of allowed numbers, for messages such as "expected a number in (0, 180), got 200".
+struct Interval {
+    double lo, hi;
+    bool loOpen = false, hiOpen = false;
+    bool contains(double v) const { return (loOpen ? v > lo : v >= lo) && (hiOpen ? v < hi : v <= hi); }
+    std::string str() const;  // "[0, 1]", "(0, 180)", "[0, inf)"
+};
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
+inline constexpr Interval kAnyNumber{-kInf, kInf, true, true};
+inline constexpr Interval kNonNegative{0.0, kInf, false, true};
+inline constexpr Interval kPositive{0.0, kInf, true, true};
+inline constexpr Interval kUnit{0.0, 1.0};
+
+// A view of one JSON value together with where it is: the file (for messages) and its JSON path
+// ("scene[2].material.albedo"). The value is referenced, not copied: the document must outlive the node.
+class JsonNode {
+  public:
+    JsonNode(const nlohmann::json& value, std::string file, std::string path = {})
+        : value_(&value), file_(std::move(file)), path_(std::move(path)) {}
+
+    const nlohmann::json& value() const { return *value_; }
+    const std::string& file() const { return file_; }
+    const std::string& path() const { return path_; }
+    // "file: path" (or "file" at the top level): the `where` of an InputError.
+    std::string where() const;
+    [[noreturn]] void fail(const std::string& what) const;
+
+    // Objects. child() fails when the key is missing; find() returns nothing.
+    void requireObject() const;
+    bool has(std::string_view key) const;
+    JsonNode child(std::string_view key) const;
+    std::optional<JsonNode> find(std::string_view key) const;
+    // Fails, naming the key's path, at the first key not in `allowed`.
+    void allowKeys(std::initializer_list<std::string_view> allowed) const;
+    // A path below this node that need not exist, for messages: "camera" -> "camera.fx".
+    std::string childWhere(std::string_view key) const;
+
+    // Arrays.
+    void requireArray() const;
+    size_t size() const { return value_->size(); }
+    JsonNode element(size_t index) const;
+
+    // Scalars. Numbers must be finite as a float; integers must be JSON integers (64 is, 64.0 is not).
+    double number(const Interval& range = kAnyNumber) const;
+    float floatNumber(const Interval& range = kAnyNumber) const { return static_cast<float>(number(range)); }
+    int64_t integer64() const;
+    int integer(int lo, int hi) const;
+    bool boolean() const;
+    std::string string() const;
+    // [x, y, z], each component in `range`.
+    glm::vec3 vec3(const Interval& range = kAnyNumber) const;
+    // A colour: [r, g, b] or one number for grey.
+    glm::vec3 colour(const Interval& range) const;
+    // A 4x4 matrix written as 4 rows of 4 numbers (row-major, as printed); returned in glm's column-major.
+    glm::mat4 matrix4() const;
+
+  private:
+    const nlohmann::json* value_;
+    std::string file_;
+    std::string path_;
+};
+
+// Name of a JSON value's type for messages: "a string", "an array", "an integer", "a number", ...
+std::string describeType(const nlohmann::json& value);
+// The value itself, shortened for messages.
+std::string describeValue(const nlohmann::json& value);
+
+// Reads the "options" object into Options, checking every range; unknown keys are errors.
+Options readOptions(const JsonNode& node);
+
+// Estimated memory of a render: the four volumes with their mip chains, one cube RSM per light and the
+// G-buffer. checkRenderMemory fails, naming `file` and the options key that dominates (volume or RSM
+// resolution), when the estimate exceeds `physicalMemoryBytes` (a parameter so that tests can lower it).
+uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount);
+void checkRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
+                       uint64_t physicalMemoryBytes, const std::string& file);
+// sysconf(_SC_PHYS_PAGES) * sysconf(_SC_PAGE_SIZE).
+uint64_t physicalMemoryBytes();
+
+}  // namespace deltagi

@@ -1,0 +1,54 @@
+// Mesh input: loading mesh files with Assimp (mesh_io.cpp), and the clean-up every input mesh goes through
+// before it reaches the renderer: transform to world space, validation, vertex normals (mesh.cpp).
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+// The material values a mesh file gives; each is absent when the file does not give it (Assimp's default
+// material, used for files without materials, gives none).
+struct FileMaterial {
+    std::string name;
+    std::optional<glm::vec3> albedo;    // Kd
+    std::optional<glm::vec3> specular;  // Ks
+    // glTF's roughness factor squared, else from the Phong exponent Ns: sqrt(2 / (Ns + 2)); within (0, 1]
+    std::optional<float> roughness;
+};
+
+struct FileMesh {
+    TriangleMesh mesh;  // in the file's coordinates; mesh.material is left at its defaults
+    FileMaterial material;
+};
+
+// Loads the triangles of an OBJ, PLY, glTF or GLB file (anything Assimp reads), node transforms applied,
+// points and lines dropped, smooth vertex normals generated where the file has none (creases sharper than
+// kCreaseAngleDeg stay sharp). Meshes are named `baseName` when there is one, else "baseName/<mesh name or
+// index>". Throws InputError(where, ...) when the file cannot be read or holds no triangles.
+inline constexpr float kCreaseAngleDeg = 80.0f;
+std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
+                                   const std::string& baseName);
+
+// Area-weighted average of the face normals around each vertex, unit length; (0, 1, 0) where it vanishes.
+void computeVertexNormals(TriangleMesh& mesh);
+
+// Positions by `worldFromObject`, normals by its inverse transpose (renormalized); a mirroring transform
+// also flips the winding, so that outward faces stay outward.
+void transformMesh(TriangleMesh& mesh, const glm::mat4& worldFromObject);
+
+// Validates a mesh read from input and makes it ready to render. Throws InputError(where, ...) for a
+// non-finite position (naming the vertex), an index out of range, and a mesh without triangles or with only
+// degenerate ones. Triangles with area < kDegenerateAreaFactor * (bounding box diagonal)^2 are dropped,
+// unreferenced vertices removed, missing or broken normals recomputed and all normals normalized.
+// Returns the number of degenerate triangles dropped.
+inline constexpr double kDegenerateAreaFactor = 1e-12;
+size_t cleanMesh(TriangleMesh& mesh, const std::string& where);
+
+}  // namespace deltagi

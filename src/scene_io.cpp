@@ -1,0 +1,508 @@
+// Reading scene files: JSON -> Scene. The format is documented in docs/scene-format.md; every check here
+// raises InputError naming the file and the JSON path of the key ("scene.json: scene[2].material.albedo").
+#include "deltagi/scene_io.h"
+
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <regex>
+
+#include <fmt/format.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "deltagi/error.h"
+#include "json_reader.h"
+#include "mesh_io.h"
+#include "shapes.h"
+
+namespace deltagi {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr int kMaxImageSide = 16384;            // camera width and height
+constexpr int kMaxShapeSegments = 4096;         // sphere and torus tessellation
+constexpr float kOrthonormalTolerance = 1e-3f;  // world_from_camera rotation: max |R^T R - I|
+constexpr float kAffineTolerance = 1e-6f;       // last row of 4x4 matrices: [0, 0, 0, 1]
+constexpr float kParallelTolerance = 1e-6f;     // camera up vs view direction: |cross| of unit vectors
+constexpr float kEnergyTolerance = 1e-6f;       // albedo + specular <= 1 up to rounding
+
+// ---- files ------------------------------------------------------------------------------------------------
+
+// A file named by `node` (a string), relative to the scene file's folder; it must exist.
+fs::path inputFile(const JsonNode& node, const fs::path& sceneFolder) {
+    fs::path path = node.string();
+    if (path.empty()) node.fail("expected a file name, got an empty string");
+    if (path.is_relative()) path = sceneFolder / path;
+    path = path.lexically_normal();
+    if (fs::is_regular_file(path)) return path;
+    std::string hint;
+    for (const fs::path& part : path.parent_path())
+        if (part == "shared")
+            hint = " (this example needs ../shared/data from the project's shared data set)";
+    node.fail(fmt::format("file not found: '{}'{}", path.string(), hint));
+}
+
+std::string sizeText(int width, int height) {
+    return fmt::format("{}x{}", width, height);
+}
+
+// ---- camera -----------------------------------------------------------------------------------------------
+
+void checkAffine(const JsonNode& node, const glm::mat4& m) {
+    glm::vec4 lastRow(m[0][3], m[1][3], m[2][3], m[3][3]);
+    if (glm::length(lastRow - glm::vec4(0, 0, 0, 1)) > kAffineTolerance)
+        node.fail(fmt::format("expected the last row to be [0, 0, 0, 1], got [{}, {}, {}, {}]", lastRow.x,
+                              lastRow.y, lastRow.z, lastRow.w));
+}
+
+void readIntrinsics(const JsonNode& node, Camera& camera) {
+    bool pinhole = node.has("fx") || node.has("fy") || node.has("cx") || node.has("cy");
+    if (auto fov = node.find("fov_y_deg")) {
+        if (pinhole) fov->fail("give either fov_y_deg or fx, fy (cx, cy), not both");
+        double fovRad = glm::radians(fov->number({0.0, 180.0, true, true}));
+        camera.fy = static_cast<float>(0.5 * camera.height / std::tan(0.5 * fovRad));
+        camera.fx = camera.fy;  // square pixels
+        camera.cx = 0.5f * static_cast<float>(camera.width);
+        camera.cy = 0.5f * static_cast<float>(camera.height);
+        return;
+    }
+    if (!pinhole)
+        node.fail(
+            "missing intrinsics: give \"fx\" and \"fy\" (and optionally \"cx\", \"cy\"), or \"fov_y_deg\"");
+    camera.fx = node.child("fx").floatNumber(kPositive);
+    camera.fy = node.child("fy").floatNumber(kPositive);
+    camera.cx = node.has("cx") ? node.child("cx").floatNumber() : 0.5f * static_cast<float>(camera.width);
+    camera.cy = node.has("cy") ? node.child("cy").floatNumber() : 0.5f * static_cast<float>(camera.height);
+}
+
+// OpenGL camera frame: the camera looks down -z with +y up, so -z maps to the view direction.
+glm::mat4 lookAtPose(const JsonNode& node) {
+    glm::vec3 position = node.child("position").vec3();
+    JsonNode lookAtNode = node.child("look_at");
+    glm::vec3 forward = lookAtNode.vec3() - position;
+    if (glm::length(forward) <= kParallelTolerance * std::max(1.0f, glm::length(position)))
+        lookAtNode.fail(
+            "expected a point different from camera.position (the camera needs a view direction)");
+    forward = glm::normalize(forward);
+    glm::vec3 up(0.0f, 1.0f, 0.0f);
+    if (auto upNode = node.find("up")) {
+        up = upNode->vec3();
+        if (glm::length(up) == 0.0f) upNode->fail("expected a non-zero vector");
+    }
+    glm::vec3 right = glm::cross(forward, glm::normalize(up));
+    if (glm::length(right) < kParallelTolerance)
+        throw InputError(node.childWhere("up"),
+                         "expected a direction not parallel to the view direction (look_at - position)");
+    right = glm::normalize(right);
+    glm::vec3 trueUp = glm::cross(right, forward);
+    glm::mat4 worldFromCamera(1.0f);
+    worldFromCamera[0] = glm::vec4(right, 0.0f);
+    worldFromCamera[1] = glm::vec4(trueUp, 0.0f);
+    worldFromCamera[2] = glm::vec4(-forward, 0.0f);
+    worldFromCamera[3] = glm::vec4(position, 1.0f);
+    return worldFromCamera;
+}
+
+glm::mat4 matrixPose(const JsonNode& node) {
+    glm::mat4 m = node.matrix4();
+    checkAffine(node, m);
+    glm::mat3 rotation(m);
+    glm::mat3 error = glm::transpose(rotation) * rotation - glm::mat3(1.0f);
+    float maxError = 0.0f;
+    for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) maxError = std::max(maxError, std::abs(error[c][r]));
+    if (maxError > kOrthonormalTolerance)
+        node.fail(fmt::format(
+            "expected an orthonormal rotation part (no scale or shear), but |R^T R - I| reaches {:.3g}",
+            maxError));
+    if (glm::determinant(rotation) < 0.0f)
+        node.fail(
+            "expected a rotation, got a reflection (determinant -1): the camera frame must be right-handed");
+    return m;
+}
+
+Camera readCamera(const JsonNode& node) {
+    node.allowKeys({"width", "height", "fx", "fy", "cx", "cy", "fov_y_deg", "position", "look_at", "up",
+                    "world_from_camera"});
+    Camera camera;
+    camera.width = node.child("width").integer(1, kMaxImageSide);
+    camera.height = node.child("height").integer(1, kMaxImageSide);
+    readIntrinsics(node, camera);
+    bool lookAt = node.has("position") || node.has("look_at") || node.has("up");
+    if (auto matrix = node.find("world_from_camera")) {
+        if (lookAt) matrix->fail("give either world_from_camera or position, look_at (up), not both");
+        camera.worldFromCamera = matrixPose(*matrix);
+    } else if (lookAt) {
+        camera.worldFromCamera = lookAtPose(node);
+    } else {
+        node.fail(
+            "missing pose: give \"position\" and \"look_at\" (and optionally \"up\"), or "
+            "\"world_from_camera\"");
+    }
+    return camera;
+}
+
+// ---- lights -----------------------------------------------------------------------------------------------
+
+glm::vec3 readDirection(const JsonNode& node) {
+    glm::vec3 direction = node.vec3();
+    float length = glm::length(direction);
+    if (!(length > 0.0f) || !std::isfinite(length)) node.fail("expected a non-zero direction");
+    return direction / length;
+}
+
+Light readLight(const JsonNode& node) {
+    node.requireObject();
+    JsonNode typeNode = node.child("type");
+    std::string type = typeNode.string();
+    Light light;
+    if (type == "point") {
+        light.type = Light::Type::Point;
+        node.allowKeys({"type", "name", "color", "intensity", "radius", "position"});
+    } else if (type == "spot") {
+        light.type = Light::Type::Spot;
+        node.allowKeys({"type", "name", "color", "intensity", "radius", "position", "direction",
+                        "inner_angle_deg", "outer_angle_deg"});
+    } else if (type == "directional") {
+        light.type = Light::Type::Directional;
+        node.allowKeys({"type", "name", "color", "intensity", "direction"});
+    } else {
+        typeNode.fail("expected \"point\", \"spot\" or \"directional\", got \"" + type + "\"");
+    }
+    if (auto n = node.find("name")) n->string();  // only for the reader of the file
+    if (auto n = node.find("color")) light.color = n->vec3(kNonNegative);
+    if (auto n = node.find("intensity")) light.intensity = n->floatNumber(kNonNegative);
+    if (auto n = node.find("radius")) light.radius = n->floatNumber(kNonNegative);
+    if (type != "directional") light.position = node.child("position").vec3();
+    if (type != "point") light.direction = readDirection(node.child("direction"));
+    if (type == "spot") {
+        constexpr Interval kHalfAngle{0.0, 90.0};
+        if (auto n = node.find("inner_angle_deg")) light.innerAngleDeg = n->floatNumber(kHalfAngle);
+        if (auto n = node.find("outer_angle_deg")) light.outerAngleDeg = n->floatNumber(kHalfAngle);
+        if (light.innerAngleDeg > light.outerAngleDeg)
+            throw InputError(node.childWhere("inner_angle_deg"),
+                             fmt::format("expected at most outer_angle_deg ({}), got {}", light.outerAngleDeg,
+                                         light.innerAngleDeg));
+    }
+    return light;
+}
+
+// ---- mesh entries -----------------------------------------------------------------------------------------
+
+struct MaterialOverrides {
+    std::optional<glm::vec3> albedo, specular;
+    std::optional<float> roughness;
+};
+
+MaterialOverrides readMaterial(const JsonNode& node) {
+    node.allowKeys({"albedo", "specular", "roughness", "glossiness"});
+    MaterialOverrides result;
+    if (auto n = node.find("albedo")) result.albedo = n->colour(kUnit);
+    if (auto n = node.find("specular")) result.specular = n->colour(kUnit);
+    if (auto n = node.find("roughness")) result.roughness = n->floatNumber({0.0, 1.0, true, false});
+    if (auto n = node.find("glossiness")) {
+        if (result.roughness) n->fail("give either roughness or glossiness, not both");
+        result.roughness = 1.0f - n->floatNumber({0.0, 1.0, false, true});
+    }
+    return result;
+}
+
+// The JSON's keys win, then the mesh file's values, then the defaults of Material; the result must conserve
+// energy. `where` names the entry (or its "material"), for values that came from the file.
+Material combineMaterial(const MaterialOverrides& json, const FileMaterial& file, const std::string& meshName,
+                         const std::string& where) {
+    Material m;
+    m.albedo = json.albedo.value_or(file.albedo.value_or(m.albedo));
+    m.specular = json.specular.value_or(file.specular.value_or(m.specular));
+    m.roughness = json.roughness.value_or(file.roughness.value_or(m.roughness));
+    std::string origin = (!json.albedo && file.albedo) || (!json.specular && file.specular)
+                             ? fmt::format(
+                                   " (values not given in \"material\" come from material '{}' of the mesh "
+                                   "file)",
+                                   file.name)
+                             : "";
+    constexpr const char* kChannel[] = {"r", "g", "b"};
+    for (int c = 0; c < 3; ++c) {
+        if (!(m.albedo[c] >= 0.0f && m.albedo[c] <= 1.0f) ||
+            !(m.specular[c] >= 0.0f && m.specular[c] <= 1.0f))
+            throw InputError(where,
+                             fmt::format("mesh '{}': albedo and specular must be in [0, 1], got {} and {} in "
+                                         "channel {}{}",
+                                         meshName, m.albedo[c], m.specular[c], kChannel[c], origin));
+        if (m.albedo[c] + m.specular[c] > 1.0f + kEnergyTolerance)
+            throw InputError(
+                where,
+                fmt::format("mesh '{}': albedo + specular exceeds 1 in channel {} ({} + {} = {}){}", meshName,
+                            kChannel[c], m.albedo[c], m.specular[c], m.albedo[c] + m.specular[c], origin));
+    }
+    return m;
+}
+
+glm::vec3 readScale(const JsonNode& node) {
+    glm::vec3 scale = node.value().is_number() ? glm::vec3(node.floatNumber()) : node.vec3();
+    if (scale.x == 0.0f || scale.y == 0.0f || scale.z == 0.0f)
+        node.fail("expected non-zero scale factors (a zero scale flattens the mesh)");
+    return scale;
+}
+
+// Object form: T * R * S with R = Rz * Ry * Rx (rotated about X first). Array form: 4 rows, row-major.
+glm::mat4 readTransform(const JsonNode& node) {
+    if (node.value().is_array()) {
+        glm::mat4 m = node.matrix4();
+        checkAffine(node, m);
+        float det = glm::determinant(glm::mat3(m));
+        if (det == 0.0f || !std::isfinite(det))
+            node.fail("expected an invertible matrix, got a singular one");
+        return m;
+    }
+    node.allowKeys({"translate", "rotate_deg", "scale"});
+    glm::vec3 translate(0.0f), rotateDeg(0.0f), scale(1.0f);
+    if (auto n = node.find("translate")) translate = n->vec3();
+    if (auto n = node.find("rotate_deg")) rotateDeg = n->vec3();
+    if (auto n = node.find("scale")) scale = readScale(*n);
+    glm::mat4 m = glm::translate(glm::mat4(1.0f), translate);
+    m = glm::rotate(m, glm::radians(rotateDeg.z), glm::vec3(0, 0, 1));
+    m = glm::rotate(m, glm::radians(rotateDeg.y), glm::vec3(0, 1, 0));
+    m = glm::rotate(m, glm::radians(rotateDeg.x), glm::vec3(1, 0, 0));
+    return glm::scale(m, scale);
+}
+
+// "indices": [[i, j, k], ...] or a flat list of ints, each in [0, vertexCount).
+std::vector<glm::uvec3> readIndices(const JsonNode& node, size_t vertexCount) {
+    node.requireArray();
+    std::vector<unsigned> flat;
+    auto readIndex = [&](const JsonNode& n) {
+        int64_t index = n.integer64();
+        if (index < 0 || static_cast<uint64_t>(index) >= vertexCount)
+            n.fail(
+                fmt::format("vertex index {} is out of range: there are {} positions", index, vertexCount));
+        flat.push_back(static_cast<unsigned>(index));
+    };
+    bool nested = !node.value().empty() && node.value()[0].is_array();
+    for (size_t i = 0; i < node.size(); ++i) {
+        JsonNode item = node.element(i);
+        if (!nested) {
+            readIndex(item);
+            continue;
+        }
+        if (!item.value().is_array() || item.size() != 3)
+            item.fail("expected a triangle [i, j, k], got " + describeValue(item.value()));
+        for (size_t k = 0; k < 3; ++k) readIndex(item.element(k));
+    }
+    if (flat.size() % 3 != 0)
+        node.fail(
+            fmt::format("expected a multiple of 3 indices (one triple per triangle), got {}", flat.size()));
+    std::vector<glm::uvec3> triangles;
+    for (size_t i = 0; i < flat.size(); i += 3) triangles.emplace_back(flat[i], flat[i + 1], flat[i + 2]);
+    return triangles;
+}
+
+TriangleMesh readTrianglesShape(const JsonNode& node) {
+    node.allowKeys({"type", "positions", "indices", "smooth"});
+    JsonNode positionsNode = node.child("positions");
+    positionsNode.requireArray();
+    std::vector<glm::vec3> positions;
+    for (size_t i = 0; i < positionsNode.size(); ++i) positions.push_back(positionsNode.element(i).vec3());
+    std::vector<glm::uvec3> triangles = readIndices(node.child("indices"), positions.size());
+    bool smooth = node.has("smooth") && node.child("smooth").boolean();
+    return makeTriangles(positions, triangles, smooth);
+}
+
+int readSegments(const JsonNode& node, int fallback) {
+    return node.has("segments") ? node.child("segments").integer(3, kMaxShapeSegments) : fallback;
+}
+
+TriangleMesh readShape(const JsonNode& node) {
+    node.requireObject();
+    JsonNode typeNode = node.child("type");
+    std::string type = typeNode.string();
+    if (type == "box") {
+        node.allowKeys({"type", "size"});
+        return makeBox(node.child("size").vec3(kPositive));
+    }
+    if (type == "sphere") {
+        node.allowKeys({"type", "radius", "segments"});
+        return makeSphere(node.child("radius").floatNumber(kPositive), readSegments(node, 32));
+    }
+    if (type == "quad") {
+        node.allowKeys({"type", "size"});
+        JsonNode size = node.child("size");
+        if (!size.value().is_array() || size.size() != 2)
+            size.fail("expected [width, depth] (2 numbers), got " + describeValue(size.value()));
+        return makeQuad({size.element(0).floatNumber(kPositive), size.element(1).floatNumber(kPositive)});
+    }
+    if (type == "torus") {
+        node.allowKeys({"type", "major_radius", "minor_radius", "segments"});
+        float major = node.child("major_radius").floatNumber(kPositive);
+        JsonNode minorNode = node.child("minor_radius");
+        float minor = minorNode.floatNumber(kPositive);
+        if (minor >= major)
+            minorNode.fail(fmt::format("expected less than major_radius ({}), got {}", major, minor));
+        return makeTorus(major, minor, readSegments(node, 48));
+    }
+    if (type == "triangles") return readTrianglesShape(node);
+    typeNode.fail("expected \"box\", \"sphere\", \"quad\", \"torus\" or \"triangles\", got \"" + type + "\"");
+}
+
+std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& sceneFolder) {
+    entry.allowKeys({"name", "file", "shape", "transform", "material"});
+    auto fileNode = entry.find("file"), shapeNode = entry.find("shape");
+    if (fileNode && shapeNode) shapeNode->fail("give either \"file\" or \"shape\", not both");
+    if (!fileNode && !shapeNode) entry.fail("expected a \"file\" or a \"shape\"");
+    std::optional<std::string> name;
+    if (auto n = entry.find("name")) name = n->string();
+    glm::mat4 worldFromObject =
+        entry.has("transform") ? readTransform(entry.child("transform")) : glm::mat4(1.0f);
+    auto materialNode = entry.find("material");
+    MaterialOverrides overrides = materialNode ? readMaterial(*materialNode) : MaterialOverrides{};
+    std::string materialWhere = materialNode ? materialNode->where() : entry.where();
+
+    std::vector<FileMesh> meshes;
+    if (fileNode) {
+        fs::path path = inputFile(*fileNode, sceneFolder);
+        meshes = loadMeshFile(path, fileNode->where(), name.value_or(path.stem().string()));
+    } else {
+        meshes.push_back({readShape(*shapeNode), {}});
+        meshes.back().mesh.name = name.value_or(shapeNode->child("type").string());
+    }
+    std::vector<TriangleMesh> result;
+    for (FileMesh& fileMesh : meshes) {
+        TriangleMesh& mesh = fileMesh.mesh;
+        mesh.material = combineMaterial(overrides, fileMesh.material, mesh.name, materialWhere);
+        transformMesh(mesh, worldFromObject);
+        cleanMesh(mesh, entry.where());
+        result.push_back(std::move(mesh));
+    }
+    return result;
+}
+
+std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sceneFolder) {
+    list.requireArray();
+    std::vector<TriangleMesh> meshes;
+    for (size_t i = 0; i < list.size(); ++i) {
+        std::vector<TriangleMesh> entry = readMeshEntry(list.element(i), sceneFolder);
+        std::move(entry.begin(), entry.end(), std::back_inserter(meshes));
+    }
+    return meshes;
+}
+
+// ---- the document -----------------------------------------------------------------------------------------
+
+void readBackground(const JsonNode& node, const fs::path& sceneFolder, Scene& scene) {
+    scene.backgroundFile = inputFile(node, sceneFolder);
+    try {
+        scene.background = readImage(scene.backgroundFile);
+    } catch (const InputError& e) {
+        node.fail(e.what());
+    }
+    const Camera& camera = scene.camera;
+    if (scene.background->width() != camera.width || scene.background->height() != camera.height)
+        node.fail(fmt::format(
+            "expected an image of the camera's size {}, got {} ('{}')", sizeText(camera.width, camera.height),
+            sizeText(scene.background->width(), scene.background->height()), scene.backgroundFile.string()));
+}
+
+bool holdsEntries(const JsonNode& root, std::string_view key) {
+    auto node = root.find(key);
+    if (!node) return false;
+    node->requireArray();
+    return node->size() > 0;
+}
+
+}  // namespace
+
+Scene loadScene(const json& document, const fs::path& file) {
+    JsonNode root(document, file.string());
+    if (!document.is_object())
+        root.fail("expected a JSON object {...} at the top level, got " + describeValue(document));
+    root.allowKeys({"description", "camera", "background", "scene", "virtual", "lights", "options"});
+    if (auto n = root.find("description")) n->string();
+    fs::path sceneFolder = file.parent_path();
+
+    // Cheap checks first, so that a typo in the options does not wait for a large mesh to load.
+    Scene scene;
+    scene.file = file;
+    scene.camera = readCamera(root.child("camera"));
+    if (auto n = root.find("options")) scene.options = readOptions(*n);
+    if (auto n = root.find("lights")) {
+        n->requireArray();
+        for (size_t i = 0; i < n->size(); ++i) scene.lights.push_back(readLight(n->element(i)));
+    }
+    checkRenderMemory(scene.options, scene.camera, scene.lights.size(), physicalMemoryBytes(), file.string());
+    if (!holdsEntries(root, "scene") && !holdsEntries(root, "virtual"))
+        root.fail("no meshes: at least one of \"scene\" (the real scene) and \"virtual\" must hold a mesh");
+
+    if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
+    if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder);
+    if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder);
+    return scene;
+}
+
+Scene loadScene(const fs::path& file, const std::vector<std::string>& overrides) {
+    std::ifstream in(file, std::ios::binary);
+    if (!fs::is_regular_file(file) || !in) throw InputError(file.string(), "cannot open scene file");
+    std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    json document;
+    try {
+        document = json::parse(text);
+    } catch (const json::parse_error& e) {
+        // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, column 5:
+        // <what>".
+        static const std::regex kPosition(R"(at line (\d+), column (\d+): (.*))");
+        std::smatch match;
+        std::string message = e.what();
+        if (std::regex_search(message, match, kPosition))
+            throw InputError(
+                fmt::format("{}: line {}, column {}", file.string(), match[1].str(), match[2].str()),
+                match[3].str());
+        throw InputError(fmt::format("{}: byte {}", file.string(), e.byte), message);
+    }
+    for (const std::string& override : overrides) applyOverride(document, override);
+    return loadScene(document, file);
+}
+
+void applyOverride(json& document, const std::string& keyEqualsValue) {
+    size_t equals = keyEqualsValue.find('=');
+    if (equals == std::string::npos)
+        throw InputError("--set " + keyEqualsValue, "expected KEY=VALUE, e.g. options.volume.resolution=64");
+    std::string key = keyEqualsValue.substr(0, equals), valueText = keyEqualsValue.substr(equals + 1);
+    std::string where = "--set " + key;
+    json value = json::parse(valueText, nullptr, /*allow_exceptions=*/false);
+    if (value.is_discarded()) value = valueText;  // not JSON: a string
+
+    json* node = &document;
+    std::string walked;  // the path so far, for messages
+    size_t start = 0;
+    while (true) {
+        size_t dot = key.find('.', start);
+        std::string part = key.substr(start, dot == std::string::npos ? std::string::npos : dot - start);
+        if (part.empty())
+            throw InputError(where, "expected KEY as dotted names, e.g. options.volume.resolution");
+        if (node->is_null()) *node = json::object();
+        if (node->is_object()) {
+            node = &(*node)[part];
+        } else if (node->is_array()) {
+            bool isIndex = part.size() <= 9 && part.find_first_not_of("0123456789") == std::string::npos;
+            if (!isIndex)
+                throw InputError(where,
+                                 fmt::format("'{}' is an array: expected an index, got '{}'", walked, part));
+            size_t index = std::stoul(part);
+            if (index >= node->size())
+                throw InputError(where, fmt::format("index {} is out of range: '{}' has {} element{}", index,
+                                                    walked, node->size(), node->size() == 1 ? "" : "s"));
+            node = &(*node)[index];
+        } else {
+            throw InputError(where, fmt::format("cannot set '{}' inside '{}', which is {}", part, walked,
+                                                describeValue(*node)));
+        }
+        walked += (walked.empty() ? "" : ".") + part;
+        if (dot == std::string::npos) break;
+        start = dot + 1;
+    }
+    *node = std::move(value);
+}
+
+}  // namespace deltagi

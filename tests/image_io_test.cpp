@@ -1,0 +1,210 @@
+// Image files: round trips, sRGB decoding, and the errors for missing files and non-finite pixels.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "deltagi/error.h"
+#include "deltagi/image.h"
+
+namespace deltagi {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ImageIoTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir_ =
+            fs::temp_directory_path() / ("deltagi_image_io_" + std::to_string(getpid()) + "_" + info->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+    fs::path dir_;
+};
+
+std::string errorOf(const std::function<void()>& action) {
+    try {
+        action();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    ADD_FAILURE() << "expected an InputError";
+    return {};
+}
+
+void expectContains(const std::string& message, const std::string& part) {
+    EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
+}
+
+// The sRGB encoding (IEC 61966-2-1), written out independently of the implementation.
+double encodeSrgb(double linear) {
+    return linear <= 0.0031308 ? 12.92 * linear : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+}
+
+// A ramp over [0, 1] in every channel, different per channel.
+Image ramp(int width, int height, int channels) {
+    Image image(width, height, channels);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            for (int c = 0; c < channels; ++c)
+                image.at(x, y, c) = static_cast<float>((x + y * width + 37 * c) % (width * height)) /
+                                    static_cast<float>(width * height - 1);
+    return image;
+}
+
+TEST_F(ImageIoTest, PngRoundTripWithinOneCodeValue) {
+    Image image = ramp(16, 16, 3);
+    image.at(0, 0, 0) = 2.0f;   // clamped to 1
+    image.at(1, 0, 0) = -1.0f;  // clamped to 0
+    writeImage(image, dir_ / "ramp.png");
+    Image back = readImage(dir_ / "ramp.png");
+    ASSERT_EQ(back.width(), 16);
+    ASSERT_EQ(back.height(), 16);
+    ASSERT_EQ(back.channels(), 3);
+    EXPECT_FLOAT_EQ(back.at(0, 0, 0), 1.0f);
+    EXPECT_FLOAT_EQ(back.at(1, 0, 0), 0.0f);
+    // Compared in the encoded domain: rounding to 8 bits moves a value by at most half a code value.
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x)
+            for (int c = 0; c < 3; ++c) {
+                if (y == 0 && x < 2 && c == 0) continue;
+                EXPECT_NEAR(encodeSrgb(back.at(x, y, c)), encodeSrgb(image.at(x, y, c)), 0.5 / 255 + 1e-6);
+            }
+}
+
+TEST_F(ImageIoTest, PngDecodesWithTheExactSrgbCurve) {
+    // Code values 0..255 decoded must match the piecewise sRGB EOTF.
+    Image codes(256, 1, 1);
+    for (int i = 0; i < 256; ++i) {
+        double v = i / 255.0;
+        codes.at(i, 0, 0) = static_cast<float>(v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4));
+    }
+    writeImage(codes, dir_ / "codes.png");
+    Image back = readImage(dir_ / "codes.png");
+    ASSERT_EQ(back.channels(), 3);  // grey expanded
+    for (int i = 0; i < 256; ++i) {
+        EXPECT_NEAR(back.at(i, 0, 0), codes.at(i, 0, 0), 1e-6f) << "code " << i;
+        EXPECT_EQ(back.at(i, 0, 2), back.at(i, 0, 0));
+    }
+    EXPECT_NEAR(back.at(128, 0, 0), 0.2158605f, 1e-6f);  // the textbook value for code 128
+}
+
+TEST_F(ImageIoTest, ExrRoundTripIsExact) {
+    for (int channels : {1, 3, 4}) {
+        Image image = ramp(8, 5, channels);
+        image.at(2, 3, 0) = -0.75f;  // negative and large values survive (deltas, HDR)
+        image.at(3, 3, 0) = 12345.678f;
+        fs::path file = dir_ / ("ramp" + std::to_string(channels) + ".exr");
+        writeImage(image, file);
+        Image back = readImage(file);
+        ASSERT_EQ(back.width(), 8);
+        ASSERT_EQ(back.height(), 5);
+        ASSERT_EQ(back.channels(), 3);
+        for (int y = 0; y < 5; ++y)
+            for (int x = 0; x < 8; ++x)
+                for (int c = 0; c < 3; ++c)
+                    EXPECT_EQ(back.at(x, y, c), image.at(x, y, channels >= 3 ? c : 0));
+    }
+}
+
+TEST_F(ImageIoTest, HdrRoundTripWithinRgbePrecision) {
+    Image image(4, 2, 3);
+    for (size_t i = 0; i < image.data().size(); ++i) image.data()[i] = 0.1f + 3.7f * static_cast<float>(i);
+    writeImage(image, dir_ / "x.hdr");
+    Image back = readImage(dir_ / "x.hdr");
+    ASSERT_EQ(back.width(), 4);
+    // RGBE keeps 8 mantissa bits per channel relative to the largest channel of the pixel.
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) {
+            float largest = std::max({image.at(x, y, 0), image.at(x, y, 1), image.at(x, y, 2)});
+            for (int c = 0; c < 3; ++c) EXPECT_NEAR(back.at(x, y, c), image.at(x, y, c), largest / 128.0f);
+        }
+}
+
+TEST_F(ImageIoTest, NonFinitePixelsAreWrittenAsZero) {
+    Image image(3, 1, 3, 0.5f);
+    image.at(0, 0, 1) = NAN;
+    image.at(1, 0, 0) = INFINITY;
+    image.at(2, 0, 2) = -INFINITY;
+    for (const char* name : {"nan.exr", "nan.png", "nan.hdr"}) {
+        writeImage(image, dir_ / name);
+        Image back = readImage(dir_ / name);  // would throw if a NaN had been written
+        EXPECT_EQ(back.at(0, 0, 1), 0.0f) << name;
+        EXPECT_EQ(back.at(1, 0, 0), 0.0f) << name;
+        EXPECT_EQ(back.at(2, 0, 2), 0.0f) << name;
+        EXPECT_NEAR(back.at(0, 0, 0), 0.5f, 0.01f) << name;
+    }
+}
+
+// A PFM (portable float map) written by hand, since writeImage never writes NaN.
+void writePfm(const fs::path& path, int width, int height, const std::vector<float>& rgb) {
+    std::ofstream out(path, std::ios::binary);
+    out << "PF\n" << width << " " << height << "\n-1.0\n";  // negative scale: little-endian
+    out.write(reinterpret_cast<const char*>(rgb.data()),
+              static_cast<std::streamsize>(rgb.size() * sizeof(float)));
+}
+
+TEST_F(ImageIoTest, ReadingNonFinitePixelsIsAnError) {
+    std::vector<float> pixels(4 * 2 * 3, 0.25f);
+    pixels[0] = NAN;
+    pixels[1] = NAN;  // the same pixel: counted once
+    pixels[7] = INFINITY;
+    writePfm(dir_ / "bad.pfm", 4, 2, pixels);
+    std::string message = errorOf([&] { readImage(dir_ / "bad.pfm"); });
+    expectContains(message, "bad.pfm");
+    expectContains(message, "2 of 8 pixels are NaN or infinite");
+}
+
+TEST_F(ImageIoTest, MissingAndUnwritableFilesAreErrors) {
+    std::string message = errorOf([&] { readImage(dir_ / "missing.png"); });
+    expectContains(message, "missing.png");
+    expectContains(message, "cannot read image");
+
+    message = errorOf([&] { writeImage(Image(2, 2, 3), dir_ / "x.tiff"); });
+    expectContains(message, "x.tiff");
+    expectContains(message, ".png, .exr or .hdr");
+
+    message = errorOf([&] { writeImage(Image(2, 2, 3), dir_ / "no-such-folder" / "x.png"); });
+    expectContains(message, "no-such-folder");
+    expectContains(message, "does not exist");
+    EXPECT_FALSE(fs::exists(dir_ / "no-such-folder"));
+}
+
+TEST(ImageTest, RgbOfGreyAndColourImages) {
+    Image grey(2, 1, 1, 0.25f);
+    EXPECT_EQ(grey.rgb(1, 0), glm::vec3(0.25f));
+    grey.setRgb(0, 0, glm::vec3(0.1f, 0.2f, 0.3f));
+    EXPECT_FLOAT_EQ(grey.at(0, 0, 0), 0.2f);
+    Image colour(2, 1, 4, 1.0f);
+    colour.setRgb(1, 0, {0.1f, 0.2f, 0.3f});
+    EXPECT_EQ(colour.rgb(1, 0), glm::vec3(0.1f, 0.2f, 0.3f));
+    EXPECT_EQ(colour.at(1, 0, 3), 1.0f);  // alpha untouched
+}
+
+TEST(ImageIoSharedDataTest, VeniceSunsetHdrMean) {
+    fs::path file = fs::path(DELTAGI_SHARED_DATA_DIR) / "envmaps" / "venice_sunset_1k.hdr";
+    if (!fs::exists(file)) GTEST_SKIP() << "shared data set not found: " << file << " (see ../shared/data)";
+    Image image = readImage(file);
+    ASSERT_EQ(image.width(), 1024);
+    ASSERT_EQ(image.height(), 512);
+    glm::dvec3 sum(0.0);
+    for (int y = 0; y < image.height(); ++y)
+        for (int x = 0; x < image.width(); ++x) sum += glm::dvec3(image.rgb(x, y));
+    glm::dvec3 mean = sum / static_cast<double>(image.pixelCount());
+    // The data set's README gives the mean to 3 digits.
+    EXPECT_NEAR(mean.x, 0.525, 0.0015);
+    EXPECT_NEAR(mean.y, 0.561, 0.0015);
+    EXPECT_NEAR(mean.z, 0.662, 0.0015);
+}
+
+}  // namespace
+}  // namespace deltagi
