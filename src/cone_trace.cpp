@@ -7,7 +7,17 @@
 namespace deltagi {
 
 ConeTraceSettings coneTraceSettings(const TraceOptions& o) {
-    return {o.stepScale, o.startOffset, o.maxOcclusion, o.normalWeight, o.accumulation == "paper"};
+    return {o.stepScale,      o.startOffset, o.maxOcclusion, o.normalWeight,
+            o.backfaceWeight, o.jitter,      o.accumulation == "paper"};
+}
+
+float hashToUnit(uint64_t index, uint32_t stream) {
+    // SplitMix64 finalizer over the index and stream.
+    uint64_t z = index * 0x9E3779B97F4A7C15ull + (static_cast<uint64_t>(stream) << 32) + 0x632BE59BD9B4E019ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return static_cast<float>(z >> 40) * (1.0f / static_cast<float>(1ull << 24));
 }
 
 glm::vec3 coneOrigin(glm::vec3 position, glm::vec3 normal, glm::vec3 direction, const VolumeRegion& region,
@@ -36,16 +46,33 @@ std::pair<float, float> clipToVolume(glm::vec3 origin, glm::vec3 dir, float n) {
     return {tEnter, tExit};
 }
 
-// Occlusion of a visibility sample seen along `dir` (§3.1: "adapted with the normal stored in the volume"):
-// a voxel whose normals agree (|mean normal| near 1) occludes a cone in proportion to |cos| between them;
-// incoherent normals (|mean normal| near 0, e.g. both sides of a thin part) occlude isotropically.
-inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float normalWeight) {
+// Occlusion of a visibility sample seen along `dir` at mip `level`.
+//
+// Voxelization records surfaces, one voxel thick, so the occlusion of a coarse voxel (the fraction of filled
+// sub-voxels, §3.2) of a surface crossing it is only 2^-level: read as an opacity, every thin wall would turn
+// transparent at coarse levels and light would leak through it. The fraction is therefore scaled back by
+// 2^level to the surface's coverage of the voxel's cross-section, and weighted by how the surface faces the
+// cone (§3.1: "the occlusion value is thereby adapted with the normal stored in the volume"):
+//   coherent normals (|mean normal| near 1): 1 for a surface facing the cone (seen obliquely, a surface covers
+//     the cone's cross-section as well: the cone crosses more of its voxels), 1 - backface_weight for one the
+//     cone leaves through its back (so that a convex surface does not shadow itself at grazing angles);
+//   incoherent normals (both sides of a thin part, a whole small object in one coarse voxel): the mean
+//     projected area of randomly oriented surface, kIsotropicCoverage.
+// normal_weight blends from the isotropic model (0) to the normal-adapted one (1).
+constexpr float kIsotropicCoverage = 0.5f;
+// A back face counts fully as one once cos(back) >= 1/kBackfaceRamp: the neighbours of a point on a convex
+// surface face a grazing cone slightly from behind.
+constexpr float kBackfaceRamp = 16.0f;
+inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float level, const ConeTraceSettings& s) {
     const float occupancy = v.x;
     if (occupancy <= 1e-6f) return 0.0f;
     const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / occupancy;
     const float coherence = std::min(glm::length(meanNormal), 1.0f);
-    const float projected = std::min(std::abs(glm::dot(meanNormal, dir)), coherence);
-    return std::min(occupancy * (1.0f - normalWeight * (coherence - projected)), 1.0f);
+    const float facing = coherence > 1e-6f ? glm::dot(meanNormal, dir) / coherence : 0.0f;  // cos; > 0: back
+    const float directional = facing > 0.0f ? 1.0f - s.backfaceWeight * std::min(1.0f, kBackfaceRamp * facing) : 1.0f;
+    const float adapted = (1.0f - coherence) * kIsotropicCoverage + coherence * directional;
+    const float weight = (1.0f - s.normalWeight) * kIsotropicCoverage + s.normalWeight * adapted;
+    return std::clamp(occupancy * std::exp2(level) * weight, 0.0f, 1.0f);
 }
 
 // Opacity of a sample that covers a segment as long as the cone is wide, applied over a shorter step.
@@ -62,7 +89,9 @@ void marchCone(const Cone& cone, const VolumeRegion& region, const ConeTraceSett
     auto [tEnter, tExit] = clipToVolume(origin, cone.direction, n);
     tExit = std::min(tExit, cone.maxDistance * invVoxel);
     const float maxLevel = std::log2(n);
-    for (float t = tEnter; t < tExit;) {
+    // The first step is jittered: regular steps would alias into bands across neighbouring pixels.
+    const float firstDiameter = std::max(1.0f, 2.0f * tEnter * cone.tanHalfAngle);
+    for (float t = tEnter + cone.jitter * settings.jitter * firstDiameter * settings.stepScale; t < tExit;) {
         const float diameter = std::max(1.0f, 2.0f * t * cone.tanHalfAngle);
         const float level = std::min(std::log2(diameter), maxLevel);
         if (!visit(origin + t * cone.direction, level)) return;
@@ -81,11 +110,9 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
     marchCone(cone, light.region(), settings, [&](glm::vec3 p, float level) {
         float transmittance = 1.0f;
         if (visibility.scene)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->sample(p, level), cone.direction,
-                                                     settings.normalWeight);
+            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, level, settings);
         if (visibility.object)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.object->sample(p, level), cone.direction,
-                                                     settings.normalWeight);
+            transmittance *= 1.0f - adaptedOcclusion(visibility.object->sample(p, level), cone.direction, level, settings);
         const float occlusionLocal = stepOpacity(1.0f - transmittance, settings.stepScale);
         if (occlusionLocal > 0.0f) {
             const glm::vec4 l = light.sample(p, level);
@@ -109,11 +136,11 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
         float scene = 0.0f, object = 0.0f;
         if (visibility.scene)
             scene = stepOpacity(
-                adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, settings.normalWeight),
+                adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, level, settings),
                 settings.stepScale);
         if (visibility.object)
             object = stepOpacity(
-                adaptedOcclusion(visibility.object->sample(p, level), cone.direction, settings.normalWeight),
+                adaptedOcclusion(visibility.object->sample(p, level), cone.direction, level, settings),
                 settings.stepScale);
         const float combined = scene + object - scene * object;  // exactly `scene` without objects
         acc.scene += scene * (1.0f - acc.scene);

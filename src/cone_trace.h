@@ -18,8 +18,10 @@ struct ConeTraceSettings {
     float stepScale = 0.5f;
     float startOffset = 1.5f;  // level-0 voxels
     float maxOcclusion = 0.98f;
-    float normalWeight = 0.5f;
-    bool paperAccumulation = true;
+    float normalWeight = 1.0f;
+    float backfaceWeight = 1.0f;
+    float jitter = 1.0f;
+    bool paperAccumulation = false;
 };
 ConeTraceSettings coneTraceSettings(const TraceOptions& options);
 
@@ -34,7 +36,12 @@ struct Cone {
     glm::vec3 direction{0, 0, 1};  // unit
     float tanHalfAngle = 0.5f;
     float maxDistance = std::numeric_limits<float>::infinity();  // world units from origin
+    float jitter = 0.0f;  // in [0, 1): the first sample is this fraction of a step further along
 };
+
+// A deterministic random number in [0, 1) for (pixel or voxel index, stream): cones of one point get
+// different streams. Independent of the thread count by construction.
+float hashToUnit(uint64_t index, uint32_t stream);
 
 // Moves a surface point off its surface along the normal and the cone axis by `startOffset` voxels, so that
 // the surface's own voxel does not occlude its cones.

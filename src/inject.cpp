@@ -7,6 +7,13 @@
 
 namespace deltagi {
 
+namespace {
+// Texel footprints tile a lit surface only up to the RSM's sampling: a fully lit voxel collects between about
+// (k-1)^2 and (k+1)^2 texels of k^2. A voxel whose footprints cover this fraction of its area counts as fully
+// lit; below it, the radiance is scaled by the covered fraction (partly shadowed voxels).
+constexpr float kFullCoverage = 0.75f;
+}  // namespace
+
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
                   std::span<const VoxelGeometry* const> geometry) {
     const int n = region.resolution;
@@ -48,10 +55,14 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
             occupancy = std::max(occupancy, g->visibility[i].x);
             area += g->area[i];
         }
-        const glm::vec4 a = accum[i];
-        if (a.w > 0.0f) occupancy = 1.0f;
-        const float denominator = std::numbers::pi_v<float> * std::max(area, a.w);
-        const glm::vec3 radiance = denominator > 0.0f ? glm::vec3(a) / denominator : glm::vec3(0.0f);
+        const glm::vec4 a = accum[i];  // (reflected flux, footprint area)
+        glm::vec3 radiance(0.0f);
+        if (a.w > 0.0f) {
+            occupancy = 1.0f;
+            // Mean radiance of the lit texels, times the lit fraction of the voxel's surface.
+            const float litFraction = area > 0.0f ? std::min(1.0f, a.w / (kFullCoverage * area)) : 1.0f;
+            radiance = glm::vec3(a) * (litFraction / (std::numbers::pi_v<float> * a.w));
+        }
         light[i] = glm::vec4(radiance * occupancy, occupancy);
     });
     return light;

@@ -11,8 +11,9 @@
 
 namespace deltagi {
 
-// Radiance of a voxel = reflected flux / (pi * surface area), with the area being the geometry's area in the
-// voxel (or the texels' footprints when they cover more). Voxels are (radiance * occupancy, occupancy), with
+// Radiance of a voxel = the mean radiance of the texels that landed in it (reflected flux / (pi * footprint
+// area)), times the lit fraction of the geometry's surface area in the voxel (footprint / area, saturating at
+// kFullCoverage in inject.cpp, which absorbs the RSM's sampling jitter). Voxels are (radiance * occupancy, occupancy), with
 // occupancy 1 where any of `geometry` touches the voxel. Deterministic for any thread count.
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
                   std::span<const VoxelGeometry* const> geometry);

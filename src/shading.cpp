@@ -10,6 +10,10 @@ namespace deltagi {
 namespace {
 
 constexpr int64_t kPointGrain = 256;
+// A shadow cone stops this many cone diameters short of a point or spot light: trilinear samples of a mip
+// level reach one voxel of that level beyond the cone, and a cone reaching the lamp would read the surfaces
+// around it (a lamp set into a ceiling would shadow everything).
+constexpr float kShadowConeStopDiameters = 1.5f;
 
 // A frame with z along n.
 inline glm::mat3 tangentFrame(glm::vec3 n) {
@@ -43,13 +47,15 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
         for (size_t l = 0; l < lights.size(); ++l) {
             const LightSample s = sampleLight(lights[l], p.position);
             if (glm::dot(s.wi, p.normal) <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
+            const float tanHalf = lights[l].radius > 0.0f && std::isfinite(s.distance)
+                                      ? lights[l].radius / s.distance
+                                      : defaultTan;
             Cone cone;
+            cone.tanHalfAngle = tanHalf;
             cone.origin = coneOrigin(p.position, p.normal, s.wi, region, settings);
             cone.direction = s.wi;
-            cone.maxDistance = s.distance;
-            cone.tanHalfAngle = lights[l].radius > 0.0f && std::isfinite(s.distance)
-                                    ? lights[l].radius / s.distance
-                                    : defaultTan;
+            cone.maxDistance = std::isfinite(s.distance) ? s.distance / (1.0f + kShadowConeStopDiameters * 2.0f * tanHalf) : s.distance;
+            cone.jitter = hashToUnit(i, static_cast<uint32_t>(l));
             out[i * lights.size() + l] = traceShadowCone(cone, visibility, settings);
         }
     });
@@ -71,6 +77,7 @@ std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, c
             cone.direction = frame * cones.directions[k];
             cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
             cone.tanHalfAngle = cones.tanHalfAngle;
+            cone.jitter = hashToUnit(i, static_cast<uint32_t>(1000 + k));
             sum += cones.weights[k] * traceLightCone(cone, light, visibility, settings);
         }
         out[i] = sum;
@@ -90,6 +97,7 @@ std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, 
         cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
         cone.tanHalfAngle = specularConeTanHalfAngle(p.material->phongExponent(), options.specular.minApertureDeg,
                                                      options.specular.maxApertureDeg);
+        cone.jitter = hashToUnit(i, 2000u);
         out[i] = traceLightCone(cone, light, visibility, settings);
     });
     return out;

@@ -59,11 +59,18 @@ struct TraceOptions {
     float maxOcclusion = 0.98f;
     // "normal_weight": how strongly the stored average normal adapts the occlusion (§3.1): 0 = isotropic
     // occlusion, 1 = a voxel whose normals all agree occludes a grazing cone in proportion to |cos|.
-    float normalWeight = 0.5f;
+    float normalWeight = 1.0f;
+    // "backface_weight": how much less a voxel occludes a cone that leaves it through the back of its surface
+    // (mean normal along the cone): 0 = two-sided, 1 = a coherent back face does not occlude. This is what
+    // keeps a convex surface from shadowing itself at grazing angles (the shadow terminator).
+    float backfaceWeight = 1.0f;
+    // "jitter": offsets each cone's first step by a fraction of a step that is random per pixel (seeded by
+    // the pixel index), turning the banding of regular steps into fine noise. 0 disables it.
+    float jitter = 1.0f;
     // "accumulation": "paper" uses the accumulator formulas of §3.1 as printed
     //   light = light*occ + light_local*occ_local*(1-occ); occ = occ + occ_local*(1-occ),
     // "front_to_back" uses the usual emission-absorption compositing light += light_local*occ_local*(1-occ).
-    std::string accumulation = "paper";
+    std::string accumulation = "front_to_back";
 };
 
 // options.render: the camera pass.

@@ -1,0 +1,140 @@
+// Reflective shadow maps and light injection against closed-form irradiance.
+#include "inject.h"
+#include "mipmap.h"
+#include "shading.h"
+
+#include <algorithm>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "test_scenes.h"
+
+namespace deltagi {
+namespace {
+
+const VolumeRegion kRegion{glm::vec3(-1.0f), 2.0f, 16};
+
+Scene floorOnly(float albedo) {
+    Scene s;
+    s.real.push_back(test::placed(makeQuad({4.0f, 4.0f}), {0, 0.0625f, 0}, test::diffuse(glm::vec3(albedo))));
+    return s;
+}
+
+Light directionalDown(float irradiance) {
+    Light l;
+    l.type = Light::Type::Directional;
+    l.direction = glm::vec3(0, -1, 0);
+    l.intensity = irradiance;
+    return l;
+}
+
+// A directional light straight down on a Lambertian floor: every lit floor voxel holds albedo * E / pi.
+TEST(Inject, DirectionalLightOnAFloorGivesAlbedoTimesIrradianceOverPi) {
+    Scene s = floorOnly(0.5f);
+    RayScene rays(s, SceneContent::RealOnly);
+    std::vector<ReflectiveShadowMap> rsm = {renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256)};
+    // The RSM carries the reflected flux: albedo * E * (floor area inside the region) = 0.5 * 2 * 4.
+    glm::dvec3 flux(0.0);
+    for (const RsmTexel& t : rsm[0].texels) flux += glm::dvec3(t.flux);
+    EXPECT_NEAR(flux.x, 4.0, 0.05);
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    Grid3 light = injectLight(rsm, kRegion, geometry);
+    const float expected = 0.5f * 2.0f / std::numbers::pi_v<float>;
+    for (int z = 1; z < 15; ++z)
+        for (int x = 1; x < 15; ++x) {
+            glm::vec4 v = light.at(x, 8, z);
+            ASSERT_EQ(v.w, 1.0f);
+            EXPECT_NEAR(v.x, expected, 0.02f * expected) << x << "," << z;
+        }
+    // Nothing above or below the floor.
+    EXPECT_EQ(light.at(8, 9, 8), glm::vec4(0.0f));
+}
+
+// A point light: the voxel under it holds albedo * I / (pi d^2).
+TEST(Inject, PointLightMatchesInverseSquareIrradiance) {
+    Scene s = floorOnly(0.8f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const float height = 3.0f - 0.0625f;  // light outside the region: one fitted frustum
+    Light light = test::pointLight({0.0f, 3.0f, 0.0f}, 5.0f);
+    std::vector<ReflectiveShadowMap> rsm = {renderReflectiveShadowMap(rays, light, kRegion, 512)};
+    EXPECT_EQ(rsm[0].faces, 1);
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    Grid3 volume = injectLight(rsm, kRegion, geometry);
+    const float expected = 0.8f * 5.0f / (std::numbers::pi_v<float> * height * height);
+    const glm::vec4 v = volume.at(8, 8, 8);  // the voxel whose corner is under the light
+    EXPECT_NEAR(v.x, expected, 0.03f * expected);
+    // Light inside the region: a cube map, same answer.
+    Light inside = test::pointLight({0.0f, 0.6f, 0.0f}, 5.0f);
+    std::vector<ReflectiveShadowMap> cube = {renderReflectiveShadowMap(rays, inside, kRegion, 256)};
+    EXPECT_EQ(cube[0].faces, 6);
+    Grid3 volume2 = injectLight(cube, kRegion, geometry);
+    const float h2 = 0.6f - 0.0625f;
+    // Averaged over the voxel (0.125 wide) at distance ~0.54 the irradiance is a little lower than at its
+    // corner; compare the four voxels around the axis against the mean irradiance over them.
+    float mean = 0.25f * (volume2.at(7, 8, 7).x + volume2.at(8, 8, 7).x + volume2.at(7, 8, 8).x +
+                          volume2.at(8, 8, 8).x);
+    // Closed form: mean over the 0.25 x 0.25 square of I h / r^3 (cosine and inverse square), numerically.
+    double e = 0.0;
+    const int k = 200;
+    for (int i = 0; i < k; ++i)
+        for (int j = 0; j < k; ++j) {
+            double x = -0.125 + 0.25 * (i + 0.5) / k, z = -0.125 + 0.25 * (j + 0.5) / k;
+            double r2 = x * x + z * z + double(h2) * h2;
+            e += 5.0 * h2 / (r2 * std::sqrt(r2));
+        }
+    e /= double(k) * k;
+    EXPECT_NEAR(mean, 0.8 * e / std::numbers::pi, 0.03 * 0.8 * e / std::numbers::pi);
+}
+
+// The delta volume: negative where a virtual box now shadows the floor, positive on the lit box.
+TEST(Inject, DeltaVolumeIsNegativeInTheShadowAndPositiveOnTheObject) {
+    Scene s = floorOnly(0.5f);
+    s.virtuals.push_back(test::placed(makeBox(glm::vec3(0.5f)), {0, 0.5f, 0}, test::diffuse(glm::vec3(0.9f))));
+    RayScene realOnly(s, SceneContent::RealOnly), all(s, SceneContent::RealAndVirtual);
+    const Light light = directionalDown(1.0f);
+    std::vector<ReflectiveShadowMap> full = {renderReflectiveShadowMap(all, light, kRegion, 256)};
+    std::vector<ReflectiveShadowMap> alone = {renderReflectiveShadowMap(realOnly, light, kRegion, 256)};
+    VoxelGeometry sceneGeometry = voxelize(s.real, kRegion), objectGeometry = voxelize(s.virtuals, kRegion);
+    const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
+    const VoxelGeometry* sceneOnly[] = {&sceneGeometry};
+    Grid3 delta = deltaVolume(injectLight(full, kRegion, both), injectLight(alone, kRegion, sceneOnly));
+    EXPECT_LT(delta.at(8, 8, 8).x, -0.1f);   // floor under the box
+    EXPECT_EQ(delta.at(2, 8, 2).x, 0.0f);    // floor far from the box: unchanged
+    EXPECT_GT(delta.at(8, 14, 8).x, 0.1f);   // the lit top of the box, y = 0.75: layer 14
+}
+
+}  // namespace
+}  // namespace deltagi
+
+namespace deltagi {
+namespace {
+
+// Closed form through the whole light path: a point facing down over a uniformly lit Lambertian floor sees
+// radiance L = albedo E / pi over its hemisphere, so the cosine-weighted diffuse cones return L (minus the few
+// grazing cones that leave the region before reaching the floor: 5% of the weight for 9 cones at h = 0.2).
+TEST(DiffuseCones, APointAboveALitFloorGathersTheFloorsRadiance) {
+    Scene s = floorOnly(0.5f);
+    const Light light = directionalDown(1.0f);
+    const VolumeRegion region{glm::vec3(-1.0f), 2.0f, 64};
+    RayScene rays(s, SceneContent::RealOnly);
+    std::vector<ReflectiveShadowMap> rsm = {renderReflectiveShadowMap(rays, light, region, 512)};
+    VoxelGeometry g = voxelize(s.real, region);
+    const VoxelGeometry* geometry[] = {&g};
+    MipVolume lightVolume = buildMipChain(region, injectLight(rsm, region, geometry));
+    MipVolume visibility = buildMipChain(region, std::move(g.visibility));
+    const Material white = test::diffuse(glm::vec3(1.0f));
+    const float floorRadiance = 0.5f / std::numbers::pi_v<float>;
+    for (float h : {0.2f, 0.4f}) {
+        std::vector<SurfacePoint> points = {{{0.0f, h, 0.0f}, {0, -1, 0}, {0, 0, 1}, &white}};
+        Options options;
+        const glm::vec3 gathered = traceDiffuseCones(points, lightVolume, {&visibility, nullptr}, options)[0];
+        // Measured 0.139-0.141 at resolution 64 (expected 0.151 after the grazing cones): within 15%.
+        EXPECT_NEAR(gathered.x, 0.95f * floorRadiance, 0.15f * floorRadiance) << "h = " << h;
+    }
+}
+
+}  // namespace
+}  // namespace deltagi

@@ -1,0 +1,180 @@
+// End-to-end properties of the Delta Global Illumination pipeline on small scenes built in code.
+#include "deltagi/renderer.h"
+
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include "test_scenes.h"
+
+namespace deltagi {
+namespace {
+
+using test::diffuse;
+using test::placed;
+
+Image patternImage(int w, int h) {
+    Image img(w, h, 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) img.setRgb(x, y, {0.01f * x, 0.02f * y, 0.3f + 0.001f * (x * y % 7)});
+    return img;
+}
+
+void expectFinite(const Image& img) {
+    for (float v : img.data()) ASSERT_TRUE(std::isfinite(v));
+}
+
+TEST(Render, NoVirtualObjectReturnsTheBackgroundExactly) {
+    Scene s = test::floorScene();
+    s.background = patternImage(s.camera.width, s.camera.height);
+    RenderOutput out = render(s);
+    ASSERT_EQ(out.composite.data().size(), s.background->data().size());
+    for (size_t i = 0; i < out.composite.data().size(); ++i)
+        ASSERT_EQ(out.composite.data()[i], s.background->data()[i]);
+    for (float v : out.delta.data()) ASSERT_EQ(v, 0.0f);
+    for (float v : out.objectMask.data()) ASSERT_EQ(v, 0.0f);
+}
+
+TEST(Render, WithoutAPhotoTheRealSceneIsRenderedAsBackground) {
+    Scene s = test::floorScene();
+    RenderOutput out = render(s);
+    // The floor under the light: albedo/pi * I / d^2 = 0.5/pi * 2/2.25, plus a little indirect (none: a plane).
+    const glm::ivec2 p = test::project(s.camera, {0, 0, 0});
+    const float expected = 0.5f / 3.14159265f * 2.0f / 2.25f;
+    EXPECT_NEAR(out.background.rgb(p.x, p.y).x, expected, 0.05f * expected);
+    EXPECT_EQ(out.composite.data()[0], out.background.data()[0]);
+}
+
+Scene sphereOverFloor() {
+    Scene s = test::floorScene();
+    s.virtuals.push_back(placed(makeSphere(0.2f, 32), {0.0f, 0.35f, 0.0f}, diffuse({0.7f, 0.7f, 0.7f}), "ball"));
+    return s;
+}
+
+TEST(Render, TheObjectsShadowDarkensTheFloorUnderIt) {
+    Scene s = sphereOverFloor();
+    RenderOutput out = render(s);
+    expectFinite(out.composite);
+    // The floor point under the sphere, seen past it (the camera looks down at 45 degrees, so it is visible).
+    const glm::ivec2 under = test::project(s.camera, {0.0f, 0.0f, 0.25f});
+    ASSERT_EQ(out.objectMask.at(under.x, under.y, 0), 0.0f) << "the floor point must be visible";
+    const glm::vec3 bg = out.background.rgb(under.x, under.y);
+    const glm::vec3 d = out.delta.rgb(under.x, under.y);
+    EXPECT_LT(d.x, -0.3f * bg.x);
+    EXPECT_LT(d.y, 0.0f);
+    EXPECT_LT(d.z, 0.0f);
+    // The sphere itself is covered and lit.
+    const glm::ivec2 ball = test::project(s.camera, {0.0f, 0.5f, 0.1f});
+    EXPECT_EQ(out.objectMask.at(ball.x, ball.y, 0), 1.0f);
+    EXPECT_GT(out.composite.rgb(ball.x, ball.y).x, 0.05f);
+    // Composite never goes below zero, even on a black photo.
+    s.background = Image(s.camera.width, s.camera.height, 3, 0.0f);
+    RenderOutput black = render(s);
+    for (float v : black.composite.data()) ASSERT_GE(v, 0.0f);
+}
+
+TEST(Render, AnObjectOutOfTheLightsReachChangesOnlyItsOwnPixels) {
+    Scene s;
+    s.real.push_back(placed(makeQuad({6.0f, 2.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    Light spot;
+    spot.type = Light::Type::Spot;
+    spot.position = {-2.0f, 1.5f, 0.0f};
+    spot.direction = {0, -1, 0};
+    spot.innerAngleDeg = 15.0f;
+    spot.outerAngleDeg = 20.0f;
+    spot.intensity = 3.0f;
+    s.lights.push_back(spot);
+    s.virtuals.push_back(placed(makeBox(glm::vec3(0.3f)), {2.0f, 0.15f, 0.0f}, diffuse({0.9f, 0.2f, 0.2f}), "box"));
+    s.camera = test::lookAtCamera({0.0f, 2.5f, 3.0f}, {0, 0, 0}, 64, 48, 70.0f);
+    s.options.volume.resolution = 32;
+    s.options.rsm.resolution = 128;
+    s.background = patternImage(64, 48);
+    RenderOutput out = render(s);
+    int objectPixels = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 64; ++x) {
+            if (out.objectMask.at(x, y, 0) > 0.0f) {
+                ++objectPixels;
+                continue;
+            }
+            ASSERT_EQ(out.delta.rgb(x, y), glm::vec3(0.0f)) << x << "," << y;
+        }
+    EXPECT_GT(objectPixels, 0);
+}
+
+// A real table shadows the floor; a virtual ball under it must not darken that shadow again (§3.2).
+Scene ballUnderTable() {
+    Scene s = test::floorScene();
+    s.real.push_back(placed(makeBox({1.0f, 0.05f, 1.0f}), {0.0f, 0.8f, 0.0f}, diffuse(glm::vec3(0.5f)), "table"));
+    s.virtuals.push_back(placed(makeSphere(0.15f, 32), {0.0f, 0.15f, 0.0f}, diffuse(glm::vec3(0.7f)), "ball"));
+    s.camera = test::lookAtCamera({0.0f, 0.5f, 1.8f}, {0, 0.1f, 0}, 64, 48, 60.0f);
+    s.options.volume.center = glm::vec3(0.0f, 0.4f, 0.0f);
+    s.options.volume.size = 1.2f;
+    s.background = Image(64, 48, 3, 0.2f);
+    return s;
+}
+
+TEST(Render, ARealSurfaceInARealShadowIsNotDarkenedAgain) {
+    Scene s = ballUnderTable();
+    const float unshadowed = 0.5f / 3.14159265f * 2.0f / 2.25f;  // direct light on the floor, were it lit
+    auto meanDeltaNextToBall = [&](const RenderOutput& out) {
+        double sum = 0.0;
+        int count = 0;
+        for (float x : {-0.3f, -0.25f, 0.25f, 0.3f}) {
+            glm::ivec2 p = test::project(s.camera, {x, 0.0f, 0.1f});
+            if (out.objectMask.at(p.x, p.y, 0) > 0.0f) continue;
+            sum += out.delta.rgb(p.x, p.y).x;
+            ++count;
+        }
+        EXPECT_GT(count, 0);
+        return sum / count;
+    };
+    const double fixed = meanDeltaNextToBall(render(s));
+    EXPECT_LT(std::abs(fixed), 0.1 * unshadowed);
+    s.options.render.doubleShadowFix = false;  // one shared visibility: the double shadow of §3.2
+    const double doubled = meanDeltaNextToBall(render(s));
+    EXPECT_LT(doubled, -0.5 * unshadowed);
+}
+
+TEST(Render, ABrightObjectNextToAWhiteWallBleedsItsColourOntoIt) {
+    Scene s;
+    s.real.push_back(placed(makeQuad({2.0f, 2.0f}), {0, 0, 0}, diffuse(glm::vec3(0.8f)), "floor"));
+    TriangleMesh wall = makeQuad({2.0f, 2.0f});
+    transformMesh(wall, glm::translate(glm::mat4(1.0f), glm::vec3(0, 1.0f, -0.5f)) *
+                            glm::rotate(glm::mat4(1.0f), glm::radians(90.0f), glm::vec3(1, 0, 0)));
+    wall.material = diffuse(glm::vec3(0.8f));
+    s.real.push_back(wall);
+    s.virtuals.push_back(placed(makeBox(glm::vec3(0.4f)), {0.0f, 0.2f, -0.25f}, diffuse({0.9f, 0.1f, 0.05f}), "box"));
+    s.lights.push_back(test::pointLight({1.0f, 1.0f, 0.5f}, 3.0f));
+    s.camera = test::lookAtCamera({0.3f, 0.6f, 1.5f}, {0.0f, 0.2f, -0.5f}, 64, 48, 60.0f);
+    s.options.volume.resolution = 32;
+    s.options.rsm.resolution = 128;
+    s.background = Image(64, 48, 3, 0.3f);
+    RenderOutput out = render(s);
+    const glm::ivec2 p = test::project(s.camera, {0.3f, 0.2f, -0.5f});
+    ASSERT_EQ(out.objectMask.at(p.x, p.y, 0), 0.0f);
+    const glm::vec3 d = out.delta.rgb(p.x, p.y);
+    EXPECT_GT(d.x, 0.0f);
+    EXPECT_GT(d.x, d.y + 0.002f);
+    EXPECT_GT(d.x, d.z + 0.002f);
+}
+
+TEST(Render, ResultDoesNotDependOnTheThreadCount) {
+    auto run = [](int threads) {
+        tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+        Scene s = sphereOverFloor();
+        s.options.specular.minApertureDeg = 10.0f;
+        s.real[0].material.specular = glm::vec3(0.3f);
+        s.real[0].material.albedo = glm::vec3(0.5f);
+        s.real[0].material.roughness = 0.3f;
+        return render(s);
+    };
+    RenderOutput a = run(1), b = run(2);
+    for (size_t i = 0; i < a.composite.data().size(); ++i) ASSERT_EQ(a.composite.data()[i], b.composite.data()[i]);
+    for (size_t i = 0; i < a.background.data().size(); ++i)
+        ASSERT_EQ(a.background.data()[i], b.background.data()[i]);
+}
+
+}  // namespace
+}  // namespace deltagi
