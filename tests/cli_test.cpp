@@ -1,0 +1,276 @@
+// The `deltagi` command end to end: bad input gives one `deltagi: error:` line naming the file and key and a
+// non-zero exit; a tiny scene renders with every AOV; `info --json` is valid JSON.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "deltagi/scene_info.h"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct CliResult {
+    int exitCode = -1;
+    std::string out;  // stdout
+    std::string err;  // stderr
+};
+
+std::string readText(const fs::path& path) {
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    return text.str();
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+    std::ofstream out(path);
+    out << text;
+    ASSERT_TRUE(out.good()) << path;
+}
+
+// Single-quotes an argument for /bin/sh.
+std::string quote(const std::string& arg) {
+    std::string quoted = "'";
+    for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return quoted + "'";
+}
+
+size_t lineCount(const std::string& text) {
+    return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
+}
+
+// A floor quad (explicit triangles), a small box on it as the virtual object and one point light; small
+// enough to render in well under a second.
+json tinyScene() {
+    json floorShape = {{"type", "triangles"},
+                       {"positions", {{-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}}},
+                       {"indices", {{0, 2, 1}, {0, 3, 2}}}};
+    return {
+        {"camera",
+         {{"width", 64},
+          {"height", 48},
+          {"fov_y_deg", 45},
+          {"position", {0, 0.8, 2}},
+          {"look_at", {0, 0.1, 0}},
+          {"up", {0, 1, 0}}}},
+        {"scene", {{{"name", "floor"}, {"shape", floorShape}, {"material", {{"albedo", {0.7, 0.7, 0.7}}}}}}},
+        {"virtual",
+         {{{"name", "box"},
+           {"shape", {{"type", "box"}, {"size", {0.3, 0.3, 0.3}}}},
+           {"transform", {{"translate", {0, 0.15, 0}}}},
+           {"material", {{"albedo", {0.1, 0.2, 0.8}}}}}}},
+        {"lights",
+         {{{"type", "point"}, {"position", {0.5, 1.5, 0.5}}, {"color", {1, 1, 1}}, {"intensity", 3}}}},
+        {"options", {{"volume", {{"resolution", 16}}}, {"rsm", {{"resolution", 64}}}}},
+    };
+}
+
+class CliTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir_ = fs::temp_directory_path() /
+               ("deltagi_cli_test_" + std::string(test->name()) + "_" + std::to_string(getpid()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override {
+        std::error_code ignored;
+        fs::remove_all(dir_, ignored);
+    }
+
+    // Runs `deltagi ARGS` (already quoted as needed), capturing stdout and stderr.
+    CliResult run(const std::string& args) const {
+        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
+        const std::string command =
+            quote(DELTAGI_CLI) + " " + args + " >" + quote(out.string()) + " 2>" + quote(err.string());
+        const int status = std::system(command.c_str());
+        CliResult result;
+        result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        result.out = readText(out);
+        result.err = readText(err);
+        return result;
+    }
+
+    fs::path writeScene(const json& scene, const std::string& name = "scene.json") const {
+        const fs::path path = dir_ / name;
+        writeText(path, scene.dump(2));
+        return path;
+    }
+
+    std::string renderArgs(const fs::path& scene) const {
+        return "render " + quote(scene.string()) + " -o " + quote((dir_ / "out.png").string());
+    }
+
+    // `deltagi info` on a shipped example: it loads and covers the box with the region it asks for.
+    void expectExampleLoads(const std::string& name) const {
+        const fs::path scene = fs::path(DELTAGI_SOURCE_DIR) / "examples" / (name + ".json");
+        const CliResult result = run("info --json " + quote(scene.string()));
+        ASSERT_EQ(result.exitCode, 0) << name << ": " << result.err;
+        const json info = json::parse(result.out);
+        EXPECT_EQ(info.at("real").at("meshes"), 7) << name;
+        EXPECT_EQ(info.at("lights"), 1) << name;
+        EXPECT_EQ(info.at("volume").at("resolution"), 128) << name;
+        EXPECT_NEAR(info.at("volume").at("size").get<double>(), 0.6, 1e-6) << name;
+    }
+
+    fs::path dir_;
+};
+
+// The contract of every input error: a non-zero exit, and one line on stderr that names what was wrong.
+void expectOneErrorLine(const CliResult& result, std::initializer_list<std::string> mustName) {
+    EXPECT_NE(result.exitCode, 0);
+    EXPECT_EQ(lineCount(result.err), 1u) << result.err;
+    EXPECT_EQ(result.err.rfind("deltagi: error:", 0), 0u) << result.err;
+    for (const std::string& name : mustName)
+        EXPECT_NE(result.err.find(name), std::string::npos) << result.err;
+}
+
+TEST_F(CliTest, MissingSceneFile) {
+    expectOneErrorLine(run(renderArgs(dir_ / "no-such-scene.json")), {"no-such-scene.json"});
+    expectOneErrorLine(run("info " + quote((dir_ / "no-such-scene.json").string())), {"no-such-scene.json"});
+}
+
+TEST_F(CliTest, MalformedJson) {
+    writeText(dir_ / "broken.json", "{\"camera\": {\"width\": 64,\n");
+    expectOneErrorLine(run(renderArgs(dir_ / "broken.json")), {"broken.json"});
+}
+
+TEST_F(CliTest, UnknownKey) {
+    json scene = tinyScene();
+    scene["camera"]["widht"] = 64;
+    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "widht"});
+}
+
+TEST_F(CliTest, WrongType) {
+    json scene = tinyScene();
+    scene["camera"]["width"] = "wide";
+    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "camera", "width"});
+}
+
+TEST_F(CliTest, MissingMeshFile) {
+    json scene = tinyScene();
+    scene["virtual"][0].erase("shape");
+    scene["virtual"][0]["file"] = "missing-mesh.obj";
+    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "missing-mesh.obj"});
+}
+
+TEST_F(CliTest, BadOverride) {
+    const fs::path scene = writeScene(tinyScene());
+    // camera.width is a number: the key cannot go on through it.
+    expectOneErrorLine(run(renderArgs(scene) + " --set camera.width.pixels=3"), {"camera.width"});
+    expectOneErrorLine(run(renderArgs(scene) + " --set options.volume.resolution"),
+                       {"options.volume.resolution"});
+    expectOneErrorLine(run(renderArgs(scene) + " --set camera.width=-5"), {"scene.json", "camera", "width"});
+}
+
+TEST_F(CliTest, ZeroThreads) {
+    expectOneErrorLine(run(renderArgs(writeScene(tinyScene())) + " --threads 0"), {"--threads"});
+}
+
+TEST_F(CliTest, ZeroResolution) {
+    json scene = tinyScene();
+    scene["options"]["volume"]["resolution"] = 0;
+    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "resolution"});
+    expectOneErrorLine(run(renderArgs(writeScene(tinyScene())) + " --set options.volume.resolution=0"),
+                       {"scene.json", "resolution"});
+}
+
+TEST_F(CliTest, UnknownOutputType) {
+    const std::string args =
+        "render " + quote(writeScene(tinyScene()).string()) + " -o " + quote((dir_ / "out.tif").string());
+    expectOneErrorLine(run(args), {"out.tif"});
+}
+
+TEST_F(CliTest, UsageErrorExitsWithTwo) {
+    const CliResult result = run("render");  // no scene, no -o
+    EXPECT_EQ(result.exitCode, 2);
+    EXPECT_EQ(result.err.rfind("deltagi: error:", 0), 0u) << result.err;
+}
+
+TEST_F(CliTest, RendersTinySceneWithAovs) {
+    const fs::path scene = writeScene(tinyScene());
+    const fs::path aov = dir_ / "aov";
+    const CliResult result = run(renderArgs(scene) + " --threads 2 --aov " + quote(aov.string()));
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    // stderr is not a terminal here: only the summary line.
+    EXPECT_EQ(lineCount(result.err), 1u) << result.err;
+    EXPECT_NE(result.err.find("out.png"), std::string::npos) << result.err;
+
+    for (const char* file :
+         {"background.exr", "composite.exr", "object_mask.exr", "delta.exr", "timings.json"}) {
+        EXPECT_TRUE(fs::is_regular_file(aov / file)) << file;
+        EXPECT_GT(fs::file_size(aov / file), 0u) << file;
+    }
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "out.png"));
+
+    const json timings = json::parse(readText(aov / "timings.json"));
+    ASSERT_TRUE(timings.at("stages").is_object());
+    for (const char* stage : {"voxelize", "rsm", "inject", "mipmap", "composite"})
+        EXPECT_TRUE(timings["stages"].contains(stage)) << stage << " in " << timings.dump();
+    for (const auto& [name, ms] : timings["stages"].items()) EXPECT_GE(ms.get<double>(), 0.0) << name;
+    EXPECT_GE(timings.at("total_ms").get<double>(), 0.0);
+    EXPECT_EQ(timings.at("threads"), 2);
+    EXPECT_EQ(timings.at("width"), 64);
+    EXPECT_EQ(timings.at("height"), 48);
+    EXPECT_EQ(timings.at("volume_resolution"), 16);
+}
+
+TEST_F(CliTest, QuietPrintsNothing) {
+    const CliResult result = run(renderArgs(writeScene(tinyScene())) + " --quiet --threads 1");
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    EXPECT_EQ(result.err, "");
+    EXPECT_EQ(result.out, "");
+}
+
+TEST_F(CliTest, InfoJson) {
+    const fs::path scene = writeScene(tinyScene());
+    const CliResult result =
+        run("info " + quote(scene.string()) + " --json --set options.volume.resolution=32");
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    const json info = json::parse(result.out);
+    EXPECT_EQ(info.at("real").at("triangles"), 2);
+    EXPECT_EQ(info.at("virtual").at("triangles"), 12);
+    EXPECT_EQ(info.at("lights"), 1);
+    EXPECT_EQ(info.at("volume").at("resolution"), 32);
+    EXPECT_EQ(info.at("volume").at("mip_levels"), 6);
+    EXPECT_EQ(info.at("volume").at("bytes_per_volume"), deltagi::volumeBytes(32));
+    EXPECT_EQ(info.at("volume").at("bytes_all_volumes"), 4 * deltagi::volumeBytes(32));
+    EXPECT_EQ(info.at("options").at("volume").at("resolution"), 32);
+    EXPECT_EQ(info.at("options").at("rsm").at("resolution"), 64);
+
+    const CliResult table = run("info " + quote(scene.string()));
+    ASSERT_EQ(table.exitCode, 0) << table.err;
+    EXPECT_NE(table.out.find("triangles"), std::string::npos) << table.out;
+}
+
+TEST_F(CliTest, CornellExamplesLoad) {
+    expectExampleLoads("cornell-box");
+    expectExampleLoads("cornell-box-glossy");
+}
+
+TEST_F(CliTest, BuddhaExampleLoads) {
+    if (!fs::exists(fs::path(DELTAGI_SHARED_DATA_DIR) / "meshes" / "happy-buddha.obj"))
+        GTEST_SKIP() << "needs the shared data set (" << DELTAGI_SHARED_DATA_DIR << ")";
+    expectExampleLoads("cornell-buddha");
+}
+
+// 16 bytes per voxel over the mip chain r^3 + (r/2)^3 + ... + 1.
+TEST(SceneInfo, VolumeBytesSumsTheMipChain) {
+    EXPECT_EQ(deltagi::volumeBytes(1), 16u);
+    EXPECT_EQ(deltagi::volumeBytes(4), 16u * (64 + 8 + 1));
+    EXPECT_EQ(deltagi::volumeBytes(128), 16u * (2396745u));  // (8^8 - 1) / 7 voxels
+}
+
+}  // namespace
