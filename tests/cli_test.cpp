@@ -156,14 +156,15 @@ TEST_F(CliTest, UnknownKey) {
 TEST_F(CliTest, WrongType) {
     json scene = tinyScene();
     scene["camera"]["width"] = "wide";
-    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "camera", "width"});
+    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "camera.width"});
 }
 
 TEST_F(CliTest, MissingMeshFile) {
     json scene = tinyScene();
     scene["virtual"][0].erase("shape");
     scene["virtual"][0]["file"] = "missing-mesh.obj";
-    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "missing-mesh.obj"});
+    expectOneErrorLine(run(renderArgs(writeScene(scene))),
+                       {"scene.json", "virtual[0].file", "missing-mesh.obj"});
 }
 
 TEST_F(CliTest, BadOverride) {
@@ -172,7 +173,7 @@ TEST_F(CliTest, BadOverride) {
     expectOneErrorLine(run(renderArgs(scene) + " --set camera.width.pixels=3"), {"camera.width"});
     expectOneErrorLine(run(renderArgs(scene) + " --set options.volume.resolution"),
                        {"options.volume.resolution"});
-    expectOneErrorLine(run(renderArgs(scene) + " --set camera.width=-5"), {"scene.json", "camera", "width"});
+    expectOneErrorLine(run(renderArgs(scene) + " --set camera.width=-5"), {"scene.json", "camera.width"});
 }
 
 TEST_F(CliTest, ZeroThreads) {
@@ -182,9 +183,9 @@ TEST_F(CliTest, ZeroThreads) {
 TEST_F(CliTest, ZeroResolution) {
     json scene = tinyScene();
     scene["options"]["volume"]["resolution"] = 0;
-    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "resolution"});
+    expectOneErrorLine(run(renderArgs(writeScene(scene))), {"scene.json", "options.volume.resolution"});
     expectOneErrorLine(run(renderArgs(writeScene(tinyScene())) + " --set options.volume.resolution=0"),
-                       {"scene.json", "resolution"});
+                       {"scene.json", "options.volume.resolution"});
 }
 
 TEST_F(CliTest, UnknownOutputType) {
