@@ -168,15 +168,12 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
     const auto realShadows = traceShadowCones(realPoints, scene.lights, bothVisibility, o);
     timer.lap("shadow");
     std::vector<glm::vec3> objectDiffuse, realDiffuse, objectSpecular, realSpecular;
-    if (o.render.indirect) {
-        objectDiffuse = traceDiffuseCones(gbuffer.object, fullVolume, bothVisibility, o);
-        realDiffuse = traceDiffuseCones(realPoints, deltaVolumeMips, bothVisibility, o);
-    }
+    const bool relightIndirect = o.render.indirect && o.render.relightIndirect;
+    if (o.render.indirect) objectDiffuse = traceDiffuseCones(gbuffer.object, fullVolume, bothVisibility, o);
+    if (relightIndirect) realDiffuse = traceDiffuseCones(realPoints, deltaVolumeMips, bothVisibility, o);
     timer.lap("diffuse");
-    if (o.render.indirect) {
-        objectSpecular = traceSpecularCones(gbuffer.object, fullVolume, bothVisibility, o);
-        realSpecular = traceSpecularCones(realPoints, deltaVolumeMips, bothVisibility, o);
-    }
+    if (o.render.indirect) objectSpecular = traceSpecularCones(gbuffer.object, fullVolume, bothVisibility, o);
+    if (relightIndirect) realSpecular = traceSpecularCones(realPoints, deltaVolumeMips, bothVisibility, o);
     timer.lap("specular");
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).

@@ -83,6 +83,9 @@ struct RenderOptions {
     // "double_shadow_fix": relight real surfaces with the object's shadow only where the real scene does not
     // already shadow them (§3.2). false reproduces the double shadow of a single shared visibility volume.
     bool doubleShadowFix = true;
+    // "relight_indirect": add the indirect change (delta volume cones) to real surfaces. false keeps only the
+    // object's shadow on them (the "shadow only" baseline of the evaluation); the object is shaded in full.
+    bool relightIndirect = true;
 };
 
 struct Options {
