@@ -2,6 +2,7 @@
 
 #include <numbers>
 
+#include "brdf.h"
 #include "lights.h"
 #include "parallel.h"
 
@@ -107,15 +108,7 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
     const LightSample s = sampleLight(light, point.position);
     const float cosTheta = glm::dot(s.wi, point.normal);
     if (cosTheta <= 0.0f) return glm::vec3(0.0f);
-    const Material& m = *point.material;
-    glm::vec3 brdf = m.albedo * std::numbers::inv_pi_v<float>;
-    if (m.specular != glm::vec3(0.0f)) {
-        const float n = m.phongExponent();
-        const glm::vec3 mirror = glm::reflect(-point.toEye, point.normal);
-        const float c = std::max(glm::dot(mirror, s.wi), 0.0f);
-        brdf += m.specular * ((n + 2.0f) * 0.5f * std::numbers::inv_pi_v<float> * std::pow(c, n));
-    }
-    return brdf * s.irradiance * cosTheta;
+    return evalBrdf(*point.material, point.normal, point.toEye, s.wi) * s.irradiance * cosTheta;
 }
 
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
