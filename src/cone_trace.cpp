@@ -63,13 +63,14 @@ constexpr float kIsotropicCoverage = 0.5f;
 // A back face counts fully as one once cos(back) >= 1/kBackfaceRamp: the neighbours of a point on a convex
 // surface face a grazing cone slightly from behind.
 constexpr float kBackfaceRamp = 16.0f;
-inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float level, const ConeTraceSettings& s) {
+inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float level, const ConeTraceSettings& s,
+                              float backfaceWeight) {
     const float occupancy = v.x;
     if (occupancy <= 1e-6f) return 0.0f;
     const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / occupancy;
     const float coherence = std::min(glm::length(meanNormal), 1.0f);
     const float facing = coherence > 1e-6f ? glm::dot(meanNormal, dir) / coherence : 0.0f;  // cos; > 0: back
-    const float directional = facing > 0.0f ? 1.0f - s.backfaceWeight * std::min(1.0f, kBackfaceRamp * facing) : 1.0f;
+    const float directional = facing > 0.0f ? 1.0f - backfaceWeight * std::min(1.0f, kBackfaceRamp * facing) : 1.0f;
     const float adapted = (1.0f - coherence) * kIsotropicCoverage + coherence * directional;
     const float weight = (1.0f - s.normalWeight) * kIsotropicCoverage + s.normalWeight * adapted;
     return std::clamp(occupancy * std::exp2(level) * weight, 0.0f, 1.0f);
@@ -101,18 +102,25 @@ void marchCone(const Cone& cone, const VolumeRegion& region, const ConeTraceSett
 
 const VolumeRegion& regionOf(const MipVolume* a, const MipVolume* b) { return a ? a->region() : b->region(); }
 
+// The back-face weights of the scene and the object volume: only the starting surface's own volume gets one.
+std::pair<float, float> backfaceWeights(const VisibilityVolumes& v, const ConeTraceSettings& s) {
+    const bool sceneIsSelf = v.self == VisibilityVolumes::Self::Scene;
+    return {sceneIsSelf ? s.backfaceWeight : 0.0f, sceneIsSelf ? 0.0f : s.backfaceWeight};
+}
+
 }  // namespace
 
 glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const VisibilityVolumes& visibility,
                          const ConeTraceSettings& settings) {
     glm::vec3 lightAcc(0.0f);
     float occlusionAcc = 0.0f;
+    const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
     marchCone(cone, light.region(), settings, [&](glm::vec3 p, float level) {
         float transmittance = 1.0f;
         if (visibility.scene)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, level, settings);
+            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, level, settings, sceneBackface);
         if (visibility.object)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.object->sample(p, level), cone.direction, level, settings);
+            transmittance *= 1.0f - adaptedOcclusion(visibility.object->sample(p, level), cone.direction, level, settings, objectBackface);
         const float occlusionLocal = stepOpacity(1.0f - transmittance, settings.stepScale);
         if (occlusionLocal > 0.0f) {
             const glm::vec4 l = light.sample(p, level);
@@ -132,15 +140,16 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
                                 const ConeTraceSettings& settings) {
     ShadowOcclusion acc;
     if (!visibility.scene && !visibility.object) return acc;
+    const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
     marchCone(cone, regionOf(visibility.scene, visibility.object), settings, [&](glm::vec3 p, float level) {
         float scene = 0.0f, object = 0.0f;
         if (visibility.scene)
             scene = stepOpacity(
-                adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, level, settings),
+                adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, level, settings, sceneBackface),
                 settings.stepScale);
         if (visibility.object)
             object = stepOpacity(
-                adaptedOcclusion(visibility.object->sample(p, level), cone.direction, level, settings),
+                adaptedOcclusion(visibility.object->sample(p, level), cone.direction, level, settings, objectBackface),
                 settings.stepScale);
         const float combined = scene + object - scene * object;  // exactly `scene` without objects
         acc.scene += scene * (1.0f - acc.scene);

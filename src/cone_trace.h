@@ -25,10 +25,15 @@ struct ConeTraceSettings {
 };
 ConeTraceSettings coneTraceSettings(const TraceOptions& options);
 
-// The visibility volumes a cone is occluded by; either may be null (absent).
+// The visibility volumes a cone is occluded by; either may be null (absent). `self` names the volume of the
+// surface the cones start from: only its back faces are discounted (backface_weight), so that the surface
+// does not shadow itself, while the other volume occludes from both sides (a floor point right under a ball,
+// whose cones start inside the ball, must stay shadowed by it).
 struct VisibilityVolumes {
+    enum class Self { Scene, Object };
     const MipVolume* scene = nullptr;
     const MipVolume* object = nullptr;
+    Self self = Self::Scene;
 };
 
 struct Cone {

@@ -211,7 +211,7 @@ void readTrace(const JsonNode& node, TraceOptions& trace) {
 }
 
 void readRender(const JsonNode& node, RenderOptions& render) {
-    node.allowKeys({"samples_per_pixel", "indirect", "double_shadow_fix", "relight_indirect"});
+    node.allowKeys({"samples_per_pixel", "indirect", "double_shadow_fix", "relight_indirect", "denoise_radius"});
     if (auto n = node.find("samples_per_pixel")) {
         int spp = n->integer(1, 16);
         if (spp != 1 && spp != 4 && spp != 9 && spp != 16)
@@ -221,6 +221,7 @@ void readRender(const JsonNode& node, RenderOptions& render) {
     if (auto n = node.find("indirect")) render.indirect = n->boolean();
     if (auto n = node.find("double_shadow_fix")) render.doubleShadowFix = n->boolean();
     if (auto n = node.find("relight_indirect")) render.relightIndirect = n->boolean();
+    if (auto n = node.find("denoise_radius")) render.denoiseRadius = n->integer(0, 8);
 }
 
 }  // namespace
@@ -285,7 +286,8 @@ json optionsToJson(const Options& o) {
          {{"samples_per_pixel", o.render.samplesPerPixel},
           {"indirect", o.render.indirect},
           {"double_shadow_fix", o.render.doubleShadowFix},
-          {"relight_indirect", o.render.relightIndirect}}},
+          {"relight_indirect", o.render.relightIndirect},
+          {"denoise_radius", o.render.denoiseRadius}}},
     };
 }
 

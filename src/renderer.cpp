@@ -5,6 +5,7 @@
 #include <chrono>
 
 #include "composite.h"
+#include "denoise.h"
 #include "gbuffer.h"
 #include "inject.h"
 #include "mipmap.h"
@@ -72,12 +73,15 @@ std::vector<glm::vec3> renderRealScene(const Scene& scene, const RayScene& realO
     MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
     MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
     const VisibilityVolumes vis{&visibility, nullptr};
-    const auto shadows = traceShadowCones(points, scene.lights, vis, o);
+    auto shadows = traceShadowCones(points, scene.lights, vis, o);
     std::vector<glm::vec3> diffuse, specular;
     if (o.render.indirect) {
         diffuse = traceDiffuseCones(points, light, vis, o);
         specular = traceSpecularCones(points, light, vis, o);
     }
+    const DenoiseSettings filter{o.render.denoiseRadius};
+    denoiseInPlace(shadows, static_cast<int>(scene.lights.size()), points, scene.camera, filter);
+    denoiseInPlace(diffuse, 1, points, scene.camera, filter);
     return combineLighting(points, scene.lights, shadows, ShadowMode::SceneOnly, diffuse, specular);
 }
 
@@ -163,18 +167,29 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
     timer.lap("gbuffer");
 
     // 6. Cone tracing. Shadow cones test both visibility volumes.
-    const VisibilityVolumes bothVisibility{&sceneVisibility, &objectVisibility};
-    const auto objectShadows = traceShadowCones(gbuffer.object, scene.lights, bothVisibility, o);
-    const auto realShadows = traceShadowCones(realPoints, scene.lights, bothVisibility, o);
+    // Cones from virtual surfaces discount the object volume's back faces, cones from real ones the scene's.
+    const VisibilityVolumes fromObject{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
+    const VisibilityVolumes fromReal{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Scene};
+    auto objectShadows = traceShadowCones(gbuffer.object, scene.lights, fromObject, o);
+    auto realShadows = traceShadowCones(realPoints, scene.lights, fromReal, o);
     timer.lap("shadow");
     std::vector<glm::vec3> objectDiffuse, realDiffuse, objectSpecular, realSpecular;
     const bool relightIndirect = o.render.indirect && o.render.relightIndirect;
-    if (o.render.indirect) objectDiffuse = traceDiffuseCones(gbuffer.object, fullVolume, bothVisibility, o);
-    if (relightIndirect) realDiffuse = traceDiffuseCones(realPoints, deltaVolumeMips, bothVisibility, o);
+    if (o.render.indirect) objectDiffuse = traceDiffuseCones(gbuffer.object, fullVolume, fromObject, o);
+    if (relightIndirect) realDiffuse = traceDiffuseCones(realPoints, deltaVolumeMips, fromReal, o);
     timer.lap("diffuse");
-    if (o.render.indirect) objectSpecular = traceSpecularCones(gbuffer.object, fullVolume, bothVisibility, o);
-    if (relightIndirect) realSpecular = traceSpecularCones(realPoints, deltaVolumeMips, bothVisibility, o);
+    if (o.render.indirect) objectSpecular = traceSpecularCones(gbuffer.object, fullVolume, fromObject, o);
+    if (relightIndirect) realSpecular = traceSpecularCones(realPoints, deltaVolumeMips, fromReal, o);
     timer.lap("specular");
+
+    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
+    const DenoiseSettings filter{o.render.denoiseRadius};
+    const int lightCount = static_cast<int>(scene.lights.size());
+    denoiseInPlace(objectShadows, lightCount, gbuffer.object, camera, filter);
+    denoiseInPlace(realShadows, lightCount, realPoints, camera, filter);
+    denoiseInPlace(objectDiffuse, 1, gbuffer.object, camera, filter);
+    denoiseInPlace(realDiffuse, 1, realPoints, camera, filter);
+    timer.lap("denoise");
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
     const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, objectShadows, ShadowMode::Shaded,

@@ -86,6 +86,9 @@ struct RenderOptions {
     // "relight_indirect": add the indirect change (delta volume cones) to real surfaces. false keeps only the
     // object's shadow on them (the "shadow only" baseline of the evaluation); the object is shaded in full.
     bool relightIndirect = true;
+    // "denoise_radius": pixels of the edge-aware filter over the shadow and diffuse cone results, which
+    // averages the noise of the jittered cone starts (0 disables it).
+    int denoiseRadius = 2;
 };
 
 struct Options {
