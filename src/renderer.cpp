@@ -34,7 +34,7 @@ public:
 private:
     using Clock = std::chrono::steady_clock;
     std::vector<StageTiming>& timings_;
-    const StageCallback& callback_;
+    StageCallback callback_;
     Clock::time_point start_;
 };
 
@@ -52,39 +52,6 @@ VolumeRegion cubeAround(const Bounds3f& b, float scale, int resolution) {
     return r;
 }
 
-std::vector<ReflectiveShadowMap> renderRsms(const RayScene& rays, std::span<const Light> lights,
-                                            const VolumeRegion& region, int resolution) {
-    std::vector<ReflectiveShadowMap> rsms;
-    for (const Light& light : lights) rsms.push_back(renderReflectiveShadowMap(rays, light, region, resolution));
-    return rsms;
-}
-
-// The real scene alone, rendered with regular voxel cone tracing over its own bounds: the background when the
-// scene has no photo (the "already lit virtual scene" of the paper's Fig. 3).
-std::vector<glm::vec3> renderRealScene(const Scene& scene, const RayScene& realOnly,
-                                       std::span<const SurfacePoint> points) {
-    const Options& o = scene.options;
-    // One voxel of margin on each side so that surfaces on the bounds are inside.
-    const float margin = 1.0f + 2.0f / static_cast<float>(o.volume.resolution);
-    const VolumeRegion region = cubeAround(boundsOf(scene.real), margin, o.volume.resolution);
-    VoxelGeometry geometry = voxelize(scene.real, region);
-    const std::vector<ReflectiveShadowMap> rsms = renderRsms(realOnly, scene.lights, region, o.rsm.resolution);
-    const VoxelGeometry* geometries[] = {&geometry};
-    MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
-    MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
-    const VisibilityVolumes vis{&visibility, nullptr};
-    auto shadows = traceShadowCones(points, scene.lights, vis, o);
-    std::vector<glm::vec3> diffuse, specular;
-    if (o.render.indirect) {
-        diffuse = traceDiffuseCones(points, light, vis, o);
-        specular = traceSpecularCones(points, light, vis, o);
-    }
-    const DenoiseSettings filter{o.render.denoiseRadius};
-    denoiseInPlace(shadows, static_cast<int>(scene.lights.size()), points, scene.camera, filter);
-    denoiseInPlace(diffuse, 1, points, scene.camera, filter);
-    return combineLighting(points, scene.lights, shadows, ShadowMode::SceneOnly, diffuse, specular);
-}
-
 Image toImage(std::span<const glm::vec3> pixels, int width, int height) {
     Image image(width, height, 3);
     for (int y = 0; y < height; ++y)
@@ -92,6 +59,105 @@ Image toImage(std::span<const glm::vec3> pixels, int width, int height) {
     sanitize(image);
     return image;
 }
+
+std::vector<ReflectiveShadowMap> renderRsms(const RayScene& rays, std::span<const Light> lights,
+                                            const VolumeRegion& region, int resolution) {
+    std::vector<ReflectiveShadowMap> rsms;
+    for (const Light& light : lights) rsms.push_back(renderReflectiveShadowMap(rays, light, region, resolution));
+    return rsms;
+}
+
+// One set of surfaces to trace cones from, against a light volume and visibility volumes.
+struct ConeJob {
+    std::span<const SurfacePoint> points;
+    const MipVolume* light;
+    VisibilityVolumes visibility;
+    bool indirect;  // trace diffuse and specular cones too
+};
+
+struct ConeResults {
+    std::vector<ShadowOcclusion> shadows;  // points x lights
+    std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
+};
+
+// Stage 6 for every job: shadow, diffuse and specular cones (each timed as one stage over all jobs), then
+// the edge-aware filter over the shadow and diffuse results.
+std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
+    const Options& o = scene.options;
+    std::vector<ConeResults> results(jobs.size());
+    for (size_t j = 0; j < jobs.size(); ++j)
+        results[j].shadows = traceShadowCones(jobs[j].points, scene.lights, jobs[j].visibility, o);
+    timer.lap("shadow");
+    for (size_t j = 0; j < jobs.size(); ++j)
+        if (jobs[j].indirect)
+            results[j].diffuse = traceDiffuseCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
+    timer.lap("diffuse");
+    for (size_t j = 0; j < jobs.size(); ++j)
+        if (jobs[j].indirect)
+            results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
+    timer.lap("specular");
+    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
+    const DenoiseSettings filter{o.render.denoiseRadius};
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        denoiseInPlace(results[j].shadows, static_cast<int>(scene.lights.size()), jobs[j].points, scene.camera,
+                       filter);
+        denoiseInPlace(results[j].diffuse, 1, jobs[j].points, scene.camera, filter);
+    }
+    timer.lap("denoise");
+    return results;
+}
+
+// Stages 1-4 (§3.2): the two visibility volumes, the full light volume and the delta volume, mip-mapped.
+struct DgiVolumes {
+    MipVolume sceneVisibility, objectVisibility, fullLight, deltaLight;
+};
+
+DgiVolumes buildVolumes(const Scene& scene, const VolumeRegion& region, const RayScene& realOnly,
+                        const RayScene& all, StageTimer& timer) {
+    const int rsmResolution = scene.options.rsm.resolution;
+    // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
+    VoxelGeometry sceneGeometry = voxelize(scene.real, region);
+    VoxelGeometry objectGeometry = voxelize(scene.virtuals, region);
+    timer.lap("voxelize");
+    // 2. Reflective shadow maps: scene + objects, and scene alone.
+    const std::vector<ReflectiveShadowMap> rsmFull = renderRsms(all, scene.lights, region, rsmResolution);
+    const std::vector<ReflectiveShadowMap> rsmScene = renderRsms(realOnly, scene.lights, region, rsmResolution);
+    timer.lap("rsm");
+    // 3. Light injection: the full light volume and the delta volume = full - scene alone.
+    const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
+    const VoxelGeometry* sceneAlone[] = {&sceneGeometry};
+    Grid3 fullLight = injectLight(rsmFull, region, both);
+    Grid3 deltaLight = deltaVolume(fullLight, injectLight(rsmScene, region, sceneAlone));
+    timer.lap("inject");
+    // 4. Mipmaps of all four volumes.
+    DgiVolumes v{buildMipChain(region, std::move(sceneGeometry.visibility)),
+                 buildMipChain(region, std::move(objectGeometry.visibility)),
+                 buildMipChain(region, std::move(fullLight)), buildMipChain(region, std::move(deltaLight))};
+    timer.lap("mipmap");
+    return v;
+}
+
+// The real scene alone, rendered with regular voxel cone tracing over its own bounds: the background when the
+// scene has no photo (the "already lit virtual scene" of the paper's Fig. 3). Its stages are timed together.
+Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<const SurfacePoint> points) {
+    const Options& o = scene.options;
+    // One voxel of margin on each side so that surfaces on the bounds are inside.
+    const float margin = 1.0f + 2.0f / static_cast<float>(o.volume.resolution);
+    const VolumeRegion region = cubeAround(boundsOf(scene.real), margin, o.volume.resolution);
+    VoxelGeometry geometry = voxelize(scene.real, region);
+    const std::vector<ReflectiveShadowMap> rsms = renderRsms(realOnly, scene.lights, region, o.rsm.resolution);
+    const VoxelGeometry* geometries[] = {&geometry};
+    const MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
+    const MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
+    const ConeJob job{points, &light, {&visibility, nullptr, VisibilityVolumes::Self::Scene}, o.render.indirect};
+    std::vector<StageTiming> ignored;
+    StageTimer quiet(ignored, {});
+    const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
+    const std::vector<glm::vec3> radiance = combineLighting(points, scene.lights, cones.shadows,
+                                                            ShadowMode::SceneOnly, cones.diffuse, cones.specular);
+    return toImage(radiance, scene.camera.width, scene.camera.height);
+}
+
 
 }  // namespace
 
@@ -120,7 +186,7 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
         } else {
             GBuffer gbuffer = renderGBuffer(camera, realOnly, realOnly, 1);
             timer.lap("gbuffer");
-            out.background = toImage(renderRealScene(scene, realOnly, gbuffer.real), camera.width, camera.height);
+            out.background = renderRealScene(scene, realOnly, gbuffer.real);
             timer.lap("background");
         }
         out.composite = out.background;
@@ -134,77 +200,41 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
     const RayScene all(scene, SceneContent::RealAndVirtual);
     timer.lap("bvh");
 
-    // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects (§3.2).
-    VoxelGeometry sceneGeometry = voxelize(scene.real, region);
-    VoxelGeometry objectGeometry = voxelize(scene.virtuals, region);
-    timer.lap("voxelize");
+    const DgiVolumes volumes = buildVolumes(scene, region, realOnly, all, timer);
 
-    // 2. Reflective shadow maps: scene + objects, and scene alone.
-    const std::vector<ReflectiveShadowMap> rsmFull = renderRsms(all, scene.lights, region, o.rsm.resolution);
-    const std::vector<ReflectiveShadowMap> rsmScene = renderRsms(realOnly, scene.lights, region, o.rsm.resolution);
-    timer.lap("rsm");
-
-    // 3. Light injection: the full light volume and the delta volume = full - scene alone.
-    const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
-    const VoxelGeometry* sceneAlone[] = {&sceneGeometry};
-    Grid3 fullLight = injectLight(rsmFull, region, both);
-    Grid3 deltaLight = deltaVolume(fullLight, injectLight(rsmScene, region, sceneAlone));
-    timer.lap("inject");
-
-    // 4. Mipmaps of all four volumes.
-    const MipVolume sceneVisibility = buildMipChain(region, std::move(sceneGeometry.visibility));
-    const MipVolume objectVisibility = buildMipChain(region, std::move(objectGeometry.visibility));
-    const MipVolume fullVolume = buildMipChain(region, std::move(fullLight));
-    const MipVolume deltaVolumeMips = buildMipChain(region, std::move(deltaLight));
-    timer.lap("mipmap");
-
-    // 5. G-buffer.
+    // 5. G-buffer. Real surfaces are relit only where they show through (coverage < 1).
     GBuffer gbuffer = renderGBuffer(camera, all, realOnly, o.render.samplesPerPixel);
-    // Real surfaces are relit only where they show through (coverage < 1).
     std::vector<SurfacePoint> realPoints = gbuffer.real;
     for (size_t i = 0; i < realPoints.size(); ++i)
         if (gbuffer.coverage[i] >= 1.0f) realPoints[i] = {};
     timer.lap("gbuffer");
 
-    // 6. Cone tracing. Shadow cones test both visibility volumes.
-    // Cones from virtual surfaces discount the object volume's back faces, cones from real ones the scene's.
-    const VisibilityVolumes fromObject{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
-    const VisibilityVolumes fromReal{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Scene};
-    auto objectShadows = traceShadowCones(gbuffer.object, scene.lights, fromObject, o);
-    auto realShadows = traceShadowCones(realPoints, scene.lights, fromReal, o);
-    timer.lap("shadow");
-    std::vector<glm::vec3> objectDiffuse, realDiffuse, objectSpecular, realSpecular;
-    const bool relightIndirect = o.render.indirect && o.render.relightIndirect;
-    if (o.render.indirect) objectDiffuse = traceDiffuseCones(gbuffer.object, fullVolume, fromObject, o);
-    if (relightIndirect) realDiffuse = traceDiffuseCones(realPoints, deltaVolumeMips, fromReal, o);
-    timer.lap("diffuse");
-    if (o.render.indirect) objectSpecular = traceSpecularCones(gbuffer.object, fullVolume, fromObject, o);
-    if (relightIndirect) realSpecular = traceSpecularCones(realPoints, deltaVolumeMips, fromReal, o);
-    timer.lap("specular");
-
-    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
-    const DenoiseSettings filter{o.render.denoiseRadius};
-    const int lightCount = static_cast<int>(scene.lights.size());
-    denoiseInPlace(objectShadows, lightCount, gbuffer.object, camera, filter);
-    denoiseInPlace(realShadows, lightCount, realPoints, camera, filter);
-    denoiseInPlace(objectDiffuse, 1, gbuffer.object, camera, filter);
-    denoiseInPlace(realDiffuse, 1, realPoints, camera, filter);
-    timer.lap("denoise");
+    // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both are
+    // occluded by both visibility volumes. Cones discount the back faces of their own surface's volume only.
+    const ConeJob jobs[] = {
+        {gbuffer.object, &volumes.fullLight,
+         {&volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object}, o.render.indirect},
+        {realPoints, &volumes.deltaLight,
+         {&volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Scene},
+         o.render.indirect && o.render.relightIndirect}};
+    const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
+    const ConeResults& object = cones[0];
+    const ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
-    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, objectShadows, ShadowMode::Shaded,
-                                                objectDiffuse, objectSpecular);
+    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded,
+                                                object.diffuse, object.specular);
     const ShadowMode relightMode =
         o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     const auto realChange =
-        combineLighting(realPoints, scene.lights, realShadows, relightMode, realDiffuse, realSpecular);
+        combineLighting(realPoints, scene.lights, real.shadows, relightMode, real.diffuse, real.specular);
     timer.lap("shading");
 
     // The background: the photo, or the real scene rendered alone.
     if (scene.background) {
         out.background = *scene.background;
     } else {
-        out.background = toImage(renderRealScene(scene, realOnly, gbuffer.real), camera.width, camera.height);
+        out.background = renderRealScene(scene, realOnly, gbuffer.real);
         timer.lap("background");
     }
 
