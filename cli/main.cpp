@@ -1,4 +1,5 @@
-// The `deltagi` command: `render` a scene file to an image (and its AOVs), or print `info` about a scene.
+// The `deltagi` command: `render` a scene file to an image (and its AOVs), print `info` about a scene, render
+// the path-traced `reference`, `compare` two images, or `eval` DGI against the reference.
 //
 // Errors: bad input (InputError) and any other exception become one line `deltagi: error: <message>` on
 // stderr and exit code 1; command-line usage errors exit with code 2.
@@ -7,6 +8,8 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -20,7 +23,9 @@
 #include <nlohmann/json.hpp>
 
 #include "deltagi/error.h"
+#include "deltagi/evaluation.h"
 #include "deltagi/image.h"
+#include "deltagi/reference.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_info.h"
 #include "deltagi/scene_io.h"
@@ -41,6 +46,26 @@ struct RenderArgs {
     std::vector<std::string> overrides;
     int threads = 0;  // 0: not given, TBB's default (all cores)
     bool quiet = false;
+};
+
+// `reference` and `eval` share the path tracer's settings.
+struct ReferenceArgs {
+    fs::path scene;
+    fs::path output;  // reference: the composite image; eval: the JSON file
+    fs::path aovDir;
+    std::vector<std::string> overrides;
+    int samplesPerPixel = 64;
+    double timeLimit = 0.0;
+    uint64_t seed = 0;
+    int threads = 0;
+    bool quiet = false;
+};
+
+struct CompareArgs {
+    fs::path test, reference;
+    fs::path difference;
+    float maxValue = 0.0f;  // 0: the 99th percentile of the image
+    bool json = false;
 };
 
 struct InfoArgs {
@@ -176,6 +201,161 @@ int runRender(const RenderArgs& args) {
     return 0;
 }
 
+// Sets TBB's thread count for as long as it lives; `threads()` is what the pool will use.
+class ThreadLimit {
+public:
+    explicit ThreadLimit(int threads) {
+        if (threads > 0) limit_.emplace(tbb::global_control::max_allowed_parallelism, threads);
+    }
+    int threads() const {
+        return static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    }
+
+private:
+    std::optional<tbb::global_control> limit_;
+};
+
+std::string formatSeconds(double seconds) {
+    if (seconds < 60.0) return fmt::format("{:.0f} s", seconds);
+    if (seconds < 3600.0) return fmt::format("{:.0f} min {:02.0f} s", std::floor(seconds / 60.0), std::fmod(seconds, 60.0));
+    return fmt::format("{:.0f} h {:02.0f} min", std::floor(seconds / 3600.0), std::fmod(seconds, 3600.0) / 60.0);
+}
+
+// A progress bar on one terminal line: samples done, time spent and an estimate of the time left (the
+// smaller of the rate's estimate and what is left of the time limit).
+ReferenceProgress progressBar(double timeLimit) {
+    return [timeLimit](int done, int total, double seconds) {
+        constexpr int kWidth = 30;
+        const int filled = total > 0 ? done * kWidth / total : kWidth;
+        double left = done > 0 ? seconds / done * (total - done) : 0.0;
+        if (timeLimit > 0.0) left = std::min(left, std::max(timeLimit - seconds, 0.0));
+        note("\r  [{}{}] {}/{} spp  {}  ETA {}   ", std::string(filled, '#'), std::string(kWidth - filled, '.'),
+             done, total, formatSeconds(seconds), formatSeconds(left));
+        if (done == total) note("\n");
+    };
+}
+
+ReferenceOptions referenceOptions(const ReferenceArgs& args) {
+    ReferenceOptions options;
+    options.samplesPerPixel = args.samplesPerPixel;
+    options.timeLimitSeconds = args.timeLimit;
+    options.seed = args.seed;
+    return options;
+}
+
+void writeReferenceAovs(const ReferenceOutput& output, const fs::path& folder) {
+    writeImage(output.with, folder / "with.exr");
+    writeImage(output.without, folder / "without.exr");
+    writeImage(output.background, folder / "background.exr");
+    writeImage(output.composite, folder / "composite.exr");
+    writeImage(output.objectMask, folder / "object_mask.exr");
+    writeImage(output.delta, folder / "delta.exr");
+}
+
+int runReference(const ReferenceArgs& args) {
+    const ThreadLimit limit(args.threads);
+    checkOutputPath(args.output);
+    createFolder(args.output.parent_path());
+    if (!args.aovDir.empty()) createFolder(args.aovDir);
+    const Scene scene = loadScene(args.scene, args.overrides);
+
+    const bool progress = !args.quiet && isatty(STDERR_FILENO);
+    const ReferenceOutput output =
+        renderReference(scene, referenceOptions(args), progress ? progressBar(args.timeLimit) : ReferenceProgress{});
+    if (progress && output.samplesPerPixel < args.samplesPerPixel) note("\n");
+
+    writeImage(output.composite, args.output);
+    if (!args.aovDir.empty()) writeReferenceAovs(output, args.aovDir);
+    if (!args.quiet) {
+        note("deltagi: wrote {} ({}x{}, {} spp{}, {:.1f} s, {}){}\n", args.output.string(), scene.camera.width,
+             scene.camera.height, output.samplesPerPixel,
+             output.samplesPerPixel < args.samplesPerPixel ? " (time limit)" : "", output.totalMs / 1000.0,
+             plural(limit.threads(), "thread", "threads"),
+             args.aovDir.empty() ? "" : fmt::format(", AOVs in {}", args.aovDir.string()));
+    }
+    return 0;
+}
+
+int runCompare(const CompareArgs& args) {
+    if (!args.difference.empty()) {
+        checkOutputPath(args.difference);
+        createFolder(args.difference.parent_path());
+    }
+    const Image test = readImage(args.test);
+    const Image reference = readImage(args.reference);
+    ImageMetrics metrics;
+    try {
+        metrics = compareImages(test, reference);
+    } catch (const InputError& error) {
+        throw InputError(args.test.string() + " vs " + args.reference.string(), error.what());
+    }
+    float maxValue = args.maxValue;
+    if (!args.difference.empty()) {
+        const Image squared = squaredDifference(test, reference);
+        if (!(maxValue > 0.0f)) maxValue = robustMaximum(squared);
+        writeImage(falseColour(squared, maxValue), args.difference);
+    }
+    if (args.json) {
+        nlohmann::ordered_json json;
+        json["rmse"] = metrics.rmse;
+        json["rel_mse"] = metrics.relMse;
+        json["mae"] = metrics.mae;
+        if (!args.difference.empty()) json["difference_max"] = maxValue;
+        fmt::print("{}\n", json.dump(2));
+    } else {
+        fmt::print("rmse     {:.6g}\nrel_mse  {:.6g}\nmae      {:.6g}\n", metrics.rmse, metrics.relMse, metrics.mae);
+        if (!args.difference.empty())
+            fmt::print("difference {} (2x squared difference, full scale {:.4g})\n", args.difference.string(),
+                       maxValue);
+    }
+    return 0;
+}
+
+void writeEvaluationAovs(const Evaluation& e, const fs::path& folder) {
+    writeReferenceAovs(e.reference, folder);  // with, without, background, composite (the reference's) ...
+    writeImage(e.reference.composite, folder / "reference.exr");
+    writeImage(e.reference.composite, folder / "reference.png");
+    writeImage(e.dgiRender.composite, folder / "dgi.exr");
+    writeImage(e.dgiRender.composite, folder / "dgi.png");
+    writeImage(e.dgiRender.objectMask, folder / "dgi_object_mask.exr");
+    writeImage(e.noRelightComposite, folder / "no_relight.exr");
+    const Image squared = squaredDifference(e.dgiRender.composite, e.reference.composite);
+    writeImage(squared, folder / "difference.exr");
+    writeImage(falseColour(squared, robustMaximum(squared)), folder / "difference.png");
+    Image classes(e.classes.width, e.classes.height, 1);
+    for (size_t i = 0; i < e.classes.classes.size(); ++i)  // 0 silhouette, 1 object, 2 lit, 3 shadowed
+        classes.data()[i] = static_cast<float>(e.classes.classes[i]);
+    writeImage(classes, folder / "pixel_classes.exr");
+}
+
+int runEval(const ReferenceArgs& args) {
+    const ThreadLimit limit(args.threads);
+    if (lowerExtension(args.output) != ".json")
+        throw InputError(args.output.string(), "expected a .json file for the figures");
+    createFolder(args.output.parent_path());
+    if (!args.aovDir.empty()) createFolder(args.aovDir);
+    const Scene scene = loadScene(args.scene, args.overrides);
+
+    const bool progress = !args.quiet && isatty(STDERR_FILENO);
+    if (progress) note("reference\n");
+    const Evaluation e =
+        evaluate(scene, referenceOptions(args), progress ? progressBar(args.timeLimit) : ReferenceProgress{});
+    if (progress && e.reference.samplesPerPixel < args.samplesPerPixel) note("\n");
+
+    writeJson(evaluationToJson(e), args.output);
+    if (!args.aovDir.empty()) writeEvaluationAovs(e, args.aovDir);
+    if (!args.quiet) {
+        note("deltagi: delta_rel_error {:.4f}, object_rel_rmse {:.4f}, composite_rmse {:.5f} "
+             "(DGI {:.0f} ms, reference {} spp {:.1f} s); pixels: {} lit, {} shadowed, {} object\n",
+             e.dgi.deltaRelError, e.dgi.objectRelRmse, e.dgi.compositeRmse, e.dgiMs, e.reference.samplesPerPixel,
+             e.referenceMs / 1000.0, e.classes.count(PixelClass::RealLit),
+             e.classes.count(PixelClass::RealShadowed), e.classes.count(PixelClass::Object));
+        note("deltagi: wrote {}{}\n", args.output.string(),
+             args.aovDir.empty() ? "" : fmt::format(", images in {}", args.aovDir.string()));
+    }
+    return 0;
+}
+
 std::string formatVec(glm::vec3 v) {
     return fmt::format("({:.4g}, {:.4g}, {:.4g})", v.x, v.y, v.z);
 }
@@ -278,6 +458,47 @@ int main(int argc, char** argv) {
     infoCommand->add_option("--set", infoArgs.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     infoCommand->add_flag("--json", infoArgs.json, "Print JSON on stdout instead of a table");
 
+    ReferenceArgs referenceArgs;
+    CLI::App* referenceCommand = app.add_subcommand(
+        "reference", "Path-trace the ground truth: a differential composite from renders with and without the "
+                     "virtual objects");
+    ReferenceArgs evalArgs;
+    CLI::App* evalCommand = app.add_subcommand(
+        "eval", "Render DGI and the path-traced reference and write how close they are (JSON)");
+    for (auto [command, args] : {std::pair{referenceCommand, &referenceArgs}, std::pair{evalCommand, &evalArgs}}) {
+        command->add_option("scene", args->scene, "Scene file (JSON)")->required();
+        const bool isEval = command == evalCommand;
+        command
+            ->add_option(isEval ? "--json" : "-o,--output", args->output,
+                         isEval ? "Figures (JSON)" : "Output image: .png, .exr or .hdr")
+            ->required();
+        command->add_option("--aov", args->aovDir,
+                            isEval ? "Also write the images (DGI, reference, difference, with/without, pixel classes)"
+                                   : "Also write with, without, background, composite, object_mask, delta (.exr)");
+        command->add_option("--spp", args->samplesPerPixel, "Samples per pixel (default 64)")
+            ->check(CLI::Range(1, 1 << 20));
+        command->add_option("--time-limit", args->timeLimit,
+                            "Stop after the first whole pass past this many seconds (default: none)")
+            ->check(CLI::NonNegativeNumber);
+        command->add_option("--seed", args->seed, "Random seed (default 0)");
+        command->add_option("--set", args->overrides, "Override a scene key: KEY=VALUE (repeatable)");
+        command->add_option("--threads", args->threads, "Worker threads (default: all cores)")
+            ->check(CLI::Range(1, kMaxThreads));
+        command->add_flag("-q,--quiet", args->quiet, "Print nothing but errors");
+    }
+
+    CompareArgs compareArgs;
+    CLI::App* compareCommand =
+        app.add_subcommand("compare", "Compare an image with a reference: RMSE, relative MSE, mean absolute error");
+    compareCommand->add_option("image", compareArgs.test, "The image to judge")->required();
+    compareCommand->add_option("reference", compareArgs.reference, "The reference image")->required();
+    compareCommand->add_option("-o,--output", compareArgs.difference,
+                               "False-colour image of 2x the squared difference (like the paper's Fig. 3c)");
+    compareCommand->add_option("--max", compareArgs.maxValue,
+                               "Full scale of the difference image (default: its 99th percentile)")
+        ->check(CLI::PositiveNumber);
+    compareCommand->add_flag("--json", compareArgs.json, "Print JSON on stdout");
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
@@ -285,14 +506,19 @@ int main(int argc, char** argv) {
             return app.exit(error);  // --help
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-')
             return reportError(
-                fmt::format("unknown command '{}': expected 'render' or 'info' (see deltagi --help)",
+                fmt::format("unknown command '{}': expected 'render', 'info', 'reference', 'compare' or 'eval' "
+                            "(see deltagi --help)",
                             argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);
     }
 
     try {
-        return *renderCommand ? runRender(renderArgs) : runInfo(infoArgs);
+        if (*renderCommand) return runRender(renderArgs);
+        if (*referenceCommand) return runReference(referenceArgs);
+        if (*compareCommand) return runCompare(compareArgs);
+        if (*evalCommand) return runEval(evalArgs);
+        return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         return reportError(error.what(), kExitInputError);
     } catch (...) {

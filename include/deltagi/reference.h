@@ -1,0 +1,46 @@
+// The ground truth: a differential path tracer over the same scene (camera, materials, lights) as the DGI
+// pipeline. It renders the scene with and without the virtual objects from the same random numbers, so that
+// their difference has little noise, and composites like Debevec 1998: background + (with - without) on real
+// pixels, the path-traced object on virtual pixels.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+
+#include "deltagi/image.h"
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+struct ReferenceOptions {
+    int samplesPerPixel = 64;  // camera paths per pixel (each traced twice: with and without the objects)
+    // Wall-clock budget in seconds; 0 = none. Checked after each whole pass of one sample per pixel, so the
+    // image holds a whole number of samples, and the image for a given count does not depend on the budget.
+    double timeLimitSeconds = 0.0;
+    uint64_t seed = 0;          // the same seed gives the same image, whatever the thread count
+    int rouletteStartBounce = 3;  // Russian roulette from this bounce on (bounce 0 is the camera hit)
+    int maxBounces = 256;       // a safety bound only; roulette ends paths long before
+};
+
+struct ReferenceOutput {
+    Image composite;   // the differential composite, linear RGB, never below 0
+    Image with;        // the scene with the virtual objects, path traced
+    Image without;     // the real scene alone, path traced
+    Image background;  // the photo, or `without` where the scene has none
+    Image objectMask;  // 1 channel: fraction of camera samples whose first hit is a virtual object
+    Image delta;       // composite - background
+    int samplesPerPixel = 0;  // samples actually taken (fewer than asked when the time limit stopped it)
+    double totalMs = 0.0;
+};
+
+// Called after each pass: samples per pixel done so far, the number asked for, and the seconds spent.
+using ReferenceProgress = std::function<void(int done, int total, double seconds)>;
+
+// Lights: point and spot lights with a radius are spheres of that radius (shadow rays aim at a uniformly
+// chosen point of the disk they show to the shading point, which gives the penumbra); without a radius, and
+// for directional lights, shadows are hard. Lights are not visible to camera or bounce rays. Materials have no
+// emission yet, so there are no area lights. Surfaces are two-sided, like in the pipeline.
+ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
+                                const ReferenceProgress& onPass = {});
+
+}  // namespace deltagi

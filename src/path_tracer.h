@@ -1,0 +1,55 @@
+// The reference path tracer's core: unidirectional paths with next-event estimation towards every light at
+// every vertex, BRDF importance sampling (brdf_sampling.h) and Russian roulette. renderReference()
+// (include/deltagi/reference.h) runs it twice per camera sample, with and without the virtual objects.
+#pragma once
+
+#include <span>
+
+#include <glm/glm.hpp>
+
+#include "deltagi/scene.h"
+#include "lights.h"
+#include "ray_scene.h"
+#include "rng.h"
+
+namespace deltagi {
+
+// Shadow and bounce rays start this fraction of the scene's extent off the surface, so that a surface does not
+// shadow itself through floating-point error.
+constexpr float kRayOffsetScale = 1e-4f;
+
+// One point on a light, as seen from p: like sampleLight(), but a point or spot light with a radius is a
+// sphere whose silhouette disk (facing p) is sampled uniformly by (u1, u2): averaging over many samples gives
+// the penumbra of a sphere light of the same intensity. Directional lights and lights without a radius ignore
+// (u1, u2).
+LightSample sampleLightPoint(const Light& light, glm::vec3 p, float u1, float u2);
+
+struct PathSettings {
+    int rouletteStartBounce = 3;  // vertices from this index on (0 = first hit) continue with probability q
+    int maxBounces = 256;         // a safety bound
+    float rayOffset = 1e-4f;      // world units; see kRayOffsetScale
+};
+
+class PathTracer {
+public:
+    // Holds references: `rays` and `lights` must outlive the tracer.
+    PathTracer(const RayScene& rays, std::span<const Light> lights, PathSettings settings)
+        : rays_(rays), lights_(lights), settings_(settings) {}
+
+    // Radiance arriving at `origin` from `direction` (unit). Lights are not visible to the ray itself.
+    glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
+    // The same, when the first hit along `direction` is already known.
+    glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
+    // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
+    // drawn, so that paths with and without the objects consume the same sequence).
+    glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
+
+private:
+    glm::vec3 offsetOrigin(const RayHit& hit, glm::vec3 towards) const;
+
+    const RayScene& rays_;
+    std::span<const Light> lights_;
+    PathSettings settings_;
+};
+
+}  // namespace deltagi
