@@ -63,7 +63,7 @@ constexpr float kIsotropicCoverage = 0.5f;
 // A back face counts fully as one once cos(back) >= 1/kBackfaceRamp: the neighbours of a point on a convex
 // surface face a grazing cone slightly from behind.
 constexpr float kBackfaceRamp = 16.0f;
-inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float level, const ConeTraceSettings& s,
+inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float levelScale, const ConeTraceSettings& s,
                               float backfaceWeight) {
     const float occupancy = v.x;
     if (occupancy <= 1e-6f) return 0.0f;
@@ -73,17 +73,22 @@ inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float level, const Con
     const float directional = facing > 0.0f ? 1.0f - backfaceWeight * std::min(1.0f, kBackfaceRamp * facing) : 1.0f;
     const float adapted = (1.0f - coherence) * kIsotropicCoverage + coherence * directional;
     const float weight = (1.0f - s.normalWeight) * kIsotropicCoverage + s.normalWeight * adapted;
-    return std::clamp(occupancy * std::exp2(level) * weight, 0.0f, 1.0f);
+    return std::clamp(occupancy * levelScale * weight, 0.0f, 1.0f);
 }
 
 // Opacity of a sample that covers a segment as long as the cone is wide, applied over a shorter step.
 inline float stepOpacity(float alpha, float stepScale) {
-    return stepScale == 1.0f ? alpha : 1.0f - std::pow(std::max(1.0f - alpha, 0.0f), stepScale);
+    const float transmittance = std::max(1.0f - alpha, 0.0f);
+    if (stepScale == 0.5f) return 1.0f - std::sqrt(transmittance);  // the default, without pow
+    return stepScale == 1.0f ? alpha : 1.0f - std::pow(transmittance, stepScale);
 }
 
-// Marches the cone through the volume and calls visit(voxelPos, level) at each step until visit returns false.
+// Marches the cone through the volume and calls visit(lookup, levelScale) at each step until visit returns
+// false; `lookup` reads every volume of the region at the step (one set of corners for all of them) and
+// levelScale = 2^level.
 template <typename Visit>
-void marchCone(const Cone& cone, const VolumeRegion& region, const ConeTraceSettings& settings, Visit&& visit) {
+void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSettings& settings, Visit&& visit) {
+    const VolumeRegion& region = reference.region();
     const float invVoxel = 1.0f / region.voxelSize();
     const glm::vec3 origin = (cone.origin - region.origin) * invVoxel;
     const float n = static_cast<float>(region.resolution);
@@ -95,12 +100,12 @@ void marchCone(const Cone& cone, const VolumeRegion& region, const ConeTraceSett
     for (float t = tEnter + cone.jitter * settings.jitter * firstDiameter * settings.stepScale; t < tExit;) {
         const float diameter = std::max(1.0f, 2.0f * t * cone.tanHalfAngle);
         const float level = std::min(std::log2(diameter), maxLevel);
-        if (!visit(origin + t * cone.direction, level)) return;
+        if (!visit(reference.lookup(origin + t * cone.direction, level), std::exp2(level))) return;
         t += diameter * settings.stepScale;
     }
 }
 
-const VolumeRegion& regionOf(const MipVolume* a, const MipVolume* b) { return a ? a->region() : b->region(); }
+const MipVolume& referenceOf(const MipVolume* a, const MipVolume* b) { return a ? *a : *b; }
 
 // The back-face weights of the scene and the object volume: only the starting surface's own volume gets one.
 std::pair<float, float> backfaceWeights(const VisibilityVolumes& v, const ConeTraceSettings& s) {
@@ -115,15 +120,17 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
     glm::vec3 lightAcc(0.0f);
     float occlusionAcc = 0.0f;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
-    marchCone(cone, light.region(), settings, [&](glm::vec3 p, float level) {
+    marchCone(cone, light, settings, [&](const VolumeLookup& at, float levelScale) {
         float transmittance = 1.0f;
         if (visibility.scene)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, level, settings, sceneBackface);
+            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
+                                                     settings, sceneBackface);
         if (visibility.object)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.object->sample(p, level), cone.direction, level, settings, objectBackface);
+            transmittance *= 1.0f - adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
+                                                     settings, objectBackface);
         const float occlusionLocal = stepOpacity(1.0f - transmittance, settings.stepScale);
         if (occlusionLocal > 0.0f) {
-            const glm::vec4 l = light.sample(p, level);
+            const glm::vec4 l = light.gather(at);
             const glm::vec3 lightLocal = l.w > 1e-6f ? glm::vec3(l) / l.w : glm::vec3(0.0f);
             // §3.1: light_acc = light_acc*occ_acc + light_local*occ_local*(1 - occ_acc) (as printed), or the
             // usual front-to-back compositing light_acc += light_local*occ_local*(1 - occ_acc).
@@ -141,16 +148,17 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
     ShadowOcclusion acc;
     if (!visibility.scene && !visibility.object) return acc;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
-    marchCone(cone, regionOf(visibility.scene, visibility.object), settings, [&](glm::vec3 p, float level) {
+    marchCone(cone, referenceOf(visibility.scene, visibility.object), settings,
+              [&](const VolumeLookup& at, float levelScale) {
         float scene = 0.0f, object = 0.0f;
         if (visibility.scene)
-            scene = stepOpacity(
-                adaptedOcclusion(visibility.scene->sample(p, level), cone.direction, level, settings, sceneBackface),
-                settings.stepScale);
+            scene = stepOpacity(adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale, settings,
+                                                 sceneBackface),
+                                settings.stepScale);
         if (visibility.object)
-            object = stepOpacity(
-                adaptedOcclusion(visibility.object->sample(p, level), cone.direction, level, settings, objectBackface),
-                settings.stepScale);
+            object = stepOpacity(adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
+                                                  settings, objectBackface),
+                                 settings.stepScale);
         const float combined = scene + object - scene * object;  // exactly `scene` without objects
         acc.scene += scene * (1.0f - acc.scene);
         acc.object += object * (1.0f - acc.object);

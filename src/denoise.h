@@ -42,7 +42,7 @@ void denoiseInPlace(std::vector<T>& values, int perPixel, std::span<const Surfac
     std::memcpy(flat.data(), values.data(), flat.size() * sizeof(float));
     flat = denoise(flat, channels, points, camera.width, camera.height, camera.position(), 1.0f / camera.fy,
                    settings);
-    std::memcpy(values.data(), flat.data(), flat.size() * sizeof(float));
+    std::memcpy(static_cast<void*>(values.data()), flat.data(), flat.size() * sizeof(float));
 }
 
 }  // namespace deltagi

@@ -9,6 +9,9 @@
 
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -48,45 +51,125 @@ private:
     std::vector<glm::vec4> voxels_;
 };
 
+// 4 floats in one SIMD register (GCC/Clang vector extension: SSE on x86-64, NEON on Arm).
+using Float4 = float __attribute__((vector_size(16)));
+inline Float4 loadFloat4(const glm::vec4& v) {
+    Float4 r;
+    std::memcpy(&r, &v, sizeof(r));
+    return r;
+}
+inline glm::vec4 storeFloat4(Float4 v) {
+    glm::vec4 r;
+    std::memcpy(&r, &v, sizeof(r));
+    return r;
+}
+
+// The 8 voxels and weights of one trilinear lookup (corners outside the grid have weight 0).
+struct TrilinearCorners {
+    uint32_t index[8];
+    float weight[8];
+};
+
+// Where one quadrilinear lookup reads. It depends only on the region and resolution, so the volumes that
+// share them (all four of the method) are read with one lookup.
+struct VolumeLookup {
+    glm::vec3 voxelPos{0.0f};  // level-0 voxel units
+    int level0 = 0;            // the finer of the two levels
+    float blend = 0.0f;        // weight of level0 + 1
+    TrilinearCorners fine, coarse;
+};
+
+// Trilinear corners at a level of resolution n, for a position in level-0 voxel units.
+inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorners& c) {
+    const glm::vec3 q = voxelPos * (1.0f / static_cast<float>(1 << level)) - 0.5f;
+    const glm::vec3 base = glm::floor(q);
+    const glm::vec3 f = q - base;
+    const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
+    const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
+    const bool inside = x >= 0 && y >= 0 && z >= 0 && x + 1 < n && y + 1 < n && z + 1 < n;
+    for (int k = 0; k < 8; ++k) {
+        const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
+        const int cx = x + dx, cy = y + dy, cz = z + dz;
+        const bool valid = inside || (static_cast<unsigned>(cx) < static_cast<unsigned>(n) &&
+                                      static_cast<unsigned>(cy) < static_cast<unsigned>(n) &&
+                                      static_cast<unsigned>(cz) < static_cast<unsigned>(n));
+        c.index[k] = valid ? static_cast<uint32_t>((static_cast<size_t>(cz) * n + cy) * n + cx) : 0u;
+        c.weight[k] = valid ? wx[dx] * wy[dy] * wz[dz] : 0.0f;
+    }
+}
+
 // A level-0 grid and its mip chain over a region. Level l has resolution n / 2^l; its voxels are 2^l level-0
 // voxels wide.
 class MipVolume {
 public:
     MipVolume() = default;
-    MipVolume(VolumeRegion region, std::vector<Grid3> levels) : region_(region), levels_(std::move(levels)) {}
+    MipVolume(VolumeRegion region, std::vector<Grid3> levels) : region_(region), levels_(std::move(levels)) {
+        findOccupiedBounds();
+    }
 
     const VolumeRegion& region() const { return region_; }
     int levelCount() const { return static_cast<int>(levels_.size()); }
     const Grid3& level(int l) const { return levels_[l]; }
     bool empty() const { return levels_.empty(); }
 
-    // Trilinear sample of level `l` at `voxelPos` in level-0 voxel units (0 at the region's corner).
+    // Prepares a quadrilinear lookup at `voxelPos` (level-0 voxel units, 0 at the region's corner) between
+    // the two levels around the fractional `level`.
+    VolumeLookup lookup(glm::vec3 voxelPos, float level) const {
+        VolumeLookup l;
+        l.voxelPos = voxelPos;
+        level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
+        l.level0 = static_cast<int>(level);
+        l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
+        trilinearCorners(voxelPos, l.level0, levels_[l.level0].resolution(), l.fine);
+        if (l.blend > 0.0f) trilinearCorners(voxelPos, l.level0 + 1, levels_[l.level0 + 1].resolution(), l.coarse);
+        return l;
+    }
+    // Reads a lookup prepared by any volume of the same region and resolution. Returns 0 at once where the
+    // lookup's footprint cannot reach a non-zero voxel.
+    glm::vec4 gather(const VolumeLookup& l) const {
+        const float reach = static_cast<float>(4 << l.level0);  // level-0 voxels a lookup can read from
+        if (glm::any(glm::lessThan(l.voxelPos, occupiedMin_ - reach)) ||
+            glm::any(glm::greaterThan(l.voxelPos, occupiedMax_ + reach)))
+            return glm::vec4(0.0f);
+        Float4 v = gatherLevel(l.level0, l.fine);
+        if (l.blend > 0.0f) v += (gatherLevel(l.level0 + 1, l.coarse) - v) * l.blend;
+        return storeFloat4(v);
+    }
+    // Trilinear sample of level `l`.
     glm::vec4 sampleLevel(glm::vec3 voxelPos, int l) const {
-        const float scale = 1.0f / static_cast<float>(1 << l);
-        glm::vec3 q = voxelPos * scale - 0.5f;
-        glm::vec3 base = glm::floor(q);
-        glm::vec3 f = q - base;
-        int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
-        const Grid3& g = levels_[l];
-        glm::vec4 c00 = glm::mix(g.fetch(x, y, z), g.fetch(x + 1, y, z), f.x);
-        glm::vec4 c10 = glm::mix(g.fetch(x, y + 1, z), g.fetch(x + 1, y + 1, z), f.x);
-        glm::vec4 c01 = glm::mix(g.fetch(x, y, z + 1), g.fetch(x + 1, y, z + 1), f.x);
-        glm::vec4 c11 = glm::mix(g.fetch(x, y + 1, z + 1), g.fetch(x + 1, y + 1, z + 1), f.x);
-        return glm::mix(glm::mix(c00, c10, f.y), glm::mix(c01, c11, f.y), f.z);
+        TrilinearCorners c;
+        trilinearCorners(voxelPos, l, levels_[l].resolution(), c);
+        return storeFloat4(gatherLevel(l, c));
     }
     // Quadrilinear sample: trilinear in the two levels around the fractional `level`, blended.
-    glm::vec4 sample(glm::vec3 voxelPos, float level) const {
-        level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
-        int l0 = static_cast<int>(level);
-        float t = level - static_cast<float>(l0);
-        glm::vec4 a = sampleLevel(voxelPos, l0);
-        if (t <= 0.0f || l0 + 1 >= levelCount()) return a;
-        return glm::mix(a, sampleLevel(voxelPos, l0 + 1), t);
-    }
+    glm::vec4 sample(glm::vec3 voxelPos, float level) const { return gather(lookup(voxelPos, level)); }
 
 private:
+    Float4 gatherLevel(int l, const TrilinearCorners& c) const {
+        const Grid3& g = levels_[l];
+        Float4 acc = {0.0f, 0.0f, 0.0f, 0.0f};
+        for (int k = 0; k < 8; ++k) acc += loadFloat4(g[c.index[k]]) * c.weight[k];
+        return acc;
+    }
+    // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
+    void findOccupiedBounds() {
+        occupiedMin_ = glm::vec3(std::numeric_limits<float>::max());
+        occupiedMax_ = glm::vec3(-std::numeric_limits<float>::max());
+        if (levels_.empty()) return;
+        const Grid3& g = levels_[0];
+        const int n = g.resolution();
+        for (int z = 0; z < n; ++z)
+            for (int y = 0; y < n; ++y)
+                for (int x = 0; x < n; ++x)
+                    if (g.at(x, y, z) != glm::vec4(0.0f)) {
+                        occupiedMin_ = glm::min(occupiedMin_, glm::vec3(x, y, z));
+                        occupiedMax_ = glm::max(occupiedMax_, glm::vec3(x + 1, y + 1, z + 1));
+                    }
+    }
+
     VolumeRegion region_;
     std::vector<Grid3> levels_;
+    glm::vec3 occupiedMin_{0.0f}, occupiedMax_{0.0f};
 };
 
 }  // namespace deltagi
