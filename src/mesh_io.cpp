@@ -38,6 +38,13 @@ FileMaterial readMaterial(const aiMaterial& material, const std::filesystem::pat
         result.albedo = glm::vec3(colour.r, colour.g, colour.b);
     if (material.Get(AI_MATKEY_COLOR_SPECULAR, colour) == AI_SUCCESS)
         result.specular = glm::vec3(colour.r, colour.g, colour.b);
+    // Many exporters write "Ke 0 0 0" for every material; only a positive, finite Ke makes an emitter.
+    if (material.Get(AI_MATKEY_COLOR_EMISSIVE, colour) == AI_SUCCESS) {
+        const glm::vec3 ke(colour.r, colour.g, colour.b);
+        bool valid = ke != glm::vec3(0.0f);
+        for (int c = 0; c < 3; ++c) valid = valid && std::isfinite(ke[c]) && ke[c] >= 0.0f;
+        if (valid) result.emission = ke;
+    }
     float shininess = 0.0f, roughnessFactor = 0.0f;
     if (material.Get(AI_MATKEY_ROUGHNESS_FACTOR, roughnessFactor) == AI_SUCCESS &&
         std::isfinite(roughnessFactor)) {

@@ -19,6 +19,7 @@ struct FileMaterial {
     std::string name;
     std::optional<glm::vec3> albedo;    // Kd
     std::optional<glm::vec3> specular;  // Ks
+    std::optional<glm::vec3> emission;  // Ke (emitted radiance), where the file gives a non-zero one
     // glTF's roughness factor squared, else from the Phong exponent Ns: sqrt(2 / (Ns + 2)); within (0, 1]
     std::optional<float> roughness;
 };

@@ -193,15 +193,20 @@ Light readLight(const JsonNode& node) {
 // ---- mesh entries -----------------------------------------------------------------------------------------
 
 struct MaterialOverrides {
-    std::optional<glm::vec3> albedo, specular;
+    std::optional<glm::vec3> albedo, specular, emission;
     std::optional<float> roughness;
+    float emissionScale = 1.0f;
+    std::string emissionWhere;  // the "emission_scale" key, for an overflowing product
 };
 
 MaterialOverrides readMaterial(const JsonNode& node) {
-    node.allowKeys({"albedo", "specular", "roughness", "glossiness"});
+    node.allowKeys({"albedo", "specular", "roughness", "glossiness", "emission", "emission_scale"});
     MaterialOverrides result;
     if (auto n = node.find("albedo")) result.albedo = n->colour(kUnit);
     if (auto n = node.find("specular")) result.specular = n->colour(kUnit);
+    if (auto n = node.find("emission")) result.emission = n->colour(kNonNegative);
+    if (auto n = node.find("emission_scale")) result.emissionScale = n->floatNumber(kNonNegative);
+    result.emissionWhere = node.childWhere("emission_scale");
     if (auto n = node.find("roughness")) result.roughness = n->floatNumber({0.0, 1.0, true, false});
     if (auto n = node.find("glossiness")) {
         if (result.roughness) n->fail("give either roughness or glossiness, not both");
@@ -218,6 +223,13 @@ Material combineMaterial(const MaterialOverrides& json, const FileMaterial& file
     m.albedo = json.albedo.value_or(file.albedo.value_or(m.albedo));
     m.specular = json.specular.value_or(file.specular.value_or(m.specular));
     m.roughness = json.roughness.value_or(file.roughness.value_or(m.roughness));
+    // The scale applies to the file's Ke too: MTL files give emission in arbitrary units.
+    m.emission = json.emission.value_or(file.emission.value_or(m.emission)) * json.emissionScale;
+    if (!std::isfinite(m.emission.x) || !std::isfinite(m.emission.y) || !std::isfinite(m.emission.z))
+        throw InputError(json.emissionWhere,
+                         fmt::format("mesh '{}': emission times emission_scale ({}) is not a "
+                                     "finite number",
+                                     meshName, json.emissionScale));
     std::string origin = (!json.albedo && file.albedo) || (!json.specular && file.specular)
                              ? fmt::format(
                                    " (values not given in \"material\" come from material '{}' of the mesh "

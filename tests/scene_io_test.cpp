@@ -262,6 +262,38 @@ TEST_F(SceneIoTest, MaterialsComeFromMtlAndJsonOverridesKeyByKey) {
     expectNear(scene.virtuals[0].material.specular + scene.virtuals[1].material.specular, glm::vec3(0.7f));
 }
 
+// Emission: "emission" (radiance) times "emission_scale", or the MTL file's Ke times the scale; no emission
+// by default, and "Ke 0 0 0" (what many exporters write) is no emitter.
+TEST_F(SceneIoTest, EmissionFromJsonAndMtlTimesTheScale) {
+    json doc = baseScene();
+    EXPECT_FALSE(load(doc).virtuals[0].material.emits());
+    doc["virtual"][0]["material"] = {{"emission", {1, 2, 3}}, {"emission_scale", 0.5}};
+    expectNear(load(doc).virtuals[0].material.emission, {0.5f, 1.0f, 1.5f});
+    doc["virtual"][0]["material"] = {{"emission", 4}};
+    expectNear(load(doc).virtuals[0].material.emission, glm::vec3(4.0f));
+
+    write("lamp.obj", "mtllib lamp.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl light\nf 1 2 3\n");
+    write("lamp.mtl", "newmtl light\nKd 0.78 0.78 0.78\nKe 17 12 4\n");
+    doc["virtual"][0] = {{"file", "lamp.obj"}, {"material", {{"emission_scale", 0.1}}}};
+    expectNear(load(doc).virtuals[0].material.emission, {1.7f, 1.2f, 0.4f});
+    write("dark.obj", "mtllib dark.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl dark\nf 1 2 3\n");
+    write("dark.mtl", "newmtl dark\nKd 0.5 0.5 0.5\nKe 0 0 0\n");
+    doc["virtual"][0] = {{"file", "dark.obj"}};
+    EXPECT_FALSE(load(doc).virtuals[0].material.emits());
+}
+
+TEST_F(SceneIoTest, BadEmissionIsAnError) {
+    json doc = baseScene();
+    doc["virtual"][0]["material"] = {{"emission", {1, -2, 3}}};
+    expectContains(loadError(doc), {"scene.json: virtual[0].material.emission[1]", "[0, inf)"});
+    doc["virtual"][0]["material"] = {{"emission", 1}, {"emission_scale", -1}};
+    expectContains(loadError(doc), {"virtual[0].material.emission_scale", "[0, inf)"});
+    doc["virtual"][0]["material"] = {{"emission", 1e30}, {"emission_scale", 1e30}};
+    expectContains(loadError(doc), {"virtual[0].material.emission_scale", "not a finite number"});
+    doc["virtual"][0]["material"] = {{"emision", 1}};
+    expectContains(loadError(doc), {"virtual[0].material.emision", "unknown key", "emission_scale"});
+}
+
 TEST_F(SceneIoTest, FileWithoutMaterialsGetsDefaults) {
     write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     json doc = baseScene();

@@ -18,10 +18,16 @@ namespace deltagi {
 // Lambertian diffuse + a normalized Phong glossy lobe around the mirror direction:
 //   f(wi, wo) = albedo/pi + specular * (n+2)/(2 pi) * max(0, dot(reflect(-wo), wi))^n,  n = phongExponent().
 // albedo + specular must not exceed 1 per channel (energy conservation).
+// A material may also emit: a diffuse (Lambertian) area light of uniform radiance over the mesh, from both
+// faces, since surfaces in deltagi are two-sided.
 struct Material {
     glm::vec3 albedo{0.8f};    // "albedo": diffuse reflectance in [0,1]
     glm::vec3 specular{0.0f};  // "specular": glossy reflectance in [0,1]
     float roughness = 1.0f;    // "roughness" in (0,1], or "glossiness" = 1 - roughness
+    // "emission" times "emission_scale": emitted radiance (W / (sr m^2), per world unit squared), linear RGB
+    glm::vec3 emission{0.0f};
+
+    bool emits() const { return emission != glm::vec3(0.0f); }
 
     // Phong exponent of the glossy lobe (the Blinn-Phong/Beckmann correspondence n = 2/r^2 - 2).
     float phongExponent() const {
