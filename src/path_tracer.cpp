@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "brdf.h"
@@ -22,6 +23,12 @@ constexpr int64_t kRowGrain = 1;
 constexpr float kMaxSurvivalProbability = 0.95f;
 
 float maxComponent(glm::vec3 v) { return std::max(v.x, std::max(v.y, v.z)); }
+// Veach's power heuristic (exponent 2): the weight of the strategy with density `a` against the one with `b`.
+float powerHeuristic(float a, float b) {
+    if (std::isinf(a)) return 1.0f;
+    const float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
 bool isFinite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 }  // namespace
@@ -66,6 +73,33 @@ glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) con
     return sum;
 }
 
+glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
+    const float uTriangle = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    const Material& m = *hit.material;
+    if (areaLights_.empty() || (m.albedo == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)))
+        return glm::vec3(0.0f);
+    const AreaLightSample s = areaLights_.sample(uTriangle, u1, u2);
+    const glm::vec3 toLight = s.position - hit.position;
+    const float d2 = glm::dot(toLight, toLight);
+    if (!(d2 > 0.0f)) return glm::vec3(0.0f);
+    const float d = std::sqrt(d2);
+    const glm::vec3 wi = toLight / d;
+    const float cosSurface = glm::dot(wi, hit.normal);
+    const float cosLight = std::abs(glm::dot(wi, s.normal));
+    if (cosSurface <= 0.0f || !(cosLight > 0.0f)) return glm::vec3(0.0f);
+    // The shadow ray aims at the point from the offset origin: a ray parallel to wi would meet the emitter's
+    // plane short of the point at grazing angles, and the emitter would shadow itself.
+    const glm::vec3 origin = offsetOrigin(hit, wi);
+    const glm::vec3 toPoint = s.position - origin;
+    const float distance = glm::length(toPoint);
+    const float tMax = distance - 2.0f * settings_.rayOffset;
+    if (tMax <= 0.0f || rays_.intersect(origin, toPoint / distance, 0.0f, tMax).hit()) return glm::vec3(0.0f);
+    const float pdfLight = s.pdfArea * d2 / cosLight;  // per unit solid angle at the hit
+    if (!(pdfLight > 0.0f) || !std::isfinite(pdfLight)) return glm::vec3(0.0f);
+    const float weight = powerHeuristic(pdfLight, brdfPdf(m, hit.normal, wo, wi));
+    return evalBrdf(m, hit.normal, wo, wi) * s.radiance * (cosSurface * weight / pdfLight);
+}
+
 glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const {
     return radianceFromHit(rays_.intersect(origin, direction), direction, rng);
 }
@@ -73,9 +107,24 @@ glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) 
 glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const {
     glm::vec3 radiance(0.0f), throughput(1.0f);
     RayHit hit = firstHit;
+    glm::vec3 previousPosition(0.0f);
+    float previousPdf = 0.0f;  // of the BRDF sample that led to `hit`
     for (int bounce = 0; hit.hit(); ++bounce) {
         const glm::vec3 wo = -direction;
-        radiance += throughput * directLight(hit, wo, rng);
+        if (hit.material->emits()) {
+            // Seen by the camera: all of it. Reached by a BRDF sample: its MIS share against emittedLight().
+            float weight = 1.0f;
+            if (bounce > 0) {
+                const glm::vec3 step = hit.position - previousPosition;
+                const float cosLight = std::abs(glm::dot(hit.geometricNormal, direction));
+                const float pdfLight = cosLight > 0.0f ? areaLights_.pdfArea(hit.material->emission) *
+                                                             glm::dot(step, step) / cosLight
+                                                       : std::numeric_limits<float>::infinity();
+                weight = powerHeuristic(previousPdf, pdfLight);
+            }
+            radiance += throughput * hit.material->emission * weight;
+        }
+        radiance += throughput * (directLight(hit, wo, rng) + emittedLight(hit, wo, rng));
         if (bounce + 1 >= settings_.maxBounces) break;
         // Always four numbers per bounce, whatever happens, to keep the two correlated paths in step.
         const float uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), uRoulette = rng.uniform();
@@ -88,6 +137,8 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
             throughput /= survive;
         }
         direction = s.wi;
+        previousPosition = hit.position;
+        previousPdf = s.pdf;
         hit = rays_.intersect(offsetOrigin(hit, s.wi), direction);
     }
     return radiance;
@@ -153,8 +204,10 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     settings.rouletteStartBounce = options.rouletteStartBounce;
     settings.maxBounces = std::max(options.maxBounces, 1);
     settings.rayOffset = kRayOffsetScale * std::max(all.bounds().empty() ? 1.0f : all.bounds().maxExtent(), 1e-3f);
-    const PathTracer withTracer(all, scene.lights, settings);
-    const PathTracer withoutTracer(realOnly, scene.lights, settings);
+    const AreaLights allEmitters(scene, SceneContent::RealAndVirtual);
+    const AreaLights realEmitters(scene, SceneContent::RealOnly);
+    const PathTracer withTracer(all, allEmitters, scene.lights, settings);
+    const PathTracer withoutTracer(realOnly, realEmitters, scene.lights, settings);
 
     const int w = camera.width, h = camera.height;
     std::vector<PixelSums> sums(static_cast<size_t>(w) * h);

@@ -1,12 +1,16 @@
 // The reference path tracer's core: unidirectional paths with next-event estimation towards every light at
-// every vertex, BRDF importance sampling (brdf_sampling.h) and Russian roulette. renderReference()
-// (include/deltagi/reference.h) runs it twice per camera sample, with and without the virtual objects.
+// every vertex, BRDF importance sampling (brdf_sampling.h) and Russian roulette. Emissive surfaces are lit by
+// both strategies, next-event estimation of one point on the emitters (area_lights.h) and the BRDF-sampled
+// ray that hits one, weighted by multiple importance sampling (Veach 1997, the power heuristic).
+// renderReference() (include/deltagi/reference.h) runs it twice per camera sample, with and without the
+// virtual objects.
 #pragma once
 
 #include <span>
 
 #include <glm/glm.hpp>
 
+#include "area_lights.h"
 #include "deltagi/scene.h"
 #include "lights.h"
 #include "ray_scene.h"
@@ -32,22 +36,29 @@ struct PathSettings {
 
 class PathTracer {
 public:
-    // Holds references: `rays` and `lights` must outlive the tracer.
-    PathTracer(const RayScene& rays, std::span<const Light> lights, PathSettings settings)
-        : rays_(rays), lights_(lights), settings_(settings) {}
+  // Holds references: `rays`, `areaLights` (the emitters of the same meshes) and `lights` must outlive the
+  // tracer.
+  PathTracer(const RayScene& rays, const AreaLights& areaLights, std::span<const Light> lights,
+             PathSettings settings)
+      : rays_(rays), areaLights_(areaLights), lights_(lights), settings_(settings) {}
 
-    // Radiance arriving at `origin` from `direction` (unit). Lights are not visible to the ray itself.
-    glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
-    // The same, when the first hit along `direction` is already known.
-    glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
-    // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
-    // drawn, so that paths with and without the objects consume the same sequence).
-    glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
+  // Radiance arriving at `origin` from `direction` (unit): what the surface it hits emits and reflects.
+  // Point, spot and directional lights are not visible to the ray itself.
+  glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
+  // The same, when the first hit along `direction` is already known.
+  glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
+  // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
+  // drawn, so that paths with and without the objects consume the same sequence).
+  glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
+  // Light from emissive surfaces reflected towards wo at a hit: one point on the emitters, weighted by the
+  // power heuristic against BRDF sampling (3 random numbers, always drawn).
+  glm::vec3 emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
 
 private:
     glm::vec3 offsetOrigin(const RayHit& hit, glm::vec3 towards) const;
 
     const RayScene& rays_;
+    const AreaLights& areaLights_;
     std::span<const Light> lights_;
     PathSettings settings_;
 };

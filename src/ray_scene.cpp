@@ -85,6 +85,7 @@ RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, fl
     result.position = (1.0f - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] +
                       v * mesh.positions[tri.z];
     result.normal = n;
+    result.geometricNormal = glm::normalize(ng);
     result.material = &mesh.material;
     result.isVirtual = ref.isVirtual;
     return result;

@@ -17,6 +17,7 @@ struct RayHit {
     float t = std::numeric_limits<float>::infinity();  // distance along the (unit) ray direction
     glm::vec3 position{0.0f};
     glm::vec3 normal{0.0f};  // interpolated shading normal, unit, facing the ray's origin (two-sided surfaces)
+    glm::vec3 geometricNormal{0.0f};  // the triangle's plane normal, unit, facing the ray's origin
     const Material* material = nullptr;
     bool isVirtual = false;
     bool hit() const { return material != nullptr; }

@@ -38,8 +38,9 @@ using ReferenceProgress = std::function<void(int done, int total, double seconds
 
 // Lights: point and spot lights with a radius are spheres of that radius (shadow rays aim at a uniformly
 // chosen point of the disk they show to the shading point, which gives the penumbra); without a radius, and
-// for directional lights, shadows are hard. Lights are not visible to camera or bounce rays. Materials have no
-// emission yet, so there are no area lights. Surfaces are two-sided, like in the pipeline.
+// for directional lights, shadows are hard. These lights are not visible to camera or bounce rays. Meshes
+// whose material emits are area lights, seen by every ray and sampled by next-event estimation with multiple
+// importance sampling. Surfaces, emitters included, are two-sided, like in the pipeline.
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
                                 const ReferenceProgress& onPass = {});
 
