@@ -51,9 +51,11 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     Grid3 light(n);
     parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) {
         float occupancy = 0.0f, area = 0.0f;
+        glm::vec3 emitted(0.0f);  // radiance times area
         for (const VoxelGeometry* g : geometry) {
             occupancy = std::max(occupancy, g->visibility[i].x);
             area += g->area[i];
+            if (!g->emission.empty()) emitted += g->emission[i];
         }
         const glm::vec4 a = accum[i];  // (reflected flux, footprint area)
         glm::vec3 radiance(0.0f);
@@ -63,6 +65,8 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
             const float litFraction = area > 0.0f ? std::min(1.0f, a.w / (kFullCoverage * area)) : 1.0f;
             radiance = glm::vec3(a) * (litFraction / (std::numbers::pi_v<float> * a.w));
         }
+        // Emissive surfaces add their own radiance, averaged over all the surface area in the voxel.
+        if (area > 0.0f && emitted != glm::vec3(0.0f)) radiance += emitted / area;
         light[i] = glm::vec4(radiance * occupancy, occupancy);
     });
     return light;

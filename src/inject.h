@@ -13,8 +13,10 @@ namespace deltagi {
 
 // Radiance of a voxel = the mean radiance of the texels that landed in it (reflected flux / (pi * footprint
 // area)), times the lit fraction of the geometry's surface area in the voxel (footprint / area, saturating at
-// kFullCoverage in inject.cpp, which absorbs the RSM's sampling jitter). Voxels are (radiance * occupancy, occupancy), with
-// occupancy 1 where any of `geometry` touches the voxel. Deterministic for any thread count.
+// kFullCoverage in inject.cpp, which absorbs the RSM's sampling jitter). Voxels are (radiance * occupancy,
+// occupancy), with occupancy 1 where any of `geometry` touches the voxel. Emissive geometry adds its emitted
+// radiance, averaged over the voxel's surface area: the cones then carry the light of emitters (one bounce of
+// it: emitted light is not reflected into the volume again). Deterministic for any thread count.
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
                   std::span<const VoxelGeometry* const> geometry);
 

@@ -115,10 +115,12 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
                                        std::span<const glm::vec3> diffuse, std::span<const glm::vec3> specular) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    // A rendered surface shows what it emits; a relit one only changes, and its emission is in the photo.
+    const bool emits = mode == ShadowMode::Shaded || mode == ShadowMode::SceneOnly;
     parallelFor(0, static_cast<int64_t>(points.size()), 4096, [&](int64_t i) {
         const SurfacePoint& p = points[i];
         if (!p.valid()) return;
-        glm::vec3 radiance(0.0f);
+        glm::vec3 radiance = emits ? p.material->emission : glm::vec3(0.0f);
         for (size_t l = 0; l < lights.size(); ++l)
             radiance += directRadiance(p, lights[l]) * shadowFactor(shadows[i * lights.size() + l], mode);
         if (!diffuse.empty()) radiance += p.material->albedo * diffuse[i];

@@ -42,7 +42,8 @@ enum class ShadowMode {
 };
 
 // Per point: sum over lights of direct radiance times the shadow factor of `mode`, plus albedo * diffuse
-// plus specular colour * specular (either span may be empty: no indirect light).
+// plus specular colour * specular (either span may be empty: no indirect light), plus the material's emission
+// in the modes that render a surface (Shaded, SceneOnly), not in those that relight it.
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
                                        std::span<const glm::vec3> diffuse, std::span<const glm::vec3> specular);

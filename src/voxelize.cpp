@@ -69,6 +69,7 @@ namespace {
 struct VoxelTriangle {
     glm::vec3 p[3];    // level-0 voxel coordinates
     glm::vec3 normal;  // unit face normal (winding order)
+    glm::vec3 emission;  // the material's emitted radiance
     glm::ivec3 lo, hi;  // voxel bounds, clamped to the grid
 };
 
@@ -84,6 +85,7 @@ std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, co
             float len = glm::length(cr);
             if (!(len > 0.0f)) continue;  // degenerate: covers no area
             vt.normal = cr / len;
+            vt.emission = mesh.material.emission;
             glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
             glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
             if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
@@ -99,7 +101,10 @@ std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, co
 
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
     const int n = region.resolution;
-    VoxelGeometry out{Grid3(n), std::vector<float>(static_cast<size_t>(n) * n * n, 0.0f)};
+    VoxelGeometry out{Grid3(n), std::vector<float>(static_cast<size_t>(n) * n * n, 0.0f), {}};
+    const bool emissive =
+        std::any_of(meshes.begin(), meshes.end(), [](const TriangleMesh& m) { return m.material.emits(); });
+    if (emissive) out.emission.assign(out.area.size(), glm::vec3(0.0f));
     const std::vector<VoxelTriangle> tris = toVoxelSpace(meshes, region);
     const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
     const SlabBins bins = binBySlab(tris.size(), slabCount, [&](size_t i) {
@@ -124,6 +129,7 @@ VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion&
                         v.z += t.normal.y * a;
                         v.w += t.normal.z * a;
                         out.area[i] += a;
+                        if (emissive) out.emission[i] += t.emission * a;
                     }
         }
     });
@@ -138,6 +144,7 @@ VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion&
             v.w /= a;
         }
         out.area[i] = a * voxelArea;
+        if (emissive) out.emission[i] *= voxelArea;
     });
     return out;
 }

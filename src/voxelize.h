@@ -1,5 +1,6 @@
 // Stage 1: voxelization into a visibility volume (§3.2): occlusion 1 in every voxel that any triangle touches
-// (exact triangle/box overlap, Akenine-Möller 2001) and the area-weighted average normal of the geometry in it.
+// (exact triangle/box overlap, Akenine-Möller 2001) and the area-weighted average normal of the geometry in
+// it; also the area of the geometry in each voxel and, for emissive materials, the radiance they emit.
 #pragma once
 
 #include <span>
@@ -13,6 +14,9 @@ namespace deltagi {
 struct VoxelGeometry {
     Grid3 visibility;        // level 0: (occlusion, occlusion * average normal); occlusion is 0 or 1
     std::vector<float> area;  // surface area of the geometry inside each voxel (world units^2), same indexing
+    // Emitted radiance times area of the emissive surfaces in each voxel, summed (same indexing); empty when
+    // no mesh emits. Divided by `area` it is the voxel's mean emitted radiance (light injection).
+    std::vector<glm::vec3> emission;
 };
 
 // Voxelizes `meshes` over `region`. Deterministic for any thread count (each voxel sums its triangles in
