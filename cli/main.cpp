@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,26 @@ struct InfoArgs {
     std::vector<std::string> overrides;
     bool json = false;
 };
+
+// A finite number, at least `lo` (above it when `open`). CLI11's NonNegativeNumber takes "nan" and prints its
+// range as the largest double in full; this names what is expected instead.
+CLI::Validator finiteNumber(double lo, bool open, const std::string& what) {
+    return CLI::Validator(
+        [=](std::string& text) -> std::string {
+            size_t used = 0;
+            double value = 0.0;
+            try {
+                value = std::stod(text, &used);
+            } catch (const std::exception&) {
+                used = 0;
+            }
+            if (used == 0 || used != text.size() || !std::isfinite(value) ||
+                (open ? value <= lo : value < lo))
+                return fmt::format("expected {}, got '{}'", what, text);
+            return {};
+        },
+        what);
+}
 
 // Progress and errors go to stderr; stdout holds only what `info` was asked for.
 template <typename... Args>
@@ -477,9 +498,10 @@ int main(int argc, char** argv) {
                                    : "Also write with, without, background, composite, object_mask, delta (.exr)");
         command->add_option("--spp", args->samplesPerPixel, "Samples per pixel (default 64)")
             ->check(CLI::Range(1, 1 << 20));
-        command->add_option("--time-limit", args->timeLimit,
-                            "Stop after the first whole pass past this many seconds (default: none)")
-            ->check(CLI::NonNegativeNumber);
+        command
+            ->add_option("--time-limit", args->timeLimit,
+                         "Stop after the first whole pass past this many seconds (default: none)")
+            ->check(finiteNumber(0.0, false, "a number of seconds >= 0"));
         command->add_option("--seed", args->seed, "Random seed (default 0)");
         command->add_option("--set", args->overrides, "Override a scene key: KEY=VALUE (repeatable)");
         command->add_option("--threads", args->threads, "Worker threads (default: all cores)")
@@ -494,9 +516,10 @@ int main(int argc, char** argv) {
     compareCommand->add_option("reference", compareArgs.reference, "The reference image")->required();
     compareCommand->add_option("-o,--output", compareArgs.difference,
                                "False-colour image of 2x the squared difference (like the paper's Fig. 3c)");
-    compareCommand->add_option("--max", compareArgs.maxValue,
-                               "Full scale of the difference image (default: its 99th percentile)")
-        ->check(CLI::PositiveNumber);
+    compareCommand
+        ->add_option("--max", compareArgs.maxValue,
+                     "Full scale of the difference image (default: its 99th percentile)")
+        ->check(finiteNumber(0.0, true, "a number > 0"));
     compareCommand->add_flag("--json", compareArgs.json, "Print JSON on stdout");
 
     try {

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "deltagi/image.h"
 #include "deltagi/scene_info.h"
 
 namespace fs = std::filesystem;
@@ -265,6 +266,88 @@ TEST_F(CliTest, BuddhaExampleLoads) {
     if (!fs::exists(fs::path(DELTAGI_SHARED_DATA_DIR) / "meshes" / "happy-buddha.obj"))
         GTEST_SKIP() << "needs the shared data set (" << DELTAGI_SHARED_DATA_DIR << ")";
     expectExampleLoads("cornell-buddha");
+}
+
+// ---- reference, compare, eval ----
+
+TEST_F(CliTest, ReferenceAndEvalBadInput) {
+    const std::string scene = quote(writeScene(tinyScene()).string());
+    const std::string out = " -o " + quote((dir_ / "ref.exr").string());
+    const std::string json = " --json " + quote((dir_ / "eval.json").string());
+    // The shared options are checked alike by both commands (CLI11 validators): the full set on `reference`.
+    for (const std::string command : {"reference", "eval"}) {
+        const std::string output = command == "eval" ? json : out;
+        expectOneErrorLine(run(command + " " + quote((dir_ / "no-such-scene.json").string()) + output),
+                           {"no-such-scene.json"});
+        expectOneErrorLine(run(command + " " + scene + output + " --spp 0"), {"--spp", "0"});
+        expectOneErrorLine(run(command + " " + scene + output + " --time-limit nan"),
+                           {"--time-limit", "nan"});
+    }
+    expectOneErrorLine(run("reference " + scene + out + " --spp -4"), {"--spp", "-4"});
+    expectOneErrorLine(run("reference " + scene + out + " --time-limit -1"), {"--time-limit", "-1"});
+    expectOneErrorLine(run("reference " + scene + out + " --time-limit 5s"), {"--time-limit", "5s"});
+    expectOneErrorLine(run("reference " + scene + out + " --set camera.width=0"),
+                       {"scene.json", "camera.width"});
+    expectOneErrorLine(run("reference " + scene + " -o " + quote((dir_ / "ref.tif").string())), {"ref.tif"});
+    expectOneErrorLine(run("eval " + scene + " --json " + quote((dir_ / "eval.txt").string())), {"eval.txt"});
+    EXPECT_FALSE(fs::exists(dir_ / "ref.exr"));
+    EXPECT_FALSE(fs::exists(dir_ / "eval.json"));
+}
+
+TEST_F(CliTest, CompareBadInput) {
+    const fs::path a = dir_ / "a.exr", b = dir_ / "b.exr", small = dir_ / "small.exr";
+    deltagi::writeImage(deltagi::Image(8, 6, 3, 0.5f), a);
+    deltagi::writeImage(deltagi::Image(8, 6, 3, 0.25f), b);
+    deltagi::writeImage(deltagi::Image(4, 6, 3, 0.5f), small);
+    writeText(dir_ / "text.exr", "not an image\n");
+    const std::string qa = quote(a.string()), qb = quote(b.string());
+    expectOneErrorLine(run("compare " + quote((dir_ / "missing.exr").string()) + " " + qb), {"missing.exr"});
+    expectOneErrorLine(run("compare " + qa + " " + quote((dir_ / "missing.exr").string())), {"missing.exr"});
+    expectOneErrorLine(run("compare " + qa + " " + quote((dir_ / "text.exr").string())), {"text.exr"});
+    expectOneErrorLine(run("compare " + quote(small.string()) + " " + qb),
+                       {"small.exr", "b.exr", "differ in size", "4x6", "8x6"});
+    expectOneErrorLine(run("compare " + qa + " " + qb + " -o " + quote((dir_ / "d.tif").string())),
+                       {"d.tif"});
+    expectOneErrorLine(run("compare " + qa + " " + qb + " --max 0"), {"--max", "0"});
+    expectOneErrorLine(run("compare " + qa + " " + qb + " --max -1"), {"--max", "-1"});
+}
+
+TEST_F(CliTest, CompareReportsTheMetrics) {
+    const fs::path a = dir_ / "a.exr", b = dir_ / "b.exr";
+    deltagi::writeImage(deltagi::Image(8, 6, 3, 0.5f), a);
+    deltagi::writeImage(deltagi::Image(8, 6, 3, 0.25f), b);
+    const fs::path diff = dir_ / "diff.png";
+    const CliResult result =
+        run("compare " + quote(a.string()) + " " + quote(b.string()) + " --json -o " + quote(diff.string()));
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    const json metrics = json::parse(result.out);
+    EXPECT_NEAR(metrics.at("rmse").get<double>(), 0.25, 1e-6);
+    EXPECT_NEAR(metrics.at("mae").get<double>(), 0.25, 1e-6);
+    EXPECT_NEAR(metrics.at("rel_mse").get<double>(), 0.0625 / (0.0625 + 0.01), 1e-5);
+    EXPECT_TRUE(fs::is_regular_file(diff));
+}
+
+// reference and eval end to end on the tiny scene: the images, and the figures under the documented keys.
+TEST_F(CliTest, ReferenceAndEvalWriteTheirOutputs) {
+    const std::string scene = quote(writeScene(tinyScene()).string());
+    const fs::path aov = dir_ / "aov";
+    CliResult result = run("reference " + scene + " -o " + quote((dir_ / "ref.exr").string()) +
+                           " --spp 2 --threads 2 --aov " + quote(aov.string()));
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    EXPECT_NE(result.err.find("2 spp"), std::string::npos) << result.err;
+    for (const char* file : {"with.exr", "without.exr", "composite.exr", "delta.exr", "object_mask.exr"})
+        EXPECT_TRUE(fs::is_regular_file(aov / file)) << file;
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "ref.exr"));
+
+    result = run("eval " + scene + " --json " + quote((dir_ / "eval.json").string()) + " --spp 2 --quiet");
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    EXPECT_EQ(result.err, "");
+    const json figures = json::parse(readText(dir_ / "eval.json"));
+    for (const char* key : {"delta_rel_error", "object_rel_rmse", "composite_rmse", "bias_lit",
+                            "bias_shadowed", "dgi_ms", "reference_ms"})
+        EXPECT_TRUE(figures.at(key).is_number()) << key;
+    for (const char* baseline : {"no_relight", "shadow_only", "single_visibility"})
+        EXPECT_TRUE(figures.at("baselines").at(baseline).at("delta_rel_error").is_number()) << baseline;
 }
 
 // 16 bytes per voxel over the mip chain r^3 + (r/2)^3 + ... + 1.
