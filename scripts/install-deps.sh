@@ -6,6 +6,7 @@ packages=(
   libembree-dev libtbb-dev libassimp-dev libopenimageio-dev openimageio-tools
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  jq
 )
 missing=()
 for p in "${packages[@]}"; do
