@@ -30,6 +30,12 @@ public:
     Grid3(const Grid3&) = delete;
     Grid3& operator=(const Grid3&) = delete;
 
+    Grid3 clone() const {
+        Grid3 g;
+        g.n_ = n_;
+        g.voxels_ = voxels_;
+        return g;
+    }
     int resolution() const { return n_; }
     size_t size() const { return voxels_.size(); }
     size_t index(int x, int y, int z) const { return (static_cast<size_t>(z) * n_ + y) * n_ + x; }

@@ -1,5 +1,5 @@
 // Every tuning factor of the pipeline, with its default and unit. Read from the scene file's "options" object
-// (the JSON key of each field is given in its comment) and written back by sceneOptionsToJson().
+// (the JSON key of each field is given in its comment) and written back by optionsToJson() (scene_io.h).
 #pragma once
 
 #include <optional>
