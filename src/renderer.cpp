@@ -82,29 +82,59 @@ struct ConeResults {
     std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
 };
 
-// Stage 6 for every job: shadow, diffuse and specular cones (each timed as one stage over all jobs), then
-// the edge-aware filter over the shadow and diffuse results.
+// The diffuse cones of a job at every options.diffuse.pixel_stride-th pixel and row, filtered: the edge-aware
+// filter interpolates the pixels between from traced neighbours on the same surface, and the pixels that have
+// none are traced as well.
+std::vector<glm::vec3> traceSparseDiffuse(const ConeJob& job, const Scene& scene, const DenoiseSettings& filter) {
+    const Options& o = scene.options;
+    const Camera& camera = scene.camera;
+    const int stride = o.diffuse.pixelStride;
+    if (stride <= 1) {
+        std::vector<glm::vec3> diffuse = traceDiffuseCones(job.points, *job.light, job.visibility, o);
+        denoiseInPlace(diffuse, 1, job.points, camera, filter);
+        return diffuse;
+    }
+    std::vector<SurfacePoint> subset(job.points.size());
+    std::vector<uint8_t> sampled(job.points.size(), 0);
+    for (int y = 0; y < camera.height; y += stride)
+        for (int x = 0; x < camera.width; x += stride) {
+            const size_t i = static_cast<size_t>(y) * camera.width + x;
+            subset[i] = job.points[i];
+            sampled[i] = 1;
+        }
+    std::vector<glm::vec3> diffuse = traceDiffuseCones(subset, *job.light, job.visibility, o);
+    DenoiseSettings fill = filter;
+    fill.radius = std::max(filter.radius, 0) + stride - 1;
+    std::vector<size_t> holes;
+    denoiseInPlace(diffuse, 1, job.points, camera, fill, sampled, &holes);
+    if (holes.empty()) return diffuse;
+    std::fill(subset.begin(), subset.end(), SurfacePoint{});
+    for (size_t i : holes) subset[i] = job.points[i];
+    const std::vector<glm::vec3> filled = traceDiffuseCones(subset, *job.light, job.visibility, o);
+    for (size_t i : holes) diffuse[i] = filled[i];
+    return diffuse;
+}
+
+// Stage 6 for every job: shadow, diffuse and specular cones (each timed as one stage over all jobs, the
+// diffuse cones with their interpolation), then the edge-aware filter over the shadow results.
 std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
     const Options& o = scene.options;
     std::vector<ConeResults> results(jobs.size());
     for (size_t j = 0; j < jobs.size(); ++j)
         results[j].shadows = traceShadowCones(jobs[j].points, scene.lights, jobs[j].visibility, o);
     timer.lap("shadow");
+    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
+    const DenoiseSettings filter{o.render.denoiseRadius};
     for (size_t j = 0; j < jobs.size(); ++j)
-        if (jobs[j].indirect)
-            results[j].diffuse = traceDiffuseCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
+        if (jobs[j].indirect) results[j].diffuse = traceSparseDiffuse(jobs[j], scene, filter);
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j)
         if (jobs[j].indirect)
             results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
     timer.lap("specular");
-    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
-    const DenoiseSettings filter{o.render.denoiseRadius};
-    for (size_t j = 0; j < jobs.size(); ++j) {
+    for (size_t j = 0; j < jobs.size(); ++j)
         denoiseInPlace(results[j].shadows, static_cast<int>(scene.lights.size()), jobs[j].points, scene.camera,
                        filter);
-        denoiseInPlace(results[j].diffuse, 1, jobs[j].points, scene.camera, filter);
-    }
     timer.lap("denoise");
     return results;
 }
