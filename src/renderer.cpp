@@ -150,7 +150,8 @@ struct StaticWork {
     std::optional<VolumeRegion> region;
     std::optional<VoxelGeometry> sceneGeometry;
     std::optional<MipVolume> sceneVisibility;
-    std::optional<Grid3> sceneLight;  // injected from the RSMs of the scene alone
+    std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
+    std::optional<Grid3> sceneLight;  // injected from sceneRsms
 };
 
 bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
@@ -198,15 +199,18 @@ DgiVolumes buildVolumes(const Scene& scene, const VolumeRegion& region, const Ra
     if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region);
     VoxelGeometry objectGeometry = voxelize(scene.virtuals, region);
     timer.lap("voxelize");
-    // 2. Reflective shadow maps: scene + objects, and scene alone.
-    const std::vector<ReflectiveShadowMap> rsmFull = renderRsms(all, scene.lights, region, rsmResolution);
-    std::vector<ReflectiveShadowMap> rsmScene;
-    if (!kept.sceneLight) rsmScene = renderRsms(realOnly, scene.lights, region, rsmResolution);
+    // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
+    // again).
+    if (!kept.sceneRsms) kept.sceneRsms = renderRsms(realOnly, scene.lights, region, rsmResolution);
+    std::vector<ReflectiveShadowMap> rsmFull;
+    const Bounds3f objectBounds = boundsOf(scene.virtuals);
+    for (size_t l = 0; l < scene.lights.size(); ++l)
+        rsmFull.push_back(updateReflectiveShadowMap((*kept.sceneRsms)[l], all, scene.lights[l], region, objectBounds));
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* both[] = {&*kept.sceneGeometry, &objectGeometry};
     const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
-    if (!kept.sceneLight) kept.sceneLight = injectLight(rsmScene, region, sceneAlone);
+    if (!kept.sceneLight) kept.sceneLight = injectLight(*kept.sceneRsms, region, sceneAlone);
     Grid3 fullLight = injectLight(rsmFull, region, both);
     Grid3 deltaLight = deltaVolume(fullLight, *kept.sceneLight);
     timer.lap("inject");
@@ -250,6 +254,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     if (kept.region && !sameRegion(*kept.region, region)) {
         kept.sceneGeometry.reset();
         kept.sceneVisibility.reset();
+        kept.sceneRsms.reset();
         kept.sceneLight.reset();
     }
     kept.region = region;
