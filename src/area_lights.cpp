@@ -19,8 +19,9 @@ AreaLights::AreaLights(const Scene& scene, SceneContent content) {
             cdf_.push_back(totalPower_);
         }
     };
-    for (const TriangleMesh& m : scene.real) add(m);
-    if (content == SceneContent::RealAndVirtual)
+    if (content != SceneContent::VirtualOnly)
+        for (const TriangleMesh& m : scene.real) add(m);
+    if (content != SceneContent::RealOnly)
         for (const TriangleMesh& m : scene.virtuals) add(m);
 }
 

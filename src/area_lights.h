@@ -27,8 +27,9 @@ struct AreaLightSample {
 
 class AreaLights {
   public:
-    // The emissive triangles of the meshes a RayScene of the same `content` holds, in its order (real meshes,
-    // then virtual ones), so that two sets built from the same real meshes sample them alike.
+    // The emissive triangles of the meshes a RayScene of the same `content` holds (without a base layer), in
+    // its order (real meshes, then virtual ones), so that two sets built from the same real meshes sample
+    // them alike.
     AreaLights(const Scene& scene, SceneContent content);
 
     bool empty() const { return triangles_.empty(); }
