@@ -8,8 +8,8 @@
 #   SPP=64 TIME_LIMIT=120 scripts/fig3.sh
 #
 # Needs build/deltagi (scripts/test.sh builds it), jq, and the Happy Buddha of the shared data set at
-# ../shared/data/meshes/happy-buddha.obj (next to the repository). On this project's 2-core machine it took
-# 4 minutes: 209 s of path tracing (256 samples), 8 s per DGI render (three: DGI and two baselines).
+# ../shared/data/meshes/happy-buddha.obj (next to the repository). On this project's 2-core machine it takes
+# 2 to 4 minutes, nearly all of it the path tracer (128 s for 256 samples when the machine is not shared).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
