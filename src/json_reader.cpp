@@ -224,6 +224,13 @@ void readRender(const JsonNode& node, RenderOptions& render) {
     if (auto n = node.find("denoise_radius")) render.denoiseRadius = n->integer(0, 8);
 }
 
+// options.diffuse/shadow.pixel_stride: 1, 2 or 4.
+int readPixelStride(const JsonNode& node) {
+    const int stride = node.integer(1, 4);
+    if (stride == 3) node.fail("must be 1, 2 or 4");
+    return stride;
+}
+
 }  // namespace
 
 Options readOptions(const JsonNode& node) {
@@ -237,10 +244,7 @@ Options readOptions(const JsonNode& node) {
     if (auto n = node.find("diffuse")) {
         n->allowKeys({"count", "aperture_deg", "pixel_stride"});
         if (auto c = n->find("count")) options.diffuse.count = c->integer(1, 64);
-        if (auto st = n->find("pixel_stride")) {
-            options.diffuse.pixelStride = st->integer(1, 4);
-            if (options.diffuse.pixelStride == 3) st->fail("must be 1, 2 or 4");
-        }
+        if (auto st = n->find("pixel_stride")) options.diffuse.pixelStride = readPixelStride(*st);
         if (auto a = n->find("aperture_deg"))
             options.diffuse.apertureDeg = a->floatNumber({0.0, 180.0, false, true});
     }
@@ -255,9 +259,10 @@ Options readOptions(const JsonNode& node) {
                                          options.specular.maxApertureDeg, options.specular.minApertureDeg));
     }
     if (auto n = node.find("shadow")) {
-        n->allowKeys({"aperture_deg"});
+        n->allowKeys({"aperture_deg", "pixel_stride"});
         if (auto a = n->find("aperture_deg"))
             options.shadow.apertureDeg = a->floatNumber({0.0, 90.0, true, false});
+        if (auto st = n->find("pixel_stride")) options.shadow.pixelStride = readPixelStride(*st);
     }
     if (auto n = node.find("trace")) readTrace(*n, options.trace);
     if (auto n = node.find("render")) readRender(*n, options.render);
@@ -278,7 +283,7 @@ json optionsToJson(const Options& o) {
          {{"count", o.diffuse.count}, {"aperture_deg", o.diffuse.apertureDeg}, {"pixel_stride", o.diffuse.pixelStride}}},
         {"specular",
          {{"min_aperture_deg", o.specular.minApertureDeg}, {"max_aperture_deg", o.specular.maxApertureDeg}}},
-        {"shadow", {{"aperture_deg", o.shadow.apertureDeg}}},
+        {"shadow", {{"aperture_deg", o.shadow.apertureDeg}, {"pixel_stride", o.shadow.pixelStride}}},
         {"trace",
          {{"step_scale", o.trace.stepScale},
           {"start_offset", o.trace.startOffset},

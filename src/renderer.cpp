@@ -75,6 +75,7 @@ struct ConeJob {
     const MipVolume* light;
     VisibilityVolumes visibility;
     bool indirect;  // trace diffuse and specular cones too
+    bool objectShadowOnly = false;  // see traceShadowCones()
 };
 
 struct ConeResults {
@@ -82,60 +83,67 @@ struct ConeResults {
     std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
 };
 
-// The diffuse cones of a job at every options.diffuse.pixel_stride-th pixel and row, filtered: the edge-aware
-// filter interpolates the pixels between from traced neighbours on the same surface, and the pixels that have
-// none are traced as well.
-std::vector<glm::vec3> traceSparseDiffuse(const ConeJob& job, const Scene& scene, const DenoiseSettings& filter) {
-    const Options& o = scene.options;
-    const Camera& camera = scene.camera;
-    const int stride = o.diffuse.pixelStride;
+// Cone results `trace(points)` (perPixel values of T per pixel) at every stride-th pixel of every stride-th
+// row, then filtered: the edge-aware filter interpolates the pixels between from traced neighbours on the same
+// surface (averaging the noise of the jittered cone starts too), and the pixels that have none are traced as
+// well. With stride 1 every pixel is traced and filtered.
+template <typename T, typename Trace>
+std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& camera, int stride, int perPixel,
+                           const DenoiseSettings& filter, Trace&& trace) {
     if (stride <= 1) {
-        std::vector<glm::vec3> diffuse = traceDiffuseCones(job.points, *job.light, job.visibility, o);
-        denoiseInPlace(diffuse, 1, job.points, camera, filter);
-        return diffuse;
+        std::vector<T> values = trace(points);
+        denoiseInPlace(values, perPixel, points, camera, filter);
+        return values;
     }
-    std::vector<SurfacePoint> subset(job.points.size());
-    std::vector<uint8_t> sampled(job.points.size(), 0);
+    std::vector<SurfacePoint> subset(points.size());
     for (int y = 0; y < camera.height; y += stride)
         for (int x = 0; x < camera.width; x += stride) {
             const size_t i = static_cast<size_t>(y) * camera.width + x;
-            subset[i] = job.points[i];
-            sampled[i] = 1;
+            subset[i] = points[i];
         }
-    std::vector<glm::vec3> diffuse = traceDiffuseCones(subset, *job.light, job.visibility, o);
+    std::vector<T> values = trace(std::span<const SurfacePoint>(subset));
+    // The same number of samples as the filter at stride 1 (at least the 3x3 around each pixel), spaced out.
     DenoiseSettings fill = filter;
-    fill.radius = std::max(filter.radius, 0) + stride - 1;
+    fill.radius = std::max(filter.radius, 1);
+    fill.stride = stride;
     std::vector<size_t> holes;
-    denoiseInPlace(diffuse, 1, job.points, camera, fill, sampled, &holes);
-    if (holes.empty()) return diffuse;
+    denoiseInPlace(values, perPixel, points, camera, fill, &holes);
+    if (holes.empty()) return values;
     std::fill(subset.begin(), subset.end(), SurfacePoint{});
-    for (size_t i : holes) subset[i] = job.points[i];
-    const std::vector<glm::vec3> filled = traceDiffuseCones(subset, *job.light, job.visibility, o);
-    for (size_t i : holes) diffuse[i] = filled[i];
-    return diffuse;
+    for (size_t i : holes) subset[i] = points[i];
+    const std::vector<T> filled = trace(std::span<const SurfacePoint>(subset));
+    for (size_t i : holes)
+        std::copy_n(filled.begin() + i * perPixel, perPixel, values.begin() + i * perPixel);
+    return values;
 }
 
-// Stage 6 for every job: shadow, diffuse and specular cones (each timed as one stage over all jobs, the
-// diffuse cones with their interpolation), then the edge-aware filter over the shadow results.
+// Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs. Shadow and
+// diffuse cones are traced at options.shadow/diffuse.pixel_stride and filtered (traceSparse).
 std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
     const Options& o = scene.options;
-    std::vector<ConeResults> results(jobs.size());
-    for (size_t j = 0; j < jobs.size(); ++j)
-        results[j].shadows = traceShadowCones(jobs[j].points, scene.lights, jobs[j].visibility, o);
-    timer.lap("shadow");
-    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
     const DenoiseSettings filter{o.render.denoiseRadius};
-    for (size_t j = 0; j < jobs.size(); ++j)
-        if (jobs[j].indirect) results[j].diffuse = traceSparseDiffuse(jobs[j], scene, filter);
+    const int lights = static_cast<int>(scene.lights.size());
+    std::vector<ConeResults> results(jobs.size());
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        const ConeJob& job = jobs[j];
+        results[j].shadows = traceSparse<ShadowOcclusion>(
+            job.points, scene.camera, o.shadow.pixelStride, lights, filter, [&](std::span<const SurfacePoint> p) {
+                return traceShadowCones(p, scene.lights, job.visibility, o, job.objectShadowOnly);
+            });
+    }
+    timer.lap("shadow");
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        const ConeJob& job = jobs[j];
+        if (!job.indirect) continue;
+        results[j].diffuse = traceSparse<glm::vec3>(
+            job.points, scene.camera, o.diffuse.pixelStride, 1, filter,
+            [&](std::span<const SurfacePoint> p) { return traceDiffuseCones(p, *job.light, job.visibility, o); });
+    }
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j)
         if (jobs[j].indirect)
             results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
     timer.lap("specular");
-    for (size_t j = 0; j < jobs.size(); ++j)
-        denoiseInPlace(results[j].shadows, static_cast<int>(scene.lights.size()), jobs[j].points, scene.camera,
-                       filter);
-    timer.lap("denoise");
     return results;
 }
 
@@ -302,12 +310,14 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
 
     // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both are
     // occluded by both visibility volumes. Cones discount the back faces of their own surface's volume only.
+    const ShadowMode relightMode =
+        o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     const ConeJob jobs[] = {
         {gbuffer.object, &volumes.fullLight,
          {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object}, o.render.indirect},
         {realPoints, &volumes.deltaLight,
          {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Scene},
-         o.render.indirect && o.render.relightIndirect}};
+         o.render.indirect && o.render.relightIndirect, relightMode == ShadowMode::DeltaShadow}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];
@@ -315,8 +325,6 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
     const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded,
                                                 object.diffuse, object.specular);
-    const ShadowMode relightMode =
-        o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     const auto realChange =
         combineLighting(realPoints, scene.lights, real.shadows, relightMode, real.diffuse, real.specular);
     timer.lap("shading");

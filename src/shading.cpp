@@ -36,7 +36,8 @@ float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
 }  // namespace
 
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
-                                              const VisibilityVolumes& visibility, const Options& options) {
+                                              const VisibilityVolumes& visibility, const Options& options,
+                                              bool objectShadowOnly) {
     std::vector<ShadowOcclusion> out(points.size() * lights.size());
     if (lights.empty() || (!visibility.scene && !visibility.object)) return out;
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
@@ -57,6 +58,7 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
             cone.direction = s.wi;
             cone.maxDistance = std::isfinite(s.distance) ? s.distance / (1.0f + kShadowConeStopDiameters * 2.0f * tanHalf) : s.distance;
             cone.jitter = hashToUnit(i, static_cast<uint32_t>(l));
+            if (objectShadowOnly && !shadowConeMeetsObjects(cone, visibility, settings)) continue;
             out[i * lights.size() + l] = traceShadowCone(cone, visibility, settings);
         }
     });

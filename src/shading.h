@@ -16,9 +16,12 @@
 namespace deltagi {
 
 // Shadow cones (§3.5): for every point and light (index point * lights + light) the occlusion by the scene
-// alone, the objects alone and both. Invalid points get zero occlusion.
+// alone, the objects alone and both. Invalid points get zero occlusion. With `objectShadowOnly` (relighting
+// with ShadowMode::DeltaShadow, where only scene - combined counts), cones that the objects do not occlude
+// anywhere are skipped and get zero occlusion too: their change is zero either way.
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
-                                              const VisibilityVolumes& visibility, const Options& options);
+                                              const VisibilityVolumes& visibility, const Options& options,
+                                              bool objectShadowOnly = false);
 
 // Diffuse cones: cosine-weighted incoming radiance sum_k w_k L_k (so that albedo times it is the reflected
 // radiance). Zero for invalid points.
