@@ -12,6 +12,7 @@
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
 #include "shading.h"
+#include "sky_light.h"
 #include "voxelize.h"
 
 namespace deltagi {
@@ -73,12 +74,22 @@ struct ConeJob {
     const MipVolume* light;
     VisibilityVolumes visibility;
     bool indirect;  // trace diffuse and specular cones too
+    ShadowMode mode;  // how the sky through the cones counts (shaded, relit, or the real scene alone)
 };
 
 struct ConeResults {
     std::vector<ShadowOcclusion> shadows;  // points x lights
     std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
 };
+
+// a += b, where an empty `a` is zero.
+void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
+    if (a.empty()) {
+        a = std::move(b);
+        return;
+    }
+    for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+}
 
 // Stage 6 for every job: shadow, diffuse and specular cones (each timed as one stage over all jobs), then
 // the edge-aware filter over the shadow and diffuse results.
@@ -96,6 +107,16 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         if (jobs[j].indirect)
             results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
     timer.lap("specular");
+    // Sky light through the cones, added to their indirect light (and so filtered with the diffuse part).
+    if (scene.environment && !scene.environment->sky.empty()) {
+        for (size_t j = 0; j < jobs.size(); ++j) {
+            SkyLight sky =
+                traceSkyCones(jobs[j].points, *scene.environment, jobs[j].visibility, jobs[j].mode, o);
+            addInto(results[j].diffuse, std::move(sky.diffuse));
+            addInto(results[j].specular, std::move(sky.specular));
+        }
+        timer.lap("sky");
+    }
     // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
     const DenoiseSettings filter{o.render.denoiseRadius};
     for (size_t j = 0; j < jobs.size(); ++j) {
@@ -149,7 +170,11 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const VoxelGeometry* geometries[] = {&geometry};
     const MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
     const MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
-    const ConeJob job{points, &light, {&visibility, nullptr, VisibilityVolumes::Self::Scene}, o.render.indirect};
+    const ConeJob job{points,
+                      &light,
+                      {&visibility, nullptr, VisibilityVolumes::Self::Scene},
+                      o.render.indirect,
+                      ShadowMode::SceneOnly};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
     const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
@@ -211,21 +236,26 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
 
     // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both are
     // occluded by both visibility volumes. Cones discount the back faces of their own surface's volume only.
+    const ShadowMode relightMode =
+        o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     const ConeJob jobs[] = {
-        {gbuffer.object, &volumes.fullLight,
-         {&volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object}, o.render.indirect},
-        {realPoints, &volumes.deltaLight,
+        {gbuffer.object,
+         &volumes.fullLight,
+         {&volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object},
+         o.render.indirect,
+         ShadowMode::Shaded},
+        {realPoints,
+         &volumes.deltaLight,
          {&volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Scene},
-         o.render.indirect && o.render.relightIndirect}};
+         o.render.indirect && o.render.relightIndirect,
+         relightMode}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
-    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded,
-                                                object.diffuse, object.specular);
-    const ShadowMode relightMode =
-        o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
+    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows,
+                                                ShadowMode::Shaded, object.diffuse, object.specular);
     const auto realChange =
         combineLighting(realPoints, scene.lights, real.shadows, relightMode, real.diffuse, real.specular);
     timer.lap("shading");
