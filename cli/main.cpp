@@ -22,6 +22,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "bench_command.h"
 #include "deltagi/error.h"
 #include "deltagi/evaluation.h"
 #include "deltagi/image.h"
@@ -507,6 +508,9 @@ int main(int argc, char** argv) {
         ->check(CLI::PositiveNumber);
     compareCommand->add_flag("--json", compareArgs.json, "Print JSON on stdout");
 
+    cli::BenchArgs benchArgs;
+    CLI::App* benchCommand = cli::addBenchCommand(app, benchArgs, kMaxThreads);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
@@ -514,7 +518,8 @@ int main(int argc, char** argv) {
             return app.exit(error);  // --help
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-')
             return reportError(
-                fmt::format("unknown command '{}': expected 'render', 'info', 'reference', 'compare' or 'eval' "
+                fmt::format("unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval' or "
+                            "'bench' "
                             "(see deltagi --help)",
                             argv[1]),
                 kExitUsageError);
@@ -526,6 +531,7 @@ int main(int argc, char** argv) {
         if (*referenceCommand) return runReference(referenceArgs);
         if (*compareCommand) return runCompare(compareArgs);
         if (*evalCommand) return runEval(evalArgs);
+        if (*benchCommand) return cli::runBench(benchArgs);
         return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         return reportError(error.what(), kExitInputError);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 namespace deltagi {
@@ -76,6 +77,20 @@ inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float levelScale, cons
     return std::clamp(occupancy * levelScale * weight, 0.0f, 1.0f);
 }
 
+// log2 of x >= 1 to within 3e-5 (the exponent, and a quintic in the mantissa m - 1, a least-squares fit over
+// [1, 2] that is 0 at m = 1): std::log2 is a noticeable share of a cone step.
+inline float fastLog2(float x) {
+    uint32_t bits;
+    std::memcpy(&bits, &x, sizeof(bits));
+    const float exponent = static_cast<float>(static_cast<int>(bits >> 23) - 127);
+    bits = (bits & 0x007FFFFFu) | 0x3F800000u;
+    float m;
+    std::memcpy(&m, &bits, sizeof(m));
+    const float u = m - 1.0f;
+    const float p = ((((0.04587075f * u - 0.19439043f) * u + 0.41539777f) * u - 0.70867494f) * u + 1.44182512f) * u;
+    return exponent + p;
+}
+
 // Opacity of a sample that covers a segment as long as the cone is wide, applied over a shorter step.
 inline float stepOpacity(float alpha, float stepScale) {
     const float transmittance = std::max(1.0f - alpha, 0.0f);
@@ -99,8 +114,10 @@ void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSett
     const float firstDiameter = std::max(1.0f, 2.0f * tEnter * cone.tanHalfAngle);
     for (float t = tEnter + cone.jitter * settings.jitter * firstDiameter * settings.stepScale; t < tExit;) {
         const float diameter = std::max(1.0f, 2.0f * t * cone.tanHalfAngle);
-        const float level = std::min(std::log2(diameter), maxLevel);
-        if (!visit(reference.lookup(origin + t * cone.direction, level), std::exp2(level))) return;
+        const float level = std::min(fastLog2(diameter), maxLevel);
+        // 2^level, the level's voxel width in level-0 voxels.
+        const float levelScale = std::min(diameter, n);
+        if (!visit(reference.lookup(origin + t * cone.direction, level), levelScale)) return;
         t += diameter * settings.stepScale;
     }
 }

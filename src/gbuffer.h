@@ -26,7 +26,17 @@ struct GBuffer {
     std::vector<float> coverage;        // fraction of sub-samples that see a virtual object first
 };
 
-// `samplesPerPixel` is a square number: the sub-samples are a regular k x k grid in the pixel.
-GBuffer renderGBuffer(const Camera& camera, const RayScene& all, const RayScene& realOnly, int samplesPerPixel);
+// The real surfaces behind the pixel centres (what the photo shows): rays against the real scene alone. They
+// do not change while only the virtual objects move, so FrameRenderer keeps them between frames.
+std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly);
+
+// The virtual half of `g` (object, coverage): `all` holds the real and the virtual surfaces (the virtual objects'
+// layer over the real scene's, see RayScene). One ray per pixel centre decides which pixels are virtual; pixels on a silhouette (whose 3x3 neighbourhood
+// has both kinds) take `samplesPerPixel` sub-samples on a regular k x k grid for their coverage. The virtual
+// surface nearest the pixel centre represents the pixel.
+void renderObjectSurfaces(const Camera& camera, const RayScene& all, int samplesPerPixel, GBuffer& g);
+
+// Both halves; `all` may be null (no virtual objects: zero coverage everywhere).
+GBuffer renderGBuffer(const Camera& camera, const RayScene* all, const RayScene& realOnly, int samplesPerPixel);
 
 }  // namespace deltagi

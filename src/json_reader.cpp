@@ -249,8 +249,12 @@ Options readOptions(const JsonNode& node) {
         if (auto r = n->find("resolution")) options.rsm.resolution = r->integer(16, 8192);
     }
     if (auto n = node.find("diffuse")) {
-        n->allowKeys({"count", "aperture_deg"});
+        n->allowKeys({"count", "aperture_deg", "pixel_stride"});
         if (auto c = n->find("count")) options.diffuse.count = c->integer(1, 64);
+        if (auto st = n->find("pixel_stride")) {
+            options.diffuse.pixelStride = st->integer(1, 4);
+            if (options.diffuse.pixelStride == 3) st->fail("must be 1, 2 or 4");
+        }
         if (auto a = n->find("aperture_deg"))
             options.diffuse.apertureDeg = a->floatNumber({0.0, 180.0, false, true});
     }
@@ -285,7 +289,8 @@ json optionsToJson(const Options& o) {
     return {
         {"volume", volume},
         {"rsm", {{"resolution", o.rsm.resolution}}},
-        {"diffuse", {{"count", o.diffuse.count}, {"aperture_deg", o.diffuse.apertureDeg}}},
+        {"diffuse",
+         {{"count", o.diffuse.count}, {"aperture_deg", o.diffuse.apertureDeg}, {"pixel_stride", o.diffuse.pixelStride}}},
         {"specular",
          {{"min_aperture_deg", o.specular.minApertureDeg}, {"max_aperture_deg", o.specular.maxApertureDeg}}},
         {"shadow", {{"aperture_deg", o.shadow.apertureDeg}}},

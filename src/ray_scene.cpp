@@ -16,11 +16,34 @@ struct RayScene::Impl {
     }
 };
 
-RayScene::RayScene(const Scene& scene, SceneContent content) : impl_(std::make_unique<Impl>()) {
+namespace {
+
+void initRay(RTCRay& ray, glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) {
+    ray.org_x = origin.x;
+    ray.org_y = origin.y;
+    ray.org_z = origin.z;
+    ray.dir_x = direction.x;
+    ray.dir_y = direction.y;
+    ray.dir_z = direction.z;
+    ray.tnear = tMin;
+    ray.tfar = tMax;
+    ray.time = 0.0f;
+    ray.mask = ~0u;
+    ray.id = 0;
+    ray.flags = 0;
+}
+
+}  // namespace
+
+RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* base)
+    : impl_(std::make_unique<Impl>()), base_(base) {
     impl_->device = rtcNewDevice(nullptr);
     if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
     impl_->scene = rtcNewScene(impl_->device);
-    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+    // A layer of virtual objects is rebuilt every frame: a faster build for slightly slower rays.
+    rtcSetSceneBuildQuality(impl_->scene,
+                            content == SceneContent::VirtualOnly ? RTC_BUILD_QUALITY_MEDIUM : RTC_BUILD_QUALITY_HIGH);
+    if (base) bounds_ = base->bounds();
     auto add = [&](const TriangleMesh& mesh, bool isVirtual) {
         if (mesh.triangles.empty()) return;
         RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
@@ -38,8 +61,9 @@ RayScene::RayScene(const Scene& scene, SceneContent content) : impl_(std::make_u
         meshes_.push_back({&mesh, isVirtual});
         bounds_.extend(mesh.bounds());
     };
-    for (const TriangleMesh& m : scene.real) add(m, false);
-    if (content == SceneContent::RealAndVirtual)
+    if (content != SceneContent::VirtualOnly)
+        for (const TriangleMesh& m : scene.real) add(m, false);
+    if (content != SceneContent::RealOnly)
         for (const TriangleMesh& m : scene.virtuals) add(m, true);
     rtcCommitScene(impl_->scene);
 }
@@ -47,23 +71,33 @@ RayScene::RayScene(const Scene& scene, SceneContent content) : impl_(std::make_u
 RayScene::~RayScene() = default;
 
 RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    RayHit hit = intersectLayer(origin, direction, tMin, tMax);
+    if (base_) {
+        RayHit below = base_->intersect(origin, direction, tMin, hit.hit() ? hit.t : tMax);
+        if (below.hit()) hit = below;
+    }
+    return hit;
+}
+
+bool RayScene::occluded(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    if (!meshes_.empty()) {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        RTCRay ray;
+        initRay(ray, origin, direction, tMin, tMax);
+        rtcOccluded1(impl_->scene, &context, &ray);
+        if (ray.tfar < 0.0f) return true;  // Embree marks a hit by tfar = -inf
+    }
+    return base_ && base_->occluded(origin, direction, tMin, tMax);
+}
+
+RayHit RayScene::intersectLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
     RayHit result;
     if (meshes_.empty()) return result;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     RTCRayHit rh;
-    rh.ray.org_x = origin.x;
-    rh.ray.org_y = origin.y;
-    rh.ray.org_z = origin.z;
-    rh.ray.dir_x = direction.x;
-    rh.ray.dir_y = direction.y;
-    rh.ray.dir_z = direction.z;
-    rh.ray.tnear = tMin;
-    rh.ray.tfar = tMax;
-    rh.ray.time = 0.0f;
-    rh.ray.mask = ~0u;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
+    initRay(rh.ray, origin, direction, tMin, tMax);
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &rh);

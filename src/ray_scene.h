@@ -23,12 +23,16 @@ struct RayHit {
 };
 
 // Which meshes a RayScene holds.
-enum class SceneContent { RealOnly, RealAndVirtual };
+enum class SceneContent { RealOnly, RealAndVirtual, VirtualOnly };
 
 // Owns an Embree device and scene (RAII). Holds pointers into `scene`'s meshes: the Scene must outlive it.
+//
+// A RayScene may be layered over a `base` RayScene (which must outlive it): queries then answer for both, so
+// that the virtual objects, which move every frame, get their own small BVH over the reconstruction's, which
+// is built once (FrameRenderer).
 class RayScene {
 public:
-    RayScene(const Scene& scene, SceneContent content);
+    RayScene(const Scene& scene, SceneContent content, const RayScene* base = nullptr);
     ~RayScene();
     RayScene(const RayScene&) = delete;
     RayScene& operator=(const RayScene&) = delete;
@@ -36,8 +40,10 @@ public:
     // Closest hit along origin + t * direction (direction unit length), t in (tMin, tMax).
     RayHit intersect(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
                      float tMax = std::numeric_limits<float>::infinity()) const;
-    Bounds3f bounds() const { return bounds_; }
-    bool empty() const { return meshes_.empty(); }
+    // Whether anything lies along origin + t * direction for t in (tMin, tMax).
+    bool occluded(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const;
+    Bounds3f bounds() const { return bounds_; }  // of this layer and its base
+    bool empty() const { return meshes_.empty() && (!base_ || base_->empty()); }
 
 private:
     struct Impl;
@@ -46,7 +52,10 @@ private:
         const TriangleMesh* mesh;
         bool isVirtual;
     };
+    RayHit intersectLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const;
+
     std::vector<MeshRef> meshes_;  // indexed by Embree geometry ID
+    const RayScene* base_ = nullptr;
     Bounds3f bounds_;
 };
 

@@ -3,8 +3,10 @@
 #include "deltagi/renderer.h"
 
 #include <chrono>
+#include <optional>
 
 #include "composite.h"
+#include "deltagi/scene_io.h"
 #include "denoise.h"
 #include "gbuffer.h"
 #include "inject.h"
@@ -91,68 +93,167 @@ void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
     for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
 }
 
-// Stage 6 for every job: shadow, diffuse and specular cones (each timed as one stage over all jobs), then
-// the edge-aware filter over the shadow and diffuse results.
+// The diffuse cones of a job at every options.diffuse.pixel_stride-th pixel and row, filtered: the edge-aware
+// filter interpolates the pixels between from traced neighbours on the same surface, and the pixels that have
+// none are traced as well.
+std::vector<glm::vec3> traceSparseDiffuse(const ConeJob& job, const Scene& scene, const DenoiseSettings& filter) {
+    const Options& o = scene.options;
+    const Camera& camera = scene.camera;
+    const int stride = o.diffuse.pixelStride;
+    if (stride <= 1) {
+        std::vector<glm::vec3> diffuse = traceDiffuseCones(job.points, *job.light, job.visibility, o);
+        denoiseInPlace(diffuse, 1, job.points, camera, filter);
+        return diffuse;
+    }
+    std::vector<SurfacePoint> subset(job.points.size());
+    std::vector<uint8_t> sampled(job.points.size(), 0);
+    for (int y = 0; y < camera.height; y += stride)
+        for (int x = 0; x < camera.width; x += stride) {
+            const size_t i = static_cast<size_t>(y) * camera.width + x;
+            subset[i] = job.points[i];
+            sampled[i] = 1;
+        }
+    std::vector<glm::vec3> diffuse = traceDiffuseCones(subset, *job.light, job.visibility, o);
+    DenoiseSettings fill = filter;
+    fill.radius = std::max(filter.radius, 0) + stride - 1;
+    std::vector<size_t> holes;
+    denoiseInPlace(diffuse, 1, job.points, camera, fill, sampled, &holes);
+    if (holes.empty()) return diffuse;
+    std::fill(subset.begin(), subset.end(), SurfacePoint{});
+    for (size_t i : holes) subset[i] = job.points[i];
+    const std::vector<glm::vec3> filled = traceDiffuseCones(subset, *job.light, job.visibility, o);
+    for (size_t i : holes) diffuse[i] = filled[i];
+    return diffuse;
+}
+
+// Stage 6 for every job: shadow, diffuse and specular cones (each timed as one stage over all jobs, the
+// diffuse cones with their interpolation), the sky light through the cones, then the edge-aware filter over
+// the shadow results.
 std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
     const Options& o = scene.options;
     std::vector<ConeResults> results(jobs.size());
     for (size_t j = 0; j < jobs.size(); ++j)
         results[j].shadows = traceShadowCones(jobs[j].points, scene.lights, jobs[j].visibility, o);
     timer.lap("shadow");
+    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
+    const DenoiseSettings filter{o.render.denoiseRadius};
     for (size_t j = 0; j < jobs.size(); ++j)
-        if (jobs[j].indirect)
-            results[j].diffuse = traceDiffuseCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
+        if (jobs[j].indirect) results[j].diffuse = traceSparseDiffuse(jobs[j], scene, filter);
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j)
         if (jobs[j].indirect)
             results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
     timer.lap("specular");
-    // Sky light through the cones, added to their indirect light (and so filtered with the diffuse part).
+    // Sky light through the cones, added to their indirect light; its diffuse part filtered like the diffuse
+    // cones' (it has the same jitter noise).
     if (scene.environment && !scene.environment->sky.empty()) {
         for (size_t j = 0; j < jobs.size(); ++j) {
-            SkyLight sky =
-                traceSkyCones(jobs[j].points, *scene.environment, jobs[j].visibility, jobs[j].mode, o);
+            SkyLight sky = traceSkyCones(jobs[j].points, *scene.environment, jobs[j].visibility, jobs[j].mode, o);
+            denoiseInPlace(sky.diffuse, 1, jobs[j].points, scene.camera, filter);
             addInto(results[j].diffuse, std::move(sky.diffuse));
             addInto(results[j].specular, std::move(sky.specular));
         }
         timer.lap("sky");
     }
-    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
-    const DenoiseSettings filter{o.render.denoiseRadius};
-    for (size_t j = 0; j < jobs.size(); ++j) {
+    for (size_t j = 0; j < jobs.size(); ++j)
         denoiseInPlace(results[j].shadows, static_cast<int>(scene.lights.size()), jobs[j].points, scene.camera,
                        filter);
-        denoiseInPlace(results[j].diffuse, 1, jobs[j].points, scene.camera, filter);
-    }
     timer.lap("denoise");
     return results;
 }
 
-// Stages 1-4 (§3.2): the two visibility volumes, the full light volume and the delta volume, mip-mapped.
+// The static half of a frame: what depends only on the real scene, its lights, the camera, the options and
+// the volume region. Built lazily, kept by FrameRenderer while its signature and region are unchanged.
+struct StaticWork {
+    uint64_t signature = 0;
+    std::unique_ptr<RayScene> realOnly;
+    std::optional<std::vector<SurfacePoint>> realSurfaces;  // the G-buffer's real half
+    std::optional<Image> background;                        // the real scene rendered alone (no photo)
+    // Over `region`:
+    std::optional<VolumeRegion> region;
+    std::optional<VoxelGeometry> sceneGeometry;
+    std::optional<MipVolume> sceneVisibility;
+    std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
+    std::optional<Grid3> sceneLight;  // injected from sceneRsms
+};
+
+bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
+    return a.origin == b.origin && a.size == b.size && a.resolution == b.resolution;
+}
+
+// FNV-1a over everything the static half depends on. The scene's and its real meshes' addresses are part of
+// it: the kept BVH and surfaces point into them.
+uint64_t staticSignature(const Scene& scene) {
+    uint64_t h = 1469598103934665603ull;
+    auto bytes = [&](const void* data, size_t size) {
+        const auto* p = static_cast<const unsigned char*>(data);
+        for (size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 1099511628211ull;
+    };
+    auto value = [&](const auto& v) { bytes(&v, sizeof(v)); };
+    value(&scene);
+    value(scene.real.data());
+    value(scene.real.size());
+    for (const TriangleMesh& m : scene.real) {
+        value(m.positions.data());
+        bytes(m.positions.data(), m.positions.size() * sizeof(glm::vec3));
+        bytes(m.normals.data(), m.normals.size() * sizeof(glm::vec3));
+        bytes(m.triangles.data(), m.triangles.size() * sizeof(glm::uvec3));
+        value(m.material);
+    }
+    for (const Light& l : scene.lights) {  // field by field: Light has padding after its bool
+        value(l.type);
+        value(l.color);
+        value(l.intensity);
+        value(l.position);
+        value(l.direction);
+        value(l.innerAngleDeg);
+        value(l.outerAngleDeg);
+        value(l.radius);
+        value(l.fromEnvironment);
+        value(l.angularRadius);
+    }
+    // The environment lights the background rendered without a photo (its sky term).
+    value(scene.environment ? scene.environment->radiance.data().data() : nullptr);
+    if (scene.environment) value(scene.environment->worldFromEnvironment);
+    value(scene.camera);
+    value(scene.background.has_value());
+    const std::string options = optionsToJson(scene.options).dump();
+    bytes(options.data(), options.size());
+    return h;
+}
+
+// Stages 1-4 (§3.2): the two visibility volumes, the full light volume and the delta volume, mip-mapped. The
+// scene's share comes from `kept` when it is there.
 struct DgiVolumes {
-    MipVolume sceneVisibility, objectVisibility, fullLight, deltaLight;
+    const MipVolume* sceneVisibility;
+    MipVolume objectVisibility, fullLight, deltaLight;
 };
 
 DgiVolumes buildVolumes(const Scene& scene, const VolumeRegion& region, const RayScene& realOnly,
-                        const RayScene& all, StageTimer& timer) {
+                        const RayScene& all, StaticWork& kept, StageTimer& timer) {
     const int rsmResolution = scene.options.rsm.resolution;
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
-    VoxelGeometry sceneGeometry = voxelize(scene.real, region);
+    if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region);
     VoxelGeometry objectGeometry = voxelize(scene.virtuals, region);
     timer.lap("voxelize");
-    // 2. Reflective shadow maps: scene + objects, and scene alone.
-    const std::vector<ReflectiveShadowMap> rsmFull = renderRsms(all, scene.lights, region, rsmResolution);
-    const std::vector<ReflectiveShadowMap> rsmScene = renderRsms(realOnly, scene.lights, region, rsmResolution);
+    // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
+    // again).
+    if (!kept.sceneRsms) kept.sceneRsms = renderRsms(realOnly, scene.lights, region, rsmResolution);
+    std::vector<ReflectiveShadowMap> rsmFull;
+    const Bounds3f objectBounds = boundsOf(scene.virtuals);
+    for (size_t l = 0; l < scene.lights.size(); ++l)
+        rsmFull.push_back(updateReflectiveShadowMap((*kept.sceneRsms)[l], all, scene.lights[l], region, objectBounds));
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
-    const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
-    const VoxelGeometry* sceneAlone[] = {&sceneGeometry};
+    const VoxelGeometry* both[] = {&*kept.sceneGeometry, &objectGeometry};
+    const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
+    if (!kept.sceneLight) kept.sceneLight = injectLight(*kept.sceneRsms, region, sceneAlone);
     Grid3 fullLight = injectLight(rsmFull, region, both);
-    Grid3 deltaLight = deltaVolume(fullLight, injectLight(rsmScene, region, sceneAlone));
+    Grid3 deltaLight = deltaVolume(fullLight, *kept.sceneLight);
     timer.lap("inject");
     // 4. Mipmaps of all four volumes.
-    DgiVolumes v{buildMipChain(region, std::move(sceneGeometry.visibility)),
-                 buildMipChain(region, std::move(objectGeometry.visibility)),
+    if (!kept.sceneVisibility) kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
+    DgiVolumes v{&*kept.sceneVisibility, buildMipChain(region, std::move(objectGeometry.visibility)),
                  buildMipChain(region, std::move(fullLight)), buildMipChain(region, std::move(deltaLight))};
     timer.lap("mipmap");
     return v;
@@ -183,37 +284,43 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     return toImage(radiance, scene.camera.width, scene.camera.height);
 }
 
-
-}  // namespace
-
-VolumeRegion volumeRegion(const Scene& scene) {
-    const VolumeOptions& v = scene.options.volume;
-    if (v.center && v.size) {
-        return {*v.center - glm::vec3(0.5f * *v.size), *v.size, v.resolution};
-    }
-    if (!scene.virtuals.empty()) return cubeAround(boundsOf(scene.virtuals), v.extentScale, v.resolution);
-    return cubeAround(boundsOf(scene.real), 1.0f + 2.0f / static_cast<float>(v.resolution), v.resolution);
-}
-
-RenderOutput render(const Scene& scene, const StageCallback& onStage) {
+// One frame; `kept` holds the static half from an earlier frame of the same scene, or nothing.
+RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallback& onStage) {
     RenderOutput out;
     const auto start = std::chrono::steady_clock::now();
     StageTimer timer(out.timings, onStage);
     const Options& o = scene.options;
     const Camera& camera = scene.camera;
     const VolumeRegion region = volumeRegion(scene);
+    if (kept.region && !sameRegion(*kept.region, region)) {
+        kept.sceneGeometry.reset();
+        kept.sceneVisibility.reset();
+        kept.sceneRsms.reset();
+        kept.sceneLight.reset();
+    }
+    kept.region = region;
+
+    if (!kept.realOnly) kept.realOnly = std::make_unique<RayScene>(scene, SceneContent::RealOnly);
+    const RayScene& realOnly = *kept.realOnly;
+    // The virtual objects get their own BVH, layered over the reconstruction's.
+    std::optional<RayScene> all;
+    if (!scene.virtuals.empty()) all.emplace(scene, SceneContent::VirtualOnly, &realOnly);
+    timer.lap("bvh");
+
+    auto realSurfaces = [&]() -> const std::vector<SurfacePoint>& {
+        if (!kept.realSurfaces) kept.realSurfaces = renderRealSurfaces(camera, realOnly);
+        return *kept.realSurfaces;
+    };
+    auto background = [&]() -> const Image& {
+        if (scene.background) return *scene.background;
+        if (!kept.background) kept.background = renderRealScene(scene, realOnly, realSurfaces());
+        return *kept.background;
+    };
 
     if (scene.virtuals.empty()) {
         // Nothing is added, so nothing changes: the composite is the background.
-        const RayScene realOnly(scene, SceneContent::RealOnly);
-        if (scene.background) {
-            out.background = *scene.background;
-        } else {
-            GBuffer gbuffer = renderGBuffer(camera, realOnly, realOnly, 1);
-            timer.lap("gbuffer");
-            out.background = renderRealScene(scene, realOnly, gbuffer.real);
-            timer.lap("background");
-        }
+        out.background = background();
+        timer.lap("background");
         out.composite = out.background;
         out.objectMask = Image(camera.width, camera.height, 1);
         out.delta = Image(camera.width, camera.height, 3);
@@ -221,14 +328,14 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
         return out;
     }
 
-    const RayScene realOnly(scene, SceneContent::RealOnly);
-    const RayScene all(scene, SceneContent::RealAndVirtual);
-    timer.lap("bvh");
-
-    const DgiVolumes volumes = buildVolumes(scene, region, realOnly, all, timer);
+    const DgiVolumes volumes = buildVolumes(scene, region, realOnly, *all, kept, timer);
 
     // 5. G-buffer. Real surfaces are relit only where they show through (coverage < 1).
-    GBuffer gbuffer = renderGBuffer(camera, all, realOnly, o.render.samplesPerPixel);
+    GBuffer gbuffer;
+    gbuffer.width = camera.width;
+    gbuffer.height = camera.height;
+    gbuffer.real = realSurfaces();
+    renderObjectSurfaces(camera, *all, o.render.samplesPerPixel, gbuffer);
     std::vector<SurfacePoint> realPoints = gbuffer.real;
     for (size_t i = 0; i < realPoints.size(); ++i)
         if (gbuffer.coverage[i] >= 1.0f) realPoints[i] = {};
@@ -241,12 +348,12 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
     const ConeJob jobs[] = {
         {gbuffer.object,
          &volumes.fullLight,
-         {&volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object},
+         {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object},
          o.render.indirect,
          ShadowMode::Shaded},
         {realPoints,
          &volumes.deltaLight,
-         {&volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Scene},
+         {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Scene},
          o.render.indirect && o.render.relightIndirect,
          relightMode}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
@@ -261,12 +368,8 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
     timer.lap("shading");
 
     // The background: the photo, or the real scene rendered alone.
-    if (scene.background) {
-        out.background = *scene.background;
-    } else {
-        out.background = renderRealScene(scene, realOnly, gbuffer.real);
-        timer.lap("background");
-    }
+    out.background = background();
+    timer.lap("background");
 
     // 8. Differential composite.
     CompositeImages images = differentialComposite(out.background, gbuffer, objectRadiance, realChange);
@@ -276,6 +379,40 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
     timer.lap("composite");
     out.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return out;
+}
+
+}  // namespace
+
+VolumeRegion volumeRegion(const Scene& scene) {
+    const VolumeOptions& v = scene.options.volume;
+    if (v.center && v.size) {
+        return {*v.center - glm::vec3(0.5f * *v.size), *v.size, v.resolution};
+    }
+    if (!scene.virtuals.empty()) return cubeAround(boundsOf(scene.virtuals), v.extentScale, v.resolution);
+    return cubeAround(boundsOf(scene.real), 1.0f + 2.0f / static_cast<float>(v.resolution), v.resolution);
+}
+
+RenderOutput render(const Scene& scene, const StageCallback& onStage) {
+    StaticWork fresh;
+    return renderFrame(scene, fresh, onStage);
+}
+
+struct FrameRenderer::State {
+    StaticWork kept;
+};
+
+FrameRenderer::FrameRenderer() : state_(std::make_unique<State>()) {}
+FrameRenderer::~FrameRenderer() = default;
+
+void FrameRenderer::clear() { state_->kept = StaticWork{}; }
+
+RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onStage) {
+    const uint64_t signature = staticSignature(scene);
+    if (signature != state_->kept.signature) {
+        state_->kept = StaticWork{};
+        state_->kept.signature = signature;
+    }
+    return renderFrame(scene, state_->kept, onStage);
 }
 
 }  // namespace deltagi

@@ -30,6 +30,12 @@ public:
     Grid3(const Grid3&) = delete;
     Grid3& operator=(const Grid3&) = delete;
 
+    Grid3 clone() const {
+        Grid3 g;
+        g.n_ = n_;
+        g.voxels_ = voxels_;
+        return g;
+    }
     int resolution() const { return n_; }
     size_t size() const { return voxels_.size(); }
     size_t index(int x, int y, int z) const { return (static_cast<size_t>(z) * n_ + y) * n_ + x; }
@@ -86,13 +92,24 @@ inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorn
     const glm::vec3 f = q - base;
     const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
     const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
-    const bool inside = x >= 0 && y >= 0 && z >= 0 && x + 1 < n && y + 1 < n && z + 1 < n;
+    if (x >= 0 && y >= 0 && z >= 0 && x + 1 < n && y + 1 < n && z + 1 < n) {
+        // All 8 corners inside: one base index and fixed offsets.
+        const uint32_t base = static_cast<uint32_t>((static_cast<size_t>(z) * n + y) * n + x);
+        const uint32_t row = static_cast<uint32_t>(n), slice = static_cast<uint32_t>(n) * row;
+        const uint32_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
+        const float wxy[4] = {wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]};
+        for (int k = 0; k < 8; ++k) {
+            c.index[k] = base + offsets[k];
+            c.weight[k] = wxy[k & 3] * wz[k >> 2];
+        }
+        return;
+    }
     for (int k = 0; k < 8; ++k) {
         const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
         const int cx = x + dx, cy = y + dy, cz = z + dz;
-        const bool valid = inside || (static_cast<unsigned>(cx) < static_cast<unsigned>(n) &&
-                                      static_cast<unsigned>(cy) < static_cast<unsigned>(n) &&
-                                      static_cast<unsigned>(cz) < static_cast<unsigned>(n));
+        const bool valid = static_cast<unsigned>(cx) < static_cast<unsigned>(n) &&
+                           static_cast<unsigned>(cy) < static_cast<unsigned>(n) &&
+                           static_cast<unsigned>(cz) < static_cast<unsigned>(n);
         c.index[k] = valid ? static_cast<uint32_t>((static_cast<size_t>(cz) * n + cy) * n + cx) : 0u;
         c.weight[k] = valid ? wx[dx] * wy[dy] * wz[dz] : 0.0f;
     }

@@ -265,6 +265,30 @@ TEST_F(CliTest, BuddhaExampleLoads) {
     if (!fs::exists(fs::path(DELTAGI_SHARED_DATA_DIR) / "meshes" / "happy-buddha.obj"))
         GTEST_SKIP() << "needs the shared data set (" << DELTAGI_SHARED_DATA_DIR << ")";
     expectExampleLoads("cornell-buddha");
+    expectExampleLoads("bench-cornell-buddha");
+}
+
+TEST_F(CliTest, BenchWritesTheTableAndJson) {
+    const fs::path jsonPath = dir_ / "bench.json";
+    const CliResult result = run("bench " + quote(writeScene(tinyScene()).string()) +
+                                 " --frames 2 --warmup 0 --quiet --json " + quote(jsonPath.string()));
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    EXPECT_NE(result.out.find("diffuse_ms"), std::string::npos) << result.out;
+    const json figures = json::parse(readText(jsonPath));
+    EXPECT_EQ(figures.at("frames"), 2);
+    EXPECT_EQ(figures.at("width"), 64);
+    EXPECT_GE(figures.at("total_ms").at("median").get<double>(), 0.0);
+    EXPECT_EQ(figures.at("specular_ms").at("paper"), 64.0);
+}
+
+TEST_F(CliTest, BenchBadInput) {
+    json scene = tinyScene();
+    scene["virtual"] = json::array();
+    expectOneErrorLine(run("bench " + quote(writeScene(scene).string())), {"scene.json", "virtual"});
+    expectOneErrorLine(run("bench " + quote(writeScene(tinyScene()).string()) + " --frames 0"), {"--frames"});
+    expectOneErrorLine(run("bench " + quote(writeScene(tinyScene()).string()) + " --json " +
+                           quote((dir_ / "no-such-folder" / "b.json").string())),
+                       {"b.json"});
 }
 
 // The field example names the shared file it misses; with the shared data it loads 16 lights from the probe.

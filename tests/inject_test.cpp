@@ -2,6 +2,7 @@
 #include "inject.h"
 #include "mipmap.h"
 #include "shading.h"
+#include "shapes.h"
 
 #include <algorithm>
 #include <numbers>
@@ -104,6 +105,35 @@ TEST(Inject, DeltaVolumeIsNegativeInTheShadowAndPositiveOnTheObject) {
     EXPECT_LT(delta.at(8, 8, 8).x, -0.1f);   // floor under the box
     EXPECT_EQ(delta.at(2, 8, 2).x, 0.0f);    // floor far from the box: unchanged
     EXPECT_GT(delta.at(8, 14, 8).x, 0.1f);   // the lit top of the box, y = 0.75: layer 14
+}
+
+// Updating the scene-alone map for the objects gives the map rendered with them, texel for texel: a light
+// whose frustum is fitted to the region, a light inside the region (6 faces), a directional light.
+TEST(ReflectiveShadowMap, UpdateForTheObjectsEqualsAFullRender) {
+    Scene s = floorOnly(0.5f);
+    s.virtuals.push_back(test::placed(makeSphere(0.2f, 24), {0.1f, 0.4f, -0.1f}, test::diffuse(glm::vec3(0.9f))));
+    const RayScene realOnly(s, SceneContent::RealOnly);
+    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
+    Bounds3f objectBounds = s.virtuals[0].bounds();
+    const Light lights[] = {test::pointLight({0.3f, 3.0f, 0.2f}, 2.0f), test::pointLight({0.0f, 0.9f, 0.0f}, 2.0f),
+                            directionalDown(1.0f)};
+    for (const Light& light : lights) {
+        const ReflectiveShadowMap full = renderReflectiveShadowMap(all, light, kRegion, 128);
+        const ReflectiveShadowMap base = renderReflectiveShadowMap(realOnly, light, kRegion, 128);
+        const ReflectiveShadowMap updated = updateReflectiveShadowMap(base, all, light, kRegion, objectBounds);
+        ASSERT_EQ(updated.texels.size(), full.texels.size());
+        size_t differentFromBase = 0;
+        for (size_t i = 0; i < full.texels.size(); ++i) {
+            const RsmTexel &a = updated.texels[i], &b = full.texels[i];
+            ASSERT_EQ(a.index, b.index);
+            ASSERT_EQ(a.position, b.position);
+            ASSERT_EQ(a.normal, b.normal);
+            ASSERT_EQ(a.flux, b.flux);
+            ASSERT_EQ(a.area, b.area);
+            differentFromBase += i >= base.texels.size() || base.texels[i].position != a.position;
+        }
+        EXPECT_GT(differentFromBase, 0u);  // the object is in the map
+    }
 }
 
 }  // namespace

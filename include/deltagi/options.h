@@ -1,5 +1,5 @@
 // Every tuning factor of the pipeline, with its default and unit. Read from the scene file's "options" object
-// (the JSON key of each field is given in its comment) and written back by sceneOptionsToJson().
+// (the JSON key of each field is given in its comment) and written back by optionsToJson() (scene_io.h).
 #pragma once
 
 #include <optional>
@@ -31,6 +31,10 @@ struct DiffuseConeOptions {
     // "aperture_deg": full apex angle of each cone in degrees; 0 derives it from the count so that the cones'
     // solid angles add up to the hemisphere (half-angle = acos(1 - 1/count)).
     float apertureDeg = 0.0f;
+    // "pixel_stride": the diffuse cones are traced at every pixel_stride-th pixel of every pixel_stride-th row
+    // (1, 2 or 4); the edge-aware filter fills the pixels between from traced neighbours on the same surface,
+    // and pixels with none are traced too. Diffuse light varies slowly: 2 traces a quarter of the cones.
+    int pixelStride = 2;
 };
 
 // options.specular: the one specular cone along the reflected view ray.

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -28,7 +29,32 @@ struct RenderOutput {
 // Called after each stage, for progress output: the stage's name and its time.
 using StageCallback = std::function<void(const StageTiming&)>;
 
+// Renders one frame from scratch.
 RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
+
+// Renders a sequence of frames of one scene whose virtual objects change from frame to frame, as in a mixed
+// reality session. What depends only on the real side (the reconstruction's ray-casting BVH, its voxels, its
+// reflective shadow maps and injected light, the real half of the G-buffer, the rendered background) is kept
+// from the previous frame while the scene object, its real meshes, lights, camera, photo size, options and
+// the volume region are unchanged (compared by identity and content at every call); the virtual objects'
+// voxels, the RSMs with them, the full and delta volumes and the cones are redone every frame. The images
+// are the same as render()'s.
+class FrameRenderer {
+public:
+    FrameRenderer();
+    ~FrameRenderer();
+    FrameRenderer(const FrameRenderer&) = delete;
+    FrameRenderer& operator=(const FrameRenderer&) = delete;
+
+    // `scene` must stay alive and in place between calls for the kept work to be reused.
+    RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
+    // Forgets everything kept: the next frame is a cold one.
+    void clear();
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
 
 // The cubic region covered by the volumes: the explicit options.volume region, or extent_scale times the
 // virtual objects' bounding box (§3.4); the real scene's bounds when there are no virtual objects.

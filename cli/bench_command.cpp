@@ -1,0 +1,64 @@
+#include "bench_command.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <optional>
+
+#include <fmt/core.h>
+#include <tbb/global_control.h>
+
+#include "deltagi/error.h"
+#include "deltagi/scene_io.h"
+
+namespace deltagi::cli {
+
+CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
+    CLI::App* command = app.add_subcommand(
+        "bench", "Time the pipeline's stages over frames in which the virtual objects move (the paper's Table 1)");
+    command->add_option("scene", args.scene, "Scene file (JSON)")->required();
+    command->add_option("--frames", args.options.frames, "Measured frames (default 10)")
+        ->check(CLI::Range(1, 100000));
+    command->add_option("--warmup", args.options.warmup, "Frames rendered before measuring (default 2)")
+        ->check(CLI::Range(0, 100000));
+    command->add_flag("--cold", args.options.cold,
+                      "Rebuild everything every frame, the static reconstruction's voxels, RSMs and BVH too");
+    command->add_option("--motion", args.options.motionVoxels,
+                        "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still)")
+        ->check(CLI::Range(0.0f, 1000.0f));
+    command->add_option("--json", args.json, "Also write the figures as JSON here");
+    command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
+    command->add_option("--threads", args.threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(1, maxThreads));
+    command->add_flag("-q,--quiet", args.quiet, "Print only the table");
+    return command;
+}
+
+int runBench(const BenchArgs& args) {
+    std::optional<tbb::global_control> threadLimit;
+    if (args.threads > 0) threadLimit.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
+    // A bad JSON path fails before the frames are rendered.
+    std::optional<std::ofstream> jsonFile;
+    if (!args.json.empty()) {
+        jsonFile.emplace(args.json);
+        if (!*jsonFile) throw InputError(args.json.string(), "cannot write file");
+    }
+    Scene scene = loadScene(args.scene, args.overrides);
+    if (scene.virtuals.empty())
+        throw InputError(args.scene.string(), "virtual: the benchmark needs at least one virtual object to move");
+
+    const bool progress = !args.quiet && isatty(STDERR_FILENO);
+    const BenchResult result = runBenchmark(scene, args.options, [&](int frame, double ms) {
+        if (progress) fmt::print(stderr, "  frame {:>4}  {:>9.1f} ms\n", frame, ms);
+    });
+    fmt::print("{}", benchTable(result));
+    std::fflush(stdout);
+    if (jsonFile) {
+        *jsonFile << benchToJson(result).dump(2) << '\n';
+        if (!*jsonFile) throw InputError(args.json.string(), "cannot write file");
+    }
+    return 0;
+}
+
+}  // namespace deltagi::cli

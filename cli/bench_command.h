@@ -1,0 +1,29 @@
+// `deltagi bench`: per-stage timings over moving-object frames (include/deltagi/benchmark.h).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "deltagi/benchmark.h"
+
+namespace deltagi::cli {
+
+struct BenchArgs {
+    std::filesystem::path scene;
+    std::filesystem::path json;  // empty: no JSON file
+    std::vector<std::string> overrides;
+    BenchOptions options;
+    int threads = 0;  // 0: all cores
+    bool quiet = false;
+};
+
+// Adds the subcommand and its options to `app`, storing them in `args`.
+CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads);
+
+// Runs it: the table on stdout, progress on stderr (unless quiet). Throws InputError on bad input.
+int runBench(const BenchArgs& args);
+
+}  // namespace deltagi::cli

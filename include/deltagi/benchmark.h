@@ -1,0 +1,61 @@
+// `deltagi bench`: the per-stage timings of the paper's Table 1, measured over a sequence of frames in which the
+// virtual objects move a little every frame (as in a mixed reality session), so that their voxels, the RSMs
+// with them, the light and delta volumes and all cones are redone each frame.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "deltagi/renderer.h"
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+struct BenchOptions {
+    int frames = 10;     // measured frames
+    int warmup = 2;      // frames rendered first and not measured (caches, page faults, the kept static work)
+    bool cold = false;   // rebuild everything every frame, the static reconstruction's share too
+    // The virtual objects move on a horizontal circle of this radius (in level-0 voxels of the volume region),
+    // one sixteenth of a turn per frame.
+    float motionVoxels = 1.0f;
+};
+
+// The rows of the report, in order: Table 1's stages first, then the others, then the total.
+struct BenchRow {
+    std::string key;           // JSON key, e.g. "voxelize_ms"
+    std::vector<std::string> stages;  // pipeline stages (StageTiming names) summed into the row
+    double paperMs = -1.0;     // Table 1 of the paper (GTX 660); < 0: not reported there
+};
+const std::vector<BenchRow>& benchRows();
+
+struct BenchStatistics {
+    double median = 0.0, max = 0.0;
+};
+
+struct BenchResult {
+    BenchOptions options;
+    std::vector<std::vector<StageTiming>> frames;  // the measured frames' stage timings
+    std::vector<double> totals;                    // their total_ms
+    int threads = 0;
+    int width = 0, height = 0, volumeResolution = 0;
+    size_t realTriangles = 0, virtualTriangles = 0;
+
+    BenchStatistics row(const BenchRow& row) const;  // over the measured frames
+};
+
+// Renders options.warmup + options.frames frames of `scene`, moving its virtual objects (their vertices are
+// changed in place and put back at the end). `onFrame(index, total_ms)` is called after each measured frame.
+BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
+                         const std::function<void(int, double)>& onFrame = {});
+
+// {"frames", "warmup", "cold", "threads", "width", "height", "volume_resolution", "triangles": {"real",
+// "virtual"}, then one object {"median", "max", "paper"} per row key ("voxelize_ms" ... "total_ms")}.
+nlohmann::ordered_json benchToJson(const BenchResult& result);
+
+// The table printed by `deltagi bench`.
+std::string benchTable(const BenchResult& result);
+
+}  // namespace deltagi

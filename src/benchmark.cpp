@@ -1,0 +1,130 @@
+#include "deltagi/benchmark.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <fmt/core.h>
+#include <tbb/global_control.h>
+
+namespace deltagi {
+
+const std::vector<BenchRow>& benchRows() {
+    static const std::vector<BenchRow> rows = {
+        {"voxelize_ms", {"voxelize"}, 5.0},  {"rsm_ms", {"rsm"}, 0.2},
+        {"inject_ms", {"inject"}, 3.0},      {"mipmap_ms", {"mipmap"}, 8.0},
+        {"diffuse_ms", {"diffuse"}, 6.0},    {"specular_ms", {"specular"}, 64.0},
+        {"shadow_ms", {"shadow"}, 4.0},      {"bvh_ms", {"bvh"}, -1.0},
+        {"gbuffer_ms", {"gbuffer"}, -1.0},   {"denoise_ms", {"denoise"}, -1.0},
+        {"shading_ms", {"shading"}, -1.0},   {"background_ms", {"background"}, -1.0},
+        {"composite_ms", {"composite"}, -1.0}, {"total_ms", {}, 90.2},
+    };
+    return rows;
+}
+
+namespace {
+
+BenchStatistics statistics(std::vector<double> values) {
+    BenchStatistics s;
+    if (values.empty()) return s;
+    std::sort(values.begin(), values.end());
+    const size_t n = values.size();
+    s.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+    s.max = values.back();
+    return s;
+}
+
+size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
+    size_t n = 0;
+    for (const TriangleMesh& m : meshes) n += m.triangleCount();
+    return n;
+}
+
+}  // namespace
+
+BenchStatistics BenchResult::row(const BenchRow& row) const {
+    if (row.stages.empty()) return statistics(totals);
+    std::vector<double> values;
+    for (const std::vector<StageTiming>& frame : frames) {
+        double ms = 0.0;
+        for (const StageTiming& t : frame)
+            if (std::find(row.stages.begin(), row.stages.end(), t.name) != row.stages.end()) ms += t.ms;
+        values.push_back(ms);
+    }
+    return statistics(std::move(values));
+}
+
+BenchResult runBenchmark(Scene& scene, const BenchOptions& options, const std::function<void(int, double)>& onFrame) {
+    BenchResult result;
+    result.options = options;
+    result.threads = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    result.width = scene.camera.width;
+    result.height = scene.camera.height;
+    const VolumeRegion region = volumeRegion(scene);
+    result.volumeResolution = region.resolution;
+    result.realTriangles = triangleCount(scene.real);
+    result.virtualTriangles = triangleCount(scene.virtuals);
+
+    // The objects' own vertices are moved (and restored at the end): every frame starts from the originals,
+    // so the path does not drift.
+    std::vector<std::vector<glm::vec3>> original;
+    for (const TriangleMesh& m : scene.virtuals) original.push_back(m.positions);
+    const float radius = options.motionVoxels * region.voxelSize();
+    auto placeObjects = [&](int frame) {
+        const float angle = 2.0f * std::numbers::pi_v<float> * static_cast<float>(frame) / 16.0f;
+        const glm::vec3 offset = radius * glm::vec3(std::cos(angle) - 1.0f, 0.0f, std::sin(angle));
+        for (size_t m = 0; m < scene.virtuals.size(); ++m) {
+            std::vector<glm::vec3>& p = scene.virtuals[m].positions;
+            for (size_t v = 0; v < p.size(); ++v) p[v] = original[m][v] + offset;
+        }
+    };
+
+    FrameRenderer renderer;
+    const int total = options.warmup + options.frames;
+    for (int f = 0; f < total; ++f) {
+        placeObjects(f);
+        if (options.cold) renderer.clear();
+        RenderOutput out = renderer.render(scene);
+        if (f < options.warmup) continue;
+        result.frames.push_back(std::move(out.timings));
+        result.totals.push_back(out.totalMs);
+        if (onFrame) onFrame(f - options.warmup, out.totalMs);
+    }
+    placeObjects(0);
+    return result;
+}
+
+nlohmann::ordered_json benchToJson(const BenchResult& r) {
+    nlohmann::ordered_json json;
+    json["frames"] = r.options.frames;
+    json["warmup"] = r.options.warmup;
+    json["cold"] = r.options.cold;
+    json["threads"] = r.threads;
+    json["width"] = r.width;
+    json["height"] = r.height;
+    json["volume_resolution"] = r.volumeResolution;
+    json["triangles"] = {{"real", r.realTriangles}, {"virtual", r.virtualTriangles}};
+    for (const BenchRow& row : benchRows()) {
+        const BenchStatistics s = r.row(row);
+        nlohmann::ordered_json entry = {{"median", s.median}, {"max", s.max}};
+        entry["paper"] = row.paperMs >= 0.0 ? nlohmann::ordered_json(row.paperMs) : nlohmann::ordered_json();
+        json[row.key] = std::move(entry);
+    }
+    return json;
+}
+
+std::string benchTable(const BenchResult& r) {
+    std::string out = fmt::format(
+        "{}x{}, volumes {}^3, {} real + {} virtual triangles, {} threads, {} frames ({}{} warm-up)\n", r.width,
+        r.height, r.volumeResolution, r.realTriangles, r.virtualTriangles, r.threads, r.options.frames,
+        r.options.cold ? "cold, " : "", r.options.warmup);
+    out += fmt::format("{:<15} {:>10} {:>10} {:>12}\n", "stage", "median ms", "max ms", "paper ms");
+    for (const BenchRow& row : benchRows()) {
+        const BenchStatistics s = r.row(row);
+        const std::string paper = row.paperMs >= 0.0 ? fmt::format("{:.1f}", row.paperMs) : "-";
+        out += fmt::format("{:<15} {:>10.1f} {:>10.1f} {:>12}\n", row.key, s.median, s.max, paper);
+    }
+    return out;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,88 @@
+// FrameRenderer keeps the real scene's share of the work between frames: its frames must be exactly render()'s.
+#include <gtest/gtest.h>
+
+#include "deltagi/benchmark.h"
+#include "deltagi/renderer.h"
+#include "test_scenes.h"
+
+namespace deltagi {
+namespace {
+
+using test::diffuse;
+using test::placed;
+
+Scene ballOverFloor() {
+    Scene s = test::floorScene();
+    s.real.push_back(placed(makeBox({0.3f, 0.6f, 0.3f}), {-0.6f, 0.3f, -0.3f}, diffuse({0.8f, 0.2f, 0.2f}), "box"));
+    s.virtuals.push_back(placed(makeSphere(0.2f, 24), {0.1f, 0.3f, 0.0f}, diffuse({0.2f, 0.3f, 0.9f}), "ball"));
+    s.options.volume.center = glm::vec3(0.0f, 0.3f, 0.0f);  // fixed: the real scene's voxels can be kept
+    s.options.volume.size = 1.6f;
+    return s;
+}
+
+void moveVirtuals(Scene& s, glm::vec3 offset) {
+    for (TriangleMesh& m : s.virtuals)
+        for (glm::vec3& p : m.positions) p += offset;
+}
+
+void expectSameImages(const RenderOutput& a, const RenderOutput& b) {
+    ASSERT_EQ(a.composite.data().size(), b.composite.data().size());
+    for (size_t i = 0; i < a.composite.data().size(); ++i) ASSERT_EQ(a.composite.data()[i], b.composite.data()[i]);
+    for (size_t i = 0; i < a.background.data().size(); ++i)
+        ASSERT_EQ(a.background.data()[i], b.background.data()[i]);
+    for (size_t i = 0; i < a.objectMask.data().size(); ++i)
+        ASSERT_EQ(a.objectMask.data()[i], b.objectMask.data()[i]);
+}
+
+TEST(FrameRenderer, MovingObjectFramesAreExactlyRendersFromScratch) {
+    Scene s = ballOverFloor();
+    FrameRenderer frames;
+    const RenderOutput first = frames.render(s);
+    expectSameImages(first, render(s));
+    moveVirtuals(s, {0.05f, 0.0f, 0.03f});
+    const RenderOutput second = frames.render(s);
+    expectSameImages(second, render(s));
+    // The frame did change: the object moved.
+    double change = 0.0;
+    for (size_t i = 0; i < first.composite.data().size(); ++i)
+        change += std::abs(first.composite.data()[i] - second.composite.data()[i]);
+    EXPECT_GT(change, 1.0);
+}
+
+TEST(FrameRenderer, ChangesToTheRealSceneAreNotMissed) {
+    Scene s = ballOverFloor();
+    FrameRenderer frames;
+    frames.render(s);
+    s.lights[0].intensity *= 2.0f;
+    expectSameImages(frames.render(s), render(s));
+    s.real[1].material.albedo = glm::vec3(0.1f, 0.9f, 0.1f);
+    expectSameImages(frames.render(s), render(s));
+    for (glm::vec3& p : s.real[1].positions) p.x += 0.1f;
+    expectSameImages(frames.render(s), render(s));
+    s.options.volume.size = 1.2f;  // a new region: the real scene's voxels are redone
+    expectSameImages(frames.render(s), render(s));
+}
+
+TEST(Benchmark, ReportsEveryRowAndPutsTheObjectsBack) {
+    Scene s = ballOverFloor();
+    const std::vector<glm::vec3> before = s.virtuals[0].positions;
+    BenchOptions o;
+    o.frames = 3;
+    o.warmup = 1;
+    const BenchResult r = runBenchmark(s, o);
+    EXPECT_EQ(s.virtuals[0].positions, before);
+    ASSERT_EQ(r.frames.size(), 3u);
+    const nlohmann::ordered_json json = benchToJson(r);
+    for (const char* key : {"voxelize_ms", "rsm_ms", "inject_ms", "mipmap_ms", "diffuse_ms", "specular_ms",
+                            "shadow_ms", "gbuffer_ms", "composite_ms", "total_ms"}) {
+        ASSERT_TRUE(json.contains(key)) << key;
+        EXPECT_GE(json[key]["max"].get<double>(), json[key]["median"].get<double>()) << key;
+        EXPECT_GE(json[key]["median"].get<double>(), 0.0) << key;
+    }
+    EXPECT_GT(json["total_ms"]["median"].get<double>(), json["diffuse_ms"]["median"].get<double>());
+    EXPECT_EQ(json["triangles"]["virtual"].get<size_t>(), s.virtuals[0].triangleCount());
+    EXPECT_EQ(json["volume_resolution"].get<int>(), 32);
+}
+
+}  // namespace
+}  // namespace deltagi
