@@ -231,10 +231,24 @@ int readPixelStride(const JsonNode& node) {
     return stride;
 }
 
+void readEnvironmentOptions(const JsonNode& node, EnvironmentOptions& environment) {
+    node.allowKeys({"light_count", "extraction", "sky", "max_light_aperture_deg"});
+    if (auto n = node.find("light_count")) environment.lightCount = n->integer(0, 256);
+    if (auto n = node.find("extraction")) {
+        std::string method = n->string();
+        if (method != "median_cut" && method != "variance_minimization")
+            n->fail("expected \"median_cut\" or \"variance_minimization\", got \"" + method + "\"");
+        environment.extraction = method;
+    }
+    if (auto n = node.find("sky")) environment.sky = n->boolean();
+    if (auto n = node.find("max_light_aperture_deg"))
+        environment.maxLightApertureDeg = n->floatNumber({0.0, 180.0, true, true});
+}
+
 }  // namespace
 
 Options readOptions(const JsonNode& node) {
-    node.allowKeys({"volume", "rsm", "diffuse", "specular", "shadow", "trace", "render"});
+    node.allowKeys({"volume", "rsm", "diffuse", "specular", "shadow", "trace", "render", "environment"});
     Options options;
     if (auto n = node.find("volume")) readVolume(*n, options.volume);
     if (auto n = node.find("rsm")) {
@@ -266,6 +280,7 @@ Options readOptions(const JsonNode& node) {
     }
     if (auto n = node.find("trace")) readTrace(*n, options.trace);
     if (auto n = node.find("render")) readRender(*n, options.render);
+    if (auto n = node.find("environment")) readEnvironmentOptions(*n, options.environment);
     return options;
 }
 
@@ -298,6 +313,11 @@ json optionsToJson(const Options& o) {
           {"double_shadow_fix", o.render.doubleShadowFix},
           {"relight_indirect", o.render.relightIndirect},
           {"denoise_radius", o.render.denoiseRadius}}},
+        {"environment",
+         {{"light_count", o.environment.lightCount},
+          {"extraction", o.environment.extraction},
+          {"sky", o.environment.sky},
+          {"max_light_aperture_deg", o.environment.maxLightApertureDeg}}},
     };
 }
 

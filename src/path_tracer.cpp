@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 
 #include "brdf.h"
 #include "brdf_sampling.h"
@@ -20,6 +21,13 @@ namespace {
 constexpr int64_t kRowGrain = 1;
 // Russian roulette never continues with more than this probability, so that paths in a white room end.
 constexpr float kMaxSurvivalProbability = 0.95f;
+
+// Multiple importance sampling (Veach 1997): the power heuristic's weight of a sample drawn with pdf `a`
+// when the other strategy would have drawn it with pdf `b`.
+float powerHeuristic(float a, float b) {
+    const float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
 
 float maxComponent(glm::vec3 v) { return std::max(v.x, std::max(v.y, v.z)); }
 bool isFinite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
@@ -55,6 +63,7 @@ glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) con
     glm::vec3 sum(0.0f);
     for (const Light& light : lights_) {
         const float u1 = rng.uniform(), u2 = rng.uniform();
+        if (light.fromEnvironment) continue;  // its light is in the map, sampled below
         const LightSample s = sampleLightPoint(light, hit.position, u1, u2);
         const float cosTheta = glm::dot(s.wi, hit.normal);
         if (cosTheta <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
@@ -63,7 +72,20 @@ glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) con
         if (tMax <= 0.0f || rays_.intersect(origin, s.wi, 0.0f, tMax).hit()) continue;
         sum += evalBrdf(*hit.material, hit.normal, wo, s.wi) * s.irradiance * cosTheta;
     }
+    if (environment_) {
+        const float u1 = rng.uniform(), u2 = rng.uniform();
+        sum += environmentLight(hit, wo, u1, u2);
+    }
     return sum;
+}
+
+glm::vec3 PathTracer::environmentLight(const RayHit& hit, glm::vec3 wo, float u1, float u2) const {
+    const EnvironmentSampler::Sample s = environment_->sample(u1, u2);
+    const float cosTheta = glm::dot(s.wi, hit.normal);
+    if (!(s.pdf > 0.0f) || cosTheta <= 0.0f || s.radiance == glm::vec3(0.0f)) return glm::vec3(0.0f);
+    if (rays_.intersect(offsetOrigin(hit, s.wi), s.wi).hit()) return glm::vec3(0.0f);
+    const float weight = powerHeuristic(s.pdf, brdfPdf(*hit.material, hit.normal, wo, s.wi));
+    return evalBrdf(*hit.material, hit.normal, wo, s.wi) * s.radiance * (cosTheta * weight / s.pdf);
 }
 
 glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const {
@@ -71,6 +93,7 @@ glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) 
 }
 
 glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const {
+    if (!firstHit.hit()) return environment_ ? environment_->radiance(direction) : glm::vec3(0.0f);
     glm::vec3 radiance(0.0f), throughput(1.0f);
     RayHit hit = firstHit;
     for (int bounce = 0; hit.hit(); ++bounce) {
@@ -89,6 +112,11 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
         }
         direction = s.wi;
         hit = rays_.intersect(offsetOrigin(hit, s.wi), direction);
+        // A path that leaves the scene sees the environment, weighted against the light sample of
+        // directLight().
+        if (!hit.hit() && environment_)
+            radiance += throughput * environment_->radiance(direction) *
+                        powerHeuristic(s.pdf, environment_->pdf(direction));
     }
     return radiance;
 }
@@ -153,8 +181,11 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     settings.rouletteStartBounce = options.rouletteStartBounce;
     settings.maxBounces = std::max(options.maxBounces, 1);
     settings.rayOffset = kRayOffsetScale * std::max(all.bounds().empty() ? 1.0f : all.bounds().maxExtent(), 1e-3f);
-    const PathTracer withTracer(all, scene.lights, settings);
-    const PathTracer withoutTracer(realOnly, scene.lights, settings);
+    std::optional<EnvironmentSampler> environment;
+    if (scene.environment) environment.emplace(*scene.environment);
+    const EnvironmentSampler* sampler = environment ? &*environment : nullptr;
+    const PathTracer withTracer(all, scene.lights, settings, sampler);
+    const PathTracer withoutTracer(realOnly, scene.lights, settings, sampler);
 
     const int w = camera.width, h = camera.height;
     std::vector<PixelSums> sums(static_cast<size_t>(w) * h);

@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 
 #include "deltagi/scene.h"
+#include "environment_sampling.h"
 #include "lights.h"
 #include "ray_scene.h"
 #include "rng.h"
@@ -32,24 +33,30 @@ struct PathSettings {
 
 class PathTracer {
 public:
-    // Holds references: `rays` and `lights` must outlive the tracer.
-    PathTracer(const RayScene& rays, std::span<const Light> lights, PathSettings settings)
-        : rays_(rays), lights_(lights), settings_(settings) {}
+  // Holds references: `rays`, `lights` and `environment` must outlive the tracer. Lights extracted from the
+  // environment map (Light::fromEnvironment) are skipped: the map itself is sampled, when there is one.
+  PathTracer(const RayScene& rays, std::span<const Light> lights, PathSettings settings,
+             const EnvironmentSampler* environment = nullptr)
+      : rays_(rays), lights_(lights), settings_(settings), environment_(environment) {}
 
-    // Radiance arriving at `origin` from `direction` (unit). Lights are not visible to the ray itself.
-    glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
-    // The same, when the first hit along `direction` is already known.
-    glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
-    // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
-    // drawn, so that paths with and without the objects consume the same sequence).
-    glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
+  // Radiance arriving at `origin` from `direction` (unit). Lights are not visible to the ray itself; the
+  // environment is (a ray that leaves the scene sees it).
+  glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
+  // The same, when the first hit along `direction` is already known.
+  glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
+  // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
+  // drawn, so that paths with and without the objects consume the same sequence), and one sample of the
+  // environment (2 more numbers) weighted against BRDF sampling by the power heuristic (MIS).
+  glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
 
 private:
     glm::vec3 offsetOrigin(const RayHit& hit, glm::vec3 towards) const;
+    glm::vec3 environmentLight(const RayHit& hit, glm::vec3 wo, float u1, float u2) const;
 
     const RayScene& rays_;
     std::span<const Light> lights_;
     PathSettings settings_;
+    const EnvironmentSampler* environment_;
 };
 
 }  // namespace deltagi

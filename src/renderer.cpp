@@ -14,6 +14,7 @@
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
 #include "shading.h"
+#include "sky_light.h"
 #include "voxelize.h"
 
 namespace deltagi {
@@ -75,13 +76,22 @@ struct ConeJob {
     const MipVolume* light;
     VisibilityVolumes visibility;
     bool indirect;  // trace diffuse and specular cones too
-    bool objectShadowOnly = false;  // see traceShadowCones()
+    ShadowMode mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
 };
 
 struct ConeResults {
     std::vector<ShadowOcclusion> shadows;  // points x lights
     std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
 };
+
+// a += b, where an empty `a` is zero.
+void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
+    if (a.empty()) {
+        a = std::move(b);
+        return;
+    }
+    for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+}
 
 // Cone results `trace(points)` (perPixel values of T per pixel) at every stride-th pixel of every stride-th
 // row, then filtered: the edge-aware filter interpolates the pixels between from traced neighbours on the same
@@ -117,8 +127,9 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& c
     return values;
 }
 
-// Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs. Shadow and
-// diffuse cones are traced at options.shadow/diffuse.pixel_stride and filtered (traceSparse).
+// Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs, then the
+// sky light through the cones. Shadow and diffuse cones are traced at options.shadow/diffuse.pixel_stride and
+// filtered (traceSparse).
 std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
     const Options& o = scene.options;
     const DenoiseSettings filter{o.render.denoiseRadius};
@@ -128,7 +139,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         const ConeJob& job = jobs[j];
         results[j].shadows = traceSparse<ShadowOcclusion>(
             job.points, scene.camera, o.shadow.pixelStride, lights, filter, [&](std::span<const SurfacePoint> p) {
-                return traceShadowCones(p, scene.lights, job.visibility, o, job.objectShadowOnly);
+                return traceShadowCones(p, scene.lights, job.visibility, o, job.mode == ShadowMode::DeltaShadow);
             });
     }
     timer.lap("shadow");
@@ -144,6 +155,17 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         if (jobs[j].indirect)
             results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
     timer.lap("specular");
+    // Sky light through the cones, added to their indirect light; its diffuse part filtered like the diffuse
+    // cones' (it has the same jitter noise).
+    if (scene.environment && !scene.environment->sky.empty()) {
+        for (size_t j = 0; j < jobs.size(); ++j) {
+            SkyLight sky = traceSkyCones(jobs[j].points, *scene.environment, jobs[j].visibility, jobs[j].mode, o);
+            denoiseInPlace(sky.diffuse, 1, jobs[j].points, scene.camera, filter);
+            addInto(results[j].diffuse, std::move(sky.diffuse));
+            addInto(results[j].specular, std::move(sky.specular));
+        }
+        timer.lap("sky");
+    }
     return results;
 }
 
@@ -185,7 +207,21 @@ uint64_t staticSignature(const Scene& scene) {
         bytes(m.triangles.data(), m.triangles.size() * sizeof(glm::uvec3));
         value(m.material);
     }
-    for (const Light& l : scene.lights) value(l);
+    for (const Light& l : scene.lights) {  // field by field: Light has padding after its bool
+        value(l.type);
+        value(l.color);
+        value(l.intensity);
+        value(l.position);
+        value(l.direction);
+        value(l.innerAngleDeg);
+        value(l.outerAngleDeg);
+        value(l.radius);
+        value(l.fromEnvironment);
+        value(l.angularRadius);
+    }
+    // The environment lights the background rendered without a photo (its sky term).
+    value(scene.environment ? scene.environment->radiance.data().data() : nullptr);
+    if (scene.environment) value(scene.environment->worldFromEnvironment);
     value(scene.camera);
     value(scene.background.has_value());
     const std::string options = optionsToJson(scene.options).dump();
@@ -242,7 +278,11 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const VoxelGeometry* geometries[] = {&geometry};
     const MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
     const MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
-    const ConeJob job{points, &light, {&visibility, nullptr, VisibilityVolumes::Self::Scene}, o.render.indirect};
+    const ConeJob job{points,
+                      &light,
+                      {&visibility, nullptr, VisibilityVolumes::Self::Scene},
+                      o.render.indirect,
+                      ShadowMode::SceneOnly};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
     const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
@@ -313,18 +353,23 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     const ShadowMode relightMode =
         o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     const ConeJob jobs[] = {
-        {gbuffer.object, &volumes.fullLight,
-         {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object}, o.render.indirect},
-        {realPoints, &volumes.deltaLight,
+        {gbuffer.object,
+         &volumes.fullLight,
+         {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object},
+         o.render.indirect,
+         ShadowMode::Shaded},
+        {realPoints,
+         &volumes.deltaLight,
          {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Scene},
-         o.render.indirect && o.render.relightIndirect, relightMode == ShadowMode::DeltaShadow}};
+         o.render.indirect && o.render.relightIndirect,
+         relightMode}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
-    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded,
-                                                object.diffuse, object.specular);
+    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows,
+                                                ShadowMode::Shaded, object.diffuse, object.specular);
     const auto realChange =
         combineLighting(realPoints, scene.lights, real.shadows, relightMode, real.diffuse, real.specular);
     timer.lap("shading");

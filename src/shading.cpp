@@ -23,6 +23,8 @@ inline glm::mat3 tangentFrame(glm::vec3 n) {
     return glm::mat3(t, glm::cross(n, t), n);
 }
 
+}  // namespace
+
 float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
     switch (mode) {
         case ShadowMode::Shaded: return 1.0f - o.combined;
@@ -32,8 +34,6 @@ float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
     }
     return 0.0f;
 }
-
-}  // namespace
 
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                               const VisibilityVolumes& visibility, const Options& options,
@@ -51,7 +51,8 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
             if (glm::dot(s.wi, p.normal) <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
             const float tanHalf = lights[l].radius > 0.0f && std::isfinite(s.distance)
                                       ? lights[l].radius / s.distance
-                                      : defaultTan;
+                                  : lights[l].angularRadius > 0.0f ? std::tan(lights[l].angularRadius)
+                                                                   : defaultTan;
             Cone cone;
             cone.tanHalfAngle = tanHalf;
             cone.origin = coneOrigin(p.position, p.normal, s.wi, region, settings);

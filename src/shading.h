@@ -44,6 +44,9 @@ enum class ShadowMode {
     DeltaSingleVisibility,  // real surface relit with one shared visibility: (1 - combined) - 1 (double shadow)
 };
 
+// The fraction of a light (or of the sky through a cone) that reaches a point, or its change, under `mode`.
+float shadowFactor(const ShadowOcclusion& occlusion, ShadowMode mode);
+
 // Per point: sum over lights of direct radiance times the shadow factor of `mode`, plus albedo * diffuse
 // plus specular colour * specular (either span may be empty: no indirect light).
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,

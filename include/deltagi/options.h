@@ -99,6 +99,23 @@ struct RenderOptions {
     int denoiseRadius = 2;
 };
 
+// options.environment: how the scene's environment map lights the pipeline (ignored without one).
+struct EnvironmentOptions {
+    // "light_count": directional lights extracted from the map (in [0, 256]); they drive the reflective
+    // shadow maps and the shadow cones. 0 leaves all of the map's light to the sky term.
+    int lightCount = 16;
+    // "extraction": "median_cut" (Debevec 2005: regions of equal energy) or "variance_minimization"
+    // (Viriyothai & Debevec 2009: each split minimizes the regions' energy-weighted angular variance).
+    std::string extraction = "median_cut";
+    // "sky": diffuse and specular cones that leave the volumes pick up the map minus the extracted lights,
+    // prefiltered to their aperture (sky light, reflections, and the object's ambient occlusion on real
+    // surfaces).
+    bool sky = true;
+    // "max_light_aperture_deg": an extracted light's shadow cone is as wide as the region of sky it stands
+    // for (full apex angle, degrees), at most this.
+    float maxLightApertureDeg = 30.0f;
+};
+
 struct Options {
     VolumeOptions volume;
     RsmOptions rsm;
@@ -107,6 +124,7 @@ struct Options {
     ShadowConeOptions shadow;
     TraceOptions trace;
     RenderOptions render;
+    EnvironmentOptions environment;
 };
 
 }  // namespace deltagi

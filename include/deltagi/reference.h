@@ -38,8 +38,11 @@ using ReferenceProgress = std::function<void(int done, int total, double seconds
 
 // Lights: point and spot lights with a radius are spheres of that radius (shadow rays aim at a uniformly
 // chosen point of the disk they show to the shading point, which gives the penumbra); without a radius, and
-// for directional lights, shadows are hard. Lights are not visible to camera or bounce rays. Materials have no
-// emission yet, so there are no area lights. Surfaces are two-sided, like in the pipeline.
+// for directional lights, shadows are hard. Lights are not visible to camera or bounce rays. Materials have
+// no emission yet, so there are no area lights. Surfaces are two-sided, like in the pipeline. A scene's
+// environment map lights it directly: rays that leave the scene see it, and every vertex samples it in
+// proportion to its radiance, combined with BRDF sampling by multiple importance sampling; the lights
+// extracted from the map for the DGI pipeline are not used.
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
                                 const ReferenceProgress& onPass = {});
 
