@@ -124,6 +124,14 @@ int reportError(const std::string& message, int exitCode) {
     return exitCode;
 }
 
+// Loads a scene and prints what the loader accepted with a warning (always: a warning matters even with
+// --quiet).
+Scene loadAndWarn(const fs::path& file, const std::vector<std::string>& overrides) {
+    Scene scene = loadScene(file, overrides);
+    for (const std::string& warning : scene.warnings) note("deltagi: warning: {}\n", oneLine(warning));
+    return scene;
+}
+
 std::string plural(size_t count, const char* one, const char* many) {
     return fmt::format("{} {}", count, count == 1 ? one : many);
 }
@@ -202,7 +210,7 @@ int runRender(const RenderArgs& args) {
     if (!args.aovDir.empty()) createFolder(args.aovDir);
 
     const auto loadStart = std::chrono::steady_clock::now();
-    const Scene scene = loadScene(args.scene, args.overrides);
+    const Scene scene = loadAndWarn(args.scene, args.overrides);
     const double loadMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - loadStart).count();
     if (progress) printStep("load", loadMs);
@@ -279,7 +287,7 @@ int runReference(const ReferenceArgs& args) {
     checkOutputPath(args.output);
     createFolder(args.output.parent_path());
     if (!args.aovDir.empty()) createFolder(args.aovDir);
-    const Scene scene = loadScene(args.scene, args.overrides);
+    const Scene scene = loadAndWarn(args.scene, args.overrides);
 
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const ReferenceOutput output =
@@ -356,7 +364,7 @@ int runEval(const ReferenceArgs& args) {
         throw InputError(args.output.string(), "expected a .json file for the figures");
     createFolder(args.output.parent_path());
     if (!args.aovDir.empty()) createFolder(args.aovDir);
-    const Scene scene = loadScene(args.scene, args.overrides);
+    const Scene scene = loadAndWarn(args.scene, args.overrides);
 
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     if (progress) note("reference\n");
@@ -435,7 +443,7 @@ void printInfoTable(const Scene& scene, const SceneInfo& info) {
 }
 
 int runInfo(const InfoArgs& args) {
-    const Scene scene = loadScene(args.scene, args.overrides);
+    const Scene scene = loadAndWarn(args.scene, args.overrides);
     const SceneInfo info = sceneInfo(scene);
     if (args.json) {
         nlohmann::json json = toJson(info);

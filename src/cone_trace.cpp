@@ -98,9 +98,8 @@ inline float stepOpacity(float alpha, float stepScale) {
     return stepScale == 1.0f ? alpha : 1.0f - std::pow(transmittance, stepScale);
 }
 
-// Marches the cone through the volume and calls visit(lookup, levelScale) at each step until visit returns
-// false; `lookup` reads every volume of the region at the step (one set of corners for all of them) and
-// levelScale = 2^level.
+// Marches the cone through the region of `reference` and calls visit(position, level, levelScale) at each step
+// until visit returns false: the position in level-0 voxel units, the fractional mip level, 2^level.
 template <typename Visit>
 void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSettings& settings, Visit&& visit) {
     const VolumeRegion& region = reference.region();
@@ -117,7 +116,7 @@ void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSett
         const float level = std::min(fastLog2(diameter), maxLevel);
         // 2^level, the level's voxel width in level-0 voxels.
         const float levelScale = std::min(diameter, n);
-        if (!visit(reference.lookup(origin + t * cone.direction, level), levelScale)) return;
+        if (!visit(origin + t * cone.direction, level, levelScale)) return;
         t += diameter * settings.stepScale;
     }
 }
@@ -137,7 +136,9 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
     glm::vec3 lightAcc(0.0f);
     float occlusionAcc = 0.0f;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
-    marchCone(cone, light, settings, [&](const VolumeLookup& at, float levelScale) {
+    marchCone(cone, light, settings, [&](glm::vec3 position, float level, float levelScale) {
+        // One set of corners for all the volumes of the region.
+        const VolumeLookup at = light.lookup(position, level);
         float transmittance = 1.0f;
         if (visibility.scene)
             transmittance *= 1.0f - adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
@@ -165,8 +166,9 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
     ShadowOcclusion acc;
     if (!visibility.scene && !visibility.object) return acc;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
-    marchCone(cone, referenceOf(visibility.scene, visibility.object), settings,
-              [&](const VolumeLookup& at, float levelScale) {
+    const MipVolume& reference = referenceOf(visibility.scene, visibility.object);
+    marchCone(cone, reference, settings, [&](glm::vec3 position, float level, float levelScale) {
+        const VolumeLookup at = reference.lookup(position, level);
         float scene = 0.0f, object = 0.0f;
         if (visibility.scene)
             scene = stepOpacity(adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale, settings,
@@ -184,6 +186,20 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
         return acc.combined < settings.maxOcclusion || acc.scene < settings.maxOcclusion;
     });
     return acc;
+}
+
+bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibility, const ConeTraceSettings& settings) {
+    if (!visibility.object) return false;
+    const MipVolume& objects = *visibility.object;
+    const float backface = backfaceWeights(visibility, settings).second;
+    bool meets = false;
+    marchCone(cone, objects, settings, [&](glm::vec3 position, float level, float levelScale) {
+        if (!objects.mayReadNonZero(position, static_cast<int>(level))) return true;
+        const glm::vec4 v = objects.gather(objects.lookup(position, level));
+        meets = adaptedOcclusion(v, cone.direction, levelScale, settings, backface) > 0.0f;
+        return !meets;
+    });
+    return meets;
 }
 
 DiffuseConeSet makeDiffuseCones(int count, float apertureDeg) {

@@ -64,6 +64,11 @@ struct ShadowOcclusion {
 ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
                                 const ConeTraceSettings& settings);
 
+// Whether the object volume occludes the shadow cone anywhere along its march (traceShadowCone would give
+// object > 0). When it does not, scene and combined occlusion are equal: the objects change nothing for the
+// point, and relighting can skip the cone. Reads the object volume alone, only near its occupied voxels.
+bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibility, const ConeTraceSettings& settings);
+
 // Directions of the diffuse cones around +z (a spiral of equal-solid-angle cells over the hemisphere), their
 // cosine weights (summing to 1) and the half-angle that makes their solid angles cover the hemisphere.
 struct DiffuseConeSet {

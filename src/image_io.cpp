@@ -75,7 +75,7 @@ std::string lowerExtension(const std::filesystem::path& path) {
 
 }  // namespace
 
-Image readImage(const std::filesystem::path& path) {
+ImageFile readImageFile(const std::filesystem::path& path) {
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha",
                      1);  // keep colours as stored: alpha is dropped, not multiplied
@@ -102,8 +102,11 @@ Image readImage(const std::filesystem::path& path) {
             for (float& v : pixels) v = srgbToLinear(v);
     }
     input->close();
+    return {toRgb(pixels, width, height, channels), isFloatFormat(spec.format)};
+}
 
-    Image image = toRgb(pixels, width, height, channels);
+Image readImage(const std::filesystem::path& path) {
+    Image image = readImageFile(path).image;
     size_t bad = 0;
     for (size_t p = 0; p < image.pixelCount(); ++p) {
         const float* v = &image.data()[p * 3];

@@ -224,10 +224,31 @@ void readRender(const JsonNode& node, RenderOptions& render) {
     if (auto n = node.find("denoise_radius")) render.denoiseRadius = n->integer(0, 8);
 }
 
+// options.diffuse/shadow.pixel_stride: 1, 2 or 4.
+int readPixelStride(const JsonNode& node) {
+    const int stride = node.integer(1, 4);
+    if (stride == 3) node.fail("must be 1, 2 or 4");
+    return stride;
+}
+
+void readEnvironmentOptions(const JsonNode& node, EnvironmentOptions& environment) {
+    node.allowKeys({"light_count", "extraction", "sky", "max_light_aperture_deg"});
+    if (auto n = node.find("light_count")) environment.lightCount = n->integer(0, 256);
+    if (auto n = node.find("extraction")) {
+        std::string method = n->string();
+        if (method != "median_cut" && method != "variance_minimization")
+            n->fail("expected \"median_cut\" or \"variance_minimization\", got \"" + method + "\"");
+        environment.extraction = method;
+    }
+    if (auto n = node.find("sky")) environment.sky = n->boolean();
+    if (auto n = node.find("max_light_aperture_deg"))
+        environment.maxLightApertureDeg = n->floatNumber({0.0, 180.0, true, true});
+}
+
 }  // namespace
 
 Options readOptions(const JsonNode& node) {
-    node.allowKeys({"volume", "rsm", "diffuse", "specular", "shadow", "trace", "render"});
+    node.allowKeys({"volume", "rsm", "diffuse", "specular", "shadow", "trace", "render", "environment"});
     Options options;
     if (auto n = node.find("volume")) readVolume(*n, options.volume);
     if (auto n = node.find("rsm")) {
@@ -237,10 +258,7 @@ Options readOptions(const JsonNode& node) {
     if (auto n = node.find("diffuse")) {
         n->allowKeys({"count", "aperture_deg", "pixel_stride"});
         if (auto c = n->find("count")) options.diffuse.count = c->integer(1, 64);
-        if (auto st = n->find("pixel_stride")) {
-            options.diffuse.pixelStride = st->integer(1, 4);
-            if (options.diffuse.pixelStride == 3) st->fail("must be 1, 2 or 4");
-        }
+        if (auto st = n->find("pixel_stride")) options.diffuse.pixelStride = readPixelStride(*st);
         if (auto a = n->find("aperture_deg"))
             options.diffuse.apertureDeg = a->floatNumber({0.0, 180.0, false, true});
     }
@@ -255,12 +273,14 @@ Options readOptions(const JsonNode& node) {
                                          options.specular.maxApertureDeg, options.specular.minApertureDeg));
     }
     if (auto n = node.find("shadow")) {
-        n->allowKeys({"aperture_deg"});
+        n->allowKeys({"aperture_deg", "pixel_stride"});
         if (auto a = n->find("aperture_deg"))
             options.shadow.apertureDeg = a->floatNumber({0.0, 90.0, true, false});
+        if (auto st = n->find("pixel_stride")) options.shadow.pixelStride = readPixelStride(*st);
     }
     if (auto n = node.find("trace")) readTrace(*n, options.trace);
     if (auto n = node.find("render")) readRender(*n, options.render);
+    if (auto n = node.find("environment")) readEnvironmentOptions(*n, options.environment);
     return options;
 }
 
@@ -278,7 +298,7 @@ json optionsToJson(const Options& o) {
          {{"count", o.diffuse.count}, {"aperture_deg", o.diffuse.apertureDeg}, {"pixel_stride", o.diffuse.pixelStride}}},
         {"specular",
          {{"min_aperture_deg", o.specular.minApertureDeg}, {"max_aperture_deg", o.specular.maxApertureDeg}}},
-        {"shadow", {{"aperture_deg", o.shadow.apertureDeg}}},
+        {"shadow", {{"aperture_deg", o.shadow.apertureDeg}, {"pixel_stride", o.shadow.pixelStride}}},
         {"trace",
          {{"step_scale", o.trace.stepScale},
           {"start_offset", o.trace.startOffset},
@@ -293,6 +313,11 @@ json optionsToJson(const Options& o) {
           {"double_shadow_fix", o.render.doubleShadowFix},
           {"relight_indirect", o.render.relightIndirect},
           {"denoise_radius", o.render.denoiseRadius}}},
+        {"environment",
+         {{"light_count", o.environment.lightCount},
+          {"extraction", o.environment.extraction},
+          {"sky", o.environment.sky},
+          {"max_light_aperture_deg", o.environment.maxLightApertureDeg}}},
     };
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <initializer_list>
 #include <limits>
 #include <optional>
@@ -84,6 +85,10 @@ class JsonNode {
 std::string describeType(const nlohmann::json& value);
 // The value itself, shortened for messages.
 std::string describeValue(const nlohmann::json& value);
+
+// A file named by `node` (a string), relative to the scene file's folder; it must exist (the message points
+// at the project's shared data set when the path runs through a "shared" folder).
+std::filesystem::path inputFile(const JsonNode& node, const std::filesystem::path& sceneFolder);
 
 // Reads the "options" object into Options, checking every range; unknown keys are errors.
 Options readOptions(const JsonNode& node);

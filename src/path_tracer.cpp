@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 
 #include "brdf.h"
 #include "brdf_sampling.h"
@@ -22,13 +23,14 @@ constexpr int64_t kRowGrain = 1;
 // Russian roulette never continues with more than this probability, so that paths in a white room end.
 constexpr float kMaxSurvivalProbability = 0.95f;
 
-float maxComponent(glm::vec3 v) { return std::max(v.x, std::max(v.y, v.z)); }
-// Veach's power heuristic (exponent 2): the weight of the strategy with density `a` against the one with `b`.
+// Multiple importance sampling (Veach 1997): the power heuristic's weight of a sample drawn with pdf `a`
+// when the other strategy would have drawn it with pdf `b`.
 float powerHeuristic(float a, float b) {
-    if (std::isinf(a)) return 1.0f;
     const float a2 = a * a, b2 = b * b;
     return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
+
+float maxComponent(glm::vec3 v) { return std::max(v.x, std::max(v.y, v.z)); }
 bool isFinite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 }  // namespace
@@ -62,6 +64,7 @@ glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) con
     glm::vec3 sum(0.0f);
     for (const Light& light : lights_) {
         const float u1 = rng.uniform(), u2 = rng.uniform();
+        if (light.fromEnvironment) continue;  // its light is in the map, sampled below
         const LightSample s = sampleLightPoint(light, hit.position, u1, u2);
         const float cosTheta = glm::dot(s.wi, hit.normal);
         if (cosTheta <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
@@ -69,6 +72,10 @@ glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) con
         const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * settings_.rayOffset : s.distance;
         if (tMax <= 0.0f || rays_.intersect(origin, s.wi, 0.0f, tMax).hit()) continue;
         sum += evalBrdf(*hit.material, hit.normal, wo, s.wi) * s.irradiance * cosTheta;
+    }
+    if (environment_) {
+        const float u1 = rng.uniform(), u2 = rng.uniform();
+        sum += environmentLight(hit, wo, u1, u2);
     }
     return sum;
 }
@@ -100,11 +107,21 @@ glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) co
     return evalBrdf(m, hit.normal, wo, wi) * s.radiance * (cosSurface * weight / pdfLight);
 }
 
+glm::vec3 PathTracer::environmentLight(const RayHit& hit, glm::vec3 wo, float u1, float u2) const {
+    const EnvironmentSampler::Sample s = environment_->sample(u1, u2);
+    const float cosTheta = glm::dot(s.wi, hit.normal);
+    if (!(s.pdf > 0.0f) || cosTheta <= 0.0f || s.radiance == glm::vec3(0.0f)) return glm::vec3(0.0f);
+    if (rays_.intersect(offsetOrigin(hit, s.wi), s.wi).hit()) return glm::vec3(0.0f);
+    const float weight = powerHeuristic(s.pdf, brdfPdf(*hit.material, hit.normal, wo, s.wi));
+    return evalBrdf(*hit.material, hit.normal, wo, s.wi) * s.radiance * (cosTheta * weight / s.pdf);
+}
+
 glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const {
     return radianceFromHit(rays_.intersect(origin, direction), direction, rng);
 }
 
 glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const {
+    if (!firstHit.hit()) return environment_ ? environment_->radiance(direction) : glm::vec3(0.0f);
     glm::vec3 radiance(0.0f), throughput(1.0f);
     RayHit hit = firstHit;
     glm::vec3 previousPosition(0.0f);
@@ -140,6 +157,11 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
         previousPosition = hit.position;
         previousPdf = s.pdf;
         hit = rays_.intersect(offsetOrigin(hit, s.wi), direction);
+        // A path that leaves the scene sees the environment, weighted against the light sample of
+        // directLight().
+        if (!hit.hit() && environment_)
+            radiance += throughput * environment_->radiance(direction) *
+                        powerHeuristic(s.pdf, environment_->pdf(direction));
     }
     return radiance;
 }
@@ -206,8 +228,11 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     settings.rayOffset = kRayOffsetScale * std::max(all.bounds().empty() ? 1.0f : all.bounds().maxExtent(), 1e-3f);
     const AreaLights allEmitters(scene, SceneContent::RealAndVirtual);
     const AreaLights realEmitters(scene, SceneContent::RealOnly);
-    const PathTracer withTracer(all, allEmitters, scene.lights, settings);
-    const PathTracer withoutTracer(realOnly, realEmitters, scene.lights, settings);
+    std::optional<EnvironmentSampler> environment;
+    if (scene.environment) environment.emplace(*scene.environment);
+    const EnvironmentSampler* sampler = environment ? &*environment : nullptr;
+    const PathTracer withTracer(all, allEmitters, scene.lights, settings, sampler);
+    const PathTracer withoutTracer(realOnly, realEmitters, scene.lights, settings, sampler);
 
     const int w = camera.width, h = camera.height;
     std::vector<PixelSums> sums(static_cast<size_t>(w) * h);

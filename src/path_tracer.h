@@ -12,6 +12,7 @@
 
 #include "area_lights.h"
 #include "deltagi/scene.h"
+#include "environment_sampling.h"
 #include "lights.h"
 #include "ray_scene.h"
 #include "rng.h"
@@ -36,31 +37,35 @@ struct PathSettings {
 
 class PathTracer {
 public:
-  // Holds references: `rays`, `areaLights` (the emitters of the same meshes) and `lights` must outlive the
-  // tracer.
-  PathTracer(const RayScene& rays, const AreaLights& areaLights, std::span<const Light> lights,
-             PathSettings settings)
-      : rays_(rays), areaLights_(areaLights), lights_(lights), settings_(settings) {}
+    // Holds references: `rays`, `areaLights` (the emitters of the same meshes), `lights` and `environment`
+    // must outlive the tracer. Lights extracted from the environment map (Light::fromEnvironment) are skipped:
+    // the map itself is sampled, when there is one.
+    PathTracer(const RayScene& rays, const AreaLights& areaLights, std::span<const Light> lights,
+               PathSettings settings, const EnvironmentSampler* environment = nullptr)
+        : rays_(rays), areaLights_(areaLights), lights_(lights), settings_(settings), environment_(environment) {}
 
-  // Radiance arriving at `origin` from `direction` (unit): what the surface it hits emits and reflects.
-  // Point, spot and directional lights are not visible to the ray itself.
+    // Radiance arriving at `origin` from `direction` (unit): what the surface it hits emits and reflects, or
+    // the environment when it leaves the scene. Point, spot and directional lights are not visible to the ray.
   glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
   // The same, when the first hit along `direction` is already known.
   glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
   // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
-  // drawn, so that paths with and without the objects consume the same sequence).
-  glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
-  // Light from emissive surfaces reflected towards wo at a hit: one point on the emitters, weighted by the
-  // power heuristic against BRDF sampling (3 random numbers, always drawn).
-  glm::vec3 emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
+    // drawn, so that paths with and without the objects consume the same sequence), and one sample of the
+    // environment (2 more numbers) weighted against BRDF sampling by the power heuristic (MIS).
+    glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
+    // Light from emissive surfaces reflected towards wo at a hit: one point on the emitters, weighted by the
+    // power heuristic against BRDF sampling (3 random numbers, always drawn).
+    glm::vec3 emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
 
 private:
     glm::vec3 offsetOrigin(const RayHit& hit, glm::vec3 towards) const;
+    glm::vec3 environmentLight(const RayHit& hit, glm::vec3 wo, float u1, float u2) const;
 
     const RayScene& rays_;
     const AreaLights& areaLights_;
     std::span<const Light> lights_;
     PathSettings settings_;
+    const EnvironmentSampler* environment_;
 };
 
 }  // namespace deltagi

@@ -14,6 +14,7 @@
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
 #include "shading.h"
+#include "sky_light.h"
 #include "voxelize.h"
 
 namespace deltagi {
@@ -75,6 +76,7 @@ struct ConeJob {
     const MipVolume* light;
     VisibilityVolumes visibility;
     bool indirect;  // trace diffuse and specular cones too
+    ShadowMode mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
 };
 
 struct ConeResults {
@@ -82,60 +84,88 @@ struct ConeResults {
     std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
 };
 
-// The diffuse cones of a job at every options.diffuse.pixel_stride-th pixel and row, filtered: the edge-aware
-// filter interpolates the pixels between from traced neighbours on the same surface, and the pixels that have
-// none are traced as well.
-std::vector<glm::vec3> traceSparseDiffuse(const ConeJob& job, const Scene& scene, const DenoiseSettings& filter) {
-    const Options& o = scene.options;
-    const Camera& camera = scene.camera;
-    const int stride = o.diffuse.pixelStride;
-    if (stride <= 1) {
-        std::vector<glm::vec3> diffuse = traceDiffuseCones(job.points, *job.light, job.visibility, o);
-        denoiseInPlace(diffuse, 1, job.points, camera, filter);
-        return diffuse;
+// a += b, where an empty `a` is zero.
+void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
+    if (a.empty()) {
+        a = std::move(b);
+        return;
     }
-    std::vector<SurfacePoint> subset(job.points.size());
-    std::vector<uint8_t> sampled(job.points.size(), 0);
+    for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
+}
+
+// Cone results `trace(points)` (perPixel values of T per pixel) at every stride-th pixel of every stride-th
+// row, then filtered: the edge-aware filter interpolates the pixels between from traced neighbours on the same
+// surface (averaging the noise of the jittered cone starts too), and the pixels that have none are traced as
+// well. With stride 1 every pixel is traced and filtered.
+template <typename T, typename Trace>
+std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& camera, int stride, int perPixel,
+                           const DenoiseSettings& filter, Trace&& trace) {
+    if (stride <= 1) {
+        std::vector<T> values = trace(points);
+        denoiseInPlace(values, perPixel, points, camera, filter);
+        return values;
+    }
+    std::vector<SurfacePoint> subset(points.size());
     for (int y = 0; y < camera.height; y += stride)
         for (int x = 0; x < camera.width; x += stride) {
             const size_t i = static_cast<size_t>(y) * camera.width + x;
-            subset[i] = job.points[i];
-            sampled[i] = 1;
+            subset[i] = points[i];
         }
-    std::vector<glm::vec3> diffuse = traceDiffuseCones(subset, *job.light, job.visibility, o);
+    std::vector<T> values = trace(std::span<const SurfacePoint>(subset));
+    // The same number of samples as the filter at stride 1 (at least the 3x3 around each pixel), spaced out.
     DenoiseSettings fill = filter;
-    fill.radius = std::max(filter.radius, 0) + stride - 1;
+    fill.radius = std::max(filter.radius, 1);
+    fill.stride = stride;
     std::vector<size_t> holes;
-    denoiseInPlace(diffuse, 1, job.points, camera, fill, sampled, &holes);
-    if (holes.empty()) return diffuse;
+    denoiseInPlace(values, perPixel, points, camera, fill, &holes);
+    if (holes.empty()) return values;
     std::fill(subset.begin(), subset.end(), SurfacePoint{});
-    for (size_t i : holes) subset[i] = job.points[i];
-    const std::vector<glm::vec3> filled = traceDiffuseCones(subset, *job.light, job.visibility, o);
-    for (size_t i : holes) diffuse[i] = filled[i];
-    return diffuse;
+    for (size_t i : holes) subset[i] = points[i];
+    const std::vector<T> filled = trace(std::span<const SurfacePoint>(subset));
+    for (size_t i : holes)
+        std::copy_n(filled.begin() + i * perPixel, perPixel, values.begin() + i * perPixel);
+    return values;
 }
 
-// Stage 6 for every job: shadow, diffuse and specular cones (each timed as one stage over all jobs, the
-// diffuse cones with their interpolation), then the edge-aware filter over the shadow results.
+// Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs, then the
+// sky light through the cones. Shadow and diffuse cones are traced at options.shadow/diffuse.pixel_stride and
+// filtered (traceSparse).
 std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
     const Options& o = scene.options;
-    std::vector<ConeResults> results(jobs.size());
-    for (size_t j = 0; j < jobs.size(); ++j)
-        results[j].shadows = traceShadowCones(jobs[j].points, scene.lights, jobs[j].visibility, o);
-    timer.lap("shadow");
-    // The jittered cone starts leave fine noise in shadows and diffuse light: an edge-aware filter per surface.
     const DenoiseSettings filter{o.render.denoiseRadius};
-    for (size_t j = 0; j < jobs.size(); ++j)
-        if (jobs[j].indirect) results[j].diffuse = traceSparseDiffuse(jobs[j], scene, filter);
+    const int lights = static_cast<int>(scene.lights.size());
+    std::vector<ConeResults> results(jobs.size());
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        const ConeJob& job = jobs[j];
+        results[j].shadows = traceSparse<ShadowOcclusion>(
+            job.points, scene.camera, o.shadow.pixelStride, lights, filter, [&](std::span<const SurfacePoint> p) {
+                return traceShadowCones(p, scene.lights, job.visibility, o, job.mode == ShadowMode::DeltaShadow);
+            });
+    }
+    timer.lap("shadow");
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        const ConeJob& job = jobs[j];
+        if (!job.indirect) continue;
+        results[j].diffuse = traceSparse<glm::vec3>(
+            job.points, scene.camera, o.diffuse.pixelStride, 1, filter,
+            [&](std::span<const SurfacePoint> p) { return traceDiffuseCones(p, *job.light, job.visibility, o); });
+    }
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j)
         if (jobs[j].indirect)
             results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
     timer.lap("specular");
-    for (size_t j = 0; j < jobs.size(); ++j)
-        denoiseInPlace(results[j].shadows, static_cast<int>(scene.lights.size()), jobs[j].points, scene.camera,
-                       filter);
-    timer.lap("denoise");
+    // Sky light through the cones, added to their indirect light; its diffuse part filtered like the diffuse
+    // cones' (it has the same jitter noise).
+    if (scene.environment && !scene.environment->sky.empty()) {
+        for (size_t j = 0; j < jobs.size(); ++j) {
+            SkyLight sky = traceSkyCones(jobs[j].points, *scene.environment, jobs[j].visibility, jobs[j].mode, o);
+            denoiseInPlace(sky.diffuse, 1, jobs[j].points, scene.camera, filter);
+            addInto(results[j].diffuse, std::move(sky.diffuse));
+            addInto(results[j].specular, std::move(sky.specular));
+        }
+        timer.lap("sky");
+    }
     return results;
 }
 
@@ -177,7 +207,21 @@ uint64_t staticSignature(const Scene& scene) {
         bytes(m.triangles.data(), m.triangles.size() * sizeof(glm::uvec3));
         value(m.material);
     }
-    for (const Light& l : scene.lights) value(l);
+    for (const Light& l : scene.lights) {  // field by field: Light has padding after its bool
+        value(l.type);
+        value(l.color);
+        value(l.intensity);
+        value(l.position);
+        value(l.direction);
+        value(l.innerAngleDeg);
+        value(l.outerAngleDeg);
+        value(l.radius);
+        value(l.fromEnvironment);
+        value(l.angularRadius);
+    }
+    // The environment lights the background rendered without a photo (its sky term).
+    value(scene.environment ? scene.environment->radiance.data().data() : nullptr);
+    if (scene.environment) value(scene.environment->worldFromEnvironment);
     value(scene.camera);
     value(scene.background.has_value());
     const std::string options = optionsToJson(scene.options).dump();
@@ -234,7 +278,11 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const VoxelGeometry* geometries[] = {&geometry};
     const MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
     const MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
-    const ConeJob job{points, &light, {&visibility, nullptr, VisibilityVolumes::Self::Scene}, o.render.indirect};
+    const ConeJob job{points,
+                      &light,
+                      {&visibility, nullptr, VisibilityVolumes::Self::Scene},
+                      o.render.indirect,
+                      ShadowMode::SceneOnly};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
     const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
@@ -302,21 +350,26 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
 
     // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both are
     // occluded by both visibility volumes. Cones discount the back faces of their own surface's volume only.
+    const ShadowMode relightMode =
+        o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     const ConeJob jobs[] = {
-        {gbuffer.object, &volumes.fullLight,
-         {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object}, o.render.indirect},
-        {realPoints, &volumes.deltaLight,
+        {gbuffer.object,
+         &volumes.fullLight,
+         {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object},
+         o.render.indirect,
+         ShadowMode::Shaded},
+        {realPoints,
+         &volumes.deltaLight,
          {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Scene},
-         o.render.indirect && o.render.relightIndirect}};
+         o.render.indirect && o.render.relightIndirect,
+         relightMode}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
-    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded,
-                                                object.diffuse, object.specular);
-    const ShadowMode relightMode =
-        o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
+    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows,
+                                                ShadowMode::Shaded, object.diffuse, object.specular);
     const auto realChange =
         combineLighting(realPoints, scene.lights, real.shadows, relightMode, real.diffuse, real.specular);
     timer.lap("shading");

@@ -11,6 +11,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/error.h"
+#include "environment_io.h"
 #include "json_reader.h"
 #include "mesh_io.h"
 #include "shapes.h"
@@ -29,9 +30,10 @@ constexpr float kAffineTolerance = 1e-6f;       // last row of 4x4 matrices: [0,
 constexpr float kParallelTolerance = 1e-6f;     // camera up vs view direction: |cross| of unit vectors
 constexpr float kEnergyTolerance = 1e-6f;       // albedo + specular <= 1 up to rounding
 
+}  // namespace
+
 // ---- files ------------------------------------------------------------------------------------------------
 
-// A file named by `node` (a string), relative to the scene file's folder; it must exist.
 fs::path inputFile(const JsonNode& node, const fs::path& sceneFolder) {
     fs::path path = node.string();
     if (path.empty()) node.fail("expected a file name, got an empty string");
@@ -44,6 +46,8 @@ fs::path inputFile(const JsonNode& node, const fs::path& sceneFolder) {
             hint = " (this example needs ../shared/data from the project's shared data set)";
     node.fail(fmt::format("file not found: '{}'{}", path.string(), hint));
 }
+
+namespace {
 
 std::string sizeText(int width, int height) {
     return fmt::format("{}x{}", width, height);
@@ -430,7 +434,8 @@ Scene loadScene(const json& document, const fs::path& file) {
     JsonNode root(document, file.string());
     if (!document.is_object())
         root.fail("expected a JSON object {...} at the top level, got " + describeValue(document));
-    root.allowKeys({"description", "camera", "background", "scene", "virtual", "lights", "options"});
+    root.allowKeys(
+        {"description", "camera", "background", "environment", "scene", "virtual", "lights", "options"});
     if (auto n = root.find("description")) n->string();
     fs::path sceneFolder = file.parent_path();
 
@@ -443,11 +448,14 @@ Scene loadScene(const json& document, const fs::path& file) {
         n->requireArray();
         for (size_t i = 0; i < n->size(); ++i) scene.lights.push_back(readLight(n->element(i)));
     }
-    checkRenderMemory(scene.options, scene.camera, scene.lights.size(), physicalMemoryBytes(), file.string());
+    const size_t environmentLights = root.has("environment") ? scene.options.environment.lightCount : 0;
+    checkRenderMemory(scene.options, scene.camera, scene.lights.size() + environmentLights,
+                      physicalMemoryBytes(), file.string());
     if (!holdsEntries(root, "scene") && !holdsEntries(root, "virtual"))
         root.fail("no meshes: at least one of \"scene\" (the real scene) and \"virtual\" must hold a mesh");
 
     if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
+    if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
     if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder);
     if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder);
     return scene;

@@ -23,6 +23,8 @@ inline glm::mat3 tangentFrame(glm::vec3 n) {
     return glm::mat3(t, glm::cross(n, t), n);
 }
 
+}  // namespace
+
 float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
     switch (mode) {
         case ShadowMode::Shaded: return 1.0f - o.combined;
@@ -33,10 +35,9 @@ float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
     return 0.0f;
 }
 
-}  // namespace
-
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
-                                              const VisibilityVolumes& visibility, const Options& options) {
+                                              const VisibilityVolumes& visibility, const Options& options,
+                                              bool objectShadowOnly) {
     std::vector<ShadowOcclusion> out(points.size() * lights.size());
     if (lights.empty() || (!visibility.scene && !visibility.object)) return out;
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
@@ -50,13 +51,15 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
             if (glm::dot(s.wi, p.normal) <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
             const float tanHalf = lights[l].radius > 0.0f && std::isfinite(s.distance)
                                       ? lights[l].radius / s.distance
-                                      : defaultTan;
+                                  : lights[l].angularRadius > 0.0f ? std::tan(lights[l].angularRadius)
+                                                                   : defaultTan;
             Cone cone;
             cone.tanHalfAngle = tanHalf;
             cone.origin = coneOrigin(p.position, p.normal, s.wi, region, settings);
             cone.direction = s.wi;
             cone.maxDistance = std::isfinite(s.distance) ? s.distance / (1.0f + kShadowConeStopDiameters * 2.0f * tanHalf) : s.distance;
             cone.jitter = hashToUnit(i, static_cast<uint32_t>(l));
+            if (objectShadowOnly && !shadowConeMeetsObjects(cone, visibility, settings)) continue;
             out[i * lights.size() + l] = traceShadowCone(cone, visibility, settings);
         }
     });

@@ -16,9 +16,12 @@
 namespace deltagi {
 
 // Shadow cones (§3.5): for every point and light (index point * lights + light) the occlusion by the scene
-// alone, the objects alone and both. Invalid points get zero occlusion.
+// alone, the objects alone and both. Invalid points get zero occlusion. With `objectShadowOnly` (relighting
+// with ShadowMode::DeltaShadow, where only scene - combined counts), cones that the objects do not occlude
+// anywhere are skipped and get zero occlusion too: their change is zero either way.
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
-                                              const VisibilityVolumes& visibility, const Options& options);
+                                              const VisibilityVolumes& visibility, const Options& options,
+                                              bool objectShadowOnly = false);
 
 // Diffuse cones: cosine-weighted incoming radiance sum_k w_k L_k (so that albedo times it is the reflected
 // radiance). Zero for invalid points.
@@ -40,6 +43,9 @@ enum class ShadowMode {
     DeltaShadow,     // real surface relit: the change (1 - combined) - (1 - scene) (§3.2, no double shadow)
     DeltaSingleVisibility,  // real surface relit with one shared visibility: (1 - combined) - 1 (double shadow)
 };
+
+// The fraction of a light (or of the sky through a cone) that reaches a point, or its change, under `mode`.
+float shadowFactor(const ShadowOcclusion& occlusion, ShadowMode mode);
 
 // Per point: sum over lights of direct radiance times the shadow factor of `mode`, plus albedo * diffuse
 // plus specular colour * specular (either span may be empty: no indirect light), plus the material's emission

@@ -144,13 +144,16 @@ public:
     // Reads a lookup prepared by any volume of the same region and resolution. Returns 0 at once where the
     // lookup's footprint cannot reach a non-zero voxel.
     glm::vec4 gather(const VolumeLookup& l) const {
-        const float reach = static_cast<float>(4 << l.level0);  // level-0 voxels a lookup can read from
-        if (glm::any(glm::lessThan(l.voxelPos, occupiedMin_ - reach)) ||
-            glm::any(glm::greaterThan(l.voxelPos, occupiedMax_ + reach)))
-            return glm::vec4(0.0f);
+        if (!mayReadNonZero(l.voxelPos, l.level0)) return glm::vec4(0.0f);
         Float4 v = gatherLevel(l.level0, l.fine);
         if (l.blend > 0.0f) v += (gatherLevel(l.level0 + 1, l.coarse) - v) * l.blend;
         return storeFloat4(v);
+    }
+    // False where a lookup at `voxelPos` between levels level0 and level0 + 1 cannot reach a non-zero voxel.
+    bool mayReadNonZero(glm::vec3 voxelPos, int level0) const {
+        const float reach = static_cast<float>(4 << level0);  // level-0 voxels a lookup can read from
+        return !glm::any(glm::lessThan(voxelPos, occupiedMin_ - reach)) &&
+               !glm::any(glm::greaterThan(voxelPos, occupiedMax_ + reach));
     }
     // Trilinear sample of level `l`.
     glm::vec4 sampleLevel(glm::vec3 voxelPos, int l) const {

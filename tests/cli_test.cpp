@@ -374,6 +374,23 @@ TEST_F(CliTest, ReferenceAndEvalWriteTheirOutputs) {
         EXPECT_TRUE(figures.at("baselines").at(baseline).at("delta_rel_error").is_number()) << baseline;
 }
 
+// The field example names the shared file it misses; with the shared data it loads 16 lights from the probe.
+TEST_F(CliTest, FieldBunnyExampleLoadsOrNamesTheMissingSharedFile) {
+    const fs::path scene = fs::path(DELTAGI_SOURCE_DIR) / "examples" / "field-bunny.json";
+    const CliResult missing =
+        run("info " + quote(scene.string()) + " --set environment.file=../../shared/data/photos/missing.hdr");
+    EXPECT_EQ(missing.exitCode, 1);
+    for (const char* part :
+         {"field-bunny.json: environment.file: file not found", "missing.hdr", "shared data"})
+        EXPECT_NE(missing.err.find(part), std::string::npos) << part << " not in: " << missing.err;
+    if (!fs::exists(fs::path(DELTAGI_SHARED_DATA_DIR) / "photos" / "spruit-sunrise-field"))
+        GTEST_SKIP() << "needs the shared data set (" << DELTAGI_SHARED_DATA_DIR << ")";
+    const CliResult result = run("info --json " + quote(scene.string()));
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    EXPECT_EQ(json::parse(result.out).at("lights"), 16);
+    EXPECT_TRUE(result.err.empty()) << result.err;  // an HDR probe: no warning
+}
+
 // 16 bytes per voxel over the mip chain r^3 + (r/2)^3 + ... + 1.
 TEST(SceneInfo, VolumeBytesSumsTheMipChain) {
     EXPECT_EQ(deltagi::volumeBytes(1), 16u);

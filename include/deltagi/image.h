@@ -45,6 +45,14 @@ private:
 // pixel is NaN or infinite.
 Image readImage(const std::filesystem::path& path);
 
+// readImage() without the check for NaN and infinite pixels, which it leaves as they are (for callers that
+// repair them), and whether the file held float (linear) pixels rather than sRGB-encoded integers.
+struct ImageFile {
+    Image image;
+    bool floatPixels = false;
+};
+ImageFile readImageFile(const std::filesystem::path& path);
+
 // Writes by extension: .png (8-bit sRGB, clamped to [0,1]), .exr (32-bit float, linear), .hdr (linear).
 // NaN/Inf pixels are written as 0. Throws InputError when the file cannot be written.
 void writeImage(const Image& image, const std::filesystem::path& path);

@@ -50,6 +50,10 @@ struct ShadowConeOptions {
     // "aperture_deg": full apex angle in degrees of the shadow cone of a light without a "radius".
     // A light with a radius r at distance d uses 2*atan(r/d) instead.
     float apertureDeg = 4.0f;
+    // "pixel_stride": shadow cones at every pixel_stride-th pixel of every pixel_stride-th row (1, 2 or 4),
+    // interpolated like options.diffuse.pixel_stride. At 128^3 a voxel covers several pixels of a 640x480
+    // view, and shadow detail is voxel-sized: 2 traces a quarter of the cones for the same shadows.
+    int pixelStride = 2;
 };
 
 // options.trace: the cone marcher shared by all cones.
@@ -95,6 +99,23 @@ struct RenderOptions {
     int denoiseRadius = 2;
 };
 
+// options.environment: how the scene's environment map lights the pipeline (ignored without one).
+struct EnvironmentOptions {
+    // "light_count": directional lights extracted from the map (in [0, 256]); they drive the reflective
+    // shadow maps and the shadow cones. 0 leaves all of the map's light to the sky term.
+    int lightCount = 16;
+    // "extraction": "median_cut" (Debevec 2005: regions of equal energy) or "variance_minimization"
+    // (Viriyothai & Debevec 2009: each split minimizes the regions' energy-weighted angular variance).
+    std::string extraction = "median_cut";
+    // "sky": diffuse and specular cones that leave the volumes pick up the map minus the extracted lights,
+    // prefiltered to their aperture (sky light, reflections, and the object's ambient occlusion on real
+    // surfaces).
+    bool sky = true;
+    // "max_light_aperture_deg": an extracted light's shadow cone is as wide as the region of sky it stands
+    // for (full apex angle, degrees), at most this.
+    float maxLightApertureDeg = 30.0f;
+};
+
 struct Options {
     VolumeOptions volume;
     RsmOptions rsm;
@@ -103,6 +124,7 @@ struct Options {
     ShadowConeOptions shadow;
     TraceOptions trace;
     RenderOptions render;
+    EnvironmentOptions environment;
 };
 
 }  // namespace deltagi

@@ -40,7 +40,10 @@ using ReferenceProgress = std::function<void(int done, int total, double seconds
 // chosen point of the disk they show to the shading point, which gives the penumbra); without a radius, and
 // for directional lights, shadows are hard. These lights are not visible to camera or bounce rays. Meshes
 // whose material emits are area lights, seen by every ray and sampled by next-event estimation with multiple
-// importance sampling. Surfaces, emitters included, are two-sided, like in the pipeline.
+// importance sampling. Surfaces, emitters included, are two-sided, like in the pipeline. A scene's
+// environment map lights it directly: rays that leave the scene see it, and every vertex samples it in
+// proportion to its radiance, combined with BRDF sampling by multiple importance sampling; the lights
+// extracted from the map for the DGI pipeline are not used.
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
                                 const ReferenceProgress& onPass = {});
 

@@ -9,6 +9,7 @@
 
 #include <glm/glm.hpp>
 
+#include "deltagi/environment.h"
 #include "deltagi/image.h"
 #include "deltagi/math.h"
 #include "deltagi/options.h"
@@ -75,6 +76,11 @@ struct Light {
     float outerAngleDeg = 45.0f;  // "outer_angle_deg": spot zero intensity outside this half-angle
     float radius = 0.0f;          // "radius": size of the emitter in world units (softens shadow cones); 0 = use
                                   // options.shadow.aperture_deg
+    // Directional lights extracted from the environment map: the half-angle (radians) of the part of the sky
+    // the light stands for, which widens its shadow cone; the path tracer skips these lights (it samples the
+    // map itself). Not read from scene files.
+    bool fromEnvironment = false;
+    float angularRadius = 0.0f;
 
     glm::vec3 power() const { return color * intensity; }
 };
@@ -86,8 +92,11 @@ struct Scene {
     std::filesystem::path backgroundFile;
     std::vector<TriangleMesh> real;      // "scene": the reconstruction of the real scene
     std::vector<TriangleMesh> virtuals;  // "virtual": the virtual objects
-    std::vector<Light> lights;
+    std::vector<Light> lights;           // the scene file's lights, then those extracted from the environment
+    std::optional<Environment> environment;  // "environment": the light probe
     Options options;
+    // What the loader accepted but the user should know (an LDR environment map, repaired pixels).
+    std::vector<std::string> warnings;
 };
 
 }  // namespace deltagi
