@@ -16,7 +16,7 @@ const std::vector<BenchRow>& benchRows() {
         {"diffuse_ms", {"diffuse"}, 6.0},    {"specular_ms", {"specular"}, 64.0},
         {"shadow_ms", {"shadow"}, 4.0},      {"sky_ms", {"sky"}, -1.0},
         {"bvh_ms", {"bvh"}, -1.0},
-        {"gbuffer_ms", {"gbuffer"}, -1.0},   {"denoise_ms", {"denoise"}, -1.0},
+        {"gbuffer_ms", {"gbuffer"}, -1.0},
         {"shading_ms", {"shading"}, -1.0},   {"background_ms", {"background"}, -1.0},
         {"composite_ms", {"composite"}, -1.0}, {"total_ms", {}, 90.2},
     };

@@ -132,13 +132,14 @@ std::pair<float, float> backfaceWeights(const VisibilityVolumes& v, const ConeTr
 }  // namespace
 
 glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const VisibilityVolumes& visibility,
-                         const ConeTraceSettings& settings) {
+                         const ConeTraceSettings& settings, int64_t* steps) {
     glm::vec3 lightAcc(0.0f);
     float occlusionAcc = 0.0f;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
     marchCone(cone, light, settings, [&](glm::vec3 position, float level, float levelScale) {
         // One set of corners for all the volumes of the region.
         const VolumeLookup at = light.lookup(position, level);
+        if (steps) ++*steps;
         float transmittance = 1.0f;
         if (visibility.scene)
             transmittance *= 1.0f - adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
@@ -162,13 +163,14 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
 }
 
 ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
-                                const ConeTraceSettings& settings) {
+                                const ConeTraceSettings& settings, int64_t* steps) {
     ShadowOcclusion acc;
     if (!visibility.scene && !visibility.object) return acc;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
     const MipVolume& reference = referenceOf(visibility.scene, visibility.object);
     marchCone(cone, reference, settings, [&](glm::vec3 position, float level, float levelScale) {
         const VolumeLookup at = reference.lookup(position, level);
+        if (steps) ++*steps;
         float scene = 0.0f, object = 0.0f;
         if (visibility.scene)
             scene = stepOpacity(adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale, settings,

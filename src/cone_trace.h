@@ -53,16 +53,17 @@ float hashToUnit(uint64_t index, uint32_t stream);
 glm::vec3 coneOrigin(glm::vec3 position, glm::vec3 normal, glm::vec3 direction, const VolumeRegion& region,
                      const ConeTraceSettings& settings);
 
-// Light arriving along the cone: radiance from `light`, occluded by both visibility volumes.
+// Light arriving along the cone: radiance from `light`, occluded by both visibility volumes. `steps`, if
+// given, is incremented by the number of samples taken (for the microbenchmarks).
 glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const VisibilityVolumes& visibility,
-                         const ConeTraceSettings& settings);
+                         const ConeTraceSettings& settings, int64_t* steps = nullptr);
 
 // Occlusion accumulated along a shadow cone, by the scene volume alone, the object volume alone and both.
 struct ShadowOcclusion {
     float scene = 0.0f, object = 0.0f, combined = 0.0f;
 };
 ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
-                                const ConeTraceSettings& settings);
+                                const ConeTraceSettings& settings, int64_t* steps = nullptr);
 
 // Whether the object volume occludes the shadow cone anywhere along its march (traceShadowCone would give
 // object > 0). When it does not, scene and combined occlusion are equal: the objects change nothing for the

@@ -33,8 +33,10 @@ struct DiffuseConeOptions {
     float apertureDeg = 0.0f;
     // "pixel_stride": the diffuse cones are traced at every pixel_stride-th pixel of every pixel_stride-th row
     // (1, 2 or 4); the edge-aware filter fills the pixels between from traced neighbours on the same surface,
-    // and pixels with none are traced too. Diffuse light varies slowly: 2 traces a quarter of the cones.
-    int pixelStride = 2;
+    // and pixels with none are traced too. Diffuse light varies slowly: 4 traces 1/16 of the cones, with the
+    // same error against the path-traced reference as 2 (Cornell box, 640x480: delta_rel_error 0.5631 vs
+    // 0.5635, object_rel_rmse 0.849 vs 0.853).
+    int pixelStride = 4;
 };
 
 // options.specular: the one specular cone along the reflected view ray.
