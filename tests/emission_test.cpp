@@ -115,7 +115,7 @@ TEST_F(GlowingBall, ObjectShowsItsEmissionAndLightsTheFloor) {
         // Measured: the reference 0.966 to 1.027 times the closed form (noise of 256 samples); bound 8%.
         EXPECT_NEAR(traced, expected, 0.08 * expected) << p.x << "," << p.z;
         // DGI: one bounce of the ball's light through the cones, positive and of the right size. Measured
-        // ratios to the closed form 1.01 (left), 1.06, 1.13 (right), 1.22 (in front); bound [0.6, 1.5].
+        // ratios to the closed form 0.89 (in front), 0.88 (right), 0.96 (left), 1.15; bound [0.6, 1.5].
         EXPECT_GT(dgiDelta, 0.6 * expected) << p.x << "," << p.z;
         EXPECT_LT(dgiDelta, 1.5 * expected) << p.x << "," << p.z;
     }

@@ -67,11 +67,11 @@ TEST(Evaluation, CornellBoxRegressionBound) {
     EXPECT_GT(e.classes.count(PixelClass::RealLit), 1000u);
     EXPECT_GT(e.classes.count(PixelClass::RealShadowed), 50u);
 
-    // Measured (GCC 12, Release): delta_rel_error 0.5662, object_rel_rmse 0.9729 (the reference's noise at 32
+    // Measured (GCC 12, Release): delta_rel_error 0.5616, object_rel_rmse 0.9796 (the reference's noise at 32
     // samples included; DGI's ball is brighter than the reference's on its lower half). Bounds: the measurement
     // plus 10%, for another compiler's rounding and small, deliberate changes.
     EXPECT_LT(e.dgi.deltaRelError, 0.62);
-    EXPECT_LT(e.dgi.objectRelRmse, 1.07);
+    EXPECT_LT(e.dgi.objectRelRmse, 1.08);
     // What each part buys: pasting the object in misses the whole change (1 by definition), and one shared
     // visibility volume shadows twice (measured 2.64); DGI is closer than both.
     EXPECT_DOUBLE_EQ(e.noRelight.deltaRelError, 1.0);
