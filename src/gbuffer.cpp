@@ -1,5 +1,7 @@
 #include "gbuffer.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "parallel.h"
@@ -19,6 +21,28 @@ RayHit visibleObjectHit(const RayScene& all, glm::vec3 eye, glm::vec3 dir) {
     return hit.isVirtual ? hit : RayHit{};
 }
 
+// The pixel rows and columns [x0, x1] x [y0, y1] whose rays may meet the box `b` (its corners' projections,
+// with a margin for the sub-samples); the whole image when the box reaches behind the camera.
+std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
+    const std::array<int, 4> all = {0, camera.width - 1, 0, camera.height - 1};
+    if (b.empty()) return {0, -1, 0, -1};
+    const glm::mat4 cameraFromWorld = glm::inverse(camera.worldFromCamera);
+    float xMin = INFINITY, xMax = -INFINITY, yMin = INFINITY, yMax = -INFINITY;
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec3 p(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y, c & 4 ? b.max.z : b.min.z);
+        const glm::vec3 q = glm::vec3(cameraFromWorld * glm::vec4(p, 1.0f));
+        if (q.z > -1e-6f) return all;  // at or behind the camera plane
+        const float x = camera.cx + camera.fx * (q.x / -q.z), y = camera.cy - camera.fy * (q.y / -q.z);
+        xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y), yMax = std::max(yMax, y);
+    }
+    constexpr float kMargin = 2.0f;
+    auto clampTo = [](float v, int hi) { return static_cast<int>(std::clamp(v, -1.0f, static_cast<float>(hi) + 1.0f)); };
+    return {std::max(clampTo(std::floor(xMin - kMargin), camera.width), 0),
+            std::min(clampTo(std::ceil(xMax + kMargin), camera.width), camera.width - 1),
+            std::max(clampTo(std::floor(yMin - kMargin), camera.height), 0),
+            std::min(clampTo(std::ceil(yMax + kMargin), camera.height), camera.height - 1)};
+}
+
 }  // namespace
 
 std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly) {
@@ -33,7 +57,8 @@ std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScen
     return real;
 }
 
-void renderObjectSurfaces(const Camera& camera, const RayScene& all, int samplesPerPixel, GBuffer& g) {
+void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
+                          int samplesPerPixel, GBuffer& g) {
     const int width = camera.width, height = camera.height;
     const size_t count = static_cast<size_t>(width) * height;
     g.object.assign(count, {});
@@ -41,9 +66,10 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, int samples
     const glm::vec3 eye = camera.position();
     const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<float>(samplesPerPixel)))));
 
-    // Pixel centres first.
-    parallelFor(0, height, 2, [&](int64_t y) {
-        for (int x = 0; x < width; ++x) {
+    // Pixel centres first, where the objects can be.
+    const auto [x0, x1, y0, y1] = pixelsCovering(camera, objectBounds);
+    parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
+        for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
             const glm::vec3 dir = glm::normalize(camera.rayDirection(x + 0.5f, y + 0.5f));
             g.object[i] = toSurfacePoint(visibleObjectHit(all, eye, dir), dir);
@@ -54,8 +80,8 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, int samples
 
     // Then the sub-samples of silhouette pixels (decided from the centres alone, so the pass is deterministic).
     std::vector<uint8_t> silhouette(count, 0);
-    parallelFor(0, height, 8, [&](int64_t y) {
-        for (int x = 0; x < width; ++x) {
+    parallelFor(y0, y1 + 1, 8, [&](int64_t y) {
+        for (int x = x0; x <= x1; ++x) {
             const bool centre = g.object[static_cast<size_t>(y) * width + x].valid();
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx) {
@@ -66,8 +92,8 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, int samples
                 }
         }
     });
-    parallelFor(0, height, 2, [&](int64_t y) {
-        for (int x = 0; x < width; ++x) {
+    parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
+        for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
             if (!silhouette[i]) continue;
             int virtualCount = 0;
@@ -89,20 +115,6 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, int samples
             if (virtualCount == 0) g.object[i] = {};
         }
     });
-}
-
-GBuffer renderGBuffer(const Camera& camera, const RayScene* all, const RayScene& realOnly, int samplesPerPixel) {
-    GBuffer g;
-    g.width = camera.width;
-    g.height = camera.height;
-    g.real = renderRealSurfaces(camera, realOnly);
-    if (all) {
-        renderObjectSurfaces(camera, *all, samplesPerPixel, g);
-    } else {
-        g.object.assign(g.real.size(), {});
-        g.coverage.assign(g.real.size(), 0.0f);
-    }
-    return g;
 }
 
 }  // namespace deltagi

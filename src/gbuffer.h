@@ -31,12 +31,11 @@ struct GBuffer {
 std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly);
 
 // The virtual half of `g` (object, coverage): `all` holds the real and the virtual surfaces (the virtual objects'
-// layer over the real scene's, see RayScene). One ray per pixel centre decides which pixels are virtual; pixels on a silhouette (whose 3x3 neighbourhood
+// layer over the real scene's, see RayScene), whose virtual objects lie inside `objectBounds`: only pixels
+// near the bounds' projection can see them. One ray per pixel centre decides which pixels are virtual; pixels on a silhouette (whose 3x3 neighbourhood
 // has both kinds) take `samplesPerPixel` sub-samples on a regular k x k grid for their coverage. The virtual
 // surface nearest the pixel centre represents the pixel.
-void renderObjectSurfaces(const Camera& camera, const RayScene& all, int samplesPerPixel, GBuffer& g);
-
-// Both halves; `all` may be null (no virtual objects: zero coverage everywhere).
-GBuffer renderGBuffer(const Camera& camera, const RayScene* all, const RayScene& realOnly, int samplesPerPixel);
+void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
+                          int samplesPerPixel, GBuffer& g);
 
 }  // namespace deltagi

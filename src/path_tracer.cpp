@@ -100,7 +100,7 @@ glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) co
     const glm::vec3 toPoint = s.position - origin;
     const float distance = glm::length(toPoint);
     const float tMax = distance - 2.0f * settings_.rayOffset;
-    if (tMax <= 0.0f || rays_.occluded(origin, toPoint / distance, 0.0f, tMax)) return glm::vec3(0.0f);
+    if (tMax <= 0.0f || rays_.intersect(origin, toPoint / distance, 0.0f, tMax).hit()) return glm::vec3(0.0f);
     const float pdfLight = s.pdfArea * d2 / cosLight;  // per unit solid angle at the hit
     if (!(pdfLight > 0.0f) || !std::isfinite(pdfLight)) return glm::vec3(0.0f);
     const float weight = powerHeuristic(pdfLight, brdfPdf(m, hit.normal, wo, wi));

@@ -79,18 +79,6 @@ RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, fl
     return hit;
 }
 
-bool RayScene::occluded(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
-    if (!meshes_.empty()) {
-        RTCIntersectContext context;
-        rtcInitIntersectContext(&context);
-        RTCRay ray;
-        initRay(ray, origin, direction, tMin, tMax);
-        rtcOccluded1(impl_->scene, &context, &ray);
-        if (ray.tfar < 0.0f) return true;  // Embree marks a hit by tfar = -inf
-    }
-    return base_ && base_->occluded(origin, direction, tMin, tMax);
-}
-
 RayHit RayScene::intersectLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
     RayHit result;
     if (meshes_.empty()) return result;

@@ -41,8 +41,6 @@ public:
     // Closest hit along origin + t * direction (direction unit length), t in (tMin, tMax).
     RayHit intersect(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
                      float tMax = std::numeric_limits<float>::infinity()) const;
-    // Whether anything lies along origin + t * direction for t in (tMin, tMax).
-    bool occluded(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const;
     Bounds3f bounds() const { return bounds_; }  // of this layer and its base
     bool empty() const { return meshes_.empty() && (!base_ || base_->empty()); }
 

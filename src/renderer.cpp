@@ -342,7 +342,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     gbuffer.width = camera.width;
     gbuffer.height = camera.height;
     gbuffer.real = realSurfaces();
-    renderObjectSurfaces(camera, *all, o.render.samplesPerPixel, gbuffer);
+    renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer);
     std::vector<SurfacePoint> realPoints = gbuffer.real;
     for (size_t i = 0; i < realPoints.size(); ++i)
         if (gbuffer.coverage[i] >= 1.0f) realPoints[i] = {};

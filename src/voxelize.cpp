@@ -45,6 +45,7 @@ float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMi
         const bool keepAbove = plane % 2 == 0;  // keep p[axis] >= min, or p[axis] <= max
         const float bound = keepAbove ? boxMin[axis] : boxMax[axis];
         auto inside = [&](const glm::vec3& p) { return keepAbove ? p[axis] >= bound : p[axis] <= bound; };
+        if (std::all_of(in, in + count, inside)) continue;  // the plane cuts nothing off (the usual case)
         int outCount = 0;
         for (int i = 0; i < count; ++i) {
             const glm::vec3& p = in[i];
@@ -69,6 +70,8 @@ namespace {
 struct VoxelTriangle {
     glm::vec3 p[3];    // level-0 voxel coordinates
     glm::vec3 normal;  // unit face normal (winding order)
+    float area;        // voxel units^2
+    bool oneVoxel;     // lies inside a single voxel of the grid
     glm::vec3 emission;  // the material's emitted radiance
     glm::ivec3 lo, hi;  // voxel bounds, clamped to the grid
 };
@@ -85,12 +88,16 @@ std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, co
             float len = glm::length(cr);
             if (!(len > 0.0f)) continue;  // degenerate: covers no area
             vt.normal = cr / len;
+            vt.area = 0.5f * len;
             vt.emission = mesh.material.emission;
             glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
             glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
             if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
             vt.lo = glm::clamp(glm::ivec3(glm::floor(mn)), glm::ivec3(0), glm::ivec3(n - 1));
             vt.hi = glm::clamp(glm::ivec3(glm::floor(mx)), glm::ivec3(0), glm::ivec3(n - 1));
+            vt.oneVoxel = glm::ivec3(glm::floor(mn)) == glm::ivec3(glm::floor(mx)) &&
+                          glm::all(glm::greaterThanEqual(mn, glm::vec3(0.0f))) &&
+                          glm::all(glm::lessThan(mx, glm::vec3(static_cast<float>(n))));
             tris.push_back(vt);
         }
     }
@@ -120,8 +127,14 @@ VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion&
                 for (int y = t.lo.y; y <= t.hi.y; ++y)
                     for (int x = t.lo.x; x <= t.hi.x; ++x) {
                         glm::vec3 boxMin(x, y, z);
-                        if (!triangleBoxOverlap(boxMin + half, half, t.p[0], t.p[1], t.p[2])) continue;
-                        float a = clippedTriangleArea(t.p[0], t.p[1], t.p[2], boxMin, boxMin + 1.0f);
+                        // A triangle inside one voxel (most of a detailed mesh's) needs no test and no
+                        // clipping.
+                        const bool inside = t.oneVoxel;
+                        if (!inside && !triangleBoxOverlap(boxMin + half, half, t.p[0], t.p[1], t.p[2]))
+                            continue;
+                        const float a =
+                            inside ? t.area
+                                   : clippedTriangleArea(t.p[0], t.p[1], t.p[2], boxMin, boxMin + 1.0f);
                         size_t i = out.visibility.index(x, y, z);
                         glm::vec4& v = out.visibility[i];
                         v.x = 1.0f;
