@@ -68,10 +68,10 @@ float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMi
 namespace {
 
 struct VoxelTriangle {
-    glm::vec3 p[3];    // level-0 voxel coordinates
-    glm::vec3 normal;  // unit face normal (winding order)
-    float area;        // voxel units^2
-    bool oneVoxel;     // lies inside a single voxel of the grid
+    glm::vec3 p[3];     // level-0 voxel coordinates
+    glm::vec3 normal;   // unit face normal (winding order)
+    float area;         // voxel units^2
+    bool oneVoxel;      // lies inside a single voxel of the grid
     glm::ivec3 lo, hi;  // voxel bounds, clamped to the grid
 };
 
@@ -122,11 +122,14 @@ VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion&
                 for (int y = t.lo.y; y <= t.hi.y; ++y)
                     for (int x = t.lo.x; x <= t.hi.x; ++x) {
                         glm::vec3 boxMin(x, y, z);
-                        // A triangle inside one voxel (most of a detailed mesh's) needs no test and no clipping.
+                        // A triangle inside one voxel (most of a detailed mesh's) needs no test and no
+                        // clipping.
                         const bool inside = t.oneVoxel;
-                        if (!inside && !triangleBoxOverlap(boxMin + half, half, t.p[0], t.p[1], t.p[2])) continue;
+                        if (!inside && !triangleBoxOverlap(boxMin + half, half, t.p[0], t.p[1], t.p[2]))
+                            continue;
                         const float a =
-                            inside ? t.area : clippedTriangleArea(t.p[0], t.p[1], t.p[2], boxMin, boxMin + 1.0f);
+                            inside ? t.area
+                                   : clippedTriangleArea(t.p[0], t.p[1], t.p[2], boxMin, boxMin + 1.0f);
                         size_t i = out.visibility.index(x, y, z);
                         glm::vec4& v = out.visibility[i];
                         v.x = 1.0f;
