@@ -1,5 +1,5 @@
-// Microbenchmarks of the pipeline's hot kernels (Google Benchmark): voxelization, light injection, mipmaps and
-// the cone marcher. Items per second are triangles, RSM texels, voxels and cone samples (steps). Run:
+// Microbenchmarks of the pipeline's hot kernels (Google Benchmark): voxelization, light injection, mipmaps
+// and the cone marcher. Items per second are triangles, RSM texels, voxels and cone samples (steps). Run:
 //   build/bench/deltagi_microbench [--benchmark_filter=Cone] [--benchmark_repetitions=5]
 // The whole-frame figures come from `deltagi bench` (docs in README "Performance").
 #include <benchmark/benchmark.h>
@@ -52,7 +52,8 @@ void BM_Inject(benchmark::State& state) {
     const RayScene all(k.scene, SceneContent::VirtualOnly, &realOnly);
     const std::vector<ReflectiveShadowMap> rsms = {
         renderReflectiveShadowMap(all, k.scene.lights[0], k.region, static_cast<int>(state.range(0)))};
-    const VoxelGeometry scene = voxelize(k.scene.real, k.region), objects = voxelize(k.scene.virtuals, k.region);
+    const VoxelGeometry scene = voxelize(k.scene.real, k.region),
+                        objects = voxelize(k.scene.virtuals, k.region);
     const VoxelGeometry* both[] = {&scene, &objects};
     for (auto _ : state) benchmark::DoNotOptimize(injectLight(rsms, k.region, both));
     state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(rsms[0].texels.size()));
@@ -71,16 +72,18 @@ BENCHMARK(BM_Mipmap)->Arg(64)->Arg(128)->Arg(256)->Unit(benchmark::kMillisecond)
 // Cones from points on the floor around the ball, through the two visibility volumes and the delta volume
 // (light cones) or the visibility volumes alone (shadow cones towards the light).
 class ConeFixture : public benchmark::Fixture {
-public:
+  public:
     void SetUp(const benchmark::State&) override {
         if (!volumes.empty()) return;
         const KernelScene k(128);
         scene = k.scene;
         region = k.region;
-        VoxelGeometry sceneGeometry = voxelize(scene.real, region), objectGeometry = voxelize(scene.virtuals, region);
+        VoxelGeometry sceneGeometry = voxelize(scene.real, region),
+                      objectGeometry = voxelize(scene.virtuals, region);
         const RayScene realOnly(scene, SceneContent::RealOnly);
         const RayScene all(scene, SceneContent::VirtualOnly, &realOnly);
-        const std::vector<ReflectiveShadowMap> full = {renderReflectiveShadowMap(all, scene.lights[0], region, 512)};
+        const std::vector<ReflectiveShadowMap> full = {
+            renderReflectiveShadowMap(all, scene.lights[0], region, 512)};
         const std::vector<ReflectiveShadowMap> alone = {
             renderReflectiveShadowMap(realOnly, scene.lights[0], region, 512)};
         const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
@@ -96,7 +99,8 @@ public:
             const glm::vec3 p(-0.9f + 1.8f * static_cast<float>(i % 64) / 63.0f, 0.0f,
                               -0.9f + 1.8f * static_cast<float>(i / 64) / 63.0f);
             Cone cone;
-            cone.direction = glm::vec3(set.directions[i % 9].x, set.directions[i % 9].z, set.directions[i % 9].y);
+            cone.direction =
+                glm::vec3(set.directions[i % 9].x, set.directions[i % 9].z, set.directions[i % 9].y);
             cone.origin = coneOrigin(p, {0, 1, 0}, cone.direction, region, settings);
             cone.tanHalfAngle = set.tanHalfAngle;
             cone.jitter = hashToUnit(static_cast<uint64_t>(i), 0);
@@ -110,7 +114,9 @@ public:
             shadows.push_back(shadow);
         }
     }
-    VisibilityVolumes visibility() const { return {&volumes[0], &volumes[1], VisibilityVolumes::Self::Scene}; }
+    VisibilityVolumes visibility() const {
+        return {&volumes[0], &volumes[1], VisibilityVolumes::Self::Scene};
+    }
 
     Scene scene;
     VolumeRegion region;

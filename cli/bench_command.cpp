@@ -16,7 +16,8 @@ namespace deltagi::cli {
 
 CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
     CLI::App* command = app.add_subcommand(
-        "bench", "Time the pipeline's stages over frames in which the virtual objects move (the paper's Table 1)");
+        "bench",
+        "Time the pipeline's stages over frames in which the virtual objects move (the paper's Table 1)");
     command->add_option("scene", args.scene, "Scene file (JSON)")->required();
     command->add_option("--frames", args.options.frames, "Measured frames (default 10)")
         ->check(CLI::Range(1, 100000));
@@ -24,8 +25,9 @@ CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
         ->check(CLI::Range(0, 100000));
     command->add_flag("--cold", args.options.cold,
                       "Rebuild everything every frame, the static reconstruction's voxels, RSMs and BVH too");
-    command->add_option("--motion", args.options.motionVoxels,
-                        "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still)")
+    command
+        ->add_option("--motion", args.options.motionVoxels,
+                     "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still)")
         ->check(CLI::Range(0.0f, 1000.0f));
     command->add_option("--json", args.json, "Also write the figures as JSON here");
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
@@ -46,7 +48,8 @@ int runBench(const BenchArgs& args) {
     }
     Scene scene = loadScene(args.scene, args.overrides);
     if (scene.virtuals.empty())
-        throw InputError(args.scene.string(), "virtual: the benchmark needs at least one virtual object to move");
+        throw InputError(args.scene.string(),
+                         "virtual: the benchmark needs at least one virtual object to move");
 
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const BenchResult result = runBenchmark(scene, args.options, [&](int frame, double ms) {

@@ -233,22 +233,25 @@ int runRender(const RenderArgs& args) {
 
 // Sets TBB's thread count for as long as it lives; `threads()` is what the pool will use.
 class ThreadLimit {
-public:
+  public:
     explicit ThreadLimit(int threads) {
         if (threads > 0) limit_.emplace(tbb::global_control::max_allowed_parallelism, threads);
     }
     int threads() const {
-        return static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+        return static_cast<int>(
+            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
     }
 
-private:
+  private:
     std::optional<tbb::global_control> limit_;
 };
 
 std::string formatSeconds(double seconds) {
     if (seconds < 60.0) return fmt::format("{:.0f} s", seconds);
-    if (seconds < 3600.0) return fmt::format("{:.0f} min {:02.0f} s", std::floor(seconds / 60.0), std::fmod(seconds, 60.0));
-    return fmt::format("{:.0f} h {:02.0f} min", std::floor(seconds / 3600.0), std::fmod(seconds, 3600.0) / 60.0);
+    if (seconds < 3600.0)
+        return fmt::format("{:.0f} min {:02.0f} s", std::floor(seconds / 60.0), std::fmod(seconds, 60.0));
+    return fmt::format("{:.0f} h {:02.0f} min", std::floor(seconds / 3600.0),
+                       std::fmod(seconds, 3600.0) / 60.0);
 }
 
 // A progress bar on one terminal line: samples done, time spent and an estimate of the time left (the
@@ -259,8 +262,8 @@ ReferenceProgress progressBar(double timeLimit) {
         const int filled = total > 0 ? done * kWidth / total : kWidth;
         double left = done > 0 ? seconds / done * (total - done) : 0.0;
         if (timeLimit > 0.0) left = std::min(left, std::max(timeLimit - seconds, 0.0));
-        note("\r  [{}{}] {}/{} spp  {}  ETA {}   ", std::string(filled, '#'), std::string(kWidth - filled, '.'),
-             done, total, formatSeconds(seconds), formatSeconds(left));
+        note("\r  [{}{}] {}/{} spp  {}  ETA {}   ", std::string(filled, '#'),
+             std::string(kWidth - filled, '.'), done, total, formatSeconds(seconds), formatSeconds(left));
         if (done == total) note("\n");
     };
 }
@@ -290,15 +293,15 @@ int runReference(const ReferenceArgs& args) {
     const Scene scene = loadAndWarn(args.scene, args.overrides);
 
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
-    const ReferenceOutput output =
-        renderReference(scene, referenceOptions(args), progress ? progressBar(args.timeLimit) : ReferenceProgress{});
+    const ReferenceOutput output = renderReference(
+        scene, referenceOptions(args), progress ? progressBar(args.timeLimit) : ReferenceProgress{});
     if (progress && output.samplesPerPixel < args.samplesPerPixel) note("\n");
 
     writeImage(output.composite, args.output);
     if (!args.aovDir.empty()) writeReferenceAovs(output, args.aovDir);
     if (!args.quiet) {
-        note("deltagi: wrote {} ({}x{}, {} spp{}, {:.1f} s, {}){}\n", args.output.string(), scene.camera.width,
-             scene.camera.height, output.samplesPerPixel,
+        note("deltagi: wrote {} ({}x{}, {} spp{}, {:.1f} s, {}){}\n", args.output.string(),
+             scene.camera.width, scene.camera.height, output.samplesPerPixel,
              output.samplesPerPixel < args.samplesPerPixel ? " (time limit)" : "", output.totalMs / 1000.0,
              plural(limit.threads(), "thread", "threads"),
              args.aovDir.empty() ? "" : fmt::format(", AOVs in {}", args.aovDir.string()));
@@ -333,7 +336,8 @@ int runCompare(const CompareArgs& args) {
         if (!args.difference.empty()) json["difference_max"] = maxValue;
         fmt::print("{}\n", json.dump(2));
     } else {
-        fmt::print("rmse     {:.6g}\nrel_mse  {:.6g}\nmae      {:.6g}\n", metrics.rmse, metrics.relMse, metrics.mae);
+        fmt::print("rmse     {:.6g}\nrel_mse  {:.6g}\nmae      {:.6g}\n", metrics.rmse, metrics.relMse,
+                   metrics.mae);
         if (!args.difference.empty())
             fmt::print("difference {} (2x squared difference, full scale {:.4g})\n", args.difference.string(),
                        maxValue);
@@ -375,11 +379,12 @@ int runEval(const ReferenceArgs& args) {
     writeJson(evaluationToJson(e), args.output);
     if (!args.aovDir.empty()) writeEvaluationAovs(e, args.aovDir);
     if (!args.quiet) {
-        note("deltagi: delta_rel_error {:.4f}, object_rel_rmse {:.4f}, composite_rmse {:.5f} "
-             "(DGI {:.0f} ms, reference {} spp {:.1f} s); pixels: {} lit, {} shadowed, {} object\n",
-             e.dgi.deltaRelError, e.dgi.objectRelRmse, e.dgi.compositeRmse, e.dgiMs, e.reference.samplesPerPixel,
-             e.referenceMs / 1000.0, e.classes.count(PixelClass::RealLit),
-             e.classes.count(PixelClass::RealShadowed), e.classes.count(PixelClass::Object));
+        note(
+            "deltagi: delta_rel_error {:.4f}, object_rel_rmse {:.4f}, composite_rmse {:.5f} "
+            "(DGI {:.0f} ms, reference {} spp {:.1f} s); pixels: {} lit, {} shadowed, {} object\n",
+            e.dgi.deltaRelError, e.dgi.objectRelRmse, e.dgi.compositeRmse, e.dgiMs,
+            e.reference.samplesPerPixel, e.referenceMs / 1000.0, e.classes.count(PixelClass::RealLit),
+            e.classes.count(PixelClass::RealShadowed), e.classes.count(PixelClass::Object));
         note("deltagi: wrote {}{}\n", args.output.string(),
              args.aovDir.empty() ? "" : fmt::format(", images in {}", args.aovDir.string()));
     }
@@ -490,21 +495,24 @@ int main(int argc, char** argv) {
 
     ReferenceArgs referenceArgs;
     CLI::App* referenceCommand = app.add_subcommand(
-        "reference", "Path-trace the ground truth: a differential composite from renders with and without the "
-                     "virtual objects");
+        "reference",
+        "Path-trace the ground truth: a differential composite from renders with and without the "
+        "virtual objects");
     ReferenceArgs evalArgs;
     CLI::App* evalCommand = app.add_subcommand(
         "eval", "Render DGI and the path-traced reference and write how close they are (JSON)");
-    for (auto [command, args] : {std::pair{referenceCommand, &referenceArgs}, std::pair{evalCommand, &evalArgs}}) {
+    for (auto [command, args] :
+         {std::pair{referenceCommand, &referenceArgs}, std::pair{evalCommand, &evalArgs}}) {
         command->add_option("scene", args->scene, "Scene file (JSON)")->required();
         const bool isEval = command == evalCommand;
         command
             ->add_option(isEval ? "--json" : "-o,--output", args->output,
                          isEval ? "Figures (JSON)" : "Output image: .png, .exr or .hdr")
             ->required();
-        command->add_option("--aov", args->aovDir,
-                            isEval ? "Also write the images (DGI, reference, difference, with/without, pixel classes)"
-                                   : "Also write with, without, background, composite, object_mask, delta (.exr)");
+        command->add_option(
+            "--aov", args->aovDir,
+            isEval ? "Also write the images (DGI, reference, difference, with/without, pixel classes)"
+                   : "Also write with, without, background, composite, object_mask, delta (.exr)");
         command->add_option("--spp", args->samplesPerPixel, "Samples per pixel (default 64)")
             ->check(CLI::Range(1, 1 << 20));
         command
@@ -519,8 +527,8 @@ int main(int argc, char** argv) {
     }
 
     CompareArgs compareArgs;
-    CLI::App* compareCommand =
-        app.add_subcommand("compare", "Compare an image with a reference: RMSE, relative MSE, mean absolute error");
+    CLI::App* compareCommand = app.add_subcommand(
+        "compare", "Compare an image with a reference: RMSE, relative MSE, mean absolute error");
     compareCommand->add_option("image", compareArgs.test, "The image to judge")->required();
     compareCommand->add_option("reference", compareArgs.reference, "The reference image")->required();
     compareCommand->add_option("-o,--output", compareArgs.difference,
@@ -541,10 +549,11 @@ int main(int argc, char** argv) {
             return app.exit(error);  // --help
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-')
             return reportError(
-                fmt::format("unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval' or "
-                            "'bench' "
-                            "(see deltagi --help)",
-                            argv[1]),
+                fmt::format(
+                    "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval' or "
+                    "'bench' "
+                    "(see deltagi --help)",
+                    argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);
     }

@@ -11,14 +11,20 @@ namespace deltagi {
 
 const std::vector<BenchRow>& benchRows() {
     static const std::vector<BenchRow> rows = {
-        {"voxelize_ms", {"voxelize"}, 5.0},  {"rsm_ms", {"rsm"}, 0.2},
-        {"inject_ms", {"inject"}, 3.0},      {"mipmap_ms", {"mipmap"}, 8.0},
-        {"diffuse_ms", {"diffuse"}, 6.0},    {"specular_ms", {"specular"}, 64.0},
-        {"shadow_ms", {"shadow"}, 4.0},      {"sky_ms", {"sky"}, -1.0},
+        {"voxelize_ms", {"voxelize"}, 5.0},
+        {"rsm_ms", {"rsm"}, 0.2},
+        {"inject_ms", {"inject"}, 3.0},
+        {"mipmap_ms", {"mipmap"}, 8.0},
+        {"diffuse_ms", {"diffuse"}, 6.0},
+        {"specular_ms", {"specular"}, 64.0},
+        {"shadow_ms", {"shadow"}, 4.0},
+        {"sky_ms", {"sky"}, -1.0},
         {"bvh_ms", {"bvh"}, -1.0},
         {"gbuffer_ms", {"gbuffer"}, -1.0},
-        {"shading_ms", {"shading"}, -1.0},   {"background_ms", {"background"}, -1.0},
-        {"composite_ms", {"composite"}, -1.0}, {"total_ms", {}, 90.2},
+        {"shading_ms", {"shading"}, -1.0},
+        {"background_ms", {"background"}, -1.0},
+        {"composite_ms", {"composite"}, -1.0},
+        {"total_ms", {}, 90.2},
     };
     return rows;
 }
@@ -55,10 +61,12 @@ BenchStatistics BenchResult::row(const BenchRow& row) const {
     return statistics(std::move(values));
 }
 
-BenchResult runBenchmark(Scene& scene, const BenchOptions& options, const std::function<void(int, double)>& onFrame) {
+BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
+                         const std::function<void(int, double)>& onFrame) {
     BenchResult result;
     result.options = options;
-    result.threads = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+    result.threads =
+        static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
     result.width = scene.camera.width;
     result.height = scene.camera.height;
     const VolumeRegion region = volumeRegion(scene);
@@ -116,9 +124,9 @@ nlohmann::ordered_json benchToJson(const BenchResult& r) {
 
 std::string benchTable(const BenchResult& r) {
     std::string out = fmt::format(
-        "{}x{}, volumes {}^3, {} real + {} virtual triangles, {} threads, {} frames ({}{} warm-up)\n", r.width,
-        r.height, r.volumeResolution, r.realTriangles, r.virtualTriangles, r.threads, r.options.frames,
-        r.options.cold ? "cold, " : "", r.options.warmup);
+        "{}x{}, volumes {}^3, {} real + {} virtual triangles, {} threads, {} frames ({}{} warm-up)\n",
+        r.width, r.height, r.volumeResolution, r.realTriangles, r.virtualTriangles, r.threads,
+        r.options.frames, r.options.cold ? "cold, " : "", r.options.warmup);
     out += fmt::format("{:<15} {:>10} {:>10} {:>12}\n", "stage", "median ms", "max ms", "paper ms");
     for (const BenchRow& row : benchRows()) {
         const BenchStatistics s = r.row(row);

@@ -8,13 +8,14 @@
 namespace deltagi {
 
 ConeTraceSettings coneTraceSettings(const TraceOptions& o) {
-    return {o.stepScale,      o.startOffset, o.maxOcclusion, o.normalWeight,
+    return {o.stepScale,      o.startOffset, o.maxOcclusion,           o.normalWeight,
             o.backfaceWeight, o.jitter,      o.accumulation == "paper"};
 }
 
 float hashToUnit(uint64_t index, uint32_t stream) {
     // SplitMix64 finalizer over the index and stream.
-    uint64_t z = index * 0x9E3779B97F4A7C15ull + (static_cast<uint64_t>(stream) << 32) + 0x632BE59BD9B4E019ull;
+    uint64_t z =
+        index * 0x9E3779B97F4A7C15ull + (static_cast<uint64_t>(stream) << 32) + 0x632BE59BD9B4E019ull;
     z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
     z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
     z ^= z >> 31;
@@ -54,7 +55,8 @@ std::pair<float, float> clipToVolume(glm::vec3 origin, glm::vec3 dir, float n) {
 // transparent at coarse levels and light would leak through it. The fraction is therefore scaled back by
 // 2^level to the surface's coverage of the voxel's cross-section, and weighted by how the surface faces the
 // cone (§3.1: "the occlusion value is thereby adapted with the normal stored in the volume"):
-//   coherent normals (|mean normal| near 1): 1 for a surface facing the cone (seen obliquely, a surface covers
+//   coherent normals (|mean normal| near 1): 1 for a surface facing the cone (seen obliquely, a surface
+//   covers
 //     the cone's cross-section as well: the cone crosses more of its voxels), 1 - backface_weight for one the
 //     cone leaves through its back (so that a convex surface does not shadow itself at grazing angles);
 //   incoherent normals (both sides of a thin part, a whole small object in one coarse voxel): the mean
@@ -71,7 +73,8 @@ inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float levelScale, cons
     const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / occupancy;
     const float coherence = std::min(glm::length(meanNormal), 1.0f);
     const float facing = coherence > 1e-6f ? glm::dot(meanNormal, dir) / coherence : 0.0f;  // cos; > 0: back
-    const float directional = facing > 0.0f ? 1.0f - backfaceWeight * std::min(1.0f, kBackfaceRamp * facing) : 1.0f;
+    const float directional =
+        facing > 0.0f ? 1.0f - backfaceWeight * std::min(1.0f, kBackfaceRamp * facing) : 1.0f;
     const float adapted = (1.0f - coherence) * kIsotropicCoverage + coherence * directional;
     const float weight = (1.0f - s.normalWeight) * kIsotropicCoverage + s.normalWeight * adapted;
     return std::clamp(occupancy * levelScale * weight, 0.0f, 1.0f);
@@ -87,7 +90,8 @@ inline float fastLog2(float x) {
     float m;
     std::memcpy(&m, &bits, sizeof(m));
     const float u = m - 1.0f;
-    const float p = ((((0.04587075f * u - 0.19439043f) * u + 0.41539777f) * u - 0.70867494f) * u + 1.44182512f) * u;
+    const float p =
+        ((((0.04587075f * u - 0.19439043f) * u + 0.41539777f) * u - 0.70867494f) * u + 1.44182512f) * u;
     return exponent + p;
 }
 
@@ -98,10 +102,11 @@ inline float stepOpacity(float alpha, float stepScale) {
     return stepScale == 1.0f ? alpha : 1.0f - std::pow(transmittance, stepScale);
 }
 
-// Marches the cone through the region of `reference` and calls visit(position, level, levelScale) at each step
-// until visit returns false: the position in level-0 voxel units, the fractional mip level, 2^level.
+// Marches the cone through the region of `reference` and calls visit(position, level, levelScale) at each
+// step until visit returns false: the position in level-0 voxel units, the fractional mip level, 2^level.
 template <typename Visit>
-void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSettings& settings, Visit&& visit) {
+void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSettings& settings,
+               Visit&& visit) {
     const VolumeRegion& region = reference.region();
     const float invVoxel = 1.0f / region.voxelSize();
     const glm::vec3 origin = (cone.origin - region.origin) * invVoxel;
@@ -121,7 +126,9 @@ void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSett
     }
 }
 
-const MipVolume& referenceOf(const MipVolume* a, const MipVolume* b) { return a ? *a : *b; }
+const MipVolume& referenceOf(const MipVolume* a, const MipVolume* b) {
+    return a ? *a : *b;
+}
 
 // The back-face weights of the scene and the object volume: only the starting surface's own volume gets one.
 std::pair<float, float> backfaceWeights(const VisibilityVolumes& v, const ConeTraceSettings& s) {
@@ -145,8 +152,8 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
             transmittance *= 1.0f - adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
                                                      settings, sceneBackface);
         if (visibility.object)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
-                                                     settings, objectBackface);
+            transmittance *= 1.0f - adaptedOcclusion(visibility.object->gather(at), cone.direction,
+                                                     levelScale, settings, objectBackface);
         const float occlusionLocal = stepOpacity(1.0f - transmittance, settings.stepScale);
         if (occlusionLocal > 0.0f) {
             const glm::vec4 l = light.gather(at);
@@ -154,7 +161,8 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
             // §3.1: light_acc = light_acc*occ_acc + light_local*occ_local*(1 - occ_acc) (as printed), or the
             // usual front-to-back compositing light_acc += light_local*occ_local*(1 - occ_acc).
             const glm::vec3 contribution = lightLocal * (occlusionLocal * (1.0f - occlusionAcc));
-            lightAcc = settings.paperAccumulation ? lightAcc * occlusionAcc + contribution : lightAcc + contribution;
+            lightAcc =
+                settings.paperAccumulation ? lightAcc * occlusionAcc + contribution : lightAcc + contribution;
             occlusionAcc += occlusionLocal * (1.0f - occlusionAcc);
         }
         return occlusionAcc < settings.maxOcclusion;
@@ -173,8 +181,8 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
         if (steps) ++*steps;
         float scene = 0.0f, object = 0.0f;
         if (visibility.scene)
-            scene = stepOpacity(adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale, settings,
-                                                 sceneBackface),
+            scene = stepOpacity(adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
+                                                 settings, sceneBackface),
                                 settings.stepScale);
         if (visibility.object)
             object = stepOpacity(adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
@@ -190,7 +198,8 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
     return acc;
 }
 
-bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibility, const ConeTraceSettings& settings) {
+bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibility,
+                            const ConeTraceSettings& settings) {
     if (!visibility.object) return false;
     const MipVolume& objects = *visibility.object;
     const float backface = backfaceWeights(visibility, settings).second;
@@ -235,7 +244,8 @@ float specularConeTanHalfAngle(float phongExponent, float minApertureDeg, float 
     // cos^n(theta) = 1/2 at the cone's edge.
     float halfAngle = phongExponent > 0.0f ? std::acos(std::pow(0.5f, 1.0f / phongExponent))
                                            : std::numbers::pi_v<float> / 2.0f;
-    halfAngle = std::clamp(halfAngle, 0.5f * glm::radians(minApertureDeg), 0.5f * glm::radians(maxApertureDeg));
+    halfAngle =
+        std::clamp(halfAngle, 0.5f * glm::radians(minApertureDeg), 0.5f * glm::radians(maxApertureDeg));
     return std::tan(std::min(halfAngle, glm::radians(89.0f)));
 }
 

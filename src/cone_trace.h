@@ -37,7 +37,7 @@ struct VisibilityVolumes {
 };
 
 struct Cone {
-    glm::vec3 origin{0.0f};     // world space, already offset from the surface (coneOrigin)
+    glm::vec3 origin{0.0f};        // world space, already offset from the surface (coneOrigin)
     glm::vec3 direction{0, 0, 1};  // unit
     float tanHalfAngle = 0.5f;
     float maxDistance = std::numeric_limits<float>::infinity();  // world units from origin
@@ -68,7 +68,8 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
 // Whether the object volume occludes the shadow cone anywhere along its march (traceShadowCone would give
 // object > 0). When it does not, scene and combined occlusion are equal: the objects change nothing for the
 // point, and relighting can skip the cone. Reads the object volume alone, only near its occupied voxels.
-bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibility, const ConeTraceSettings& settings);
+bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibility,
+                            const ConeTraceSettings& settings);
 
 // Directions of the diffuse cones around +z (a spiral of equal-solid-angle cells over the hemisphere), their
 // cosine weights (summing to 1) and the half-angle that makes their solid angles cover the hemisphere.

@@ -24,7 +24,8 @@ std::vector<float> denoise(std::span<const float> values, int channels, std::spa
     if (s.radius <= 0 || channels <= 0) return out;
     const int r = s.radius, stride = std::max(s.stride, 1);
     std::vector<float> spatial(2 * r + 1);
-    for (int d = -r; d <= r; ++d) spatial[d + r] = std::exp(-0.5f * d * d / (s.spatialSigma * s.spatialSigma));
+    for (int d = -r; d <= r; ++d)
+        spatial[d + r] = std::exp(-0.5f * d * d / (s.spatialSigma * s.spatialSigma));
     std::vector<std::vector<size_t>> rowHoles(holes ? height : 0);
     parallelFor(0, height, 4, [&](int64_t y64) {
         const int y = static_cast<int>(y64);

@@ -18,29 +18,30 @@
 namespace deltagi {
 
 struct DenoiseSettings {
-    int radius = 2;               // samples: a (2r+1)^2 window of them; 0 disables the filter
-    float spatialSigma = 1.5f;    // samples
+    int radius = 2;             // samples: a (2r+1)^2 window of them; 0 disables the filter
+    float spatialSigma = 1.5f;  // samples
     // Only the pixels with x and y multiples of `stride` hold values (1: all of them): the filter then
     // interpolates every valid pixel from its (2r+1)^2 nearest such samples, spaced `stride` pixels apart.
     int stride = 1;
-    int normalPower = 16;         // weight dot(n_i, n_j)^power
-    float planeDistance = 1.0f;   // how far a neighbour may lie off the tangent plane, in its pixel distances
+    int normalPower = 16;        // weight dot(n_i, n_j)^power
+    float planeDistance = 1.0f;  // how far a neighbour may lie off the tangent plane, in its pixel distances
 };
 
-// Filters `values`, `channels` floats per pixel of `points` (width x height, row-major), returning the result.
-// Invalid points keep their values and are never used as neighbours. `eye` is the camera position and
+// Filters `values`, `channels` floats per pixel of `points` (width x height, row-major), returning the
+// result. Invalid points keep their values and are never used as neighbours. `eye` is the camera position and
 // `pixelAngle` the angle one pixel subtends (1 / fy), which together give a pixel's size on a surface.
 // With settings.stride > 1, valid pixels without any usable sample in their window keep their value and are
 // listed in `holes` (if given), in pixel order.
 std::vector<float> denoise(std::span<const float> values, int channels, std::span<const SurfacePoint> points,
-                           int width, int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& settings,
-                           std::vector<size_t>* holes = nullptr);
+                           int width, int height, glm::vec3 eye, float pixelAngle,
+                           const DenoiseSettings& settings, std::vector<size_t>* holes = nullptr);
 
 // In place, for the cone passes' per-pixel results: `perPixel` values of T (trivially copyable, made of
 // floats: glm::vec3, ShadowOcclusion) per pixel of the camera's image. Empty vectors are left alone.
 template <typename T>
 void denoiseInPlace(std::vector<T>& values, int perPixel, std::span<const SurfacePoint> points,
-                    const Camera& camera, const DenoiseSettings& settings, std::vector<size_t>* holes = nullptr) {
+                    const Camera& camera, const DenoiseSettings& settings,
+                    std::vector<size_t>* holes = nullptr) {
     static_assert(sizeof(T) % sizeof(float) == 0 && std::is_trivially_copyable_v<T>);
     if (values.empty() || settings.radius <= 0) return;
     const int channels = perPixel * static_cast<int>(sizeof(T) / sizeof(float));

@@ -33,10 +33,13 @@ std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
         const glm::vec3 q = glm::vec3(cameraFromWorld * glm::vec4(p, 1.0f));
         if (q.z > -1e-6f) return all;  // at or behind the camera plane
         const float x = camera.cx + camera.fx * (q.x / -q.z), y = camera.cy - camera.fy * (q.y / -q.z);
-        xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y), yMax = std::max(yMax, y);
+        xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y),
+        yMax = std::max(yMax, y);
     }
     constexpr float kMargin = 2.0f;
-    auto clampTo = [](float v, int hi) { return static_cast<int>(std::clamp(v, -1.0f, static_cast<float>(hi) + 1.0f)); };
+    auto clampTo = [](float v, int hi) {
+        return static_cast<int>(std::clamp(v, -1.0f, static_cast<float>(hi) + 1.0f));
+    };
     return {std::max(clampTo(std::floor(xMin - kMargin), camera.width), 0),
             std::min(clampTo(std::ceil(xMax + kMargin), camera.width), camera.width - 1),
             std::max(clampTo(std::floor(yMin - kMargin), camera.height), 0),
@@ -51,7 +54,8 @@ std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScen
     parallelFor(0, camera.height, 2, [&](int64_t y) {
         for (int x = 0; x < camera.width; ++x) {
             const glm::vec3 dir = glm::normalize(camera.rayDirection(x + 0.5f, y + 0.5f));
-            real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(realOnly.intersect(eye, dir), dir);
+            real[static_cast<size_t>(y) * camera.width + x] =
+                toSurfacePoint(realOnly.intersect(eye, dir), dir);
         }
     });
     return real;
@@ -78,7 +82,8 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     });
     if (k == 1) return;
 
-    // Then the sub-samples of silhouette pixels (decided from the centres alone, so the pass is deterministic).
+    // Then the sub-samples of silhouette pixels (decided from the centres alone, so the pass is
+    // deterministic).
     std::vector<uint8_t> silhouette(count, 0);
     parallelFor(y0, y1 + 1, 8, [&](int64_t y) {
         for (int x = x0; x <= x1; ++x) {

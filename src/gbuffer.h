@@ -13,28 +13,28 @@ namespace deltagi {
 
 struct SurfacePoint {
     glm::vec3 position{0.0f};
-    glm::vec3 normal{0.0f};  // unit, facing the camera
-    glm::vec3 toEye{0.0f};   // unit, from the surface to the camera
+    glm::vec3 normal{0.0f};              // unit, facing the camera
+    glm::vec3 toEye{0.0f};               // unit, from the surface to the camera
     const Material* material = nullptr;  // null: no surface
     bool valid() const { return material != nullptr; }
 };
 
 struct GBuffer {
     int width = 0, height = 0;
-    std::vector<SurfacePoint> real;     // the real surface behind the pixel centre (what the photo shows)
-    std::vector<SurfacePoint> object;   // the virtual surface seen in the pixel, where coverage > 0
-    std::vector<float> coverage;        // fraction of sub-samples that see a virtual object first
+    std::vector<SurfacePoint> real;    // the real surface behind the pixel centre (what the photo shows)
+    std::vector<SurfacePoint> object;  // the virtual surface seen in the pixel, where coverage > 0
+    std::vector<float> coverage;       // fraction of sub-samples that see a virtual object first
 };
 
 // The real surfaces behind the pixel centres (what the photo shows): rays against the real scene alone. They
 // do not change while only the virtual objects move, so FrameRenderer keeps them between frames.
 std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly);
 
-// The virtual half of `g` (object, coverage): `all` holds the real and the virtual surfaces (the virtual objects'
-// layer over the real scene's, see RayScene), whose virtual objects lie inside `objectBounds`: only pixels
-// near the bounds' projection can see them. One ray per pixel centre decides which pixels are virtual; pixels on a silhouette (whose 3x3 neighbourhood
-// has both kinds) take `samplesPerPixel` sub-samples on a regular k x k grid for their coverage. The virtual
-// surface nearest the pixel centre represents the pixel.
+// The virtual half of `g` (object, coverage): `all` holds the real and the virtual surfaces (the virtual
+// objects' layer over the real scene's, see RayScene), whose virtual objects lie inside `objectBounds`: only
+// pixels near the bounds' projection can see them. One ray per pixel centre decides which pixels are virtual;
+// pixels on a silhouette (whose 3x3 neighbourhood has both kinds) take `samplesPerPixel` sub-samples on a
+// regular k x k grid for their coverage. The virtual surface nearest the pixel centre represents the pixel.
 void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
                           int samplesPerPixel, GBuffer& g);
 

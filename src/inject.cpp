@@ -30,7 +30,8 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
         for (const RsmTexel& t : rsm.texels) {
             glm::ivec3 v = glm::clamp(glm::ivec3(glm::floor((t.position - region.origin) * invVoxel)),
                                       glm::ivec3(0), glm::ivec3(n - 1));
-            splats.push_back({&t, static_cast<uint32_t>((static_cast<size_t>(v.z) * n + v.y) * n + v.x), v.z});
+            splats.push_back(
+                {&t, static_cast<uint32_t>((static_cast<size_t>(v.z) * n + v.y) * n + v.x), v.z});
         }
     }
     const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;

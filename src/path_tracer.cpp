@@ -30,8 +30,12 @@ float powerHeuristic(float a, float b) {
     return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
 }
 
-float maxComponent(glm::vec3 v) { return std::max(v.x, std::max(v.y, v.z)); }
-bool isFinite(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+float maxComponent(glm::vec3 v) {
+    return std::max(v.x, std::max(v.y, v.z));
+}
+bool isFinite(glm::vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 }  // namespace
 
@@ -176,7 +180,9 @@ struct PixelSums {
     int virtualSamples = 0;
 };
 
-glm::vec3 toVec3(glm::dvec3 v) { return glm::vec3(v); }
+glm::vec3 toVec3(glm::dvec3 v) {
+    return glm::vec3(v);
+}
 
 ReferenceOutput assemble(const Scene& scene, std::span<const PixelSums> sums, int samples) {
     const int w = scene.camera.width, h = scene.camera.height;
@@ -199,7 +205,8 @@ ReferenceOutput assemble(const Scene& scene, std::span<const PixelSums> sums, in
             out.without.setRgb(x, y, toVec3(s.without / n));
             const int realSamples = samples - s.virtualSamples;
             coverage.coverage[i] = static_cast<float>(s.virtualSamples / n);
-            objectRadiance[i] = s.virtualSamples > 0 ? toVec3(s.object / double(s.virtualSamples)) : glm::vec3(0);
+            objectRadiance[i] =
+                s.virtualSamples > 0 ? toVec3(s.object / double(s.virtualSamples)) : glm::vec3(0);
             realChange[i] = realSamples > 0 ? toVec3(s.change / double(realSamples)) : glm::vec3(0);
         }
     sanitize(out.with);
@@ -225,7 +232,8 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     PathSettings settings;
     settings.rouletteStartBounce = options.rouletteStartBounce;
     settings.maxBounces = std::max(options.maxBounces, 1);
-    settings.rayOffset = kRayOffsetScale * std::max(all.bounds().empty() ? 1.0f : all.bounds().maxExtent(), 1e-3f);
+    settings.rayOffset =
+        kRayOffsetScale * std::max(all.bounds().empty() ? 1.0f : all.bounds().maxExtent(), 1e-3f);
     const AreaLights allEmitters(scene, SceneContent::RealAndVirtual);
     const AreaLights realEmitters(scene, SceneContent::RealOnly);
     std::optional<EnvironmentSampler> environment;

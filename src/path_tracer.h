@@ -19,8 +19,8 @@
 
 namespace deltagi {
 
-// Shadow and bounce rays start this fraction of the scene's extent off the surface, so that a surface does not
-// shadow itself through floating-point error.
+// Shadow and bounce rays start this fraction of the scene's extent off the surface, so that a surface does
+// not shadow itself through floating-point error.
 constexpr float kRayOffsetScale = 1e-4f;
 
 // One point on a light, as seen from p: like sampleLight(), but a point or spot light with a radius is a
@@ -36,20 +36,25 @@ struct PathSettings {
 };
 
 class PathTracer {
-public:
+  public:
     // Holds references: `rays`, `areaLights` (the emitters of the same meshes), `lights` and `environment`
-    // must outlive the tracer. Lights extracted from the environment map (Light::fromEnvironment) are skipped:
-    // the map itself is sampled, when there is one.
+    // must outlive the tracer. Lights extracted from the environment map (Light::fromEnvironment) are
+    // skipped: the map itself is sampled, when there is one.
     PathTracer(const RayScene& rays, const AreaLights& areaLights, std::span<const Light> lights,
                PathSettings settings, const EnvironmentSampler* environment = nullptr)
-        : rays_(rays), areaLights_(areaLights), lights_(lights), settings_(settings), environment_(environment) {}
+        : rays_(rays),
+          areaLights_(areaLights),
+          lights_(lights),
+          settings_(settings),
+          environment_(environment) {}
 
     // Radiance arriving at `origin` from `direction` (unit): what the surface it hits emits and reflects, or
-    // the environment when it leaves the scene. Point, spot and directional lights are not visible to the ray.
-  glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
-  // The same, when the first hit along `direction` is already known.
-  glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
-  // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
+    // the environment when it leaves the scene. Point, spot and directional lights are not visible to the
+    // ray.
+    glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
+    // The same, when the first hit along `direction` is already known.
+    glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
+    // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
     // drawn, so that paths with and without the objects consume the same sequence), and one sample of the
     // environment (2 more numbers) weighted against BRDF sampling by the power heuristic (MIS).
     glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
@@ -57,7 +62,7 @@ public:
     // power heuristic against BRDF sampling (3 random numbers, always drawn).
     glm::vec3 emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
 
-private:
+  private:
     glm::vec3 offsetOrigin(const RayHit& hit, glm::vec3 towards) const;
     glm::vec3 environmentLight(const RayHit& hit, glm::vec3 wo, float u1, float u2) const;
 

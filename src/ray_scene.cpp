@@ -41,8 +41,8 @@ RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* bas
     if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
     impl_->scene = rtcNewScene(impl_->device);
     // A layer of virtual objects is rebuilt every frame: a faster build for slightly slower rays.
-    rtcSetSceneBuildQuality(impl_->scene,
-                            content == SceneContent::VirtualOnly ? RTC_BUILD_QUALITY_MEDIUM : RTC_BUILD_QUALITY_HIGH);
+    rtcSetSceneBuildQuality(impl_->scene, content == SceneContent::VirtualOnly ? RTC_BUILD_QUALITY_MEDIUM
+                                                                               : RTC_BUILD_QUALITY_HIGH);
     if (base) bounds_ = base->bounds();
     auto add = [&](const TriangleMesh& mesh, bool isVirtual) {
         if (mesh.triangles.empty()) return;
@@ -104,8 +104,8 @@ RayHit RayScene::intersectLayer(glm::vec3 origin, glm::vec3 direction, float tMi
     if (glm::dot(n, ng) < 0.0f) n = -n;
     result.t = rh.ray.tfar;
     // Interpolate the position on the triangle (more precise than origin + t * direction far away).
-    result.position = (1.0f - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] +
-                      v * mesh.positions[tri.z];
+    result.position =
+        (1.0f - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] + v * mesh.positions[tri.z];
     result.normal = n;
     result.geometricNormal = glm::normalize(ng);
     result.material = &mesh.material;

@@ -16,7 +16,8 @@ namespace deltagi {
 struct RayHit {
     float t = std::numeric_limits<float>::infinity();  // distance along the (unit) ray direction
     glm::vec3 position{0.0f};
-    glm::vec3 normal{0.0f};  // interpolated shading normal, unit, facing the ray's origin (two-sided surfaces)
+    glm::vec3 normal{
+        0.0f};  // interpolated shading normal, unit, facing the ray's origin (two-sided surfaces)
     glm::vec3 geometricNormal{0.0f};  // the triangle's plane normal, unit, facing the ray's origin
     const Material* material = nullptr;
     bool isVirtual = false;
@@ -32,7 +33,7 @@ enum class SceneContent { RealOnly, RealAndVirtual, VirtualOnly };
 // that the virtual objects, which move every frame, get their own small BVH over the reconstruction's, which
 // is built once (FrameRenderer).
 class RayScene {
-public:
+  public:
     RayScene(const Scene& scene, SceneContent content, const RayScene* base = nullptr);
     ~RayScene();
     RayScene(const RayScene&) = delete;
@@ -44,7 +45,7 @@ public:
     Bounds3f bounds() const { return bounds_; }  // of this layer and its base
     bool empty() const { return meshes_.empty() && (!base_ || base_->empty()); }
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
     struct MeshRef {

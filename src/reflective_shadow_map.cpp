@@ -36,30 +36,32 @@ constexpr float kMinCos = 1e-3f;  // grazing texels: cap the footprint area
 
 // The faces of a light's map over a region and the ray of each texel.
 class MapLayout {
-public:
+  public:
     MapLayout(const RayScene& scene, const Light& light, const VolumeRegion& region, int resolution)
         : light_(light), res_(resolution) {
         const Bounds3f regionBounds = region.bounds();
         center_ = regionBounds.center();
         const float radius = 0.5f * std::sqrt(3.0f) * region.size;
         if (light.type == Light::Type::Directional) {
-            // Orthographic: a square window across the region's bounding sphere, rays starting outside the scene.
+            // Orthographic: a square window across the region's bounding sphere, rays starting outside the
+            // scene.
             faces_.push_back(makeFace(light.direction, radius));
             Bounds3f all = scene.bounds();
             all.extend(regionBounds);
             back_ = glm::length(all.diagonal()) + glm::length(center_ - all.center()) + radius;
             return;
         }
-        // Point and spot lights: one perspective frustum fitted around the region, or a cube map when the light
-        // is inside (or too close to) the region's bounding sphere.
+        // Point and spot lights: one perspective frustum fitted around the region, or a cube map when the
+        // light is inside (or too close to) the region's bounding sphere.
         const glm::vec3 toCenter = center_ - light.position;
         const float dist = glm::length(toCenter);
         if (dist > 1.05f * radius) {
             const float halfAngle = std::asin(radius / dist);
             faces_.push_back(makeFace(toCenter / dist, std::tan(halfAngle) * 1.02f));
         } else {
-            const std::array<glm::vec3, 6> axes = {glm::vec3(1, 0, 0),  glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0),
-                                                   glm::vec3(0, -1, 0), glm::vec3(0, 0, 1),  glm::vec3(0, 0, -1)};
+            const std::array<glm::vec3, 6> axes = {glm::vec3(1, 0, 0), glm::vec3(-1, 0, 0),
+                                                   glm::vec3(0, 1, 0), glm::vec3(0, -1, 0),
+                                                   glm::vec3(0, 0, 1), glm::vec3(0, 0, -1)};
             for (glm::vec3 a : axes) faces_.push_back(makeFace(a, 1.0f));
         }
     }
@@ -92,7 +94,8 @@ public:
         const Face& f = faces_[face];
         float xMin = INFINITY, xMax = -INFINITY, yMin = INFINITY, yMax = -INFINITY;
         for (int c = 0; c < 8; ++c) {
-            const glm::vec3 p(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y, c & 4 ? b.max.z : b.min.z);
+            const glm::vec3 p(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y,
+                              c & 4 ? b.max.z : b.min.z);
             float x, y;
             if (light_.type == Light::Type::Directional) {
                 x = glm::dot(p - center_, f.right);
@@ -100,11 +103,13 @@ public:
             } else {
                 const glm::vec3 d = p - light_.position;
                 const float z = glm::dot(d, f.forward);
-                if (z <= 1e-6f * glm::length(d)) return std::array<int, 4>{0, res_ - 1, 0, res_ - 1};  // behind
+                if (z <= 1e-6f * glm::length(d))
+                    return std::array<int, 4>{0, res_ - 1, 0, res_ - 1};  // behind
                 x = glm::dot(d, f.right) / z;
                 y = glm::dot(d, f.up) / z;
             }
-            xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y), yMax = std::max(yMax, y);
+            xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y),
+            yMax = std::max(yMax, y);
         }
         const float res = static_cast<float>(res_);
         auto column = [&](float x) { return (x / f.halfTan + 1.0f) * 0.5f * res - 0.5f; };
@@ -114,10 +119,11 @@ public:
         const int j0 = static_cast<int>(std::floor(std::max(row(yMax), -2.0f))) - 1;
         const int j1 = static_cast<int>(std::ceil(std::min(row(yMin), res + 1.0f))) + 1;
         if (i1 < 0 || j1 < 0 || i0 >= res_ || j0 >= res_) return std::nullopt;
-        return std::array<int, 4>{std::max(i0, 0), std::min(i1, res_ - 1), std::max(j0, 0), std::min(j1, res_ - 1)};
+        return std::array<int, 4>{std::max(i0, 0), std::min(i1, res_ - 1), std::max(j0, 0),
+                                  std::min(j1, res_ - 1)};
     }
 
-private:
+  private:
     const Light& light_;
     int res_;
     glm::vec3 center_{0.0f};
@@ -126,8 +132,8 @@ private:
 };
 
 // The texel (face, i, j) if its ray hits a surface inside the region.
-std::optional<RsmTexel> traceTexel(const RayScene& scene, const MapLayout& layout, const Bounds3f& regionBounds,
-                                   int res, int face, int i, int j) {
+std::optional<RsmTexel> traceTexel(const RayScene& scene, const MapLayout& layout,
+                                   const Bounds3f& regionBounds, int res, int face, int i, int j) {
     const auto [origin, dir, fluxIn, areaConst, areaPerT2] = layout.ray(face, i, j);
     if (fluxIn.x <= 0.0f && fluxIn.y <= 0.0f && fluxIn.z <= 0.0f) return std::nullopt;
     const RayHit hit = scene.intersect(origin, dir);
@@ -151,9 +157,8 @@ ReflectiveShadowMap renderRows(const MapLayout& layout, int res, RowTexels&& row
     rsm.faces = layout.faceCount();
     rsm.rayStart = layout.rayStart();
     std::vector<std::vector<RsmTexel>> rows(static_cast<size_t>(rsm.faces) * res);
-    parallelFor(0, static_cast<int64_t>(rows.size()), 4, [&](int64_t r) {
-        rowTexels(static_cast<int>(r / res), static_cast<int>(r % res), rows[r]);
-    });
+    parallelFor(0, static_cast<int64_t>(rows.size()), 4,
+                [&](int64_t r) { rowTexels(static_cast<int>(r / res), static_cast<int>(r % res), rows[r]); });
     for (const auto& row : rows) rsm.texels.insert(rsm.texels.end(), row.begin(), row.end());
     return rsm;
 }

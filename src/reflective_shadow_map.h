@@ -22,17 +22,18 @@ struct RsmTexel {
 struct ReflectiveShadowMap {
     int resolution = 0;  // texels per face side
     int faces = 0;       // 1 (a frustum fitted to the region, or orthographic) or 6 (light inside the region)
-    float rayStart = 0.0f;  // directional lights: how far behind the region's centre the rays start
+    float rayStart = 0.0f;         // directional lights: how far behind the region's centre the rays start
     std::vector<RsmTexel> texels;  // the texels that hit a surface inside the region, in texel order
 };
 
 ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
                                               const VolumeRegion& region, int resolution);
 
-// The same map for `scene` = the scene of `base` plus objects inside `changed` (world bounds): the texels whose
-// rays cannot meet `changed` (outside its projection onto each face) are copied from `base`, which was rendered
-// for the same light, region and resolution; the others are traced again. Equal to renderReflectiveShadowMap()
-// over `scene`, texel for texel, at a fraction of the rays when the objects are small in the light's view.
+// The same map for `scene` = the scene of `base` plus objects inside `changed` (world bounds): the texels
+// whose rays cannot meet `changed` (outside its projection onto each face) are copied from `base`, which was
+// rendered for the same light, region and resolution; the others are traced again. Equal to
+// renderReflectiveShadowMap() over `scene`, texel for texel, at a fraction of the rays when the objects are
+// small in the light's view.
 ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, const RayScene& scene,
                                               const Light& light, const VolumeRegion& region,
                                               const Bounds3f& changed);

@@ -22,7 +22,7 @@ namespace deltagi {
 namespace {
 
 class StageTimer {
-public:
+  public:
     StageTimer(std::vector<StageTiming>& timings, const StageCallback& callback)
         : timings_(timings), callback_(callback), start_(Clock::now()) {}
     // Ends the current stage under `name` and starts the next one.
@@ -34,7 +34,7 @@ public:
         if (callback_) callback_(t);
     }
 
-private:
+  private:
     using Clock = std::chrono::steady_clock;
     std::vector<StageTiming>& timings_;
     StageCallback callback_;
@@ -66,7 +66,8 @@ Image toImage(std::span<const glm::vec3> pixels, int width, int height) {
 std::vector<ReflectiveShadowMap> renderRsms(const RayScene& rays, std::span<const Light> lights,
                                             const VolumeRegion& region, int resolution) {
     std::vector<ReflectiveShadowMap> rsms;
-    for (const Light& light : lights) rsms.push_back(renderReflectiveShadowMap(rays, light, region, resolution));
+    for (const Light& light : lights)
+        rsms.push_back(renderReflectiveShadowMap(rays, light, region, resolution));
     return rsms;
 }
 
@@ -76,11 +77,12 @@ struct ConeJob {
     const MipVolume* light;
     VisibilityVolumes visibility;
     bool indirect;  // trace diffuse and specular cones too
-    ShadowMode mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
+    ShadowMode
+        mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
 };
 
 struct ConeResults {
-    std::vector<ShadowOcclusion> shadows;  // points x lights
+    std::vector<ShadowOcclusion> shadows;      // points x lights
     std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
 };
 
@@ -94,12 +96,12 @@ void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
 }
 
 // Cone results `trace(points)` (perPixel values of T per pixel) at every stride-th pixel of every stride-th
-// row, then filtered: the edge-aware filter interpolates the pixels between from traced neighbours on the same
-// surface (averaging the noise of the jittered cone starts too), and the pixels that have none are traced as
-// well. With stride 1 every pixel is traced and filtered.
+// row, then filtered: the edge-aware filter interpolates the pixels between from traced neighbours on the
+// same surface (averaging the noise of the jittered cone starts too), and the pixels that have none are
+// traced as well. With stride 1 every pixel is traced and filtered.
 template <typename T, typename Trace>
-std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& camera, int stride, int perPixel,
-                           const DenoiseSettings& filter, Trace&& trace) {
+std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& camera, int stride,
+                           int perPixel, const DenoiseSettings& filter, Trace&& trace) {
     if (stride <= 1) {
         std::vector<T> values = trace(points);
         denoiseInPlace(values, perPixel, points, camera, filter);
@@ -137,18 +139,21 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     std::vector<ConeResults> results(jobs.size());
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
-        results[j].shadows = traceSparse<ShadowOcclusion>(
-            job.points, scene.camera, o.shadow.pixelStride, lights, filter, [&](std::span<const SurfacePoint> p) {
-                return traceShadowCones(p, scene.lights, job.visibility, o, job.mode == ShadowMode::DeltaShadow);
-            });
+        results[j].shadows =
+            traceSparse<ShadowOcclusion>(job.points, scene.camera, o.shadow.pixelStride, lights, filter,
+                                         [&](std::span<const SurfacePoint> p) {
+                                             return traceShadowCones(p, scene.lights, job.visibility, o,
+                                                                     job.mode == ShadowMode::DeltaShadow);
+                                         });
     }
     timer.lap("shadow");
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
         results[j].diffuse = traceSparse<glm::vec3>(
-            job.points, scene.camera, o.diffuse.pixelStride, 1, filter,
-            [&](std::span<const SurfacePoint> p) { return traceDiffuseCones(p, *job.light, job.visibility, o); });
+            job.points, scene.camera, o.diffuse.pixelStride, 1, filter, [&](std::span<const SurfacePoint> p) {
+                return traceDiffuseCones(p, *job.light, job.visibility, o);
+            });
     }
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j)
@@ -159,7 +164,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     // cones' (it has the same jitter noise).
     if (scene.environment && !scene.environment->sky.empty()) {
         for (size_t j = 0; j < jobs.size(); ++j) {
-            SkyLight sky = traceSkyCones(jobs[j].points, *scene.environment, jobs[j].visibility, jobs[j].mode, o);
+            SkyLight sky =
+                traceSkyCones(jobs[j].points, *scene.environment, jobs[j].visibility, jobs[j].mode, o);
             denoiseInPlace(sky.diffuse, 1, jobs[j].points, scene.camera, filter);
             addInto(results[j].diffuse, std::move(sky.diffuse));
             addInto(results[j].specular, std::move(sky.specular));
@@ -181,7 +187,7 @@ struct StaticWork {
     std::optional<VoxelGeometry> sceneGeometry;
     std::optional<MipVolume> sceneVisibility;
     std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
-    std::optional<Grid3> sceneLight;  // injected from sceneRsms
+    std::optional<Grid3> sceneLight;                            // injected from sceneRsms
 };
 
 bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
@@ -249,7 +255,8 @@ DgiVolumes buildVolumes(const Scene& scene, const VolumeRegion& region, const Ra
     std::vector<ReflectiveShadowMap> rsmFull;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
     for (size_t l = 0; l < scene.lights.size(); ++l)
-        rsmFull.push_back(updateReflectiveShadowMap((*kept.sceneRsms)[l], all, scene.lights[l], region, objectBounds));
+        rsmFull.push_back(
+            updateReflectiveShadowMap((*kept.sceneRsms)[l], all, scene.lights[l], region, objectBounds));
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* both[] = {&*kept.sceneGeometry, &objectGeometry};
@@ -259,7 +266,8 @@ DgiVolumes buildVolumes(const Scene& scene, const VolumeRegion& region, const Ra
     Grid3 deltaLight = deltaVolume(fullLight, *kept.sceneLight);
     timer.lap("inject");
     // 4. Mipmaps of all four volumes.
-    if (!kept.sceneVisibility) kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
+    if (!kept.sceneVisibility)
+        kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
     DgiVolumes v{&*kept.sceneVisibility, buildMipChain(region, std::move(objectGeometry.visibility)),
                  buildMipChain(region, std::move(fullLight)), buildMipChain(region, std::move(deltaLight))};
     timer.lap("mipmap");
@@ -274,7 +282,8 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const float margin = 1.0f + 2.0f / static_cast<float>(o.volume.resolution);
     const VolumeRegion region = cubeAround(boundsOf(scene.real), margin, o.volume.resolution);
     VoxelGeometry geometry = voxelize(scene.real, region);
-    const std::vector<ReflectiveShadowMap> rsms = renderRsms(realOnly, scene.lights, region, o.rsm.resolution);
+    const std::vector<ReflectiveShadowMap> rsms =
+        renderRsms(realOnly, scene.lights, region, o.rsm.resolution);
     const VoxelGeometry* geometries[] = {&geometry};
     const MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
     const MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
@@ -286,8 +295,8 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
     const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
-    const std::vector<glm::vec3> radiance = combineLighting(points, scene.lights, cones.shadows,
-                                                            ShadowMode::SceneOnly, cones.diffuse, cones.specular);
+    const std::vector<glm::vec3> radiance = combineLighting(
+        points, scene.lights, cones.shadows, ShadowMode::SceneOnly, cones.diffuse, cones.specular);
     return toImage(radiance, scene.camera.width, scene.camera.height);
 }
 
@@ -331,7 +340,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         out.composite = out.background;
         out.objectMask = Image(camera.width, camera.height, 1);
         out.delta = Image(camera.width, camera.height, 3);
-        out.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+        out.totalMs =
+            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
         return out;
     }
 
@@ -348,8 +358,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         if (gbuffer.coverage[i] >= 1.0f) realPoints[i] = {};
     timer.lap("gbuffer");
 
-    // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both are
-    // occluded by both visibility volumes. Cones discount the back faces of their own surface's volume only.
+    // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both
+    // are occluded by both visibility volumes. Cones discount the back faces of their own surface's volume
+    // only.
     const ShadowMode relightMode =
         o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     const ConeJob jobs[] = {
@@ -411,7 +422,9 @@ struct FrameRenderer::State {
 FrameRenderer::FrameRenderer() : state_(std::make_unique<State>()) {}
 FrameRenderer::~FrameRenderer() = default;
 
-void FrameRenderer::clear() { state_->kept = StaticWork{}; }
+void FrameRenderer::clear() {
+    state_->kept = StaticWork{};
+}
 
 RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onStage) {
     const uint64_t signature = staticSignature(scene);

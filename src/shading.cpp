@@ -27,15 +27,20 @@ inline glm::mat3 tangentFrame(glm::vec3 n) {
 
 float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
     switch (mode) {
-        case ShadowMode::Shaded: return 1.0f - o.combined;
-        case ShadowMode::SceneOnly: return 1.0f - o.scene;
-        case ShadowMode::DeltaShadow: return o.scene - o.combined;
-        case ShadowMode::DeltaSingleVisibility: return -o.combined;
+        case ShadowMode::Shaded:
+            return 1.0f - o.combined;
+        case ShadowMode::SceneOnly:
+            return 1.0f - o.scene;
+        case ShadowMode::DeltaShadow:
+            return o.scene - o.combined;
+        case ShadowMode::DeltaSingleVisibility:
+            return -o.combined;
     }
     return 0.0f;
 }
 
-std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
+std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points,
+                                              std::span<const Light> lights,
                                               const VisibilityVolumes& visibility, const Options& options,
                                               bool objectShadowOnly) {
     std::vector<ShadowOcclusion> out(points.size() * lights.size());
@@ -57,7 +62,9 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
             cone.tanHalfAngle = tanHalf;
             cone.origin = coneOrigin(p.position, p.normal, s.wi, region, settings);
             cone.direction = s.wi;
-            cone.maxDistance = std::isfinite(s.distance) ? s.distance / (1.0f + kShadowConeStopDiameters * 2.0f * tanHalf) : s.distance;
+            cone.maxDistance = std::isfinite(s.distance)
+                                   ? s.distance / (1.0f + kShadowConeStopDiameters * 2.0f * tanHalf)
+                                   : s.distance;
             cone.jitter = hashToUnit(i, static_cast<uint32_t>(l));
             if (objectShadowOnly && !shadowConeMeetsObjects(cone, visibility, settings)) continue;
             out[i * lights.size() + l] = traceShadowCone(cone, visibility, settings);
@@ -99,8 +106,8 @@ std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, 
         Cone cone;
         cone.direction = glm::normalize(glm::reflect(-p.toEye, p.normal));
         cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
-        cone.tanHalfAngle = specularConeTanHalfAngle(p.material->phongExponent(), options.specular.minApertureDeg,
-                                                     options.specular.maxApertureDeg);
+        cone.tanHalfAngle = specularConeTanHalfAngle(
+            p.material->phongExponent(), options.specular.minApertureDeg, options.specular.maxApertureDeg);
         cone.jitter = hashToUnit(i, 2000u);
         out[i] = traceLightCone(cone, light, visibility, settings);
     });
@@ -116,7 +123,8 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
 
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
-                                       std::span<const glm::vec3> diffuse, std::span<const glm::vec3> specular) {
+                                       std::span<const glm::vec3> diffuse,
+                                       std::span<const glm::vec3> specular) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     // A rendered surface shows what it emits; a relit one only changes, and its emission is in the photo.
     const bool emits = mode == ShadowMode::Shaded || mode == ShadowMode::SceneOnly;

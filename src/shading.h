@@ -19,7 +19,8 @@ namespace deltagi {
 // alone, the objects alone and both. Invalid points get zero occlusion. With `objectShadowOnly` (relighting
 // with ShadowMode::DeltaShadow, where only scene - combined counts), cones that the objects do not occlude
 // anywhere are skipped and get zero occlusion too: their change is zero either way.
-std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points, std::span<const Light> lights,
+std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points,
+                                              std::span<const Light> lights,
                                               const VisibilityVolumes& visibility, const Options& options,
                                               bool objectShadowOnly = false);
 
@@ -38,10 +39,11 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light);
 
 // How a surface's direct light is shadowed.
 enum class ShadowMode {
-    Shaded,          // virtual surface: lit where neither scene nor objects occlude (1 - combined)
-    SceneOnly,       // real surface rendered alone: (1 - scene)
-    DeltaShadow,     // real surface relit: the change (1 - combined) - (1 - scene) (§3.2, no double shadow)
-    DeltaSingleVisibility,  // real surface relit with one shared visibility: (1 - combined) - 1 (double shadow)
+    Shaded,       // virtual surface: lit where neither scene nor objects occlude (1 - combined)
+    SceneOnly,    // real surface rendered alone: (1 - scene)
+    DeltaShadow,  // real surface relit: the change (1 - combined) - (1 - scene) (§3.2, no double shadow)
+    DeltaSingleVisibility,  // real surface relit with one shared visibility: (1 - combined) - 1 (double
+                            // shadow)
 };
 
 // The fraction of a light (or of the sky through a cone) that reaches a point, or its change, under `mode`.
@@ -52,6 +54,7 @@ float shadowFactor(const ShadowOcclusion& occlusion, ShadowMode mode);
 // in the modes that render a surface (Shaded, SceneOnly), not in those that relight it.
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
-                                       std::span<const glm::vec3> diffuse, std::span<const glm::vec3> specular);
+                                       std::span<const glm::vec3> diffuse,
+                                       std::span<const glm::vec3> specular);
 
 }  // namespace deltagi

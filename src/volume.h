@@ -52,12 +52,14 @@ struct HugePageAllocator {
         std::free(p);
     }
     template <typename U>
-    bool operator==(const HugePageAllocator<U>&) const { return true; }
+    bool operator==(const HugePageAllocator<U>&) const {
+        return true;
+    }
 };
 
 // One level: n^3 voxels, x fastest. Move-only: volumes are large.
 class Grid3 {
-public:
+  public:
     Grid3() = default;
     explicit Grid3(int n) : n_(n), voxels_(static_cast<size_t>(n) * n * n, glm::vec4(0.0f)) {}
     Grid3(Grid3&&) noexcept = default;
@@ -87,7 +89,7 @@ public:
         return voxels_[index(x, y, z)];
     }
 
-private:
+  private:
     int n_ = 0;
     std::vector<glm::vec4, HugePageAllocator<glm::vec4>> voxels_;
 };
@@ -153,7 +155,7 @@ inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorn
 // A level-0 grid and its mip chain over a region. Level l has resolution n / 2^l; its voxels are 2^l level-0
 // voxels wide.
 class MipVolume {
-public:
+  public:
     MipVolume() = default;
     MipVolume(VolumeRegion region, std::vector<Grid3> levels) : region_(region), levels_(std::move(levels)) {
         findOccupiedBounds();
@@ -173,7 +175,8 @@ public:
         l.level0 = static_cast<int>(level);
         l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
         trilinearCorners(voxelPos, l.level0, levels_[l.level0].resolution(), l.fine);
-        if (l.blend > 0.0f) trilinearCorners(voxelPos, l.level0 + 1, levels_[l.level0 + 1].resolution(), l.coarse);
+        if (l.blend > 0.0f)
+            trilinearCorners(voxelPos, l.level0 + 1, levels_[l.level0 + 1].resolution(), l.coarse);
         return l;
     }
     // Reads a lookup prepared by any volume of the same region and resolution. Returns 0 at once where the
@@ -199,7 +202,7 @@ public:
     // Quadrilinear sample: trilinear in the two levels around the fractional `level`, blended.
     glm::vec4 sample(glm::vec3 voxelPos, float level) const { return gather(lookup(voxelPos, level)); }
 
-private:
+  private:
     Float4 gatherLevel(int l, const TrilinearCorners& c) const {
         const Grid3& g = levels_[l];
         Float4 acc = {0.0f, 0.0f, 0.0f, 0.0f};

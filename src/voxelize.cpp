@@ -68,12 +68,12 @@ float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMi
 namespace {
 
 struct VoxelTriangle {
-    glm::vec3 p[3];    // level-0 voxel coordinates
-    glm::vec3 normal;  // unit face normal (winding order)
-    float area;        // voxel units^2
-    bool oneVoxel;     // lies inside a single voxel of the grid
+    glm::vec3 p[3];      // level-0 voxel coordinates
+    glm::vec3 normal;    // unit face normal (winding order)
+    float area;          // voxel units^2
+    bool oneVoxel;       // lies inside a single voxel of the grid
     glm::vec3 emission;  // the material's emitted radiance
-    glm::ivec3 lo, hi;  // voxel bounds, clamped to the grid
+    glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid
 };
 
 std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {

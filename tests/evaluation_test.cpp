@@ -68,8 +68,8 @@ TEST(Evaluation, CornellBoxRegressionBound) {
     EXPECT_GT(e.classes.count(PixelClass::RealShadowed), 50u);
 
     // Measured (GCC 12, Release): delta_rel_error 0.5616, object_rel_rmse 0.9796 (the reference's noise at 32
-    // samples included; DGI's ball is brighter than the reference's on its lower half). Bounds: the measurement
-    // plus 10%, for another compiler's rounding and small, deliberate changes.
+    // samples included; DGI's ball is brighter than the reference's on its lower half). Bounds: the
+    // measurement plus 10%, for another compiler's rounding and small, deliberate changes.
     EXPECT_LT(e.dgi.deltaRelError, 0.62);
     EXPECT_LT(e.dgi.objectRelRmse, 1.08);
     // What each part buys: pasting the object in misses the whole change (1 by definition), and one shared

@@ -1,4 +1,5 @@
-// FrameRenderer keeps the real scene's share of the work between frames: its frames must be exactly render()'s.
+// FrameRenderer keeps the real scene's share of the work between frames: its frames must be exactly
+// render()'s.
 #include <gtest/gtest.h>
 
 #include "deltagi/benchmark.h"
@@ -13,8 +14,10 @@ using test::placed;
 
 Scene ballOverFloor() {
     Scene s = test::floorScene();
-    s.real.push_back(placed(makeBox({0.3f, 0.6f, 0.3f}), {-0.6f, 0.3f, -0.3f}, diffuse({0.8f, 0.2f, 0.2f}), "box"));
-    s.virtuals.push_back(placed(makeSphere(0.2f, 24), {0.1f, 0.3f, 0.0f}, diffuse({0.2f, 0.3f, 0.9f}), "ball"));
+    s.real.push_back(
+        placed(makeBox({0.3f, 0.6f, 0.3f}), {-0.6f, 0.3f, -0.3f}, diffuse({0.8f, 0.2f, 0.2f}), "box"));
+    s.virtuals.push_back(
+        placed(makeSphere(0.2f, 24), {0.1f, 0.3f, 0.0f}, diffuse({0.2f, 0.3f, 0.9f}), "ball"));
     s.options.volume.center = glm::vec3(0.0f, 0.3f, 0.0f);  // fixed: the real scene's voxels can be kept
     s.options.volume.size = 1.6f;
     return s;
@@ -27,7 +30,8 @@ void moveVirtuals(Scene& s, glm::vec3 offset) {
 
 void expectSameImages(const RenderOutput& a, const RenderOutput& b) {
     ASSERT_EQ(a.composite.data().size(), b.composite.data().size());
-    for (size_t i = 0; i < a.composite.data().size(); ++i) ASSERT_EQ(a.composite.data()[i], b.composite.data()[i]);
+    for (size_t i = 0; i < a.composite.data().size(); ++i)
+        ASSERT_EQ(a.composite.data()[i], b.composite.data()[i]);
     for (size_t i = 0; i < a.background.data().size(); ++i)
         ASSERT_EQ(a.background.data()[i], b.background.data()[i]);
     for (size_t i = 0; i < a.objectMask.data().size(); ++i)

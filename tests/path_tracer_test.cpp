@@ -29,10 +29,10 @@ glm::dvec3 meanRgb(const Image& img) {
 
 // ---- Closed-form scenes ----
 
-// A point light of intensity I at the centre of a closed diffuse sphere of radius R and albedo a, seen from the
-// centre. Direct irradiance on the wall is E0 = I / R^2 everywhere. Inside a closed surface whose outgoing
-// radiance L is uniform, every point's hemisphere sees only wall, so its indirect irradiance is pi L. The
-// rendering equation then reads L = a (E0 + pi L) / pi, hence L = a E0 / (pi (1 - a)): the sum of the
+// A point light of intensity I at the centre of a closed diffuse sphere of radius R and albedo a, seen from
+// the centre. Direct irradiance on the wall is E0 = I / R^2 everywhere. Inside a closed surface whose
+// outgoing radiance L is uniform, every point's hemisphere sees only wall, so its indirect irradiance is pi
+// L. The rendering equation then reads L = a (E0 + pi L) / pi, hence L = a E0 / (pi (1 - a)): the sum of the
 // geometric series of bounces a^k. The tessellated sphere's facets are up to 0.2% closer than R (64 slices).
 TEST(PathTracer, WhiteFurnaceMatchesTheInfiniteBounceSeries) {
     for (float albedo : {0.3f, 0.7f}) {
@@ -225,8 +225,8 @@ struct SphereQuadrature {
             double ring = 0.0;
             for (int j = 0; j < phiSteps; ++j) {
                 const double phi = (j + 0.5) * dPhi;
-                ring += g(glm::vec3(static_cast<float>(st * std::cos(phi)), static_cast<float>(st * std::sin(phi)),
-                                    static_cast<float>(ct)));
+                ring += g(glm::vec3(static_cast<float>(st * std::cos(phi)),
+                                    static_cast<float>(st * std::sin(phi)), static_cast<float>(ct)));
             }
             sum += ring * st * dTheta * dPhi;
         }
@@ -249,20 +249,22 @@ glm::vec3 directionAt(float thetaDeg) {
 
 TEST(BrdfSampling, PdfIntegratesToOneOverTheSphere) {
     const glm::vec3 n(0, 0, 1);
-    // Diffuse only, glossy only (n = 18 at 40 degrees: part of the lobe is below the surface and still counts),
-    // and a mixture with a sharp lobe (n = 198).
+    // Diffuse only, glossy only (n = 18 at 40 degrees: part of the lobe is below the surface and still
+    // counts), and a mixture with a sharp lobe (n = 198).
     const Material materials[] = {material(0.7f, 0.0f, 1.0f), material(0.0f, 0.8f, 0.3162f),
                                   material(0.4f, 0.4f, 0.1f)};
     for (const Material& m : materials)
         for (float thetaDeg : {0.0f, 40.0f, 80.0f}) {
             const glm::vec3 wo = directionAt(thetaDeg);
-            const double integral = SphereQuadrature::integrate([&](glm::vec3 wi) { return brdfPdf(m, n, wo, wi); });
+            const double integral =
+                SphereQuadrature::integrate([&](glm::vec3 wi) { return brdfPdf(m, n, wo, wi); });
             EXPECT_NEAR(integral, 1.0, 2e-3) << "exponent " << m.phongExponent() << " at " << thetaDeg;
         }
 }
 
 // The sampler draws from the density brdfPdf() reports: E[h(w)/pdf(w)] equals the integral of h for test
-// functions h (here cos^2 on the hemisphere, and the same times a power of the cosine to the mirror direction).
+// functions h (here cos^2 on the hemisphere, and the same times a power of the cosine to the mirror
+// direction).
 TEST(BrdfSampling, SamplesFollowTheReportedPdf) {
     const glm::vec3 n(0, 0, 1);
     const Material m = material(0.5f, 0.3f, 0.25f);  // n = 30
@@ -288,7 +290,8 @@ TEST(BrdfSampling, SamplesFollowTheReportedPdf) {
 }
 
 // Directional albedo of the glossy lobe, by Monte Carlo with the sampler: never above `specular`; at normal
-// incidence exactly `specular` (the normalization (n+2)/(2 pi) makes the integral of cos^n(a) cos(a) 1 there).
+// incidence exactly `specular` (the normalization (n+2)/(2 pi) makes the integral of cos^n(a) cos(a) 1
+// there).
 TEST(BrdfSampling, GlossyLobeConservesEnergy) {
     const glm::vec3 n(0, 0, 1);
     for (float roughness : {1.0f, 0.4f, 0.1f, 0.03f}) {
@@ -365,8 +368,8 @@ TEST(Reference, SameImageWhateverTheThreadCount) {
     EXPECT_NE(meanRgb(otherSeed.with), meanRgb(one.with));
 }
 
-// An object that no path can reach (under the floor, away from the light) changes nothing: with the same random
-// numbers for both renders, with - without is exactly zero, not just zero on average.
+// An object that no path can reach (under the floor, away from the light) changes nothing: with the same
+// random numbers for both renders, with - without is exactly zero, not just zero on average.
 TEST(Reference, UnreachableObjectLeavesTheImageExactlyUnchanged) {
     const Scene s = ballOverFloor({0, -1.0f, 0});
     ReferenceOptions o;

@@ -1,6 +1,6 @@
-// `deltagi bench`: the per-stage timings of the paper's Table 1, measured over a sequence of frames in which the
-// virtual objects move a little every frame (as in a mixed reality session), so that their voxels, the RSMs
-// with them, the light and delta volumes and all cones are redone each frame.
+// `deltagi bench`: the per-stage timings of the paper's Table 1, measured over a sequence of frames in which
+// the virtual objects move a little every frame (as in a mixed reality session), so that their voxels, the
+// RSMs with them, the light and delta volumes and all cones are redone each frame.
 #pragma once
 
 #include <functional>
@@ -15,19 +15,19 @@
 namespace deltagi {
 
 struct BenchOptions {
-    int frames = 10;     // measured frames
-    int warmup = 2;      // frames rendered first and not measured (caches, page faults, the kept static work)
-    bool cold = false;   // rebuild everything every frame, the static reconstruction's share too
-    // The virtual objects move on a horizontal circle of this radius (in level-0 voxels of the volume region),
-    // one sixteenth of a turn per frame.
+    int frames = 10;    // measured frames
+    int warmup = 2;     // frames rendered first and not measured (caches, page faults, the kept static work)
+    bool cold = false;  // rebuild everything every frame, the static reconstruction's share too
+    // The virtual objects move on a horizontal circle of this radius (in level-0 voxels of the volume
+    // region), one sixteenth of a turn per frame.
     float motionVoxels = 1.0f;
 };
 
 // The rows of the report, in order: Table 1's stages first, then the others, then the total.
 struct BenchRow {
-    std::string key;           // JSON key, e.g. "voxelize_ms"
+    std::string key;                  // JSON key, e.g. "voxelize_ms"
     std::vector<std::string> stages;  // pipeline stages (StageTiming names) summed into the row
-    double paperMs = -1.0;     // Table 1 of the paper (GTX 660); < 0: not reported there
+    double paperMs = -1.0;            // Table 1 of the paper (GTX 660); < 0: not reported there
 };
 const std::vector<BenchRow>& benchRows();
 

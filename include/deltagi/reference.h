@@ -17,18 +17,18 @@ struct ReferenceOptions {
     // Wall-clock budget in seconds; 0 = none. Checked after each whole pass of one sample per pixel, so the
     // image holds a whole number of samples, and the image for a given count does not depend on the budget.
     double timeLimitSeconds = 0.0;
-    uint64_t seed = 0;          // the same seed gives the same image, whatever the thread count
+    uint64_t seed = 0;            // the same seed gives the same image, whatever the thread count
     int rouletteStartBounce = 3;  // Russian roulette from this bounce on (bounce 0 is the camera hit)
-    int maxBounces = 256;       // a safety bound only; roulette ends paths long before
+    int maxBounces = 256;         // a safety bound only; roulette ends paths long before
 };
 
 struct ReferenceOutput {
-    Image composite;   // the differential composite, linear RGB, never below 0
-    Image with;        // the scene with the virtual objects, path traced
-    Image without;     // the real scene alone, path traced
-    Image background;  // the photo, or `without` where the scene has none
-    Image objectMask;  // 1 channel: fraction of camera samples whose first hit is a virtual object
-    Image delta;       // composite - background
+    Image composite;          // the differential composite, linear RGB, never below 0
+    Image with;               // the scene with the virtual objects, path traced
+    Image without;            // the real scene alone, path traced
+    Image background;         // the photo, or `without` where the scene has none
+    Image objectMask;         // 1 channel: fraction of camera samples whose first hit is a virtual object
+    Image delta;              // composite - background
     int samplesPerPixel = 0;  // samples actually taken (fewer than asked when the time limit stopped it)
     double totalMs = 0.0;
 };

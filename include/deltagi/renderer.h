@@ -13,7 +13,8 @@
 namespace deltagi {
 
 struct StageTiming {
-    std::string name;  // voxelize, rsm, inject, mipmap, gbuffer, diffuse, specular, shadow, shading, composite...
+    std::string
+        name;  // voxelize, rsm, inject, mipmap, gbuffer, diffuse, specular, shadow, shading, composite...
     double ms = 0.0;
 };
 
@@ -40,7 +41,7 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 // voxels, the RSMs with them, the full and delta volumes and the cones are redone every frame. The images
 // are the same as render()'s.
 class FrameRenderer {
-public:
+  public:
     FrameRenderer();
     ~FrameRenderer();
     FrameRenderer(const FrameRenderer&) = delete;
@@ -51,7 +52,7 @@ public:
     // Forgets everything kept: the next frame is a cold one.
     void clear();
 
-private:
+  private:
     struct State;
     std::unique_ptr<State> state_;
 };

@@ -38,10 +38,10 @@ struct Material {
 };
 
 struct TriangleMesh {
-    std::string name;                    // for messages: file name or shape name, and sub-mesh
-    std::vector<glm::vec3> positions;    // world space
-    std::vector<glm::vec3> normals;      // world space, unit length, one per position
-    std::vector<glm::uvec3> triangles;   // indices into positions
+    std::string name;                   // for messages: file name or shape name, and sub-mesh
+    std::vector<glm::vec3> positions;   // world space
+    std::vector<glm::vec3> normals;     // world space, unit length, one per position
+    std::vector<glm::uvec3> triangles;  // indices into positions
     Material material;
 
     Bounds3f bounds() const;
@@ -67,15 +67,15 @@ struct Camera {
 struct Light {
     enum class Type { Point, Spot, Directional };
     Type type = Type::Point;
-    glm::vec3 color{1.0f};        // "color": linear RGB, multiplied by intensity
-    float intensity = 1.0f;       // "intensity": radiant intensity (W/sr) of point and spot lights; irradiance
-                                  // (W/m^2, per world unit squared) of directional lights
-    glm::vec3 position{0.0f};     // "position": point and spot lights
+    glm::vec3 color{1.0f};     // "color": linear RGB, multiplied by intensity
+    float intensity = 1.0f;    // "intensity": radiant intensity (W/sr) of point and spot lights; irradiance
+                               // (W/m^2, per world unit squared) of directional lights
+    glm::vec3 position{0.0f};  // "position": point and spot lights
     glm::vec3 direction{0, -1, 0};  // "direction": unit, the direction light travels (spot and directional)
-    float innerAngleDeg = 30.0f;  // "inner_angle_deg": spot full intensity inside this half-angle
-    float outerAngleDeg = 45.0f;  // "outer_angle_deg": spot zero intensity outside this half-angle
-    float radius = 0.0f;          // "radius": size of the emitter in world units (softens shadow cones); 0 = use
-                                  // options.shadow.aperture_deg
+    float innerAngleDeg = 30.0f;    // "inner_angle_deg": spot full intensity inside this half-angle
+    float outerAngleDeg = 45.0f;    // "outer_angle_deg": spot zero intensity outside this half-angle
+    float radius = 0.0f;  // "radius": size of the emitter in world units (softens shadow cones); 0 = use
+                          // options.shadow.aperture_deg
     // Directional lights extracted from the environment map: the half-angle (radians) of the part of the sky
     // the light stands for, which widens its shadow cone; the path tracer skips these lights (it samples the
     // map itself). Not read from scene files.
@@ -86,7 +86,7 @@ struct Light {
 };
 
 struct Scene {
-    std::filesystem::path file;     // the scene file, for messages; relative paths were resolved against it
+    std::filesystem::path file;  // the scene file, for messages; relative paths were resolved against it
     Camera camera;
     std::optional<Image> background;  // the real camera image, linear RGB, camera-sized; absent: rendered
     std::filesystem::path backgroundFile;
