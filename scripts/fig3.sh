@@ -9,7 +9,7 @@
 #
 # Needs build/deltagi (scripts/test.sh builds it), jq, and the Happy Buddha of the shared data set at
 # ../shared/data/meshes/happy-buddha.obj (next to the repository). On this project's 2-core machine it takes
-# 2 to 4 minutes, nearly all of it the path tracer (125 to 210 s for 256 samples, depending on what else runs).
+# 2 to 4 minutes, nearly all of it the path tracer (70 to 210 s for 256 samples, depending on what else runs).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
