@@ -10,52 +10,16 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
-#include <memory>
-#include <new>
 #include <vector>
-
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
 
 #include <glm/glm.hpp>
 
 #include "deltagi/renderer.h"
+#include "large_blocks.h"
 
 namespace deltagi {
-
-// Allocates large arrays on 2 MiB boundaries and asks Linux for transparent huge pages for them: cone steps
-// read voxels scattered over tens of MiB, and with 4 KiB pages most of those reads also miss the TLB.
-template <typename T>
-struct HugePageAllocator {
-    using value_type = T;
-    static constexpr size_t kHugePage = size_t(2) << 20;
-    HugePageAllocator() = default;
-    template <typename U>
-    HugePageAllocator(const HugePageAllocator<U>&) {}
-    T* allocate(size_t count) {
-        const size_t bytes = count * sizeof(T);
-        if (bytes < kHugePage) return std::allocator<T>().allocate(count);
-        const size_t rounded = (bytes + kHugePage - 1) / kHugePage * kHugePage;
-        void* p = std::aligned_alloc(kHugePage, rounded);
-        if (!p) throw std::bad_alloc();
-#ifdef MADV_HUGEPAGE
-        madvise(p, rounded, MADV_HUGEPAGE);
-#endif
-        return static_cast<T*>(p);
-    }
-    void deallocate(T* p, size_t count) {
-        if (count * sizeof(T) < kHugePage) return std::allocator<T>().deallocate(p, count);
-        std::free(p);
-    }
-    template <typename U>
-    bool operator==(const HugePageAllocator<U>&) const {
-        return true;
-    }
-};
 
 // One level: n^3 voxels, x fastest. Move-only: volumes are large.
 class Grid3 {
@@ -91,7 +55,7 @@ class Grid3 {
 
   private:
     int n_ = 0;
-    std::vector<glm::vec4, HugePageAllocator<glm::vec4>> voxels_;
+    std::vector<glm::vec4, LargeBlockAllocator<glm::vec4>> voxels_;
 };
 
 // 4 floats in one SIMD register (GCC/Clang vector extension: SSE on x86-64, NEON on Arm).

@@ -108,7 +108,8 @@ std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, co
 
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
     const int n = region.resolution;
-    VoxelGeometry out{Grid3(n), std::vector<float>(static_cast<size_t>(n) * n * n, 0.0f), {}};
+    VoxelGeometry out{Grid3(n), {}, {}};
+    out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
     const bool emissive =
         std::any_of(meshes.begin(), meshes.end(), [](const TriangleMesh& m) { return m.material.emits(); });
     if (emissive) out.emission.assign(out.area.size(), glm::vec3(0.0f));

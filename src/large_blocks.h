@@ -1,0 +1,45 @@
+// Large arrays (volumes, per-voxel and per-pixel buffers) on transparent huge pages, recycled between frames.
+//
+// A frame allocates and frees a few hundred MiB of such arrays; fresh pages from the kernel must be faulted in
+// and zeroed by it every time, which was a seventh of a frame's time. Freed blocks are therefore kept (up to
+// kMaxKeptBytes) and handed out again for the next allocation of the same size. Blocks are 2 MiB aligned and
+// advised as huge pages on Linux: cone steps read voxels scattered over tens of MiB, and with 4 KiB pages most
+// of those reads would also miss the TLB. Small arrays go to the usual allocator.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+
+namespace deltagi {
+
+inline constexpr size_t kLargeBlockBytes = size_t(2) << 20;  // from this size on, and the alignment
+inline constexpr size_t kMaxKeptBytes = size_t(1) << 30;     // freed blocks kept for reuse, at most
+
+// A block of at least `bytes` (>= kLargeBlockBytes), 2 MiB aligned; throws std::bad_alloc.
+void* allocateLargeBlock(size_t bytes);
+// Gives a block back (same `bytes` as allocated): kept for reuse, or returned to the system.
+void freeLargeBlock(void* block, size_t bytes);
+
+template <typename T>
+struct LargeBlockAllocator {
+    using value_type = T;
+    LargeBlockAllocator() = default;
+    template <typename U>
+    LargeBlockAllocator(const LargeBlockAllocator<U>&) {}
+    T* allocate(size_t count) {
+        const size_t bytes = count * sizeof(T);
+        if (bytes < kLargeBlockBytes) return std::allocator<T>().allocate(count);
+        return static_cast<T*>(allocateLargeBlock(bytes));
+    }
+    void deallocate(T* p, size_t count) {
+        const size_t bytes = count * sizeof(T);
+        if (bytes < kLargeBlockBytes) return std::allocator<T>().deallocate(p, count);
+        freeLargeBlock(p, bytes);
+    }
+    template <typename U>
+    bool operator==(const LargeBlockAllocator<U>&) const {
+        return true;
+    }
+};
+
+}  // namespace deltagi
