@@ -5,10 +5,6 @@
 #include <mutex>
 #include <new>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#endif
-
 namespace deltagi {
 
 namespace {
@@ -42,9 +38,6 @@ void* allocateLargeBlock(size_t bytes) {
     }
     void* block = std::aligned_alloc(kLargeBlockBytes, size);
     if (!block) throw std::bad_alloc();
-#ifdef MADV_HUGEPAGE
-    madvise(block, size, MADV_HUGEPAGE);
-#endif
     return block;
 }
 
