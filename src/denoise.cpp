@@ -81,7 +81,8 @@ std::vector<float> denoise(std::span<const float> values, int channels, std::spa
                     if (cosN <= 0.0f) continue;
                     // Off the tangent plane by more than the allowance: another surface (a depth edge).
                     const float offPlane = std::abs(glm::dot(p.normal, q.position - p.position));
-                    if (offPlane > planeAllowance * offsetLength[lengthRow + sx * stride - x + reach]) continue;
+                    if (offPlane > planeAllowance * offsetLength[lengthRow + sx * stride - x + reach])
+                        continue;
                     const float w = spatial[dx + r] * spatial[dy + r] * powInt(cosN, s.normalPower);
                     const float* v = &sampleValues[k * channels];
                     for (int c = 0; c < channels; ++c) sum[c] += v[c] * w;

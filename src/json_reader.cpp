@@ -211,7 +211,8 @@ void readTrace(const JsonNode& node, TraceOptions& trace) {
 }
 
 void readRender(const JsonNode& node, RenderOptions& render) {
-    node.allowKeys({"samples_per_pixel", "indirect", "double_shadow_fix", "relight_indirect", "denoise_radius"});
+    node.allowKeys(
+        {"samples_per_pixel", "indirect", "double_shadow_fix", "relight_indirect", "denoise_radius"});
     if (auto n = node.find("samples_per_pixel")) {
         int spp = n->integer(1, 16);
         if (spp != 1 && spp != 4 && spp != 9 && spp != 16)
@@ -295,7 +296,9 @@ json optionsToJson(const Options& o) {
         {"volume", volume},
         {"rsm", {{"resolution", o.rsm.resolution}}},
         {"diffuse",
-         {{"count", o.diffuse.count}, {"aperture_deg", o.diffuse.apertureDeg}, {"pixel_stride", o.diffuse.pixelStride}}},
+         {{"count", o.diffuse.count},
+          {"aperture_deg", o.diffuse.apertureDeg},
+          {"pixel_stride", o.diffuse.pixelStride}}},
         {"specular",
          {{"min_aperture_deg", o.specular.minApertureDeg}, {"max_aperture_deg", o.specular.maxApertureDeg}}},
         {"shadow", {{"aperture_deg", o.shadow.apertureDeg}, {"pixel_stride", o.shadow.pixelStride}}},

@@ -9,7 +9,9 @@ namespace deltagi {
 
 namespace {
 
-size_t roundedSize(size_t bytes) { return (bytes + kLargeBlockBytes - 1) / kLargeBlockBytes * kLargeBlockBytes; }
+size_t roundedSize(size_t bytes) {
+    return (bytes + kLargeBlockBytes - 1) / kLargeBlockBytes * kLargeBlockBytes;
+}
 
 // Freed blocks by rounded size. Never destroyed: blocks may be freed by static objects' destructors.
 struct KeptBlocks {

@@ -1,9 +1,9 @@
 // Large arrays (volumes, per-voxel and per-pixel buffers), recycled between frames.
 //
-// A frame allocates and frees a few hundred MiB of such arrays; fresh pages from the kernel must be faulted in
-// and zeroed by it every time, which was a seventh of a frame's time. Freed blocks are therefore kept (up to
-// kMaxKeptBytes) and handed out again for the next allocation of the same size. Blocks are 2 MiB aligned, so
-// that the kernel may back them with transparent huge pages where its policy is "always". (Asking for huge
+// A frame allocates and frees a few hundred MiB of such arrays; fresh pages from the kernel must be faulted
+// in and zeroed by it every time, which was a seventh of a frame's time. Freed blocks are therefore kept (up
+// to kMaxKeptBytes) and handed out again for the next allocation of the same size. Blocks are 2 MiB aligned,
+// so that the kernel may back them with transparent huge pages where its policy is "always". (Asking for huge
 // pages with madvise was tried: with the "madvise" defrag policy of this project's machines, the first touch
 // of new blocks then stalled in page compaction, doubling a single render's time in one run out of two.)
 // Small arrays go to the usual allocator.

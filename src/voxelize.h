@@ -12,8 +12,9 @@
 namespace deltagi {
 
 struct VoxelGeometry {
-    Grid3 visibility;         // level 0: (occlusion, occlusion * average normal); occlusion is 0 or 1
-    std::vector<float, LargeBlockAllocator<float>> area;  // surface area of the geometry inside each voxel (world units^2), same indexing
+    Grid3 visibility;  // level 0: (occlusion, occlusion * average normal); occlusion is 0 or 1
+    std::vector<float, LargeBlockAllocator<float>>
+        area;  // surface area of the geometry inside each voxel (world units^2), same indexing
     // Emitted radiance times area of the emissive surfaces in each voxel, summed (same indexing); empty when
     // no mesh emits. Divided by `area` it is the voxel's mean emitted radiance (light injection).
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> emission;

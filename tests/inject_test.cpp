@@ -34,7 +34,8 @@ Light directionalDown(float irradiance) {
 TEST(Inject, DirectionalLightOnAFloorGivesAlbedoTimesIrradianceOverPi) {
     Scene s = floorOnly(0.5f);
     RayScene rays(s, SceneContent::RealOnly);
-    std::vector<ReflectiveShadowMap> rsm = {renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256)};
+    std::vector<ReflectiveShadowMap> rsm = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256)};
     // The RSM carries the reflected flux: albedo * E * (floor area inside the region) = 0.5 * 2 * 4.
     glm::dvec3 flux(0.0);
     for (const RsmTexel& t : rsm[0].texels) flux += glm::dvec3(t.flux);
@@ -93,7 +94,8 @@ TEST(Inject, PointLightMatchesInverseSquareIrradiance) {
 // The delta volume: negative where a virtual box now shadows the floor, positive on the lit box.
 TEST(Inject, DeltaVolumeIsNegativeInTheShadowAndPositiveOnTheObject) {
     Scene s = floorOnly(0.5f);
-    s.virtuals.push_back(test::placed(makeBox(glm::vec3(0.5f)), {0, 0.5f, 0}, test::diffuse(glm::vec3(0.9f))));
+    s.virtuals.push_back(
+        test::placed(makeBox(glm::vec3(0.5f)), {0, 0.5f, 0}, test::diffuse(glm::vec3(0.9f))));
     RayScene realOnly(s, SceneContent::RealOnly), all(s, SceneContent::RealAndVirtual);
     const Light light = directionalDown(1.0f);
     std::vector<ReflectiveShadowMap> full = {renderReflectiveShadowMap(all, light, kRegion, 256)};
@@ -102,25 +104,27 @@ TEST(Inject, DeltaVolumeIsNegativeInTheShadowAndPositiveOnTheObject) {
     const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
     const VoxelGeometry* sceneOnly[] = {&sceneGeometry};
     Grid3 delta = deltaVolume(injectLight(full, kRegion, both), injectLight(alone, kRegion, sceneOnly));
-    EXPECT_LT(delta.at(8, 8, 8).x, -0.1f);   // floor under the box
-    EXPECT_EQ(delta.at(2, 8, 2).x, 0.0f);    // floor far from the box: unchanged
-    EXPECT_GT(delta.at(8, 14, 8).x, 0.1f);   // the lit top of the box, y = 0.75: layer 14
+    EXPECT_LT(delta.at(8, 8, 8).x, -0.1f);  // floor under the box
+    EXPECT_EQ(delta.at(2, 8, 2).x, 0.0f);   // floor far from the box: unchanged
+    EXPECT_GT(delta.at(8, 14, 8).x, 0.1f);  // the lit top of the box, y = 0.75: layer 14
 }
 
 // Updating the scene-alone map for the objects gives the map rendered with them, texel for texel: a light
 // whose frustum is fitted to the region, a light inside the region (6 faces), a directional light.
 TEST(ReflectiveShadowMap, UpdateForTheObjectsEqualsAFullRender) {
     Scene s = floorOnly(0.5f);
-    s.virtuals.push_back(test::placed(makeSphere(0.2f, 24), {0.1f, 0.4f, -0.1f}, test::diffuse(glm::vec3(0.9f))));
+    s.virtuals.push_back(
+        test::placed(makeSphere(0.2f, 24), {0.1f, 0.4f, -0.1f}, test::diffuse(glm::vec3(0.9f))));
     const RayScene realOnly(s, SceneContent::RealOnly);
     const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
     Bounds3f objectBounds = s.virtuals[0].bounds();
-    const Light lights[] = {test::pointLight({0.3f, 3.0f, 0.2f}, 2.0f), test::pointLight({0.0f, 0.9f, 0.0f}, 2.0f),
-                            directionalDown(1.0f)};
+    const Light lights[] = {test::pointLight({0.3f, 3.0f, 0.2f}, 2.0f),
+                            test::pointLight({0.0f, 0.9f, 0.0f}, 2.0f), directionalDown(1.0f)};
     for (const Light& light : lights) {
         const ReflectiveShadowMap full = renderReflectiveShadowMap(all, light, kRegion, 128);
         const ReflectiveShadowMap base = renderReflectiveShadowMap(realOnly, light, kRegion, 128);
-        const ReflectiveShadowMap updated = updateReflectiveShadowMap(base, all, light, kRegion, objectBounds);
+        const ReflectiveShadowMap updated =
+            updateReflectiveShadowMap(base, all, light, kRegion, objectBounds);
         ASSERT_EQ(updated.texels.size(), full.texels.size());
         size_t differentFromBase = 0;
         for (size_t i = 0; i < full.texels.size(); ++i) {
@@ -143,8 +147,9 @@ namespace deltagi {
 namespace {
 
 // Closed form through the whole light path: a point facing down over a uniformly lit Lambertian floor sees
-// radiance L = albedo E / pi over its hemisphere, so the cosine-weighted diffuse cones return L (minus the few
-// grazing cones that leave the region before reaching the floor: 5% of the weight for 9 cones at h = 0.2).
+// radiance L = albedo E / pi over its hemisphere, so the cosine-weighted diffuse cones return L (minus the
+// few grazing cones that leave the region before reaching the floor: 5% of the weight for 9 cones at h =
+// 0.2).
 TEST(DiffuseCones, APointAboveALitFloorGathersTheFloorsRadiance) {
     Scene s = floorOnly(0.5f);
     const Light light = directionalDown(1.0f);

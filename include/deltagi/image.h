@@ -10,10 +10,12 @@
 namespace deltagi {
 
 class Image {
-public:
+  public:
     Image() = default;
     Image(int width, int height, int channels, float fill = 0.0f)
-        : width_(width), height_(height), channels_(channels),
+        : width_(width),
+          height_(height),
+          channels_(channels),
           pixels_(static_cast<size_t>(width) * height * channels, fill) {}
     Image(const Image&) = default;  // images are values; copies are explicit at call sites that need them
     Image(Image&&) noexcept = default;
@@ -27,7 +29,9 @@ public:
     size_t pixelCount() const { return static_cast<size_t>(width_) * height_; }
 
     float& at(int x, int y, int c) { return pixels_[(static_cast<size_t>(y) * width_ + x) * channels_ + c]; }
-    float at(int x, int y, int c) const { return pixels_[(static_cast<size_t>(y) * width_ + x) * channels_ + c]; }
+    float at(int x, int y, int c) const {
+        return pixels_[(static_cast<size_t>(y) * width_ + x) * channels_ + c];
+    }
     // RGB of a pixel (a 1-channel image repeats its value).
     glm::vec3 rgb(int x, int y) const;
     void setRgb(int x, int y, glm::vec3 v);
@@ -35,7 +39,7 @@ public:
     std::span<float> data() { return pixels_; }
     std::span<const float> data() const { return pixels_; }
 
-private:
+  private:
     int width_ = 0, height_ = 0, channels_ = 0;
     std::vector<float> pixels_;
 };

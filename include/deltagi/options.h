@@ -12,10 +12,11 @@ namespace deltagi {
 // options.volume: the region covered by the four volumes (§3.4) and their resolution.
 struct VolumeOptions {
     int resolution = 128;  // "resolution": voxels along each axis; a power of two in [4, 1024]
-    // "extent_scale": when no region is given, the region is this multiple of the virtual objects' bounding box
-    // (§3.4 uses twice the bounding box), made cubic around its centre.
+    // "extent_scale": when no region is given, the region is this multiple of the virtual objects' bounding
+    // box (§3.4 uses twice the bounding box), made cubic around its centre.
     float extentScale = 2.0f;
-    // "center" [x,y,z] and "size" (world units, edge length of the cube): an explicit region. Both or neither.
+    // "center" [x,y,z] and "size" (world units, edge length of the cube): an explicit region. Both or
+    // neither.
     std::optional<glm::vec3> center;
     std::optional<float> size;
 };
@@ -31,11 +32,11 @@ struct DiffuseConeOptions {
     // "aperture_deg": full apex angle of each cone in degrees; 0 derives it from the count so that the cones'
     // solid angles add up to the hemisphere (half-angle = acos(1 - 1/count)).
     float apertureDeg = 0.0f;
-    // "pixel_stride": the diffuse cones are traced at every pixel_stride-th pixel of every pixel_stride-th row
-    // (1, 2 or 4); the edge-aware filter fills the pixels between from traced neighbours on the same surface,
-    // and pixels with none are traced too. Diffuse light varies slowly: 4 traces 1/16 of the cones, with the
-    // same error against the path-traced reference as 2 (Cornell box, 640x480: delta_rel_error 0.5631 vs
-    // 0.5635, object_rel_rmse 0.849 vs 0.853).
+    // "pixel_stride": the diffuse cones are traced at every pixel_stride-th pixel of every pixel_stride-th
+    // row (1, 2 or 4); the edge-aware filter fills the pixels between from traced neighbours on the same
+    // surface, and pixels with none are traced too. Diffuse light varies slowly: 4 traces 1/16 of the cones,
+    // with the same error against the path-traced reference as 2 (Cornell box, 640x480: delta_rel_error
+    // 0.5631 vs 0.5635, object_rel_rmse 0.849 vs 0.853).
     int pixelStride = 4;
 };
 
