@@ -74,7 +74,8 @@ PixelClasses classifyPixels(const Scene& scene, const Image& dgiMask, const Imag
                 continue;
             }
             if (a > 0.0f || b > 0.0f) continue;  // the silhouette
-            // The real surface the pixel centre sees (as the pipeline's G-buffer); no surface: nothing is lit.
+            // The real surface the pixel centre sees (as the pipeline's G-buffer); no surface: nothing is
+            // lit.
             const glm::vec3 dir = glm::normalize(camera.rayDirection(x + 0.5f, y + 0.5f));
             const RayHit hit = realOnly.intersect(eye, dir);
             const double v =
@@ -106,12 +107,14 @@ DeltaFigures deltaFigures(const Image& composite, const Image& reference, const 
                     const glm::dvec3 deltaReference = ref - bg;
                     deltaError += glm::dot(error, error);
                     deltaRef += glm::dot(deltaReference, deltaReference);
-                    const int k = classes.classes[static_cast<size_t>(y) * w + x] == PixelClass::RealLit ? 0 : 1;
+                    const int k =
+                        classes.classes[static_cast<size_t>(y) * w + x] == PixelClass::RealLit ? 0 : 1;
                     biasSum[k] += (error.x + error.y + error.z) / 3.0;
                     ++biasCount[k];
                     break;
                 }
-                case PixelClass::Edge: break;
+                case PixelClass::Edge:
+                    break;
             }
         }
     DeltaFigures f;
@@ -137,14 +140,15 @@ Evaluation evaluate(const Scene& scene, const ReferenceOptions& referenceOptions
     const Image& truth = e.reference.composite;
     e.dgi = deltaFigures(e.dgiRender.composite, truth, background, e.classes);
 
-    // No relighting: the background on real pixels, DGI's object over it by coverage. On silhouette pixels the
-    // object's own radiance is not available apart from the composite, so those blend background and DGI's
-    // composite (their real part keeps a (1 - coverage) share of DGI's change).
+    // No relighting: the background on real pixels, DGI's object over it by coverage. On silhouette pixels
+    // the object's own radiance is not available apart from the composite, so those blend background and
+    // DGI's composite (their real part keeps a (1 - coverage) share of DGI's change).
     e.noRelightComposite = background;
     for (int y = 0; y < background.height(); ++y)
         for (int x = 0; x < background.width(); ++x) {
             const float c = e.dgiRender.objectMask.at(x, y, 0);
-            e.noRelightComposite.setRgb(x, y, glm::mix(background.rgb(x, y), e.dgiRender.composite.rgb(x, y), c));
+            e.noRelightComposite.setRgb(x, y,
+                                        glm::mix(background.rgb(x, y), e.dgiRender.composite.rgb(x, y), c));
         }
     e.noRelight = deltaFigures(e.noRelightComposite, truth, background, e.classes);
 

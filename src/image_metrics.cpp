@@ -1,4 +1,5 @@
-// Image metrics and the false-colour difference image of `deltagi compare` (declared in deltagi/evaluation.h).
+// Image metrics and the false-colour difference image of `deltagi compare` (declared in
+// deltagi/evaluation.h).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -27,7 +28,7 @@ void checkSameSize(const Image& a, const Image& b) {
 // Inferno-like colour ramp (sRGB-ish control points, converted to linear by the caller's writer).
 glm::vec3 ramp(float t) {
     static constexpr std::array<glm::vec3, 6> kStops = {
-        glm::vec3(0.0f, 0.0f, 0.015f), glm::vec3(0.26f, 0.04f, 0.41f), glm::vec3(0.58f, 0.15f, 0.40f),
+        glm::vec3(0.0f, 0.0f, 0.015f),  glm::vec3(0.26f, 0.04f, 0.41f), glm::vec3(0.58f, 0.15f, 0.40f),
         glm::vec3(0.87f, 0.32f, 0.23f), glm::vec3(0.99f, 0.65f, 0.04f), glm::vec3(0.99f, 1.0f, 0.64f)};
     t = std::clamp(t, 0.0f, 1.0f) * static_cast<float>(kStops.size() - 1);
     const int i = std::min(static_cast<int>(t), static_cast<int>(kStops.size()) - 2);
@@ -90,7 +91,8 @@ float robustMaximum(const Image& values) {
         for (int x = 0; x < values.width(); ++x)
             if (std::isfinite(values.at(x, y, 0))) v.push_back(values.at(x, y, 0));
     if (v.empty()) return kMinimumScale;
-    const size_t k = std::min(v.size() - 1, static_cast<size_t>(kRobustPercentile * static_cast<float>(v.size())));
+    const size_t k =
+        std::min(v.size() - 1, static_cast<size_t>(kRobustPercentile * static_cast<float>(v.size())));
     std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
     return std::max(v[k], kMinimumScale);
 }

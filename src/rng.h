@@ -17,7 +17,7 @@ inline uint64_t mixBits(uint64_t v) {
 }
 
 class Rng {
-public:
+  public:
     Rng() = default;
     // One stream per (a, b, c), e.g. (pixel index, sample index, seed).
     Rng(uint64_t a, uint64_t b, uint64_t c = 0) {
@@ -40,7 +40,7 @@ public:
     // Uniform in [0, 1): 24 random bits, so that the largest value is strictly below 1 as a float.
     float uniform() { return static_cast<float>(nextUint() >> 8) * 0x1p-24f; }
 
-private:
+  private:
     uint64_t state_ = 0x853c49e6748fea9bull;
     uint64_t inc_ = 0xda3e39cb94b95bdbull;
 };

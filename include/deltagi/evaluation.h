@@ -1,5 +1,6 @@
-// How close DGI is to the ground truth: image metrics (`deltagi compare`) and the evaluation of a scene against
-// the differential path tracer (`deltagi eval`), with the baselines that show what each part of the method buys.
+// How close DGI is to the ground truth: image metrics (`deltagi compare`) and the evaluation of a scene
+// against the differential path tracer (`deltagi eval`), with the baselines that show what each part of the
+// method buys.
 #pragma once
 
 #include <cstdint>
@@ -16,7 +17,8 @@ namespace deltagi {
 
 // ---- Image metrics ----
 
-// relMSE divides each squared error by reference^2 + this (Rousselle et al. 2011): dark pixels do not dominate.
+// relMSE divides each squared error by reference^2 + this (Rousselle et al. 2011): dark pixels do not
+// dominate.
 constexpr double kRelMseEpsilon = 1e-2;
 
 struct ImageMetrics {
@@ -55,7 +57,8 @@ struct PixelClasses {
 };
 
 struct DeltaFigures {
-    // ||delta_test - delta_ref|| / ||delta_ref|| over real pixels (all channels), delta = composite - background
+    // ||delta_test - delta_ref|| / ||delta_ref|| over real pixels (all channels), delta = composite -
+    // background
     double deltaRelError = 0.0;
     // ||test - ref|| / ||ref|| over object pixels: the RMSE relative to the reference's RMS value
     double objectRelRmse = 0.0;
@@ -79,7 +82,7 @@ struct Evaluation {
     double referenceMs = 0.0;       // the path tracer, both renders
     PixelClasses classes;
     ReferenceOutput reference;
-    RenderOutput dgiRender;     // background = reference.background
+    RenderOutput dgiRender;  // background = reference.background
     Image noRelightComposite;
 };
 
