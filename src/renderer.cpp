@@ -160,15 +160,22 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         if (jobs[j].indirect)
             results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
     timer.lap("specular");
-    // Sky light through the cones, added to their indirect light; its diffuse part filtered like the diffuse
-    // cones' (it has the same jitter noise).
+    // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
+    // filtered like the diffuse cones (it has the same jitter noise).
     if (scene.environment && !scene.environment->sky.empty()) {
+        const Environment& environment = *scene.environment;
         for (size_t j = 0; j < jobs.size(); ++j) {
-            SkyLight sky =
-                traceSkyCones(jobs[j].points, *scene.environment, jobs[j].visibility, jobs[j].mode, o);
-            denoiseInPlace(sky.diffuse, 1, jobs[j].points, scene.camera, filter);
-            addInto(results[j].diffuse, std::move(sky.diffuse));
-            addInto(results[j].specular, std::move(sky.specular));
+            const ConeJob& job = jobs[j];
+            addInto(results[j].diffuse,
+                    traceSparse<glm::vec3>(job.points, scene.camera, o.diffuse.pixelStride, 1, filter,
+                                           [&](std::span<const SurfacePoint> p) {
+                                               return traceSkyCones(p, environment, job.visibility, job.mode,
+                                                                    o, SkyParts::Diffuse)
+                                                   .diffuse;
+                                           }));
+            addInto(results[j].specular,
+                    traceSkyCones(job.points, environment, job.visibility, job.mode, o, SkyParts::Specular)
+                        .specular);
         }
         timer.lap("sky");
     }

@@ -3,6 +3,7 @@
 #include <numbers>
 
 #include "brdf.h"
+#include "brdf_sampling.h"
 #include "lights.h"
 #include "parallel.h"
 
@@ -15,13 +16,6 @@ constexpr int64_t kPointGrain = 256;
 // level reach one voxel of that level beyond the cone, and a cone reaching the lamp would read the surfaces
 // around it (a lamp set into a ceiling would shadow everything).
 constexpr float kShadowConeStopDiameters = 1.5f;
-
-// A frame with z along n.
-inline glm::mat3 tangentFrame(glm::vec3 n) {
-    glm::vec3 helper = std::abs(n.z) < 0.9f ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
-    glm::vec3 t = glm::normalize(glm::cross(helper, n));
-    return glm::mat3(t, glm::cross(n, t), n);
-}
 
 }  // namespace
 
@@ -81,7 +75,7 @@ std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, c
     parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
         if (!p.valid() || p.material->albedo == glm::vec3(0.0f)) return;
-        const glm::mat3 frame = tangentFrame(p.normal);
+        const glm::mat3 frame = frameAround(p.normal);
         glm::vec3 sum(0.0f);
         for (size_t k = 0; k < cones.directions.size(); ++k) {
             Cone cone;

@@ -145,7 +145,8 @@ glm::vec3 skyRadiance(const SkyPyramid& sky, glm::vec3 direction, float tanHalfA
 }
 
 SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& environment,
-                       const VisibilityVolumes& visibility, ShadowMode mode, const Options& options) {
+                       const VisibilityVolumes& visibility, ShadowMode mode, const Options& options,
+                       SkyParts parts) {
     SkyLight out{std::vector<glm::vec3>(points.size(), glm::vec3(0.0f)),
                  std::vector<glm::vec3>(points.size(), glm::vec3(0.0f))};
     if (environment.sky.empty()) return out;
@@ -163,6 +164,8 @@ SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& 
             cone.origin = coneOrigin(position, normal, direction, reference->region(), settings);
             cone.tanHalfAngle = tanHalf;
             cone.jitter = jitter;
+            if (mode == ShadowMode::DeltaShadow && !shadowConeMeetsObjects(cone, visibility, settings))
+                return glm::vec3(0.0f);
             occlusion = traceShadowCone(cone, visibility, settings);
         }
         return shadowFactor(occlusion, mode) *
@@ -171,7 +174,7 @@ SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& 
     parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
         if (!p.valid()) return;
-        if (p.material->albedo != glm::vec3(0.0f)) {
+        if (parts != SkyParts::Specular && p.material->albedo != glm::vec3(0.0f)) {
             const glm::mat3 frame = frameAround(p.normal);
             glm::vec3 sum(0.0f);
             for (size_t k = 0; k < cones.directions.size(); ++k)
@@ -180,7 +183,7 @@ SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& 
                                                   hashToUnit(i, static_cast<uint32_t>(3000 + k)));
             out.diffuse[i] = sum;
         }
-        if (p.material->specular != glm::vec3(0.0f)) {
+        if (parts != SkyParts::Diffuse && p.material->specular != glm::vec3(0.0f)) {
             const glm::vec3 mirror = glm::normalize(glm::reflect(-p.toEye, p.normal));
             const float tanHalf =
                 specularConeTanHalfAngle(p.material->phongExponent(), options.specular.minApertureDeg,
