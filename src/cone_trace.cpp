@@ -56,8 +56,9 @@ std::pair<float, float> clipToVolume(glm::vec3 origin, glm::vec3 dir, float n) {
 // 2^level to the surface's coverage of the voxel's cross-section, and weighted by how the surface faces the
 // cone (§3.1: "the occlusion value is thereby adapted with the normal stored in the volume"):
 //   coherent normals (|mean normal| near 1): 1 for a surface facing the cone (seen obliquely, a surface
-//     covers the cone's cross-section as well: the cone crosses more of its voxels), 1 - backface_weight for
-//     one the cone leaves through its back (so that a convex surface does not shadow itself at grazing angles);
+//     covers the cone's cross-section as well: the cone crosses more of its voxels), 1 - backface_weight
+//     for one the cone leaves through its back (so that a convex surface does not shadow itself at grazing
+//     angles);
 //   incoherent normals (both sides of a thin part, a whole small object in one coarse voxel): the mean
 //     projected area of randomly oriented surface, kIsotropicCoverage.
 // normal_weight blends from the isotropic model (0) to the normal-adapted one (1).
