@@ -1,6 +1,7 @@
 #include "denoise.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "parallel.h"
@@ -16,6 +17,100 @@ float powInt(float x, int n) {
     return r;
 }
 
+// The samples (every stride-th pixel of every stride-th row) packed together, for the cache.
+struct Sample {
+    glm::vec3 position, normal;
+    bool valid;
+};
+
+// Everything one filter pass reads, shared by its rows.
+struct FilterPass {
+    std::span<const float> values;
+    int channels;
+    std::span<const SurfacePoint> points;
+    int width, height;
+    glm::vec3 eye;
+    float pixelAngle;
+    const DenoiseSettings& s;
+    int r, stride, reach, side, sw, sh;
+    std::vector<float> spatial{};       // (2r+1)^2 window weights
+    std::vector<float> offsetLength{};  // sqrt(px^2 + py^2 + 1) for every pixel offset a window can have
+    std::vector<Sample> samples{};
+    std::vector<float> sampleValues{};
+    // Per window centre ((sw + 1) x (sh + 1): a centre may lie one past the last sample): whether any sample
+    // of its window holds a non-zero value. A window of zeros filters to zero, whatever its weights.
+    std::vector<uint8_t> windowHasValue{};
+};
+
+// Whether sample k is a usable neighbour of pixel p: on the same side, near p's tangent plane. Returns its
+// weight (0: not usable) without the spatial factor.
+inline float neighbourWeight(const FilterPass& f, const SurfacePoint& p, const Sample& q, float allowance) {
+    if (!q.valid) return 0.0f;
+    const float cosN = glm::dot(p.normal, q.normal);
+    if (cosN <= 0.0f) return 0.0f;
+    // Off the tangent plane by more than the allowance: another surface (a depth edge).
+    if (std::abs(glm::dot(p.normal, q.position - p.position)) > allowance) return 0.0f;
+    return powInt(cosN, f.s.normalPower);
+}
+
+// Filters row y into `out`; pixels without any usable sample are appended to `holes`. C is the channel count
+// when known at compile time (0: f.channels).
+template <int C>
+void filterRow(const FilterPass& f, int y, std::span<float> out, std::vector<size_t>& holes) {
+    const int channels = C > 0 ? C : f.channels;
+    std::array<float, (C > 0 ? C : 1)> fixedSum{};
+    std::vector<float> dynamicSum(C > 0 ? 0 : channels);
+    float* sum = C > 0 ? fixedSum.data() : dynamicSum.data();
+    const int r = f.r, stride = f.stride, reach = f.reach, side = f.side;
+    // The samples nearest to row y (and below, column x): the window is centred on them.
+    const int yCentre = (y + stride / 2) / stride;
+    const int syBegin = std::max(yCentre - r, 0), syEnd = std::min(yCentre + r, f.sh - 1);
+    for (int x = 0; x < f.width; ++x) {
+        const size_t i = static_cast<size_t>(y) * f.width + x;
+        const SurfacePoint& p = f.points[i];
+        if (!p.valid()) continue;
+        const float pixelSize = f.pixelAngle * glm::length(p.position - f.eye);  // world size of a pixel here
+        const float planeAllowance = f.s.planeDistance * pixelSize;
+        const int xCentre = (x + stride / 2) / stride;
+        const int sxBegin = std::max(xCentre - r, 0), sxEnd = std::min(xCentre + r, f.sw - 1);
+        auto allowance = [&](int sx, int sy) {
+            return planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + reach) * side +
+                                                   sx * stride - x + reach];
+        };
+        if (!f.windowHasValue[static_cast<size_t>(yCentre) * (f.sw + 1) + xCentre]) {
+            // All zeros: the result is zero if any sample is usable, else the pixel is a hole.
+            bool usable = false;
+            for (int sy = syBegin; sy <= syEnd && !usable; ++sy)
+                for (int sx = sxBegin; sx <= sxEnd && !usable; ++sx)
+                    usable = neighbourWeight(f, p, f.samples[static_cast<size_t>(sy) * f.sw + sx],
+                                             allowance(sx, sy)) > 0.0f;
+            if (usable)
+                std::fill_n(&out[i * channels], channels, 0.0f);
+            else
+                holes.push_back(i);
+            continue;
+        }
+        std::fill_n(sum, channels, 0.0f);
+        float weightSum = 0.0f;
+        for (int sy = syBegin; sy <= syEnd; ++sy) {
+            const float* spatialRow = &f.spatial[static_cast<size_t>(sy - yCentre + r) * (2 * r + 1)];
+            for (int sx = sxBegin; sx <= sxEnd; ++sx) {
+                const size_t k = static_cast<size_t>(sy) * f.sw + sx;
+                float w = neighbourWeight(f, p, f.samples[k], allowance(sx, sy));
+                if (w == 0.0f) continue;
+                w *= spatialRow[sx - xCentre + r];
+                const float* v = &f.sampleValues[k * channels];
+                for (int c = 0; c < channels; ++c) sum[c] += v[c] * w;
+                weightSum += w;
+            }
+        }
+        if (weightSum > 0.0f)
+            for (int c = 0; c < channels; ++c) out[i * channels + c] = sum[c] / weightSum;
+        else
+            holes.push_back(i);
+    }
+}
+
 }  // namespace
 
 std::vector<float> denoise(std::span<const float> values, int channels, std::span<const SurfacePoint> points,
@@ -24,78 +119,87 @@ std::vector<float> denoise(std::span<const float> values, int channels, std::spa
     std::vector<float> out(values.begin(), values.end());
     if (s.radius <= 0 || channels <= 0) return out;
     const int r = s.radius, stride = std::max(s.stride, 1);
-    std::vector<float> spatial(2 * r + 1);
+    const int reach = (r + 1) * stride;
+    FilterPass f{values,
+                 channels,
+                 points,
+                 width,
+                 height,
+                 eye,
+                 pixelAngle,
+                 s,
+                 r,
+                 stride,
+                 reach,
+                 2 * reach + 1,
+                 (width + stride - 1) / stride,
+                 (height + stride - 1) / stride};
+    const int window = 2 * r + 1;
+    std::vector<float> spatial1d(window);
     for (int d = -r; d <= r; ++d)
-        spatial[d + r] = std::exp(-0.5f * d * d / (s.spatialSigma * s.spatialSigma));
-    // sqrt(px^2 + py^2 + 1) for every pixel offset a window can have.
-    const int reach = (r + 1) * stride, side = 2 * reach + 1;
-    std::vector<float> offsetLength(static_cast<size_t>(side) * side);
+        spatial1d[d + r] = std::exp(-0.5f * d * d / (s.spatialSigma * s.spatialSigma));
+    f.spatial.resize(static_cast<size_t>(window) * window);
+    for (int dy = 0; dy < window; ++dy)
+        for (int dx = 0; dx < window; ++dx) f.spatial[dy * window + dx] = spatial1d[dy] * spatial1d[dx];
+    f.offsetLength.resize(static_cast<size_t>(f.side) * f.side);
     for (int py = -reach; py <= reach; ++py)
         for (int px = -reach; px <= reach; ++px)
-            offsetLength[static_cast<size_t>(py + reach) * side + px + reach] =
+            f.offsetLength[static_cast<size_t>(py + reach) * f.side + px + reach] =
                 std::sqrt(static_cast<float>(px * px + py * py + 1));
 
-    // The samples (every stride-th pixel of every stride-th row) packed together, for the cache.
-    struct Sample {
-        glm::vec3 position, normal;
-        bool valid;
-    };
-    const int sw = (width + stride - 1) / stride, sh = (height + stride - 1) / stride;
-    std::vector<Sample> samples(static_cast<size_t>(sw) * sh);
-    std::vector<float> sampleValues(samples.size() * channels);
+    const int sw = f.sw, sh = f.sh;
+    f.samples.resize(static_cast<size_t>(sw) * sh);
+    f.sampleValues.resize(f.samples.size() * channels);
+    std::vector<uint8_t> nonZero(f.samples.size());
     parallelFor(0, sh, 16, [&](int64_t sy) {
         for (int sx = 0; sx < sw; ++sx) {
             const size_t j = static_cast<size_t>(sy) * stride * width + static_cast<size_t>(sx) * stride;
             const size_t k = static_cast<size_t>(sy) * sw + sx;
-            samples[k] = {points[j].position, points[j].normal, points[j].valid()};
-            std::copy_n(&values[j * channels], channels, &sampleValues[k * channels]);
+            f.samples[k] = {points[j].position, points[j].normal, points[j].valid()};
+            const float* v = &values[j * channels];
+            std::copy_n(v, channels, &f.sampleValues[k * channels]);
+            nonZero[k] =
+                f.samples[k].valid && std::any_of(v, v + channels, [](float c) { return c != 0.0f; });
         }
     });
+    // Dilate the non-zero samples by the window (rows, then columns) onto the window centres.
+    std::vector<uint8_t> rows(static_cast<size_t>(sw + 1) * sh);
+    for (int sy = 0; sy < sh; ++sy)
+        for (int cx = 0; cx <= sw; ++cx) {
+            uint8_t any = 0;
+            for (int sx = std::max(cx - r, 0); sx <= std::min(cx + r, sw - 1); ++sx)
+                any |= nonZero[static_cast<size_t>(sy) * sw + sx];
+            rows[static_cast<size_t>(sy) * (sw + 1) + cx] = any;
+        }
+    f.windowHasValue.assign(static_cast<size_t>(sw + 1) * (sh + 1), 0);
+    for (int cy = 0; cy <= sh; ++cy)
+        for (int cx = 0; cx <= sw; ++cx) {
+            uint8_t any = 0;
+            for (int sy = std::max(cy - r, 0); sy <= std::min(cy + r, sh - 1); ++sy)
+                any |= rows[static_cast<size_t>(sy) * (sw + 1) + cx];
+            f.windowHasValue[static_cast<size_t>(cy) * (sw + 1) + cx] = any;
+        }
 
-    std::vector<std::vector<size_t>> rowHoles(holes ? height : 0);
-    parallelFor(0, height, 4, [&](int64_t y64) {
-        const int y = static_cast<int>(y64);
-        std::vector<float> sum(channels);
-        // The samples nearest to row y (and below, column x): the window is centred on them.
-        const int yCentre = (y + stride / 2) / stride;
-        for (int x = 0; x < width; ++x) {
-            const size_t i = static_cast<size_t>(y) * width + x;
-            const SurfacePoint& p = points[i];
-            if (!p.valid()) continue;
-            const float pixelSize = pixelAngle * glm::length(p.position - eye);  // world size of a pixel here
-            const float planeAllowance = s.planeDistance * pixelSize;
-            const int xCentre = (x + stride / 2) / stride;
-            std::fill(sum.begin(), sum.end(), 0.0f);
-            float weightSum = 0.0f;
-            for (int dy = -r; dy <= r; ++dy) {
-                const int sy = yCentre + dy;
-                if (sy < 0 || sy >= sh) continue;
-                const size_t lengthRow = static_cast<size_t>(sy * stride - y + reach) * side;
-                for (int dx = -r; dx <= r; ++dx) {
-                    const int sx = xCentre + dx;
-                    if (sx < 0 || sx >= sw) continue;
-                    const size_t k = static_cast<size_t>(sy) * sw + sx;
-                    const Sample& q = samples[k];
-                    if (!q.valid) continue;
-                    const float cosN = glm::dot(p.normal, q.normal);
-                    if (cosN <= 0.0f) continue;
-                    // Off the tangent plane by more than the allowance: another surface (a depth edge).
-                    const float offPlane = std::abs(glm::dot(p.normal, q.position - p.position));
-                    if (offPlane > planeAllowance * offsetLength[lengthRow + sx * stride - x + reach])
-                        continue;
-                    const float w = spatial[dx + r] * spatial[dy + r] * powInt(cosN, s.normalPower);
-                    const float* v = &sampleValues[k * channels];
-                    for (int c = 0; c < channels; ++c) sum[c] += v[c] * w;
-                    weightSum += w;
-                }
-            }
-            if (weightSum > 0.0f)
-                for (int c = 0; c < channels; ++c) out[i * channels + c] = sum[c] / weightSum;
-            else if (holes)
-                rowHoles[y].push_back(i);
+    std::vector<std::vector<size_t>> rowHoles(height);
+    parallelFor(0, height, 4, [&](int64_t y) {
+        const int row = static_cast<int>(y);
+        switch (channels) {
+            case 1:
+                filterRow<1>(f, row, out, rowHoles[y]);
+                break;
+            case 3:
+                filterRow<3>(f, row, out, rowHoles[y]);
+                break;
+            case 6:
+                filterRow<6>(f, row, out, rowHoles[y]);
+                break;
+            default:
+                filterRow<0>(f, row, out, rowHoles[y]);
+                break;
         }
     });
-    for (const std::vector<size_t>& row : rowHoles) holes->insert(holes->end(), row.begin(), row.end());
+    if (holes)
+        for (const std::vector<size_t>& row : rowHoles) holes->insert(holes->end(), row.begin(), row.end());
     return out;
 }
 

@@ -1,5 +1,6 @@
 #include "denoise.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -58,6 +59,46 @@ TEST(Denoise, KeepsConstantsReducesNoiseAndDoesNotMixSurfaces) {
         EXPECT_NEAR(v, 0.7f, 1e-6f);
     // Radius 0 is the identity.
     EXPECT_EQ(denoise(values, 1, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, DenoiseSettings{0}), values);
+}
+
+// Sparse samples (stride 3) whose windows hold only zeros filter to exactly zero without being weighed; the
+// holes (pixels without a usable sample) do not depend on the values; a window with one non-zero sample
+// interpolates it, multi-channel values too.
+TEST(Denoise, SparseZerosStayZeroAndHolesDoNotDependOnValues) {
+    Fixture f;
+    // Some points invalid: a stripe of columns the samples (x = 0, 3, ...) miss, so their pixels may be
+    // holes.
+    for (int y = 0; y < Fixture::kH; ++y)
+        for (int x = 0; x < Fixture::kW; ++x)
+            if (x % 3 == 0 && x > 20) f.points[static_cast<size_t>(y) * Fixture::kW + x].material = nullptr;
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    DenoiseSettings sparse;
+    sparse.stride = 3;
+    const int channels = 5;  // not one of the specialised counts
+    std::vector<float> zeros(f.points.size() * channels, 0.0f), ones(zeros.size(), 1.0f), spike(zeros);
+    const size_t spikePixel = 3 * Fixture::kW + 3;  // a sample of the floor
+    for (int c = 0; c < channels; ++c) spike[spikePixel * channels + c] = 1.0f + static_cast<float>(c);
+    std::vector<size_t> holesZeros, holesOnes, holesSpike;
+    const auto outZeros =
+        denoise(zeros, channels, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, sparse, &holesZeros);
+    const auto outOnes =
+        denoise(ones, channels, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, sparse, &holesOnes);
+    const auto outSpike =
+        denoise(spike, channels, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, sparse, &holesSpike);
+    EXPECT_FALSE(holesOnes.empty());
+    EXPECT_EQ(holesZeros, holesOnes);
+    EXPECT_EQ(holesSpike, holesOnes);
+    for (float v : outZeros) EXPECT_EQ(v, 0.0f);
+    for (size_t i = 0; i < f.points.size(); ++i) {
+        if (!f.points[i].valid() || std::count(holesOnes.begin(), holesOnes.end(), i)) continue;
+        for (int c = 0; c < channels; ++c) EXPECT_NEAR(outOnes[i * channels + c], 1.0f, 1e-6f) << i;
+    }
+    // Next to the spike: a positive share of it in every channel, in proportion; far away (the wall): zero.
+    const size_t near = spikePixel + 1, far = 10 * Fixture::kW + 28;
+    EXPECT_GT(outSpike[near * channels], 0.0f);
+    for (int c = 0; c < channels; ++c)
+        EXPECT_NEAR(outSpike[near * channels + c], outSpike[near * channels] * (1.0f + c), 1e-5f);
+    EXPECT_EQ(outSpike[far * channels], 0.0f);
 }
 
 }  // namespace
