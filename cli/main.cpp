@@ -55,6 +55,7 @@ struct ReferenceArgs {
     fs::path scene;
     fs::path output;  // reference: the composite image; eval: the JSON file
     fs::path aovDir;
+    fs::path referenceDir;  // eval: the reference's images, rendered before
     std::vector<std::string> overrides;
     int samplesPerPixel = 64;
     double timeLimit = 0.0;
@@ -285,6 +286,27 @@ void writeReferenceAovs(const ReferenceOutput& output, const fs::path& folder) {
     writeImage(output.delta, folder / "delta.exr");
 }
 
+// The images writeReferenceAovs wrote, for `eval --reference`; each must match the camera.
+ReferenceOutput readReferenceAovs(const fs::path& folder, const Camera& camera) {
+    ReferenceOutput r;
+    for (auto [image, name] :
+         {std::pair{&r.with, "with.exr"}, std::pair{&r.without, "without.exr"},
+          std::pair{&r.background, "background.exr"}, std::pair{&r.composite, "composite.exr"},
+          std::pair{&r.objectMask, "object_mask.exr"}, std::pair{&r.delta, "delta.exr"}}) {
+        const fs::path path = folder / name;
+        if (!fs::exists(path))
+            throw InputError(path.string(),
+                             "missing: --reference expects the folder of `deltagi reference --aov` or "
+                             "`deltagi eval --aov`");
+        *image = readImage(path);
+        if (image->width() != camera.width || image->height() != camera.height)
+            throw InputError(path.string(),
+                             fmt::format("{}x{}, but the scene's camera is {}x{}", image->width(),
+                                         image->height(), camera.width, camera.height));
+    }
+    return r;
+}
+
 int runReference(const ReferenceArgs& args) {
     const ThreadLimit limit(args.threads);
     checkOutputPath(args.output);
@@ -370,10 +392,12 @@ int runEval(const ReferenceArgs& args) {
     if (!args.aovDir.empty()) createFolder(args.aovDir);
     const Scene scene = loadAndWarn(args.scene, args.overrides);
 
-    const bool progress = !args.quiet && isatty(STDERR_FILENO);
+    const bool progress = !args.quiet && isatty(STDERR_FILENO) && args.referenceDir.empty();
     if (progress) note("reference\n");
-    const Evaluation e =
-        evaluate(scene, referenceOptions(args), progress ? progressBar(args.timeLimit) : ReferenceProgress{});
+    const Evaluation e = !args.referenceDir.empty()
+                             ? evaluate(scene, readReferenceAovs(args.referenceDir, scene.camera))
+                             : evaluate(scene, referenceOptions(args),
+                                        progress ? progressBar(args.timeLimit) : ReferenceProgress{});
     if (progress && e.reference.samplesPerPixel < args.samplesPerPixel) note("\n");
 
     writeJson(evaluationToJson(e), args.output);
@@ -381,10 +405,13 @@ int runEval(const ReferenceArgs& args) {
     if (!args.quiet) {
         note(
             "deltagi: delta_rel_error {:.4f}, object_rel_rmse {:.4f}, composite_rmse {:.5f} "
-            "(DGI {:.0f} ms, reference {} spp {:.1f} s); pixels: {} lit, {} shadowed, {} object\n",
+            "(DGI {:.0f} ms, {}); pixels: {} lit, {} shadowed, {} object\n",
             e.dgi.deltaRelError, e.dgi.objectRelRmse, e.dgi.compositeRmse, e.dgiMs,
-            e.reference.samplesPerPixel, e.referenceMs / 1000.0, e.classes.count(PixelClass::RealLit),
-            e.classes.count(PixelClass::RealShadowed), e.classes.count(PixelClass::Object));
+            args.referenceDir.empty() ? fmt::format("reference {} spp {:.1f} s", e.reference.samplesPerPixel,
+                                                    e.referenceMs / 1000.0)
+                                      : fmt::format("reference from {}", args.referenceDir.string()),
+            e.classes.count(PixelClass::RealLit), e.classes.count(PixelClass::RealShadowed),
+            e.classes.count(PixelClass::Object));
         note("deltagi: wrote {}{}\n", args.output.string(),
              args.aovDir.empty() ? "" : fmt::format(", images in {}", args.aovDir.string()));
     }
@@ -525,6 +552,13 @@ int main(int argc, char** argv) {
             ->check(CLI::Range(1, kMaxThreads));
         command->add_flag("-q,--quiet", args->quiet, "Print nothing but errors");
     }
+    evalCommand
+        ->add_option("--reference", evalArgs.referenceDir,
+                     "Judge against the reference images in this folder (written before by --aov of "
+                     "`reference` or `eval`) instead of path tracing them")
+        ->excludes("--spp")
+        ->excludes("--time-limit")
+        ->excludes("--seed");
 
     CompareArgs compareArgs;
     CLI::App* compareCommand = app.add_subcommand(

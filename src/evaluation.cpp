@@ -6,6 +6,9 @@
 #include <cmath>
 #include <limits>
 
+#include <fmt/format.h>
+
+#include "deltagi/error.h"
 #include "parallel.h"
 #include "path_tracer.h"
 
@@ -128,8 +131,17 @@ DeltaFigures deltaFigures(const Image& composite, const Image& reference, const 
 
 Evaluation evaluate(const Scene& scene, const ReferenceOptions& referenceOptions,
                     const ReferenceProgress& onPass) {
+    return evaluate(scene, renderReference(scene, referenceOptions, onPass));
+}
+
+Evaluation evaluate(const Scene& scene, ReferenceOutput reference) {
+    for (const Image* image : {&reference.composite, &reference.background, &reference.objectMask})
+        if (image->width() != scene.camera.width || image->height() != scene.camera.height)
+            throw InputError("reference",
+                             fmt::format("images are {}x{}, the scene's camera {}x{}", image->width(),
+                                         image->height(), scene.camera.width, scene.camera.height));
     Evaluation e;
-    e.reference = renderReference(scene, referenceOptions, onPass);
+    e.reference = std::move(reference);
     e.referenceMs = e.reference.totalMs;
     const Image& background = e.reference.background;
 

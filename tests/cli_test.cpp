@@ -372,6 +372,33 @@ TEST_F(CliTest, ReferenceAndEvalWriteTheirOutputs) {
         EXPECT_TRUE(figures.at(key).is_number()) << key;
     for (const char* baseline : {"no_relight", "shadow_only", "single_visibility"})
         EXPECT_TRUE(figures.at("baselines").at(baseline).at("delta_rel_error").is_number()) << baseline;
+
+    // Against the reference rendered above: the same figures as an eval that path-traces it anew with the
+    // same seed and samples (DGI is deterministic).
+    result = run("eval " + scene + " --json " + quote((dir_ / "again.json").string()) + " --reference " +
+                 quote(aov.string()));
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    EXPECT_NE(result.err.find("reference from"), std::string::npos) << result.err;
+    result = run("eval " + scene + " --json " + quote((dir_ / "fresh.json").string()) + " --spp 2 --quiet");
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    const json again = json::parse(readText(dir_ / "again.json")),
+               fresh = json::parse(readText(dir_ / "fresh.json"));
+    for (const char* key : {"delta_rel_error", "object_rel_rmse", "composite_rmse"})
+        EXPECT_DOUBLE_EQ(again.at(key).get<double>(), fresh.at(key).get<double>()) << key;
+    EXPECT_DOUBLE_EQ(again.at("baselines").at("shadow_only").at("delta_rel_error").get<double>(),
+                     fresh.at("baselines").at("shadow_only").at("delta_rel_error").get<double>());
+
+    // A reference folder that lacks an image, or whose images are of another size, is named.
+    fs::remove(aov / "without.exr");
+    expectOneErrorLine(run("eval " + scene + " --json " + quote((dir_ / "e.json").string()) +
+                           " --reference " + quote(aov.string())),
+                       {"without.exr", "missing"});
+    expectOneErrorLine(run("eval " + scene + " --json " + quote((dir_ / "e.json").string()) +
+                           " --reference " + quote(aov.string()) + " --set camera.width=12"),
+                       {"with.exr", "12x"});
+    expectOneErrorLine(run("eval " + scene + " --json " + quote((dir_ / "e.json").string()) +
+                           " --reference " + quote(aov.string()) + " --spp 4"),
+                       {"--reference", "--spp"});
 }
 
 // The field example names the shared file it misses; with the shared data it loads 16 lights from the probe.

@@ -91,6 +91,10 @@ struct Evaluation {
 // and is not blurred by how DGI would render the empty scene.
 Evaluation evaluate(const Scene& scene, const ReferenceOptions& referenceOptions,
                     const ReferenceProgress& onPass = {});
+// The same against a reference rendered before (`deltagi reference --aov` or `deltagi eval --aov`), so that
+// many DGI settings can be judged against one ground truth. Throws InputError when its images do not match
+// the scene's camera.
+Evaluation evaluate(const Scene& scene, ReferenceOutput reference);
 
 // The figures with exactly the keys of `deltagi eval --json` (see docs/ground-truth.md).
 nlohmann::ordered_json evaluationToJson(const Evaluation& evaluation);
