@@ -225,10 +225,16 @@ void readRender(const JsonNode& node, RenderOptions& render) {
     if (auto n = node.find("denoise_radius")) render.denoiseRadius = n->integer(0, 8);
 }
 
-// options.diffuse/shadow.pixel_stride: 1, 2 or 4.
+// options.diffuse/shadow.(relight_)pixel_stride: "auto" (0) or a power of two up to 32.
 int readPixelStride(const JsonNode& node) {
-    const int stride = node.integer(1, 4);
-    if (stride == 3) node.fail("must be 1, 2 or 4");
+    if (node.value().is_string()) {
+        if (node.string() != "auto")
+            node.fail(fmt::format("expected \"auto\" or 1, 2, 4, 8, 16 or 32, got {}",
+                                  describeValue(node.value())));
+        return 0;
+    }
+    const int stride = node.integer(1, 32);
+    if ((stride & (stride - 1)) != 0) node.fail("must be \"auto\" or 1, 2, 4, 8, 16 or 32");
     return stride;
 }
 
@@ -257,9 +263,11 @@ Options readOptions(const JsonNode& node) {
         if (auto r = n->find("resolution")) options.rsm.resolution = r->integer(16, 8192);
     }
     if (auto n = node.find("diffuse")) {
-        n->allowKeys({"count", "aperture_deg", "pixel_stride"});
+        n->allowKeys({"count", "aperture_deg", "pixel_stride", "relight_pixel_stride"});
         if (auto c = n->find("count")) options.diffuse.count = c->integer(1, 64);
         if (auto st = n->find("pixel_stride")) options.diffuse.pixelStride = readPixelStride(*st);
+        if (auto st = n->find("relight_pixel_stride"))
+            options.diffuse.relightPixelStride = readPixelStride(*st);
         if (auto a = n->find("aperture_deg"))
             options.diffuse.apertureDeg = a->floatNumber({0.0, 180.0, false, true});
     }
@@ -274,16 +282,24 @@ Options readOptions(const JsonNode& node) {
                                          options.specular.maxApertureDeg, options.specular.minApertureDeg));
     }
     if (auto n = node.find("shadow")) {
-        n->allowKeys({"aperture_deg", "pixel_stride"});
+        n->allowKeys({"aperture_deg", "pixel_stride", "relight_pixel_stride"});
         if (auto a = n->find("aperture_deg"))
             options.shadow.apertureDeg = a->floatNumber({0.0, 90.0, true, false});
         if (auto st = n->find("pixel_stride")) options.shadow.pixelStride = readPixelStride(*st);
+        if (auto st = n->find("relight_pixel_stride"))
+            options.shadow.relightPixelStride = readPixelStride(*st);
     }
     if (auto n = node.find("trace")) readTrace(*n, options.trace);
     if (auto n = node.find("render")) readRender(*n, options.render);
     if (auto n = node.find("environment")) readEnvironmentOptions(*n, options.environment);
     return options;
 }
+
+namespace {
+json strideJson(int stride) {
+    return stride == 0 ? json("auto") : json(stride);
+}
+}  // namespace
 
 json optionsToJson(const Options& o) {
     json volume = {{"resolution", o.volume.resolution},
@@ -298,10 +314,14 @@ json optionsToJson(const Options& o) {
         {"diffuse",
          {{"count", o.diffuse.count},
           {"aperture_deg", o.diffuse.apertureDeg},
-          {"pixel_stride", o.diffuse.pixelStride}}},
+          {"pixel_stride", strideJson(o.diffuse.pixelStride)},
+          {"relight_pixel_stride", strideJson(o.diffuse.relightPixelStride)}}},
         {"specular",
          {{"min_aperture_deg", o.specular.minApertureDeg}, {"max_aperture_deg", o.specular.maxApertureDeg}}},
-        {"shadow", {{"aperture_deg", o.shadow.apertureDeg}, {"pixel_stride", o.shadow.pixelStride}}},
+        {"shadow",
+         {{"aperture_deg", o.shadow.apertureDeg},
+          {"pixel_stride", strideJson(o.shadow.pixelStride)},
+          {"relight_pixel_stride", strideJson(o.shadow.relightPixelStride)}}},
         {"trace",
          {{"step_scale", o.trace.stepScale},
           {"start_offset", o.trace.startOffset},

@@ -79,6 +79,20 @@ struct ConeJob {
     bool indirect;  // trace diffuse and specular cones too
     ShadowMode
         mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
+    bool relit() const {
+        return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
+    }
+    // The pixel strides of its shadow and diffuse cones, "auto" resolved for the camera's image.
+    int shadowStride(const Options& o, const Camera& c) const {
+        return relit()
+                   ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightShadowStride, c.width, c.height)
+                   : pixelStrideFor(o.shadow.pixelStride, kAutoShadowStride, c.width, c.height);
+    }
+    int diffuseStride(const Options& o, const Camera& c) const {
+        return relit() ? pixelStrideFor(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride, c.width,
+                                        c.height)
+                       : pixelStrideFor(o.diffuse.pixelStride, kAutoDiffuseStride, c.width, c.height);
+    }
 };
 
 struct ConeResults {
@@ -130,8 +144,8 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& c
 }
 
 // Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs, then the
-// sky light through the cones. Shadow and diffuse cones are traced at options.shadow/diffuse.pixel_stride and
-// filtered (traceSparse).
+// sky light through the cones. Shadow and diffuse cones are traced at options.shadow/diffuse.pixel_stride
+// (relight_pixel_stride for real surfaces relit) and filtered (traceSparse).
 std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
     const Options& o = scene.options;
     const DenoiseSettings filter{o.render.denoiseRadius};
@@ -140,8 +154,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         results[j].shadows =
-            traceSparse<ShadowOcclusion>(job.points, scene.camera, o.shadow.pixelStride, lights, filter,
-                                         [&](std::span<const SurfacePoint> p) {
+            traceSparse<ShadowOcclusion>(job.points, scene.camera, job.shadowStride(o, scene.camera), lights,
+                                         filter, [&](std::span<const SurfacePoint> p) {
                                              return traceShadowCones(p, scene.lights, job.visibility, o,
                                                                      job.mode == ShadowMode::DeltaShadow);
                                          });
@@ -150,10 +164,11 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
-        results[j].diffuse = traceSparse<glm::vec3>(
-            job.points, scene.camera, o.diffuse.pixelStride, 1, filter, [&](std::span<const SurfacePoint> p) {
-                return traceDiffuseCones(p, *job.light, job.visibility, o);
-            });
+        results[j].diffuse =
+            traceSparse<glm::vec3>(job.points, scene.camera, job.diffuseStride(o, scene.camera), 1, filter,
+                                   [&](std::span<const SurfacePoint> p) {
+                                       return traceDiffuseCones(p, *job.light, job.visibility, o);
+                                   });
     }
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j)
@@ -167,8 +182,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         for (size_t j = 0; j < jobs.size(); ++j) {
             const ConeJob& job = jobs[j];
             addInto(results[j].diffuse,
-                    traceSparse<glm::vec3>(job.points, scene.camera, o.diffuse.pixelStride, 1, filter,
-                                           [&](std::span<const SurfacePoint> p) {
+                    traceSparse<glm::vec3>(job.points, scene.camera, job.diffuseStride(o, scene.camera), 1,
+                                           filter, [&](std::span<const SurfacePoint> p) {
                                                return traceSkyCones(p, environment, job.visibility, job.mode,
                                                                     o, SkyParts::Diffuse)
                                                    .diffuse;

@@ -460,6 +460,33 @@ TEST_F(SceneIoTest, WrongTypesNameThePathAndTheExpectedType) {
     }
 }
 
+// Pixel strides: "auto" (the default, 0) scales the 640x480 strides with the image; explicit ones are powers
+// of two up to 32 and are used as given.
+TEST_F(SceneIoTest, PixelStridesAreAutoOrPowersOfTwo) {
+    json doc = baseScene();
+    doc["options"] = json::parse(R"({"diffuse": {"pixel_stride": 2, "relight_pixel_stride": "auto"},
+        "shadow": {"pixel_stride": 1, "relight_pixel_stride": 32}})");
+    const Options options = load(doc).options;
+    EXPECT_EQ(options.diffuse.pixelStride, 2);
+    EXPECT_EQ(options.diffuse.relightPixelStride, 0);
+    EXPECT_EQ(options.shadow.pixelStride, 1);
+    EXPECT_EQ(options.shadow.relightPixelStride, 32);
+    EXPECT_EQ(optionsToJson(options)["diffuse"]["relight_pixel_stride"], "auto");
+    EXPECT_EQ(optionsToJson(Options{})["shadow"]["pixel_stride"], "auto");
+    for (const char* bad : {"3", "0", "64", "-2", "\"fast\"", "2.0", "true"}) {
+        doc["options"] = json::parse(std::string(R"({"shadow": {"relight_pixel_stride": )") + bad + "}}");
+        expectContains(loadError(doc), {"scene.json: options.shadow.relight_pixel_stride"});
+    }
+    EXPECT_EQ(pixelStrideFor(0, kAutoDiffuseStride, 640, 480), 8);
+    EXPECT_EQ(pixelStrideFor(0, kAutoRelightDiffuseStride, 640, 480), 16);
+    EXPECT_EQ(pixelStrideFor(0, kAutoShadowStride, 640, 480), 2);
+    EXPECT_EQ(pixelStrideFor(0, kAutoRelightShadowStride, 640, 480), 4);
+    EXPECT_EQ(pixelStrideFor(0, kAutoRelightDiffuseStride, 1920, 1080), 32);  // 16 * 1080/480 = 36 -> 32
+    EXPECT_EQ(pixelStrideFor(0, kAutoDiffuseStride, 320, 240), 4);
+    EXPECT_EQ(pixelStrideFor(0, kAutoShadowStride, 64, 48), 1);
+    EXPECT_EQ(pixelStrideFor(4, kAutoDiffuseStride, 64, 48), 4);  // explicit: as given
+}
+
 TEST_F(SceneIoTest, UnknownKeysAreErrors) {
     json doc = baseScene();
     doc["lightz"] = json::array();
