@@ -53,62 +53,130 @@ inline float neighbourWeight(const FilterPass& f, const SurfacePoint& p, const S
     return powInt(cosN, f.s.normalPower);
 }
 
-// Filters row y into `out`; pixels without any usable sample are appended to `holes`. C is the channel count
-// when known at compile time (0: f.channels).
+// The edge-aware filter at pixel (x, y), whose surface is p, from the samples of its window, into `dst`.
+// Returns false, leaving `dst` alone, when no sample is usable (a hole). C is the channel count when known at
+// compile time (0: f.channels).
 template <int C>
-void filterRow(const FilterPass& f, int y, std::span<float> out, std::vector<size_t>& holes) {
+bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float* dst) {
     const int channels = C > 0 ? C : f.channels;
     std::array<float, (C > 0 ? C : 1)> fixedSum{};
     std::vector<float> dynamicSum(C > 0 ? 0 : channels);
     float* sum = C > 0 ? fixedSum.data() : dynamicSum.data();
-    const int r = f.r, stride = f.stride, reach = f.reach, side = f.side;
-    // The samples nearest to row y (and below, column x): the window is centred on them.
-    const int yCentre = (y + stride / 2) / stride;
+    const int r = f.r, stride = f.stride;
+    // The samples nearest to the pixel (below and right of it when between two): the window's centre.
+    const int xCentre = (x + stride / 2) / stride, yCentre = (y + stride / 2) / stride;
+    const int sxBegin = std::max(xCentre - r, 0), sxEnd = std::min(xCentre + r, f.sw - 1);
     const int syBegin = std::max(yCentre - r, 0), syEnd = std::min(yCentre + r, f.sh - 1);
-    for (int x = 0; x < f.width; ++x) {
-        const size_t i = static_cast<size_t>(y) * f.width + x;
-        const SurfacePoint& p = f.points[i];
-        if (!p.valid()) continue;
-        const float pixelSize = f.pixelAngle * glm::length(p.position - f.eye);  // world size of a pixel here
-        const float planeAllowance = f.s.planeDistance * pixelSize;
-        const int xCentre = (x + stride / 2) / stride;
-        const int sxBegin = std::max(xCentre - r, 0), sxEnd = std::min(xCentre + r, f.sw - 1);
-        auto allowance = [&](int sx, int sy) {
-            return planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + reach) * side +
-                                                   sx * stride - x + reach];
-        };
-        if (!f.windowHasValue[static_cast<size_t>(yCentre) * (f.sw + 1) + xCentre]) {
-            // All zeros: the result is zero if any sample is usable, else the pixel is a hole.
-            bool usable = false;
-            for (int sy = syBegin; sy <= syEnd && !usable; ++sy)
-                for (int sx = sxBegin; sx <= sxEnd && !usable; ++sx)
-                    usable = neighbourWeight(f, p, f.samples[static_cast<size_t>(sy) * f.sw + sx],
-                                             allowance(sx, sy)) > 0.0f;
-            if (usable)
-                std::fill_n(&out[i * channels], channels, 0.0f);
-            else
-                holes.push_back(i);
-            continue;
-        }
-        std::fill_n(sum, channels, 0.0f);
-        float weightSum = 0.0f;
-        for (int sy = syBegin; sy <= syEnd; ++sy) {
-            const float* spatialRow = &f.spatial[static_cast<size_t>(sy - yCentre + r) * (2 * r + 1)];
-            for (int sx = sxBegin; sx <= sxEnd; ++sx) {
-                const size_t k = static_cast<size_t>(sy) * f.sw + sx;
-                float w = neighbourWeight(f, p, f.samples[k], allowance(sx, sy));
-                if (w == 0.0f) continue;
-                w *= spatialRow[sx - xCentre + r];
-                const float* v = &f.sampleValues[k * channels];
-                for (int c = 0; c < channels; ++c) sum[c] += v[c] * w;
-                weightSum += w;
-            }
-        }
-        if (weightSum > 0.0f)
-            for (int c = 0; c < channels; ++c) out[i * channels + c] = sum[c] / weightSum;
-        else
-            holes.push_back(i);
+    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    auto allowance = [&](int sx, int sy) {
+        return planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
+                                               sx * stride - x + f.reach];
+    };
+    if (!f.windowHasValue[static_cast<size_t>(yCentre) * (f.sw + 1) + xCentre]) {
+        // All zeros: the result is zero if any sample is usable, else the pixel is a hole.
+        for (int sy = syBegin; sy <= syEnd; ++sy)
+            for (int sx = sxBegin; sx <= sxEnd; ++sx)
+                if (neighbourWeight(f, p, f.samples[static_cast<size_t>(sy) * f.sw + sx], allowance(sx, sy)) >
+                    0.0f) {
+                    std::fill_n(dst, channels, 0.0f);
+                    return true;
+                }
+        return false;
     }
+    std::fill_n(sum, channels, 0.0f);
+    float weightSum = 0.0f;
+    for (int sy = syBegin; sy <= syEnd; ++sy) {
+        const float* spatialRow = &f.spatial[static_cast<size_t>(sy - yCentre + r) * (2 * r + 1)];
+        for (int sx = sxBegin; sx <= sxEnd; ++sx) {
+            const size_t k = static_cast<size_t>(sy) * f.sw + sx;
+            float w = neighbourWeight(f, p, f.samples[k], allowance(sx, sy));
+            if (w == 0.0f) continue;
+            w *= spatialRow[sx - xCentre + r];
+            const float* v = &f.sampleValues[k * channels];
+            for (int c = 0; c < channels; ++c) sum[c] += v[c] * w;
+            weightSum += w;
+        }
+    }
+    if (!(weightSum > 0.0f)) return false;
+    for (int c = 0; c < channels; ++c) dst[c] = sum[c] / weightSum;
+    return true;
+}
+
+// Stride > 1, the pixels between the samples: the filtered values of the (up to) 4 samples around the pixel,
+// bilinearly weighted and, like the filter's, only those on the pixel's surface. A pixel with none of them
+// on its surface (an edge between samples) takes the full filter over its window. Returns false for a hole.
+template <int C>
+bool interpolatePixel(const FilterPass& f, std::span<const float> filtered, int x, int y,
+                      const SurfacePoint& p, float* dst) {
+    const int channels = C > 0 ? C : f.channels;
+    const int stride = f.stride;
+    const int sx0 = x / stride, sy0 = y / stride;
+    const float fx = static_cast<float>(x - sx0 * stride) / static_cast<float>(stride);
+    const float fy = static_cast<float>(y - sy0 * stride) / static_cast<float>(stride);
+    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    // A small floor under the bilinear weight: a pixel on a sample's row still reads the row below when the
+    // sample is on another surface.
+    constexpr float kMinBilinear = 1e-3f;
+    size_t keys[4];
+    float weights[4];
+    int count = 0;
+    float weightSum = 0.0f;
+    for (int dy = 0; dy <= 1; ++dy)
+        for (int dx = 0; dx <= 1; ++dx) {
+            const int sx = sx0 + dx, sy = sy0 + dy;
+            if (sx >= f.sw || sy >= f.sh) continue;
+            const size_t k = static_cast<size_t>(sy) * f.sw + sx;
+            const float allowance =
+                planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
+                                                sx * stride - x + f.reach];
+            float w = neighbourWeight(f, p, f.samples[k], allowance);
+            if (w == 0.0f) continue;
+            w *= std::max((dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy), kMinBilinear);
+            keys[count] = k;
+            weights[count++] = w;
+            weightSum += w;
+        }
+    if (count == 0) return filterPixel<C>(f, x, y, p, dst);
+    std::fill_n(dst, channels, 0.0f);
+    for (int n = 0; n < count; ++n) {
+        const float w = weights[n] / weightSum;
+        const float* v = &filtered[keys[n] * channels];
+        for (int c = 0; c < channels; ++c) dst[c] += v[c] * w;
+    }
+    return true;
+}
+
+// The whole pass for C channels: every pixel filtered, or (settings.interpolate) the samples filtered and the
+// pixels between interpolated from them.
+template <int C>
+void filterImage(const FilterPass& f, std::span<float> out, std::vector<std::vector<size_t>>& rowHoles) {
+    const int channels = C > 0 ? C : f.channels;
+    std::vector<float> filtered;
+    const bool interpolate = f.stride > 1 && f.s.interpolate;
+    if (interpolate) {
+        filtered.assign(f.samples.size() * channels, 0.0f);
+        parallelFor(0, f.sh, 4, [&](int64_t sy) {
+            for (int sx = 0; sx < f.sw; ++sx) {
+                const size_t k = static_cast<size_t>(sy) * f.sw + sx;
+                if (!f.samples[k].valid) continue;
+                const size_t i =
+                    static_cast<size_t>(sy) * f.stride * f.width + static_cast<size_t>(sx) * f.stride;
+                filterPixel<C>(f, sx * f.stride, static_cast<int>(sy) * f.stride, f.points[i],
+                               &filtered[k * channels]);
+            }
+        });
+    }
+    parallelFor(0, f.height, 4, [&](int64_t y64) {
+        const int y = static_cast<int>(y64);
+        for (int x = 0; x < f.width; ++x) {
+            const size_t i = static_cast<size_t>(y) * f.width + x;
+            const SurfacePoint& p = f.points[i];
+            if (!p.valid()) continue;
+            const bool ok = interpolate ? interpolatePixel<C>(f, filtered, x, y, p, &out[i * channels])
+                                        : filterPixel<C>(f, x, y, p, &out[i * channels]);
+            if (!ok) rowHoles[y].push_back(i);
+        }
+    });
 }
 
 }  // namespace
@@ -181,23 +249,20 @@ std::vector<float> denoise(std::span<const float> values, int channels, std::spa
         }
 
     std::vector<std::vector<size_t>> rowHoles(height);
-    parallelFor(0, height, 4, [&](int64_t y) {
-        const int row = static_cast<int>(y);
-        switch (channels) {
-            case 1:
-                filterRow<1>(f, row, out, rowHoles[y]);
-                break;
-            case 3:
-                filterRow<3>(f, row, out, rowHoles[y]);
-                break;
-            case 6:
-                filterRow<6>(f, row, out, rowHoles[y]);
-                break;
-            default:
-                filterRow<0>(f, row, out, rowHoles[y]);
-                break;
-        }
-    });
+    switch (channels) {
+        case 1:
+            filterImage<1>(f, out, rowHoles);
+            break;
+        case 3:
+            filterImage<3>(f, out, rowHoles);
+            break;
+        case 6:
+            filterImage<6>(f, out, rowHoles);
+            break;
+        default:
+            filterImage<0>(f, out, rowHoles);
+            break;
+    }
     if (holes)
         for (const std::vector<size_t>& row : rowHoles) holes->insert(holes->end(), row.begin(), row.end());
     return out;

@@ -101,5 +101,41 @@ TEST(Denoise, SparseZerosStayZeroAndHolesDoNotDependOnValues) {
     EXPECT_EQ(outSpike[far * channels], 0.0f);
 }
 
+// settings.interpolate: the pixels between samples blend the filtered samples around them on their own
+// surface: a linear ramp stays linear away from the image border, and nothing crosses the crease.
+TEST(Denoise, InterpolationBetweenSamplesKeepsRampsAndEdges) {
+    Fixture f;
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    std::vector<float> values(f.points.size(), 0.0f);
+    for (int y = 0; y < Fixture::kH; y += 2)
+        for (int x = 0; x < Fixture::kW; x += 2) {
+            const bool wall = x >= Fixture::kW / 2;
+            values[static_cast<size_t>(y) * Fixture::kW + x] = wall ? 5.0f : 0.1f * static_cast<float>(y);
+        }
+    DenoiseSettings settings;
+    settings.stride = 2;
+    settings.interpolate = true;
+    std::vector<size_t> holes;
+    const auto out = denoise(values, 1, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holes);
+    EXPECT_TRUE(holes.empty());
+    for (int y = 0; y < Fixture::kH; ++y)
+        for (int x = 0; x < Fixture::kW; ++x) {
+            const float v = out[static_cast<size_t>(y) * Fixture::kW + x];
+            if (x >= Fixture::kW / 2)
+                EXPECT_NEAR(v, 5.0f, 1e-5f) << x << "," << y;  // the wall: its own constant only
+            else if (y >= 4 && y <= Fixture::kH - 6)  // the floor away from the top and bottom rows, within
+                // the floor under the bilinear weights (1e-3 of the next sample row's 0.2 more)
+                EXPECT_NEAR(v, 0.1f * static_cast<float>(y), 1e-3f) << x << "," << y;
+        }
+    // Without interpolation every pixel is filtered on its own, over the window of its nearest sample row
+    // (the next one between two): the ramp on the sample rows, a step of a row between them.
+    settings.interpolate = false;
+    const auto direct = denoise(values, 1, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, settings);
+    for (int y = 4; y <= Fixture::kH - 6; ++y)
+        EXPECT_NEAR(direct[static_cast<size_t>(y) * Fixture::kW + 3], 0.1f * static_cast<float>(y + y % 2),
+                    1e-4f)
+            << y;
+}
+
 }  // namespace
 }  // namespace deltagi
