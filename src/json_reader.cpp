@@ -272,7 +272,9 @@ Options readOptions(const JsonNode& node) {
             options.diffuse.apertureDeg = a->floatNumber({0.0, 180.0, false, true});
     }
     if (auto n = node.find("specular")) {
-        n->allowKeys({"min_aperture_deg", "max_aperture_deg"});
+        n->allowKeys({"min_aperture_deg", "max_aperture_deg", "relight_pixel_stride"});
+        if (auto st = n->find("relight_pixel_stride"))
+            options.specular.relightPixelStride = readPixelStride(*st);
         constexpr Interval kAperture{0.0, 180.0, true, true};
         if (auto a = n->find("min_aperture_deg")) options.specular.minApertureDeg = a->floatNumber(kAperture);
         if (auto a = n->find("max_aperture_deg")) options.specular.maxApertureDeg = a->floatNumber(kAperture);
@@ -317,7 +319,9 @@ json optionsToJson(const Options& o) {
           {"pixel_stride", strideJson(o.diffuse.pixelStride)},
           {"relight_pixel_stride", strideJson(o.diffuse.relightPixelStride)}}},
         {"specular",
-         {{"min_aperture_deg", o.specular.minApertureDeg}, {"max_aperture_deg", o.specular.maxApertureDeg}}},
+         {{"min_aperture_deg", o.specular.minApertureDeg},
+          {"max_aperture_deg", o.specular.maxApertureDeg},
+          {"relight_pixel_stride", strideJson(o.specular.relightPixelStride)}}},
         {"shadow",
          {{"aperture_deg", o.shadow.apertureDeg},
           {"pixel_stride", strideJson(o.shadow.pixelStride)},

@@ -82,11 +82,22 @@ struct ConeJob {
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
-    // The pixel strides of its shadow and diffuse cones, "auto" resolved for the camera's image.
+    // The pixel strides of its shadow, specular (relit only) and diffuse cones, "auto" resolved for the
+    // camera's image.
     int shadowStride(const Options& o, const Camera& c) const {
         return relit()
                    ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightShadowStride, c.width, c.height)
                    : pixelStrideFor(o.shadow.pixelStride, kAutoShadowStride, c.width, c.height);
+    }
+    // The edge-aware filter of its sparse cones; the real surfaces' change varies slowly, so its pixels
+    // between samples are interpolated.
+    DenoiseSettings filter(const Options& o) const {
+        DenoiseSettings s{o.render.denoiseRadius};
+        s.interpolate = relit();
+        return s;
+    }
+    int specularStride(const Options& o, const Camera& c) const {
+        return pixelStrideFor(o.specular.relightPixelStride, kAutoRelightSpecularStride, c.width, c.height);
     }
     int diffuseStride(const Options& o, const Camera& c) const {
         return relit() ? pixelStrideFor(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride, c.width,
@@ -148,14 +159,13 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& c
 // (relight_pixel_stride for real surfaces relit) and filtered (traceSparse).
 std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
     const Options& o = scene.options;
-    const DenoiseSettings filter{o.render.denoiseRadius};
     const int lights = static_cast<int>(scene.lights.size());
     std::vector<ConeResults> results(jobs.size());
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         results[j].shadows =
             traceSparse<ShadowOcclusion>(job.points, scene.camera, job.shadowStride(o, scene.camera), lights,
-                                         filter, [&](std::span<const SurfacePoint> p) {
+                                         job.filter(o), [&](std::span<const SurfacePoint> p) {
                                              return traceShadowCones(p, scene.lights, job.visibility, o,
                                                                      job.mode == ShadowMode::DeltaShadow);
                                          });
@@ -165,15 +175,24 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
         results[j].diffuse =
-            traceSparse<glm::vec3>(job.points, scene.camera, job.diffuseStride(o, scene.camera), 1, filter,
-                                   [&](std::span<const SurfacePoint> p) {
+            traceSparse<glm::vec3>(job.points, scene.camera, job.diffuseStride(o, scene.camera), 1,
+                                   job.filter(o), [&](std::span<const SurfacePoint> p) {
                                        return traceDiffuseCones(p, *job.light, job.visibility, o);
                                    });
     }
     timer.lap("diffuse");
-    for (size_t j = 0; j < jobs.size(); ++j)
-        if (jobs[j].indirect)
-            results[j].specular = traceSpecularCones(jobs[j].points, *jobs[j].light, jobs[j].visibility, o);
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        const ConeJob& job = jobs[j];
+        if (!job.indirect) continue;
+        auto trace = [&](std::span<const SurfacePoint> p) {
+            return traceSpecularCones(p, *job.light, job.visibility, o);
+        };
+        // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
+        results[j].specular =
+            job.relit() ? traceSparse<glm::vec3>(job.points, scene.camera,
+                                                 job.specularStride(o, scene.camera), 1, job.filter(o), trace)
+                        : trace(job.points);
+    }
     timer.lap("specular");
     // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
     // filtered like the diffuse cones (it has the same jitter noise).
@@ -183,7 +202,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             const ConeJob& job = jobs[j];
             addInto(results[j].diffuse,
                     traceSparse<glm::vec3>(job.points, scene.camera, job.diffuseStride(o, scene.camera), 1,
-                                           filter, [&](std::span<const SurfacePoint> p) {
+                                           job.filter(o), [&](std::span<const SurfacePoint> p) {
                                                return traceSkyCones(p, environment, job.visibility, job.mode,
                                                                     o, SkyParts::Diffuse)
                                                    .diffuse;

@@ -465,12 +465,13 @@ TEST_F(SceneIoTest, WrongTypesNameThePathAndTheExpectedType) {
 TEST_F(SceneIoTest, PixelStridesAreAutoOrPowersOfTwo) {
     json doc = baseScene();
     doc["options"] = json::parse(R"({"diffuse": {"pixel_stride": 2, "relight_pixel_stride": "auto"},
-        "shadow": {"pixel_stride": 1, "relight_pixel_stride": 32}})");
+        "shadow": {"pixel_stride": 1, "relight_pixel_stride": 32}, "specular": {"relight_pixel_stride": 8}})");
     const Options options = load(doc).options;
     EXPECT_EQ(options.diffuse.pixelStride, 2);
     EXPECT_EQ(options.diffuse.relightPixelStride, 0);
     EXPECT_EQ(options.shadow.pixelStride, 1);
     EXPECT_EQ(options.shadow.relightPixelStride, 32);
+    EXPECT_EQ(options.specular.relightPixelStride, 8);
     EXPECT_EQ(optionsToJson(options)["diffuse"]["relight_pixel_stride"], "auto");
     EXPECT_EQ(optionsToJson(Options{})["shadow"]["pixel_stride"], "auto");
     for (const char* bad : {"3", "0", "64", "-2", "\"fast\"", "2.0", "true"}) {

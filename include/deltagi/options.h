@@ -53,6 +53,11 @@ struct SpecularConeOptions {
     // this range (degrees, full apex angle). A narrow cone costs many small steps (Table 1 of the paper).
     float minApertureDeg = 2.0f;
     float maxApertureDeg = 90.0f;
+    // "relight_pixel_stride": the real surfaces' change through specular cones (the objects seen in a glossy
+    // real surface, and their shadow in what it reflects) traced at every relight_pixel_stride-th pixel of
+    // every such row and interpolated like the diffuse cones' ("auto", 0 here, the default:
+    // kAutoRelightSpecularStride at 640x480). Rendered surfaces trace every pixel.
+    int relightPixelStride = 0;
 };
 
 // options.shadow: the shadow cone towards each light (§3.5).
@@ -135,6 +140,7 @@ struct EnvironmentOptions {
 // its surfaces alike at any size) and rounded down to a power of two, at least 1.
 inline constexpr int kAutoDiffuseStride = 8, kAutoRelightDiffuseStride = 16;
 inline constexpr int kAutoShadowStride = 2, kAutoRelightShadowStride = 4;
+inline constexpr int kAutoRelightSpecularStride = 2;
 // The stride an option (0: "auto", with `autoStride` at 640x480) gives for a width x height image.
 inline int pixelStrideFor(int option, int autoStride, int width, int height) {
     if (option > 0) return option;
