@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "deltagi/scene.h"
+#include "parallel.h"
 #include "ray_scene.h"
 
 namespace deltagi {
@@ -18,6 +19,23 @@ struct SurfacePoint {
     const Material* material = nullptr;  // null: no surface
     bool valid() const { return material != nullptr; }
 };
+
+// Calls body(i) in parallel for the valid points among `pixels` (indices into `points`), or among all points
+// when `pixels` is empty: how the cone passes visit a sparse subset of the image (`grain` points per task).
+template <typename Body>
+void forEachValidPoint(std::span<const SurfacePoint> points, std::span<const uint32_t> pixels, int64_t grain,
+                       Body&& body) {
+    if (pixels.empty()) {
+        parallelFor(0, static_cast<int64_t>(points.size()), grain, [&](int64_t i) {
+            if (points[i].valid()) body(i);
+        });
+        return;
+    }
+    parallelFor(0, static_cast<int64_t>(pixels.size()), grain, [&](int64_t k) {
+        const int64_t i = pixels[k];
+        if (points[i].valid()) body(i);
+    });
+}
 
 struct GBuffer {
     int width = 0, height = 0;

@@ -120,25 +120,27 @@ void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
     for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
 }
 
-// Cone results `trace(points)` (perPixel values of T per pixel) at every stride-th pixel of every stride-th
-// row, then filtered: the edge-aware filter interpolates the pixels between from traced neighbours on the
-// same surface (averaging the noise of the jittered cone starts too), and the pixels that have none are
-// traced as well. With stride 1 every pixel is traced and filtered.
+// Cone results `trace(pixels)` (perPixel values of T per pixel of `points`, for the listed pixels) at every
+// stride-th pixel of every stride-th row, then filtered: the edge-aware filter interpolates the pixels
+// between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),
+// and the pixels that have none are traced as well. With stride 1 every pixel is traced and filtered.
 template <typename T, typename Trace>
 std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& camera, int stride,
                            int perPixel, const DenoiseSettings& filter, Trace&& trace) {
     if (stride <= 1) {
-        std::vector<T> values = trace(points);
+        std::vector<T> values = trace(std::span<const uint32_t>{});
         denoiseInPlace(values, perPixel, points, camera, filter);
         return values;
     }
-    std::vector<SurfacePoint> subset(points.size());
+    std::vector<uint32_t> samples;
     for (int y = 0; y < camera.height; y += stride)
         for (int x = 0; x < camera.width; x += stride) {
             const size_t i = static_cast<size_t>(y) * camera.width + x;
-            subset[i] = points[i];
+            if (points[i].valid()) samples.push_back(static_cast<uint32_t>(i));
         }
-    std::vector<T> values = trace(std::span<const SurfacePoint>(subset));
+    // An empty list would mean every pixel. Pixel 0 is a sample position, so here it is invalid: nothing.
+    if (samples.empty()) samples.push_back(0);
+    std::vector<T> values = trace(std::span<const uint32_t>(samples));
     // The same number of samples as the filter at stride 1 (at least the 3x3 around each pixel), spaced out.
     DenoiseSettings fill = filter;
     fill.radius = std::max(filter.radius, 1);
@@ -146,9 +148,8 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& c
     std::vector<size_t> holes;
     denoiseInPlace(values, perPixel, points, camera, fill, &holes);
     if (holes.empty()) return values;
-    std::fill(subset.begin(), subset.end(), SurfacePoint{});
-    for (size_t i : holes) subset[i] = points[i];
-    const std::vector<T> filled = trace(std::span<const SurfacePoint>(subset));
+    const std::vector<uint32_t> holePixels(holes.begin(), holes.end());
+    const std::vector<T> filled = trace(std::span<const uint32_t>(holePixels));
     for (size_t i : holes)
         std::copy_n(filled.begin() + i * perPixel, perPixel, values.begin() + i * perPixel);
     return values;
@@ -163,35 +164,35 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     std::vector<ConeResults> results(jobs.size());
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
-        results[j].shadows =
-            traceSparse<ShadowOcclusion>(job.points, scene.camera, job.shadowStride(o, scene.camera), lights,
-                                         job.filter(o), [&](std::span<const SurfacePoint> p) {
-                                             return traceShadowCones(p, scene.lights, job.visibility, o,
-                                                                     job.mode == ShadowMode::DeltaShadow);
-                                         });
+        results[j].shadows = traceSparse<ShadowOcclusion>(
+            job.points, scene.camera, job.shadowStride(o, scene.camera), lights, job.filter(o),
+            [&](std::span<const uint32_t> pixels) {
+                return traceShadowCones(job.points, scene.lights, job.visibility, o,
+                                        job.mode == ShadowMode::DeltaShadow, pixels);
+            });
     }
     timer.lap("shadow");
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
-        results[j].diffuse =
-            traceSparse<glm::vec3>(job.points, scene.camera, job.diffuseStride(o, scene.camera), 1,
-                                   job.filter(o), [&](std::span<const SurfacePoint> p) {
-                                       return traceDiffuseCones(p, *job.light, job.visibility, o);
-                                   });
+        results[j].diffuse = traceSparse<glm::vec3>(
+            job.points, scene.camera, job.diffuseStride(o, scene.camera), 1, job.filter(o),
+            [&](std::span<const uint32_t> pixels) {
+                return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels);
+            });
     }
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
-        auto trace = [&](std::span<const SurfacePoint> p) {
-            return traceSpecularCones(p, *job.light, job.visibility, o);
+        auto trace = [&](std::span<const uint32_t> pixels) {
+            return traceSpecularCones(job.points, *job.light, job.visibility, o, pixels);
         };
         // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
         results[j].specular =
             job.relit() ? traceSparse<glm::vec3>(job.points, scene.camera,
                                                  job.specularStride(o, scene.camera), 1, job.filter(o), trace)
-                        : trace(job.points);
+                        : trace({});
     }
     timer.lap("specular");
     // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
@@ -202,9 +203,9 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             const ConeJob& job = jobs[j];
             addInto(results[j].diffuse,
                     traceSparse<glm::vec3>(job.points, scene.camera, job.diffuseStride(o, scene.camera), 1,
-                                           job.filter(o), [&](std::span<const SurfacePoint> p) {
-                                               return traceSkyCones(p, environment, job.visibility, job.mode,
-                                                                    o, SkyParts::Diffuse)
+                                           job.filter(o), [&](std::span<const uint32_t> pixels) {
+                                               return traceSkyCones(job.points, environment, job.visibility,
+                                                                    job.mode, o, SkyParts::Diffuse, pixels)
                                                    .diffuse;
                                            }));
             addInto(results[j].specular,

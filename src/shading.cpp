@@ -36,15 +36,14 @@ float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points,
                                               std::span<const Light> lights,
                                               const VisibilityVolumes& visibility, const Options& options,
-                                              bool objectShadowOnly) {
+                                              bool objectShadowOnly, std::span<const uint32_t> pixels) {
     std::vector<ShadowOcclusion> out(points.size() * lights.size());
     if (lights.empty() || (!visibility.scene && !visibility.object)) return out;
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     const VolumeRegion& region = visibility.scene ? visibility.scene->region() : visibility.object->region();
     const float defaultTan = std::tan(0.5f * glm::radians(options.shadow.apertureDeg));
-    parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        if (!p.valid()) return;
         for (size_t l = 0; l < lights.size(); ++l) {
             const LightSample s = sampleLight(lights[l], p.position);
             if (glm::dot(s.wi, p.normal) <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
@@ -68,13 +67,14 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
 }
 
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
-                                         const VisibilityVolumes& visibility, const Options& options) {
+                                         const VisibilityVolumes& visibility, const Options& options,
+                                         std::span<const uint32_t> pixels) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
-    parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        if (!p.valid() || p.material->albedo == glm::vec3(0.0f)) return;
+        if (p.material->albedo == glm::vec3(0.0f)) return;
         const glm::mat3 frame = frameAround(p.normal);
         glm::vec3 sum(0.0f);
         for (size_t k = 0; k < cones.directions.size(); ++k) {
@@ -91,12 +91,13 @@ std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, c
 }
 
 std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, const MipVolume& light,
-                                          const VisibilityVolumes& visibility, const Options& options) {
+                                          const VisibilityVolumes& visibility, const Options& options,
+                                          std::span<const uint32_t> pixels) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
-    parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        if (!p.valid() || p.material->specular == glm::vec3(0.0f)) return;
+        if (p.material->specular == glm::vec3(0.0f)) return;
         Cone cone;
         cone.direction = glm::normalize(glm::reflect(-p.toEye, p.normal));
         cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
@@ -126,8 +127,11 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
         const SurfacePoint& p = points[i];
         if (!p.valid()) return;
         glm::vec3 radiance = emits ? p.material->emission : glm::vec3(0.0f);
-        for (size_t l = 0; l < lights.size(); ++l)
-            radiance += directRadiance(p, lights[l]) * shadowFactor(shadows[i * lights.size() + l], mode);
+        for (size_t l = 0; l < lights.size(); ++l) {
+            // Relit surfaces mostly do not change: skip the BRDF where the factor is zero.
+            const float factor = shadowFactor(shadows[i * lights.size() + l], mode);
+            if (factor != 0.0f) radiance += directRadiance(p, lights[l]) * factor;
+        }
         if (!diffuse.empty()) radiance += p.material->albedo * diffuse[i];
         if (!specular.empty()) radiance += p.material->specular * specular[i];
         out[i] = radiance;

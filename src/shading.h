@@ -19,20 +19,25 @@ namespace deltagi {
 // alone, the objects alone and both. Invalid points get zero occlusion. With `objectShadowOnly` (relighting
 // with ShadowMode::DeltaShadow, where only scene - combined counts), cones that the objects do not occlude
 // anywhere are skipped and get zero occlusion too: their change is zero either way.
+// Each pass traces the points listed in `pixels` (indices into `points`), or all of them when it is empty;
+// the others get zero. The results are per point of `points` either way.
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points,
                                               std::span<const Light> lights,
                                               const VisibilityVolumes& visibility, const Options& options,
-                                              bool objectShadowOnly = false);
+                                              bool objectShadowOnly = false,
+                                              std::span<const uint32_t> pixels = {});
 
 // Diffuse cones: cosine-weighted incoming radiance sum_k w_k L_k (so that albedo times it is the reflected
 // radiance). Zero for invalid points.
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
-                                         const VisibilityVolumes& visibility, const Options& options);
+                                         const VisibilityVolumes& visibility, const Options& options,
+                                         std::span<const uint32_t> pixels = {});
 
 // The specular cone along the mirrored view direction, aperture from the material's roughness. Zero for
 // invalid points and materials without a specular part.
 std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, const MipVolume& light,
-                                          const VisibilityVolumes& visibility, const Options& options);
+                                          const VisibilityVolumes& visibility, const Options& options,
+                                          std::span<const uint32_t> pixels = {});
 
 // The BRDF of deltagi::Material times cos(theta_i) times the light's irradiance: unshadowed direct radiance.
 glm::vec3 directRadiance(const SurfacePoint& point, const Light& light);

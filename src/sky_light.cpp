@@ -146,7 +146,7 @@ glm::vec3 skyRadiance(const SkyPyramid& sky, glm::vec3 direction, float tanHalfA
 
 SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& environment,
                        const VisibilityVolumes& visibility, ShadowMode mode, const Options& options,
-                       SkyParts parts) {
+                       SkyParts parts, std::span<const uint32_t> pixels) {
     SkyLight out{std::vector<glm::vec3>(points.size(), glm::vec3(0.0f)),
                  std::vector<glm::vec3>(points.size(), glm::vec3(0.0f))};
     if (environment.sky.empty()) return out;
@@ -171,9 +171,8 @@ SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& 
         return shadowFactor(occlusion, mode) *
                skyRadiance(environment.sky, environmentFromWorld * direction, tanHalf);
     };
-    parallelFor(0, static_cast<int64_t>(points.size()), kPointGrain, [&](int64_t i) {
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        if (!p.valid()) return;
         if (parts != SkyParts::Specular && p.material->albedo != glm::vec3(0.0f)) {
             const glm::mat3 frame = frameAround(p.normal);
             glm::vec3 sum(0.0f);

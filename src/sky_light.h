@@ -33,13 +33,14 @@ glm::vec3 skyRadiance(const SkyPyramid& sky, glm::vec3 direction, float tanHalfA
 // to be multiplied by the albedo) and through the specular cone (to be multiplied by the specular colour),
 // each cone's sky scaled by the shadow factor of `mode`. Zero for invalid points.
 // `parts` says which of the two to trace (the other stays zero). With ShadowMode::DeltaShadow, cones that the
-// objects do not occlude anywhere are skipped: their change is zero (shadowConeMeetsObjects).
+// objects do not occlude anywhere are skipped: their change is zero (shadowConeMeetsObjects). Only the points
+// listed in `pixels` are traced when it is not empty (see traceShadowCones).
 struct SkyLight {
     std::vector<glm::vec3> diffuse, specular;
 };
 enum class SkyParts { Both, Diffuse, Specular };
 SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& environment,
                        const VisibilityVolumes& visibility, ShadowMode mode, const Options& options,
-                       SkyParts parts = SkyParts::Both);
+                       SkyParts parts = SkyParts::Both, std::span<const uint32_t> pixels = {});
 
 }  // namespace deltagi
