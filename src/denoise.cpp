@@ -106,8 +106,9 @@ bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float
 // bilinearly weighted and, like the filter's, only those on the pixel's surface. A pixel with none of them
 // on its surface (an edge between samples) takes the full filter over its window. Returns false for a hole.
 template <int C>
-bool interpolatePixel(const FilterPass& f, std::span<const float> filtered, int x, int y,
-                      const SurfacePoint& p, float* dst) {
+bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
+                      std::span<const uint8_t> filteredNonZero, int x, int y, const SurfacePoint& p,
+                      float* dst) {
     const int channels = C > 0 ? C : f.channels;
     const int stride = f.stride;
     const int sx0 = x / stride, sy0 = y / stride;
@@ -117,6 +118,25 @@ bool interpolatePixel(const FilterPass& f, std::span<const float> filtered, int 
     // A small floor under the bilinear weight: a pixel on a sample's row still reads the row below when the
     // sample is on another surface.
     constexpr float kMinBilinear = 1e-3f;
+    const bool lastColumn = sx0 + 1 >= f.sw, lastRow = sy0 + 1 >= f.sh;
+    const size_t k00 = static_cast<size_t>(sy0) * f.sw + sx0;
+    if (!filteredNonZero[k00] && (lastColumn || !filteredNonZero[k00 + 1]) &&
+        (lastRow || (!filteredNonZero[k00 + f.sw] && (lastColumn || !filteredNonZero[k00 + f.sw + 1])))) {
+        // Zeros all around (most of a shadow's change): zero if any of them is on the pixel's surface.
+        for (int dy = 0; dy <= 1; ++dy)
+            for (int dx = 0; dx <= 1; ++dx) {
+                const int sx = sx0 + dx, sy = sy0 + dy;
+                if (sx >= f.sw || sy >= f.sh) continue;
+                const float allowance =
+                    planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
+                                                    sx * stride - x + f.reach];
+                if (neighbourWeight(f, p, f.samples[static_cast<size_t>(sy) * f.sw + sx], allowance) > 0.0f) {
+                    std::fill_n(dst, channels, 0.0f);
+                    return true;
+                }
+            }
+        return filterPixel<C>(f, x, y, p, dst);
+    }
     size_t keys[4];
     float weights[4];
     int count = 0;
@@ -152,17 +172,20 @@ template <int C>
 void filterImage(const FilterPass& f, std::span<float> out, std::vector<std::vector<size_t>>& rowHoles) {
     const int channels = C > 0 ? C : f.channels;
     std::vector<float> filtered;
+    std::vector<uint8_t> filteredNonZero;
     const bool interpolate = f.stride > 1 && f.s.interpolate;
     if (interpolate) {
         filtered.assign(f.samples.size() * channels, 0.0f);
+        filteredNonZero.assign(f.samples.size(), 0);
         parallelFor(0, f.sh, 4, [&](int64_t sy) {
             for (int sx = 0; sx < f.sw; ++sx) {
                 const size_t k = static_cast<size_t>(sy) * f.sw + sx;
                 if (!f.samples[k].valid) continue;
                 const size_t i =
                     static_cast<size_t>(sy) * f.stride * f.width + static_cast<size_t>(sx) * f.stride;
-                filterPixel<C>(f, sx * f.stride, static_cast<int>(sy) * f.stride, f.points[i],
-                               &filtered[k * channels]);
+                float* v = &filtered[k * channels];
+                filterPixel<C>(f, sx * f.stride, static_cast<int>(sy) * f.stride, f.points[i], v);
+                filteredNonZero[k] = std::any_of(v, v + channels, [](float c) { return c != 0.0f; });
             }
         });
     }
@@ -172,8 +195,9 @@ void filterImage(const FilterPass& f, std::span<float> out, std::vector<std::vec
             const size_t i = static_cast<size_t>(y) * f.width + x;
             const SurfacePoint& p = f.points[i];
             if (!p.valid()) continue;
-            const bool ok = interpolate ? interpolatePixel<C>(f, filtered, x, y, p, &out[i * channels])
-                                        : filterPixel<C>(f, x, y, p, &out[i * channels]);
+            const bool ok =
+                interpolate ? interpolatePixel<C>(f, filtered, filteredNonZero, x, y, p, &out[i * channels])
+                            : filterPixel<C>(f, x, y, p, &out[i * channels]);
             if (!ok) rowHoles[y].push_back(i);
         }
     });

@@ -99,6 +99,13 @@ TEST(Denoise, SparseZerosStayZeroAndHolesDoNotDependOnValues) {
     for (int c = 0; c < channels; ++c)
         EXPECT_NEAR(outSpike[near * channels + c], outSpike[near * channels] * (1.0f + c), 1e-5f);
     EXPECT_EQ(outSpike[far * channels], 0.0f);
+    // Interpolating between the filtered samples: the same zeros and holes.
+    sparse.interpolate = true;
+    std::vector<size_t> holesInterpolated;
+    for (float v :
+         denoise(zeros, channels, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, sparse, &holesInterpolated))
+        EXPECT_EQ(v, 0.0f);
+    EXPECT_EQ(holesInterpolated, holesOnes);
 }
 
 // settings.interpolate: the pixels between samples blend the filtered samples around them on their own
