@@ -108,20 +108,42 @@ std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, co
 
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
     const int n = region.resolution;
-    VoxelGeometry out{Grid3(n), {}, {}};
+    VoxelGeometry out{Grid3(n), {}, {}, {}};
     out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
+    revoxelize(out, meshes, region);
+    return out;
+}
+
+VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
     const bool emissive =
         std::any_of(meshes.begin(), meshes.end(), [](const TriangleMesh& m) { return m.material.emits(); });
-    if (emissive) out.emission.assign(out.area.size(), glm::vec3(0.0f));
+    // Clear the old geometry: the grid is zero everywhere then.
+    const VoxelBox old = out.bounds;
+    const bool hadEmission = !out.emission.empty();
+    forEachRow(old, [&](int y, int z) {
+        const size_t first = out.visibility.index(old.lo.x, y, z), count = old.hi.x - old.lo.x;
+        std::fill_n(&out.visibility[first], count, glm::vec4(0.0f));
+        std::fill_n(out.area.begin() + first, count, 0.0f);
+        if (hadEmission) std::fill_n(out.emission.begin() + first, count, glm::vec3(0.0f));
+    });
+    if (!emissive) out.emission.clear();
+    if (emissive && !hadEmission) out.emission.assign(out.area.size(), glm::vec3(0.0f));
+
     const std::vector<VoxelTriangle> tris = toVoxelSpace(meshes, region);
-    const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
+    VoxelBox& box = out.bounds;
+    box = {};
+    for (const VoxelTriangle& t : tris) box.extend({t.lo, t.hi + 1});
+    if (box.empty()) return old;
+    // Scatter in slabs of the box's layers.
+    const int slabCount = (box.hi.z - box.lo.z + kSlabThickness - 1) / kSlabThickness;
     const SlabBins bins = binBySlab(tris.size(), slabCount, [&](size_t i) {
-        return std::pair{tris[i].lo.z / kSlabThickness, tris[i].hi.z / kSlabThickness};
+        return std::pair{(tris[i].lo.z - box.lo.z) / kSlabThickness,
+                         (tris[i].hi.z - box.lo.z) / kSlabThickness};
     });
     const glm::vec3 half(0.5f);
     parallelFor(0, slabCount, 1, [&](int64_t s) {
-        const int zBegin = static_cast<int>(s) * kSlabThickness;
-        const int zEnd = std::min(zBegin + kSlabThickness, n);
+        const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
+        const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
         for (uint32_t ti : bins.slab(s)) {
             const VoxelTriangle& t = tris[ti];
             for (int z = std::max(zBegin, t.lo.z); z < std::min(zEnd, t.hi.z + 1); ++z)
@@ -149,18 +171,20 @@ VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion&
     });
     // Normal sums to area-weighted means; areas from voxel units to world units.
     const float voxelArea = region.voxelSize() * region.voxelSize();
-    parallelFor(0, static_cast<int64_t>(out.area.size()), 1 << 14, [&](int64_t i) {
-        glm::vec4& v = out.visibility[i];
-        float a = out.area[i];
-        if (a > 0.0f) {
-            v.y /= a;
-            v.z /= a;
-            v.w /= a;
+    forEachRow(box, [&](int y, int z) {
+        for (size_t i = out.visibility.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i) {
+            glm::vec4& v = out.visibility[i];
+            float a = out.area[i];
+            if (a > 0.0f) {
+                v.y /= a;
+                v.z /= a;
+                v.w /= a;
+            }
+            out.area[i] = a * voxelArea;
+            if (emissive) out.emission[i] *= voxelArea;
         }
-        out.area[i] = a * voxelArea;
-        if (emissive) out.emission[i] *= voxelArea;
     });
-    return out;
+    return old;
 }
 
 }  // namespace deltagi
