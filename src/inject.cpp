@@ -166,7 +166,10 @@ RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone,
             const bool bIn = b != before.end() && b->index < last, aIn = a != after.end() && a->index < last;
             if (!bIn && !aIn) break;
             if (bIn && aIn && b->index == a->index) {
-                if (std::memcmp(&*b, &*a, sizeof(RsmTexel)) != 0) removed(b), added(a);
+                if (std::memcmp(&*b, &*a, sizeof(RsmTexel)) != 0) {
+                    removed(b);
+                    added(a);
+                }
                 ++b, ++a;
             } else if (bIn && (!aIn || b->index < a->index)) {
                 removed(b++);
@@ -191,58 +194,73 @@ RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone,
     return changes;
 }
 
-void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
-                   std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
-                   std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight, Grid3& fullLight,
-                   Grid3& deltaLight) {
-    const int n = sceneTexels.resolution;
-    const std::vector<TexelBins::Entry>& entries = sceneTexels.entries;
-    // The scene's texels that are gone, as positions in `entries` (increasing).
+namespace {
+
+// The scene's texels that the objects removed or changed, as positions in `bins.entries` (increasing).
+std::vector<uint32_t> goneEntries(const TexelBins& bins, const RsmChanges& changes) {
+    const uint32_t n = static_cast<uint32_t>(bins.resolution);
     std::vector<uint32_t> gone;
     gone.reserve(changes.removed.size());
     for (const RsmChanges::Texel& t : changes.removed) {
         const uint32_t row = t.voxel / n, x = t.voxel % n;
-        auto e = std::lower_bound(entries.begin() + sceneTexels.rowStart[row],
-                                  entries.begin() + sceneTexels.rowStart[row + 1], x,
+        const auto rowEnd = bins.entries.begin() + bins.rowStart[row + 1];
+        auto e = std::lower_bound(bins.entries.begin() + bins.rowStart[row], rowEnd, x,
                                   [](const TexelBins::Entry& e, uint32_t x) { return e.x < x; });
-        while (e->light != t.light || e->texel != t.position) ++e;  // in its voxel's few entries
-        assert(e->x == x);
-        gone.push_back(static_cast<uint32_t>(e - entries.begin()));
+        while (e != rowEnd && (e->light != t.light || e->texel != t.position)) ++e;  // its voxel's few
+        assert(e != rowEnd && e->x == x);  // every texel of the scene's maps is binned
+        if (e != rowEnd) gone.push_back(static_cast<uint32_t>(e - bins.entries.begin()));
     }
     std::sort(gone.begin(), gone.end());
+    return gone;
+}
 
-    forEachRow(box, [&](int y, int z) {
-        const size_t row = static_cast<size_t>(z) * n + y;
-        // The row's remaining scene texels and its new texels, merged into injectLight's order per voxel.
-        auto e = std::lower_bound(entries.begin() + sceneTexels.rowStart[row],
-                                  entries.begin() + sceneTexels.rowStart[row + 1], box.lo.x,
-                                  [](const TexelBins::Entry& e, int x) { return e.x < x; });
-        const auto eEnd = entries.begin() + sceneTexels.rowStart[row + 1];
-        auto g = std::lower_bound(gone.begin(), gone.end(), static_cast<uint32_t>(e - entries.begin()));
-        const uint32_t firstVoxel = static_cast<uint32_t>(row * n + box.lo.x);
-        const uint32_t endVoxel = static_cast<uint32_t>(row * n + box.hi.x);
-        auto a = std::lower_bound(changes.added.begin(), changes.added.end(), firstVoxel,
-                                  [](const RsmChanges::Texel& t, uint32_t v) { return t.voxel < v; });
-        std::vector<glm::vec4> sums(box.hi.x - box.lo.x, glm::vec4(0.0f));
-        while (true) {
-            const bool eIn = e != eEnd && e->x < box.hi.x;
-            const bool aIn = a != changes.added.end() && a->voxel < endVoxel;
-            if (!eIn && !aIn) break;
-            const RsmTexel* sceneTexel = eIn ? &sceneAlone[e->light].texels[e->texel] : nullptr;
-            const bool takeScene = eIn && (!aIn || std::tuple(firstVoxel - box.lo.x + e->x,
-                                                              uint32_t(e->light), sceneTexel->index) <
-                                                       std::tuple(a->voxel, a->light, a->texel->index));
-            if (takeScene) {
-                if (g != gone.end() && *g == static_cast<uint32_t>(e - entries.begin()))
-                    ++g;
-                else
-                    sums[e->x - box.lo.x] += glm::vec4(sceneTexel->flux, sceneTexel->area);
-                ++e;
-            } else {
-                sums[a->voxel - firstVoxel] += glm::vec4(a->texel->flux, a->texel->area);
-                ++a;
-            }
+// Per voxel x0 <= x < x1 of row (y, z), the sum of its texels' (reflected flux, footprint area) with the
+// objects: the scene's texels that are not gone and the added ones, merged into injectLight's order (map,
+// then texel) so that the sums add the same numbers in the same order, and round the same.
+std::vector<glm::vec4> rowTexelSums(int y, int z, int x0, int x1, const TexelBins& bins,
+                                    std::span<const ReflectiveShadowMap> sceneAlone,
+                                    std::span<const uint32_t> gone, const RsmChanges& changes) {
+    const int n = bins.resolution;
+    const size_t row = static_cast<size_t>(z) * n + y;
+    const uint32_t rowVoxel = static_cast<uint32_t>(row * n);  // the index of voxel (0, y, z)
+    const std::vector<TexelBins::Entry>& entries = bins.entries;
+    auto e = std::lower_bound(entries.begin() + bins.rowStart[row], entries.begin() + bins.rowStart[row + 1],
+                              x0, [](const TexelBins::Entry& e, int x) { return e.x < x; });
+    const auto eEnd = entries.begin() + bins.rowStart[row + 1];
+    auto g = std::lower_bound(gone.begin(), gone.end(), static_cast<uint32_t>(e - entries.begin()));
+    auto a = std::lower_bound(changes.added.begin(), changes.added.end(), rowVoxel + x0,
+                              [](const RsmChanges::Texel& t, uint32_t v) { return t.voxel < v; });
+    std::vector<glm::vec4> sums(x1 - x0, glm::vec4(0.0f));
+    while (true) {
+        const bool eIn = e != eEnd && e->x < x1;
+        const bool aIn = a != changes.added.end() && a->voxel < rowVoxel + x1;
+        if (!eIn && !aIn) break;
+        const RsmTexel* sceneTexel = eIn ? &sceneAlone[e->light].texels[e->texel] : nullptr;
+        if (eIn && (!aIn || std::tuple(rowVoxel + e->x, uint32_t{e->light}, sceneTexel->index) <
+                                std::tuple(a->voxel, a->light, a->texel->index))) {
+            if (g != gone.end() && *g == static_cast<uint32_t>(e - entries.begin()))
+                ++g;  // removed or changed by the objects
+            else
+                sums[e->x - x0] += glm::vec4(sceneTexel->flux, sceneTexel->area);
+            ++e;
+        } else {
+            sums[a->voxel - rowVoxel - x0] += glm::vec4(a->texel->flux, a->texel->area);
+            ++a;
         }
+    }
+    return sums;
+}
+
+}  // namespace
+
+void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
+                   std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
+                   std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight, Grid3& fullLight,
+                   Grid3& deltaLight) {
+    const std::vector<uint32_t> gone = goneEntries(sceneTexels, changes);
+    forEachRow(box, [&](int y, int z) {
+        const std::vector<glm::vec4> sums =
+            rowTexelSums(y, z, box.lo.x, box.hi.x, sceneTexels, sceneAlone, gone, changes);
         for (int x = box.lo.x; x < box.hi.x; ++x) {
             const size_t i = fullLight.index(x, y, z);
             const glm::vec4 light = voxelLight(sums[x - box.lo.x], geometry, i);
