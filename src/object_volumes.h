@@ -21,7 +21,8 @@
 
 namespace deltagi {
 
-// The real scene's share of the volumes (kept by the renderer).
+// The real scene's share of the volumes (kept by the renderer). The same from frame to frame: a changed real
+// scene, light or region needs a new ObjectVolumes (the renderer keeps both in one place and drops both).
 struct RealSceneVolumes {
     const VoxelGeometry& geometry;
     std::span<const ReflectiveShadowMap> rsms;  // of the real scene alone, one per light
