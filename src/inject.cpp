@@ -18,7 +18,8 @@ constexpr float kFullCoverage = 0.75f;
 
 // Voxel i of the light volume from its texels' summed (reflected flux, footprint area) and the geometry in
 // it.
-glm::vec4 voxelLight(glm::vec4 texelSum, std::span<const VoxelGeometry* const> geometry, size_t i) {
+[[gnu::always_inline]] inline glm::vec4 voxelLight(glm::vec4 texelSum,
+                                                   std::span<const VoxelGeometry* const> geometry, size_t i) {
     float occupancy = 0.0f, area = 0.0f;
     glm::vec3 emitted(0.0f);  // radiance times area
     for (const VoxelGeometry* g : geometry) {
@@ -39,17 +40,11 @@ glm::vec4 voxelLight(glm::vec4 texelSum, std::span<const VoxelGeometry* const> g
     return glm::vec4(radiance * occupancy, occupancy);
 }
 
-glm::vec4 deltaVoxel(glm::vec4 full, glm::vec4 sceneOnly) {
+[[gnu::always_inline]] inline glm::vec4 deltaVoxel(glm::vec4 full, glm::vec4 sceneOnly) {
     return glm::vec4(full.x - sceneOnly.x, full.y - sceneOnly.y, full.z - sceneOnly.z, full.w);
 }
 
 }  // namespace
-
-glm::ivec3 texelVoxel(glm::vec3 position, const VolumeRegion& region) {
-    const float invVoxel = 1.0f / region.voxelSize();
-    return glm::clamp(glm::ivec3(glm::floor((position - region.origin) * invVoxel)), glm::ivec3(0),
-                      glm::ivec3(region.resolution - 1));
-}
 
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
                   std::span<const VoxelGeometry* const> geometry) {
@@ -62,9 +57,10 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
         int z;
     };
     std::vector<Splat> splats;
+    const TexelVoxels texelVoxel(region);
     for (const ReflectiveShadowMap& rsm : rsms) {
         for (const RsmTexel& t : rsm.texels) {
-            const glm::ivec3 v = texelVoxel(t.position, region);
+            const glm::ivec3 v = texelVoxel(t.position);
             splats.push_back(
                 {&t, static_cast<uint32_t>((static_cast<size_t>(v.z) * n + v.y) * n + v.x), v.z});
         }
@@ -102,11 +98,12 @@ TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegio
     TexelBins bins;
     bins.resolution = n;
     // A counting sort by row, which keeps injectLight's order inside each row, then each row by x.
+    const TexelVoxels texelVoxel(region);
     std::vector<uint32_t> rowOf;
     bins.rowStart.assign(static_cast<size_t>(n) * n + 1, 0);
     for (const ReflectiveShadowMap& rsm : rsms)
         for (const RsmTexel& t : rsm.texels) {
-            const glm::ivec3 v = texelVoxel(t.position, region);
+            const glm::ivec3 v = texelVoxel(t.position);
             rowOf.push_back(static_cast<uint32_t>(v.z * n + v.y));
             ++bins.rowStart[rowOf.back() + 1];
         }
@@ -116,7 +113,7 @@ TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegio
     size_t k = 0;
     for (size_t l = 0; l < rsms.size(); ++l)
         for (size_t t = 0; t < rsms[l].texels.size(); ++t, ++k) {
-            const int x = texelVoxel(rsms[l].texels[t].position, region).x;
+            const int x = texelVoxel(rsms[l].texels[t].position).x;
             bins.entries[cursor[rowOf[k]]++] = {static_cast<uint16_t>(x), static_cast<uint16_t>(l),
                                                 static_cast<uint32_t>(t)};
         }
@@ -133,10 +130,8 @@ RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone,
     // Texels are compared as bytes: a copy is the same bytes.
     static_assert(sizeof(RsmTexel) == 11 * sizeof(float), "RsmTexel has padding");
     const int n = region.resolution;
-    auto voxelIndex = [&](const RsmTexel& t) {
-        const glm::ivec3 v = texelVoxel(t.position, region);
-        return static_cast<uint32_t>((static_cast<size_t>(v.z) * n + v.y) * n + v.x);
-    };
+    const TexelVoxels texelVoxel(region);
+    auto voxelIndex = [&](const RsmTexel& t) { return texelVoxel.index(t.position); };
     // One piece of work per range, in light and texel order.
     struct Piece {
         uint32_t light;

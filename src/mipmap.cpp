@@ -10,7 +10,7 @@ namespace {
 
 // The mean of the 8 children of coarse voxel (x, y, z), summed in one fixed order: every path gives the same
 // bits.
-glm::vec4 childMean(const Grid3& fine, int x, int y, int z) {
+[[gnu::always_inline]] inline glm::vec4 childMean(const Grid3& fine, int x, int y, int z) {
     glm::vec4 sum(0.0f);
     for (int dz = 0; dz < 2; ++dz)
         for (int dy = 0; dy < 2; ++dy)
