@@ -68,7 +68,7 @@ float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMi
 namespace {
 
 struct VoxelTriangle {
-    VoxelTriangle() {}  // not zeroed: toVoxelSpace writes every one it reads
+    VoxelTriangle() {}   // not zeroed: toVoxelSpace writes every one it reads
     glm::vec3 p[3];      // level-0 voxel coordinates
     glm::vec3 normal;    // unit face normal (winding order)
     float area;          // voxel units^2
