@@ -4,11 +4,14 @@
 // The whole-frame figures come from `deltagi bench` (docs in README "Performance").
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <cmath>
+#include <numbers>
 
 #include "cone_trace.h"
 #include "inject.h"
 #include "mipmap.h"
+#include "object_volumes.h"
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
 #include "shapes.h"
@@ -68,6 +71,63 @@ void BM_Mipmap(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(g.visibility.size()));
 }
 BENCHMARK(BM_Mipmap)->Arg(64)->Arg(128)->Arg(256)->Unit(benchmark::kMillisecond);
+
+// Stages 1, 3 and 4 of a frame in which the 100k-triangle ball moves a little (a circle of one voxel's
+// radius, 1/16 turn per frame, as in `deltagi bench`), on the volumes kept from the frame before
+// (ObjectVolumes, as FrameRenderer runs them): one stage's time per benchmark (manual time; the RSM update
+// between stages is not counted). BM_Voxelize/316, BM_Inject and BM_Mipmap/128 above do the same work over
+// whole volumes.
+enum class FrameStage { Voxelize, Inject, Mipmap };
+void BM_MovingObjectFrame(benchmark::State& state, FrameStage stage) {
+    KernelScene k(128, 316);
+    const RayScene realOnly(k.scene, SceneContent::RealOnly);
+    const VoxelGeometry sceneGeometry = voxelize(k.scene.real, k.region);
+    const Light& light = k.scene.lights[0];
+    const std::vector<ReflectiveShadowMap> sceneRsms = {
+        renderReflectiveShadowMap(realOnly, light, k.region, 512)};
+    const VoxelGeometry* alone[] = {&sceneGeometry};
+    const Grid3 sceneLight = injectLight(sceneRsms, k.region, alone);
+    const std::vector<glm::vec3> original = k.scene.virtuals[0].positions;
+    ObjectVolumes volumes;
+    int frame = 0;
+    using Clock = std::chrono::steady_clock;
+    auto runFrame = [&]() {
+        const float angle = 2.0f * std::numbers::pi_v<float> * static_cast<float>(frame++) / 16.0f;
+        const glm::vec3 offset =
+            k.region.voxelSize() * glm::vec3(std::cos(angle) - 1.0f, 0.0f, std::sin(angle));
+        for (size_t v = 0; v < original.size(); ++v) k.scene.virtuals[0].positions[v] = original[v] + offset;
+        const RayScene all(k.scene, SceneContent::VirtualOnly, &realOnly);
+        const Bounds3f bounds = k.scene.virtuals[0].bounds();
+        const auto t0 = Clock::now();
+        volumes.voxelize(k.scene.virtuals, k.region);
+        const auto t1 = Clock::now();
+        const std::vector<ReflectiveShadowMap> withObjects = {
+            updateReflectiveShadowMap(sceneRsms[0], all, light, k.region, bounds)};
+        const std::vector<std::vector<TexelRange>> retraced = {
+            retracedTexels(sceneRsms[0], all, light, k.region, bounds)};
+        const auto t2 = Clock::now();
+        volumes.inject({sceneGeometry, sceneRsms, sceneLight}, withObjects, retraced);
+        const auto t3 = Clock::now();
+        volumes.mipmap();
+        const auto t4 = Clock::now();
+        const auto [begin, end] = stage == FrameStage::Voxelize ? std::pair{t0, t1}
+                                  : stage == FrameStage::Inject ? std::pair{t2, t3}
+                                                                : std::pair{t3, t4};
+        return std::chrono::duration<double>(end - begin).count();
+    };
+    runFrame();  // the first frame computes everything
+    for (auto _ : state) state.SetIterationTime(runFrame());
+    state.counters["voxels_redone"] = static_cast<double>(volumes.injectedBox().count());
+}
+BENCHMARK_CAPTURE(BM_MovingObjectFrame, Voxelize, FrameStage::Voxelize)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_MovingObjectFrame, Inject, FrameStage::Inject)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_MovingObjectFrame, Mipmap, FrameStage::Mipmap)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
 
 // Cones from points on the floor around the ball, through the two visibility volumes and the delta volume
 // (light cones) or the visibility volumes alone (shadow cones towards the light).

@@ -1,7 +1,10 @@
 #include "inject.h"
 
 #include <algorithm>
+#include <cassert>
+#include <cstring>
 #include <numbers>
+#include <tuple>
 
 #include "parallel.h"
 
@@ -12,12 +15,40 @@ namespace {
 // (k-1)^2 and (k+1)^2 texels of k^2. A voxel whose footprints cover this fraction of its area counts as fully
 // lit; below it, the radiance is scaled by the covered fraction (partly shadowed voxels).
 constexpr float kFullCoverage = 0.75f;
+
+// Voxel i of the light volume from its texels' summed (reflected flux, footprint area) and the geometry in
+// it.
+[[gnu::always_inline]] inline glm::vec4 voxelLight(glm::vec4 texelSum,
+                                                   std::span<const VoxelGeometry* const> geometry, size_t i) {
+    float occupancy = 0.0f, area = 0.0f;
+    glm::vec3 emitted(0.0f);  // radiance times area
+    for (const VoxelGeometry* g : geometry) {
+        occupancy = std::max(occupancy, g->visibility[i].x);
+        area += g->area[i];
+        if (!g->emission.empty()) emitted += g->emission[i];
+    }
+    const glm::vec4 a = texelSum;  // (reflected flux, footprint area)
+    glm::vec3 radiance(0.0f);
+    if (a.w > 0.0f) {
+        occupancy = 1.0f;
+        // Mean radiance of the lit texels, times the lit fraction of the voxel's surface.
+        const float litFraction = area > 0.0f ? std::min(1.0f, a.w / (kFullCoverage * area)) : 1.0f;
+        radiance = glm::vec3(a) * (litFraction / (std::numbers::pi_v<float> * a.w));
+    }
+    // Emissive surfaces add their own radiance, averaged over all the surface area in the voxel.
+    if (area > 0.0f && emitted != glm::vec3(0.0f)) radiance += emitted / area;
+    return glm::vec4(radiance * occupancy, occupancy);
+}
+
+[[gnu::always_inline]] inline glm::vec4 deltaVoxel(glm::vec4 full, glm::vec4 sceneOnly) {
+    return glm::vec4(full.x - sceneOnly.x, full.y - sceneOnly.y, full.z - sceneOnly.z, full.w);
+}
+
 }  // namespace
 
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
                   std::span<const VoxelGeometry* const> geometry) {
     const int n = region.resolution;
-    const float invVoxel = 1.0f / region.voxelSize();
 
     // All texels of all lights, in light and texel order, each with its voxel.
     struct Splat {
@@ -26,10 +57,10 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
         int z;
     };
     std::vector<Splat> splats;
+    const TexelVoxels texelVoxel(region);
     for (const ReflectiveShadowMap& rsm : rsms) {
         for (const RsmTexel& t : rsm.texels) {
-            glm::ivec3 v = glm::clamp(glm::ivec3(glm::floor((t.position - region.origin) * invVoxel)),
-                                      glm::ivec3(0), glm::ivec3(n - 1));
+            const glm::ivec3 v = texelVoxel(t.position);
             splats.push_back(
                 {&t, static_cast<uint32_t>((static_cast<size_t>(v.z) * n + v.y) * n + v.x), v.z});
         }
@@ -50,36 +81,188 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     });
 
     Grid3 light(n);
-    parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) {
-        float occupancy = 0.0f, area = 0.0f;
-        glm::vec3 emitted(0.0f);  // radiance times area
-        for (const VoxelGeometry* g : geometry) {
-            occupancy = std::max(occupancy, g->visibility[i].x);
-            area += g->area[i];
-            if (!g->emission.empty()) emitted += g->emission[i];
-        }
-        const glm::vec4 a = accum[i];  // (reflected flux, footprint area)
-        glm::vec3 radiance(0.0f);
-        if (a.w > 0.0f) {
-            occupancy = 1.0f;
-            // Mean radiance of the lit texels, times the lit fraction of the voxel's surface.
-            const float litFraction = area > 0.0f ? std::min(1.0f, a.w / (kFullCoverage * area)) : 1.0f;
-            radiance = glm::vec3(a) * (litFraction / (std::numbers::pi_v<float> * a.w));
-        }
-        // Emissive surfaces add their own radiance, averaged over all the surface area in the voxel.
-        if (area > 0.0f && emitted != glm::vec3(0.0f)) radiance += emitted / area;
-        light[i] = glm::vec4(radiance * occupancy, occupancy);
-    });
+    parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14,
+                [&](int64_t i) { light[i] = voxelLight(accum[i], geometry, i); });
     return light;
 }
 
 Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {
     Grid3 delta(full.resolution());
-    parallelFor(0, static_cast<int64_t>(delta.size()), 1 << 14, [&](int64_t i) {
-        const glm::vec4 f = full[i], s = sceneOnly[i];
-        delta[i] = glm::vec4(f.x - s.x, f.y - s.y, f.z - s.z, f.w);
-    });
+    parallelFor(0, static_cast<int64_t>(delta.size()), 1 << 14,
+                [&](int64_t i) { delta[i] = deltaVoxel(full[i], sceneOnly[i]); });
     return delta;
+}
+
+TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region) {
+    const int n = region.resolution;
+    TexelBins bins;
+    bins.resolution = n;
+    // A counting sort by row, which keeps injectLight's order inside each row, then each row by x.
+    const TexelVoxels texelVoxel(region);
+    std::vector<uint32_t> rowOf;
+    bins.rowStart.assign(static_cast<size_t>(n) * n + 1, 0);
+    for (const ReflectiveShadowMap& rsm : rsms)
+        for (const RsmTexel& t : rsm.texels) {
+            const glm::ivec3 v = texelVoxel(t.position);
+            rowOf.push_back(static_cast<uint32_t>(v.z * n + v.y));
+            ++bins.rowStart[rowOf.back() + 1];
+        }
+    for (size_t r = 0; r + 1 < bins.rowStart.size(); ++r) bins.rowStart[r + 1] += bins.rowStart[r];
+    bins.entries.resize(rowOf.size());
+    std::vector<uint32_t> cursor(bins.rowStart.begin(), bins.rowStart.end() - 1);
+    size_t k = 0;
+    for (size_t l = 0; l < rsms.size(); ++l)
+        for (size_t t = 0; t < rsms[l].texels.size(); ++t, ++k) {
+            const int x = texelVoxel(rsms[l].texels[t].position).x;
+            bins.entries[cursor[rowOf[k]]++] = {static_cast<uint16_t>(x), static_cast<uint16_t>(l),
+                                                static_cast<uint32_t>(t)};
+        }
+    parallelFor(0, static_cast<int64_t>(n) * n, 64, [&](int64_t r) {
+        std::stable_sort(bins.entries.begin() + bins.rowStart[r], bins.entries.begin() + bins.rowStart[r + 1],
+                         [](const TexelBins::Entry& a, const TexelBins::Entry& b) { return a.x < b.x; });
+    });
+    return bins;
+}
+
+RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone,
+                       std::span<const ReflectiveShadowMap> withObjects,
+                       std::span<const std::vector<TexelRange>> retraced, const VolumeRegion& region) {
+    // Texels are compared as bytes: a copy is the same bytes.
+    static_assert(sizeof(RsmTexel) == 11 * sizeof(float), "RsmTexel has padding");
+    const int n = region.resolution;
+    const TexelVoxels texelVoxel(region);
+    auto voxelIndex = [&](const RsmTexel& t) { return texelVoxel.index(t.position); };
+    // One piece of work per range, in light and texel order.
+    struct Piece {
+        uint32_t light;
+        TexelRange range;
+        std::vector<RsmChanges::Texel> removed, added;
+    };
+    std::vector<Piece> pieces;
+    for (size_t l = 0; l < retraced.size(); ++l)
+        for (const TexelRange& r : retraced[l]) pieces.push_back({static_cast<uint32_t>(l), r, {}, {}});
+    auto byIndex = [](const RsmTexel& t, uint32_t index) { return t.index < index; };
+    parallelFor(0, static_cast<int64_t>(pieces.size()), 1, [&](int64_t p) {
+        Piece& piece = pieces[p];
+        const std::vector<RsmTexel>& before = sceneAlone[piece.light].texels;
+        const std::vector<RsmTexel>& after = withObjects[piece.light].texels;
+        auto b = std::lower_bound(before.begin(), before.end(), piece.range.first, byIndex);
+        auto a = std::lower_bound(after.begin(), after.end(), piece.range.first, byIndex);
+        auto removed = [&](std::vector<RsmTexel>::const_iterator t) {
+            piece.removed.push_back(
+                {voxelIndex(*t), piece.light, &*t, static_cast<uint32_t>(t - before.begin())});
+        };
+        auto added = [&](std::vector<RsmTexel>::const_iterator t) {
+            piece.added.push_back(
+                {voxelIndex(*t), piece.light, &*t, static_cast<uint32_t>(t - after.begin())});
+        };
+        const uint32_t last = piece.range.last;
+        while (true) {
+            const bool bIn = b != before.end() && b->index < last, aIn = a != after.end() && a->index < last;
+            if (!bIn && !aIn) break;
+            if (bIn && aIn && b->index == a->index) {
+                if (std::memcmp(&*b, &*a, sizeof(RsmTexel)) != 0) {
+                    removed(b);
+                    added(a);
+                }
+                ++b, ++a;
+            } else if (bIn && (!aIn || b->index < a->index)) {
+                removed(b++);
+            } else {
+                added(a++);
+            }
+        }
+    });
+    RsmChanges changes;
+    for (Piece& piece : pieces) {
+        changes.removed.insert(changes.removed.end(), piece.removed.begin(), piece.removed.end());
+        changes.added.insert(changes.added.end(), piece.added.begin(), piece.added.end());
+    }
+    std::sort(changes.added.begin(), changes.added.end(), [](const auto& a, const auto& b) {
+        return std::tuple(a.voxel, a.light, a.texel->index) < std::tuple(b.voxel, b.light, b.texel->index);
+    });
+    for (const auto* list : {&changes.removed, &changes.added})
+        for (const RsmChanges::Texel& t : *list) {
+            const uint32_t x = t.voxel % n, y = t.voxel / n % n, z = t.voxel / n / n;
+            changes.bounds.extend(VoxelBox::voxel(glm::ivec3(x, y, z)));
+        }
+    return changes;
+}
+
+namespace {
+
+// The scene's texels that the objects removed or changed, as positions in `bins.entries` (increasing).
+std::vector<uint32_t> goneEntries(const TexelBins& bins, const RsmChanges& changes) {
+    const uint32_t n = static_cast<uint32_t>(bins.resolution);
+    std::vector<uint32_t> gone;
+    gone.reserve(changes.removed.size());
+    for (const RsmChanges::Texel& t : changes.removed) {
+        const uint32_t row = t.voxel / n, x = t.voxel % n;
+        const auto rowEnd = bins.entries.begin() + bins.rowStart[row + 1];
+        auto e = std::lower_bound(bins.entries.begin() + bins.rowStart[row], rowEnd, x,
+                                  [](const TexelBins::Entry& e, uint32_t x) { return e.x < x; });
+        while (e != rowEnd && (e->light != t.light || e->texel != t.position)) ++e;  // its voxel's few
+        assert(e != rowEnd && e->x == x);  // every texel of the scene's maps is binned
+        if (e != rowEnd) gone.push_back(static_cast<uint32_t>(e - bins.entries.begin()));
+    }
+    std::sort(gone.begin(), gone.end());
+    return gone;
+}
+
+// Per voxel x0 <= x < x1 of row (y, z), the sum of its texels' (reflected flux, footprint area) with the
+// objects: the scene's texels that are not gone and the added ones, merged into injectLight's order (map,
+// then texel) so that the sums add the same numbers in the same order, and round the same.
+std::vector<glm::vec4> rowTexelSums(int y, int z, int x0, int x1, const TexelBins& bins,
+                                    std::span<const ReflectiveShadowMap> sceneAlone,
+                                    std::span<const uint32_t> gone, const RsmChanges& changes) {
+    const int n = bins.resolution;
+    const size_t row = static_cast<size_t>(z) * n + y;
+    const uint32_t rowVoxel = static_cast<uint32_t>(row * n);  // the index of voxel (0, y, z)
+    const std::vector<TexelBins::Entry>& entries = bins.entries;
+    auto e = std::lower_bound(entries.begin() + bins.rowStart[row], entries.begin() + bins.rowStart[row + 1],
+                              x0, [](const TexelBins::Entry& e, int x) { return e.x < x; });
+    const auto eEnd = entries.begin() + bins.rowStart[row + 1];
+    auto g = std::lower_bound(gone.begin(), gone.end(), static_cast<uint32_t>(e - entries.begin()));
+    auto a = std::lower_bound(changes.added.begin(), changes.added.end(), rowVoxel + x0,
+                              [](const RsmChanges::Texel& t, uint32_t v) { return t.voxel < v; });
+    std::vector<glm::vec4> sums(x1 - x0, glm::vec4(0.0f));
+    while (true) {
+        const bool eIn = e != eEnd && e->x < x1;
+        const bool aIn = a != changes.added.end() && a->voxel < rowVoxel + x1;
+        if (!eIn && !aIn) break;
+        const RsmTexel* sceneTexel = eIn ? &sceneAlone[e->light].texels[e->texel] : nullptr;
+        if (eIn && (!aIn || std::tuple(rowVoxel + e->x, uint32_t{e->light}, sceneTexel->index) <
+                                std::tuple(a->voxel, a->light, a->texel->index))) {
+            if (g != gone.end() && *g == static_cast<uint32_t>(e - entries.begin()))
+                ++g;  // removed or changed by the objects
+            else
+                sums[e->x - x0] += glm::vec4(sceneTexel->flux, sceneTexel->area);
+            ++e;
+        } else {
+            sums[a->voxel - rowVoxel - x0] += glm::vec4(a->texel->flux, a->texel->area);
+            ++a;
+        }
+    }
+    return sums;
+}
+
+}  // namespace
+
+void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
+                   std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
+                   std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight, Grid3& fullLight,
+                   Grid3& deltaLight) {
+    const std::vector<uint32_t> gone = goneEntries(sceneTexels, changes);
+    forEachRow(box, [&](int y, int z) {
+        const std::vector<glm::vec4> sums =
+            rowTexelSums(y, z, box.lo.x, box.hi.x, sceneTexels, sceneAlone, gone, changes);
+        for (int x = box.lo.x; x < box.hi.x; ++x) {
+            const size_t i = fullLight.index(x, y, z);
+            const glm::vec4 light = voxelLight(sums[x - box.lo.x], geometry, i);
+            fullLight[i] = light;
+            deltaLight[i] = deltaVoxel(light, sceneLight[i]);
+        }
+    });
 }
 
 }  // namespace deltagi

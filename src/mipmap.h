@@ -12,4 +12,10 @@ MipVolume buildMipChain(const VolumeRegion& region, Grid3 level0);
 // One level down: each voxel of the result is the mean of 8 voxels of `fine` (resolution must be even).
 Grid3 downsample(const Grid3& fine);
 
+// The same chain after level 0 of `volume` was rewritten inside `changed` (level-0 voxels) and nowhere else:
+// the voxels above `changed` are the means of their children again, level by level, and nothing else is
+// touched, so the cost is that of the box. `occupied` must hold every non-zero level-0 voxel
+// (mayReadNonZero). The levels equal buildMipChain's over the new level 0, bit for bit.
+void updateMipChain(MipVolume& volume, const VoxelBox& changed, const VoxelBox& occupied);
+
 }  // namespace deltagi

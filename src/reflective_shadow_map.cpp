@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "lights.h"
@@ -163,6 +164,18 @@ ReflectiveShadowMap renderRows(const MapLayout& layout, int res, RowTexels&& row
     return rsm;
 }
 
+// The texels of each face that updateReflectiveShadowMap traces again (see texelsCovering), or nullopt when
+// it renders the whole map afresh: objects beyond the scene the base was made for move a directional light's
+// ray origins.
+using FaceRects = std::vector<std::optional<std::array<int, 4>>>;
+std::optional<FaceRects> retracedRects(const MapLayout& layout, const ReflectiveShadowMap& base,
+                                       const Bounds3f& changed) {
+    if (layout.rayStart() != base.rayStart) return std::nullopt;
+    FaceRects rects(layout.faceCount());
+    for (int f = 0; f < layout.faceCount(); ++f) rects[f] = layout.texelsCovering(f, changed);
+    return rects;
+}
+
 }  // namespace
 
 ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
@@ -180,11 +193,10 @@ ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, c
                                               const Bounds3f& changed) {
     const int res = base.resolution;
     const MapLayout layout(scene, light, region, res);
-    // Objects beyond the scene the base was made for move a directional light's ray origins: start afresh.
-    if (layout.rayStart() != base.rayStart) return renderReflectiveShadowMap(scene, light, region, res);
+    const std::optional<FaceRects> retraced = retracedRects(layout, base, changed);
+    if (!retraced) return renderReflectiveShadowMap(scene, light, region, res);
     const Bounds3f regionBounds = region.bounds();
-    std::vector<std::optional<std::array<int, 4>>> dirty(layout.faceCount());
-    for (int f = 0; f < layout.faceCount(); ++f) dirty[f] = layout.texelsCovering(f, changed);
+    const FaceRects& dirty = *retraced;
     auto byIndex = [](const RsmTexel& t, uint32_t index) { return t.index < index; };
     return renderRows(layout, res, [&](int face, int j, std::vector<RsmTexel>& row) {
         // The base's texels of this row, and the columns to trace again.
@@ -203,6 +215,26 @@ ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, c
         for (auto t = first; t != last; ++t)
             if (t->index > rowStart + i1) row.push_back(*t);
     });
+}
+
+std::vector<TexelRange> retracedTexels(const ReflectiveShadowMap& base, const RayScene& scene,
+                                       const Light& light, const VolumeRegion& region,
+                                       const Bounds3f& changed) {
+    const int res = base.resolution;
+    const MapLayout layout(scene, light, region, res);
+    const std::optional<FaceRects> rects = retracedRects(layout, base, changed);
+    if (!rects) return {{0, std::numeric_limits<uint32_t>::max()}};
+    std::vector<TexelRange> ranges;
+    for (int face = 0; face < layout.faceCount(); ++face) {
+        const auto& rect = (*rects)[face];
+        if (!rect) continue;
+        for (int j = (*rect)[2]; j <= (*rect)[3]; ++j) {
+            const uint32_t rowStart = static_cast<uint32_t>((static_cast<size_t>(face) * res + j) * res);
+            ranges.push_back({rowStart + static_cast<uint32_t>((*rect)[0]),
+                              rowStart + static_cast<uint32_t>((*rect)[1]) + 1});
+        }
+    }
+    return ranges;
 }
 
 }  // namespace deltagi

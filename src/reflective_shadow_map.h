@@ -38,4 +38,17 @@ ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, c
                                               const Light& light, const VolumeRegion& region,
                                               const Bounds3f& changed);
 
+// Texel indices [first, last).
+struct TexelRange {
+    uint32_t first = 0, last = 0;
+};
+
+// The texels that updateReflectiveShadowMap(base, scene, light, region, changed) traces again, in increasing
+// order (one range per row of a face); every texel of its result outside them is a copy of base's. One range
+// over every index when it renders the map afresh. Light injection uses them to find the texels that the
+// objects changed without comparing whole maps.
+std::vector<TexelRange> retracedTexels(const ReflectiveShadowMap& base, const RayScene& scene,
+                                       const Light& light, const VolumeRegion& region,
+                                       const Bounds3f& changed);
+
 }  // namespace deltagi

@@ -11,6 +11,7 @@
 #include "gbuffer.h"
 #include "inject.h"
 #include "mipmap.h"
+#include "object_volumes.h"
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
 #include "shading.h"
@@ -230,6 +231,8 @@ struct StaticWork {
     std::optional<MipVolume> sceneVisibility;
     std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
     std::optional<Grid3> sceneLight;                            // injected from sceneRsms
+    // The objects' volumes of the last frame, updated where the objects changed them.
+    std::optional<ObjectVolumes> objectVolumes;
 };
 
 bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
@@ -278,42 +281,43 @@ uint64_t staticSignature(const Scene& scene) {
 }
 
 // Stages 1-4 (§3.2): the two visibility volumes, the full light volume and the delta volume, mip-mapped. The
-// scene's share comes from `kept` when it is there.
+// scene's share comes from `kept` when it is there; the objects' volumes are kept there too and updated
+// where the objects changed them since the last frame (ObjectVolumes).
 struct DgiVolumes {
-    const MipVolume* sceneVisibility;
-    MipVolume objectVisibility, fullLight, deltaLight;
+    const MipVolume *sceneVisibility, *objectVisibility, *fullLight, *deltaLight;
 };
 
 DgiVolumes buildVolumes(const Scene& scene, const VolumeRegion& region, const RayScene& realOnly,
                         const RayScene& all, StaticWork& kept, StageTimer& timer) {
     const int rsmResolution = scene.options.rsm.resolution;
+    ObjectVolumes& objects = kept.objectVolumes ? *kept.objectVolumes : kept.objectVolumes.emplace();
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
     if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region);
-    VoxelGeometry objectGeometry = voxelize(scene.virtuals, region);
+    objects.voxelize(scene.virtuals, region);
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
     if (!kept.sceneRsms) kept.sceneRsms = renderRsms(realOnly, scene.lights, region, rsmResolution);
     std::vector<ReflectiveShadowMap> rsmFull;
+    std::vector<std::vector<TexelRange>> retraced;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
-    for (size_t l = 0; l < scene.lights.size(); ++l)
-        rsmFull.push_back(
-            updateReflectiveShadowMap((*kept.sceneRsms)[l], all, scene.lights[l], region, objectBounds));
+    for (size_t l = 0; l < scene.lights.size(); ++l) {
+        const ReflectiveShadowMap& base = (*kept.sceneRsms)[l];
+        rsmFull.push_back(updateReflectiveShadowMap(base, all, scene.lights[l], region, objectBounds));
+        retraced.push_back(retracedTexels(base, all, scene.lights[l], region, objectBounds));
+    }
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
-    const VoxelGeometry* both[] = {&*kept.sceneGeometry, &objectGeometry};
     const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
     if (!kept.sceneLight) kept.sceneLight = injectLight(*kept.sceneRsms, region, sceneAlone);
-    Grid3 fullLight = injectLight(rsmFull, region, both);
-    Grid3 deltaLight = deltaVolume(fullLight, *kept.sceneLight);
+    objects.inject({*kept.sceneGeometry, *kept.sceneRsms, *kept.sceneLight}, rsmFull, retraced);
     timer.lap("inject");
     // 4. Mipmaps of all four volumes.
     if (!kept.sceneVisibility)
         kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
-    DgiVolumes v{&*kept.sceneVisibility, buildMipChain(region, std::move(objectGeometry.visibility)),
-                 buildMipChain(region, std::move(fullLight)), buildMipChain(region, std::move(deltaLight))};
+    objects.mipmap();
     timer.lap("mipmap");
-    return v;
+    return {&*kept.sceneVisibility, &objects.objectVisibility(), &objects.fullLight(), &objects.deltaLight()};
 }
 
 // The real scene alone, rendered with regular voxel cone tracing over its own bounds: the background when the
@@ -355,6 +359,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         kept.sceneVisibility.reset();
         kept.sceneRsms.reset();
         kept.sceneLight.reset();
+        kept.objectVolumes.reset();
     }
     kept.region = region;
 
@@ -407,13 +412,13 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     const ConeJob jobs[] = {
         {gbuffer.object,
-         &volumes.fullLight,
-         {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Object},
+         volumes.fullLight,
+         {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Object},
          o.render.indirect,
          ShadowMode::Shaded},
         {realPoints,
-         &volumes.deltaLight,
-         {volumes.sceneVisibility, &volumes.objectVisibility, VisibilityVolumes::Self::Scene},
+         volumes.deltaLight,
+         {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
          o.render.indirect && o.render.relightIndirect,
          relightMode}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);

@@ -18,6 +18,7 @@
 
 #include "deltagi/renderer.h"
 #include "large_blocks.h"
+#include "parallel.h"
 
 namespace deltagi {
 
@@ -56,6 +57,29 @@ class Grid3 {
   private:
     int n_ = 0;
     std::vector<glm::vec4, LargeBlockAllocator<glm::vec4>> voxels_;
+};
+
+// A box of level-0 voxels [lo, hi) (hi exclusive); empty when hi <= lo on any axis. The frame-to-frame
+// updates of stages 1, 3 and 4 redo only the voxels of such boxes.
+struct VoxelBox {
+    glm::ivec3 lo{0}, hi{0};
+
+    static VoxelBox all(int n) { return {glm::ivec3(0), glm::ivec3(n)}; }
+    static VoxelBox voxel(glm::ivec3 v) { return {v, v + 1}; }
+    bool empty() const { return hi.x <= lo.x || hi.y <= lo.y || hi.z <= lo.z; }
+    size_t count() const {
+        return empty() ? 0 : static_cast<size_t>(hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+    }
+    // The bounding box of both (an empty box adds nothing).
+    VoxelBox& extend(const VoxelBox& b) {
+        if (b.empty()) return *this;
+        if (empty()) return *this = b;
+        lo = glm::min(lo, b.lo);
+        hi = glm::max(hi, b.hi);
+        return *this;
+    }
+    // The voxels of the next coarser mip level that hold these (resolution halved).
+    VoxelBox parents() const { return empty() ? VoxelBox{} : VoxelBox{lo >> 1, (hi + 1) >> 1}; }
 };
 
 // 4 floats in one SIMD register (GCC/Clang vector extension: SSE on x86-64, NEON on Arm).
@@ -116,6 +140,13 @@ inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorn
     }
 }
 
+// Calls rowBody(y, z) for every row of voxels of `box` (x from box.lo.x to box.hi.x), rows in parallel.
+template <typename RowBody>
+void forEachRow(const VoxelBox& box, RowBody&& rowBody);
+
+// The box around every non-zero voxel of `grid` inside `within` (empty when there is none).
+VoxelBox nonZeroBounds(const Grid3& grid, const VoxelBox& within);
+
 // A level-0 grid and its mip chain over a region. Level l has resolution n / 2^l; its voxels are 2^l level-0
 // voxels wide.
 class MipVolume {
@@ -157,6 +188,23 @@ class MipVolume {
         return !glm::any(glm::lessThan(voxelPos, occupiedMin_ - reach)) &&
                !glm::any(glm::greaterThan(voxelPos, occupiedMax_ + reach));
     }
+    // The level-0 voxels outside which every voxel is zero, as used by mayReadNonZero (a superset of the
+    // non-zero voxels gives the same lookups, only fewer early outs).
+    VoxelBox occupiedBounds() const { return occupied_; }
+    // For updates in place (mipmap.h's updateMipChain): a level to write, and the occupied bounds to use
+    // instead of scanning level 0 again. The caller keeps the levels a mip chain and the bounds a superset of
+    // the non-zero voxels.
+    Grid3& levelForUpdate(int l) { return levels_[l]; }
+    void setOccupiedBounds(const VoxelBox& box) {
+        occupied_ = box;
+        if (box.empty()) {
+            occupiedMin_ = glm::vec3(std::numeric_limits<float>::max());
+            occupiedMax_ = glm::vec3(-std::numeric_limits<float>::max());
+        } else {
+            occupiedMin_ = glm::vec3(box.lo);
+            occupiedMax_ = glm::vec3(box.hi);
+        }
+    }
     // Trilinear sample of level `l`.
     glm::vec4 sampleLevel(glm::vec3 voxelPos, int l) const {
         TrilinearCorners c;
@@ -175,23 +223,39 @@ class MipVolume {
     }
     // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
     void findOccupiedBounds() {
-        occupiedMin_ = glm::vec3(std::numeric_limits<float>::max());
-        occupiedMax_ = glm::vec3(-std::numeric_limits<float>::max());
-        if (levels_.empty()) return;
-        const Grid3& g = levels_[0];
-        const int n = g.resolution();
-        for (int z = 0; z < n; ++z)
-            for (int y = 0; y < n; ++y)
-                for (int x = 0; x < n; ++x)
-                    if (g.at(x, y, z) != glm::vec4(0.0f)) {
-                        occupiedMin_ = glm::min(occupiedMin_, glm::vec3(x, y, z));
-                        occupiedMax_ = glm::max(occupiedMax_, glm::vec3(x + 1, y + 1, z + 1));
-                    }
+        setOccupiedBounds(
+            levels_.empty() ? VoxelBox{} : nonZeroBounds(levels_[0], VoxelBox::all(levels_[0].resolution())));
     }
 
     VolumeRegion region_;
     std::vector<Grid3> levels_;
-    glm::vec3 occupiedMin_{0.0f}, occupiedMax_{0.0f};
+    VoxelBox occupied_;
+    glm::vec3 occupiedMin_{0.0f}, occupiedMax_{0.0f};  // occupied_ as floats, for mayReadNonZero
 };
+
+template <typename RowBody>
+void forEachRow(const VoxelBox& box, RowBody&& rowBody) {
+    if (box.empty()) return;
+    const int rows = box.hi.y - box.lo.y;
+    parallelFor(0, static_cast<int64_t>(box.hi.z - box.lo.z) * rows, 4, [&](int64_t r) {
+        rowBody(box.lo.y + static_cast<int>(r % rows), box.lo.z + static_cast<int>(r / rows));
+    });
+}
+
+inline VoxelBox nonZeroBounds(const Grid3& grid, const VoxelBox& within) {
+    glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
+    for (int z = within.lo.z; z < within.hi.z; ++z)
+        for (int y = within.lo.y; y < within.hi.y; ++y) {
+            // The first and the last non-zero voxel of the row.
+            int first = within.lo.x;
+            while (first < within.hi.x && grid.at(first, y, z) == glm::vec4(0.0f)) ++first;
+            if (first == within.hi.x) continue;
+            int last = within.hi.x - 1;
+            while (grid.at(last, y, z) == glm::vec4(0.0f)) --last;
+            lo = glm::min(lo, glm::ivec3(first, y, z));
+            hi = glm::max(hi, glm::ivec3(last + 1, y + 1, z + 1));
+        }
+    return lo.x <= hi.x ? VoxelBox{lo, hi} : VoxelBox{};
+}
 
 }  // namespace deltagi

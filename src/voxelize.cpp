@@ -68,21 +68,44 @@ float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMi
 namespace {
 
 struct VoxelTriangle {
+    VoxelTriangle() {}   // not zeroed: toVoxelSpace writes every one it reads
     glm::vec3 p[3];      // level-0 voxel coordinates
     glm::vec3 normal;    // unit face normal (winding order)
     float area;          // voxel units^2
     bool oneVoxel;       // lies inside a single voxel of the grid
     glm::vec3 emission;  // the material's emitted radiance
-    glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid
+    glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
+    bool touchesGrid() const { return hi.x >= lo.x; }
 };
 
-std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
-    std::vector<VoxelTriangle> tris;
+// Every triangle of `meshes` in voxel space, in mesh and triangle order; in parallel (a detailed object has
+// many).
+std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
+    std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
+    constexpr size_t kChunk = 4096;
+    struct Chunk {
+        const TriangleMesh* mesh;
+        size_t first, last, out;  // triangles [first, last) of mesh, written from `out` on
+    };
+    std::vector<Chunk> chunks;
+    size_t total = 0;
+    for (const TriangleMesh& mesh : meshes)
+        for (size_t first = 0; first < mesh.triangles.size(); first += kChunk) {
+            const size_t last = std::min(first + kChunk, mesh.triangles.size());
+            chunks.push_back({&mesh, first, last, total});
+            total += last - first;
+        }
+    std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> tris(total);
     const float invVoxel = 1.0f / region.voxelSize();
     const int n = region.resolution;
-    for (const TriangleMesh& mesh : meshes) {
-        for (const glm::uvec3& t : mesh.triangles) {
-            VoxelTriangle vt;
+    parallelFor(0, static_cast<int64_t>(chunks.size()), 1, [&](int64_t c) {
+        const Chunk& chunk = chunks[c];
+        const TriangleMesh& mesh = *chunk.mesh;
+        for (size_t i = chunk.first; i < chunk.last; ++i) {
+            const glm::uvec3& t = mesh.triangles[i];
+            VoxelTriangle& vt = tris[chunk.out + (i - chunk.first)];
+            vt.lo = glm::ivec3(0);
+            vt.hi = glm::ivec3(-1);
             for (int k = 0; k < 3; ++k) vt.p[k] = (mesh.positions[t[k]] - region.origin) * invVoxel;
             glm::vec3 cr = glm::cross(vt.p[1] - vt.p[0], vt.p[2] - vt.p[0]);
             float len = glm::length(cr);
@@ -98,9 +121,8 @@ std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, co
             vt.oneVoxel = glm::ivec3(glm::floor(mn)) == glm::ivec3(glm::floor(mx)) &&
                           glm::all(glm::greaterThanEqual(mn, glm::vec3(0.0f))) &&
                           glm::all(glm::lessThan(mx, glm::vec3(static_cast<float>(n))));
-            tris.push_back(vt);
         }
-    }
+    });
     return tris;
 }
 
@@ -108,20 +130,44 @@ std::vector<VoxelTriangle> toVoxelSpace(std::span<const TriangleMesh> meshes, co
 
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
     const int n = region.resolution;
-    VoxelGeometry out{Grid3(n), {}, {}};
+    VoxelGeometry out{Grid3(n), {}, {}, {}};
     out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
+    revoxelize(out, meshes, region);
+    return out;
+}
+
+VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
     const bool emissive =
         std::any_of(meshes.begin(), meshes.end(), [](const TriangleMesh& m) { return m.material.emits(); });
-    if (emissive) out.emission.assign(out.area.size(), glm::vec3(0.0f));
-    const std::vector<VoxelTriangle> tris = toVoxelSpace(meshes, region);
-    const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
+    // Clear the old geometry: the grid is zero everywhere then.
+    const VoxelBox old = out.bounds;
+    const bool hadEmission = !out.emission.empty();
+    forEachRow(old, [&](int y, int z) {
+        const size_t first = out.visibility.index(old.lo.x, y, z), count = old.hi.x - old.lo.x;
+        std::fill_n(&out.visibility[first], count, glm::vec4(0.0f));
+        std::fill_n(out.area.begin() + first, count, 0.0f);
+        if (hadEmission) std::fill_n(out.emission.begin() + first, count, glm::vec3(0.0f));
+    });
+    if (!emissive) out.emission.clear();
+    if (emissive && !hadEmission) out.emission.assign(out.area.size(), glm::vec3(0.0f));
+
+    const auto tris = toVoxelSpace(meshes, region);
+    VoxelBox& box = out.bounds;
+    box = {};
+    for (const VoxelTriangle& t : tris)
+        if (t.touchesGrid()) box.extend({t.lo, t.hi + 1});
+    if (box.empty()) return old;
+    // Scatter in slabs of the box's layers.
+    const int slabCount = (box.hi.z - box.lo.z + kSlabThickness - 1) / kSlabThickness;
     const SlabBins bins = binBySlab(tris.size(), slabCount, [&](size_t i) {
-        return std::pair{tris[i].lo.z / kSlabThickness, tris[i].hi.z / kSlabThickness};
+        if (!tris[i].touchesGrid()) return std::pair{1, 0};  // in no slab
+        return std::pair{(tris[i].lo.z - box.lo.z) / kSlabThickness,
+                         (tris[i].hi.z - box.lo.z) / kSlabThickness};
     });
     const glm::vec3 half(0.5f);
     parallelFor(0, slabCount, 1, [&](int64_t s) {
-        const int zBegin = static_cast<int>(s) * kSlabThickness;
-        const int zEnd = std::min(zBegin + kSlabThickness, n);
+        const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
+        const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
         for (uint32_t ti : bins.slab(s)) {
             const VoxelTriangle& t = tris[ti];
             for (int z = std::max(zBegin, t.lo.z); z < std::min(zEnd, t.hi.z + 1); ++z)
@@ -149,18 +195,20 @@ VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion&
     });
     // Normal sums to area-weighted means; areas from voxel units to world units.
     const float voxelArea = region.voxelSize() * region.voxelSize();
-    parallelFor(0, static_cast<int64_t>(out.area.size()), 1 << 14, [&](int64_t i) {
-        glm::vec4& v = out.visibility[i];
-        float a = out.area[i];
-        if (a > 0.0f) {
-            v.y /= a;
-            v.z /= a;
-            v.w /= a;
+    forEachRow(box, [&](int y, int z) {
+        for (size_t i = out.visibility.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i) {
+            glm::vec4& v = out.visibility[i];
+            float a = out.area[i];
+            if (a > 0.0f) {
+                v.y /= a;
+                v.z /= a;
+                v.w /= a;
+            }
+            out.area[i] = a * voxelArea;
+            if (emissive) out.emission[i] *= voxelArea;
         }
-        out.area[i] = a * voxelArea;
-        if (emissive) out.emission[i] *= voxelArea;
     });
-    return out;
+    return old;
 }
 
 }  // namespace deltagi

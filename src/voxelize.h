@@ -18,11 +18,20 @@ struct VoxelGeometry {
     // Emitted radiance times area of the emissive surfaces in each voxel, summed (same indexing); empty when
     // no mesh emits. Divided by `area` it is the voxel's mean emitted radiance (light injection).
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> emission;
+    // Every voxel outside it is zero in all three: the voxels that the triangles' bounding boxes touch.
+    VoxelBox bounds;
 };
 
 // Voxelizes `meshes` over `region`. Deterministic for any thread count (each voxel sums its triangles in
 // mesh and triangle order).
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region);
+
+// Voxelizes `meshes` again into `geometry`, a voxelization over the same region (of other or moved meshes):
+// the voxels of its old bounds are cleared and the new geometry is written, so the cost is that of the
+// triangles and the two boxes, not of the grid. Afterwards `geometry` equals voxelize(meshes, region) bit
+// for bit. Returns the old bounds.
+VoxelBox revoxelize(VoxelGeometry& geometry, std::span<const TriangleMesh> meshes,
+                    const VolumeRegion& region);
 
 // Exact overlap test of a triangle with the axis-aligned box centre +- halfSize (separating axis theorem).
 bool triangleBoxOverlap(glm::vec3 boxCenter, glm::vec3 halfSize, glm::vec3 a, glm::vec3 b, glm::vec3 c);

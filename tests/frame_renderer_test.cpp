@@ -53,6 +53,47 @@ TEST(FrameRenderer, MovingObjectFramesAreExactlyRendersFromScratch) {
     EXPECT_GT(change, 1.0);
 }
 
+// The objects' volumes are kept from frame to frame and redone only where the objects change them
+// (ObjectVolumes): whatever the objects do between frames, the images are render()'s.
+TEST(FrameRenderer, FramesOfObjectsThatMoveLeaveTheRegionAndChangeAreExactlyRendersFromScratch) {
+    Scene s = ballOverFloor();
+    FrameRenderer frames;
+    int frame = 0;
+    auto sameAsScratch = [&] {
+        SCOPED_TRACE(testing::Message() << "frame " << frame++);
+        expectSameImages(frames.render(s), render(s));
+    };
+    sameAsScratch();
+    for (int i = 0; i < 3; ++i) {  // small moves
+        moveVirtuals(s, {0.03f, 0.01f * static_cast<float>(i), -0.02f});
+        sameAsScratch();
+    }
+    moveVirtuals(s, {0.6f, 0.0f, 0.0f});  // partly out of the region (x > 0.8)
+    sameAsScratch();
+    moveVirtuals(s, {-0.9f, 0.0f, 0.2f});  // back
+    sameAsScratch();
+    s.virtuals[0].material.albedo = {0.9f, 0.8f, 0.1f};  // the object's material
+    sameAsScratch();
+    s.virtuals.push_back(
+        placed(makeBox(glm::vec3(0.2f)), {0.4f, 0.1f, 0.3f}, diffuse(glm::vec3(0.8f)), "cube"));
+    sameAsScratch();  // one object more
+    moveVirtuals(s, {0.02f, 0.0f, 0.02f});
+    sameAsScratch();
+    const std::vector<TriangleMesh> objects = s.virtuals;
+    s.virtuals.clear();  // none: the photo
+    sameAsScratch();
+    s.virtuals = {objects[1]};  // one object fewer than before
+    sameAsScratch();
+    s.lights[0].intensity *= 1.5f;  // a new light: nothing kept is used
+    sameAsScratch();
+    moveVirtuals(s, {-0.03f, 0.0f, 0.01f});
+    sameAsScratch();
+    s.real[0].material.albedo = glm::vec3(0.3f, 0.6f, 0.3f);  // the real scene's material: all redone
+    sameAsScratch();
+    moveVirtuals(s, {0.0f, 0.02f, 0.0f});
+    sameAsScratch();
+}
+
 TEST(FrameRenderer, ChangesToTheRealSceneAreNotMissed) {
     Scene s = ballOverFloor();
     FrameRenderer frames;

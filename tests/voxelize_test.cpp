@@ -1,5 +1,6 @@
 #include "voxelize.h"
 
+#include <cstring>
 #include <numeric>
 
 #include <gtest/gtest.h>
@@ -106,6 +107,59 @@ TEST(Voxelize, GeometryOutsideTheRegionIsIgnored) {
         test::placed(makeBox(glm::vec3(0.5f)), {5.0f, 0.0f, 0.0f}, test::diffuse(glm::vec3(1)))};
     VoxelGeometry g = voxelize(meshes, unitRegion(8));
     EXPECT_EQ(std::accumulate(g.area.begin(), g.area.end(), 0.0f), 0.0f);
+}
+
+// Voxelizing again in place (as frames do) gives voxelize()'s bits, whatever the meshes did: moved, partly
+// and wholly out of the region, emissive and not, more and fewer.
+TEST(Voxelize, RevoxelizingChangedMeshesEqualsVoxelizingThemAfresh) {
+    const VolumeRegion region = unitRegion(32);
+    std::vector<TriangleMesh> meshes = {
+        test::placed(makeSphere(0.3f, 24), {0.1f, 0.0f, -0.2f}, test::diffuse(glm::vec3(0.5f)))};
+    VoxelGeometry kept = voxelize(meshes, region);
+    auto expectSame = [&](const char* step) {
+        const VoxelBox old = kept.bounds;
+        const VoxelBox returned = revoxelize(kept, meshes, region);
+        EXPECT_EQ(returned.lo, old.lo) << step;
+        EXPECT_EQ(returned.hi, old.hi) << step;
+        const VoxelGeometry fresh = voxelize(meshes, region);
+        EXPECT_EQ(kept.bounds.lo, fresh.bounds.lo) << step;
+        EXPECT_EQ(kept.bounds.hi, fresh.bounds.hi) << step;
+        ASSERT_EQ(kept.emission.size(), fresh.emission.size()) << step;
+        for (size_t i = 0; i < fresh.area.size(); ++i) {
+            ASSERT_EQ(std::memcmp(&kept.visibility[i], &fresh.visibility[i], sizeof(glm::vec4)), 0) << step;
+            ASSERT_EQ(kept.area[i], fresh.area[i]) << step;
+            if (!fresh.emission.empty()) ASSERT_EQ(kept.emission[i], fresh.emission[i]) << step;
+        }
+        // Nothing outside the bounds.
+        for (int z = 0; z < 32; ++z)
+            for (int y = 0; y < 32; ++y)
+                for (int x = 0; x < 32; ++x) {
+                    const glm::ivec3 v(x, y, z);
+                    if (glm::all(glm::greaterThanEqual(v, fresh.bounds.lo)) &&
+                        glm::all(glm::lessThan(v, fresh.bounds.hi)))
+                        continue;
+                    ASSERT_EQ(fresh.area[fresh.visibility.index(x, y, z)], 0.0f) << step;
+                }
+    };
+    auto move = [&](glm::vec3 offset) {
+        for (TriangleMesh& m : meshes)
+            for (glm::vec3& p : m.positions) p += offset;
+    };
+    move({0.05f, 0.02f, 0.0f});
+    expectSame("moved a little");
+    move({0.6f, 0.0f, 0.0f});
+    expectSame("partly out");
+    move({2.0f, 0.0f, 0.0f});
+    expectSame("all out");
+    EXPECT_TRUE(kept.bounds.empty());
+    move({-2.9f, 0.1f, 0.3f});
+    meshes[0].material.emission = glm::vec3(1.0f, 2.0f, 3.0f);
+    expectSame("back and emissive");
+    meshes.push_back(
+        test::placed(makeBox(glm::vec3(0.2f)), {-0.5f, 0.5f, 0.5f}, test::diffuse(glm::vec3(1))));
+    expectSame("one more");
+    meshes.erase(meshes.begin());
+    expectSame("one fewer, not emissive");
 }
 
 }  // namespace

@@ -37,9 +37,10 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 // reality session. What depends only on the real side (the reconstruction's ray-casting BVH, its voxels, its
 // reflective shadow maps and injected light, the real half of the G-buffer, the rendered background) is kept
 // from the previous frame while the scene object, its real meshes, lights, camera, photo size, options and
-// the volume region are unchanged (compared by identity and content at every call); the virtual objects'
-// voxels, the RSMs with them, the full and delta volumes and the cones are redone every frame. The images
-// are the same as render()'s.
+// the volume region are unchanged (compared by identity and content at every call). The virtual objects'
+// voxels, the full and delta light volumes and their mipmaps are kept too and redone only where the objects
+// change them (their voxels, and the voxels lit differently because of them); the RSMs with the objects and
+// the cones are redone every frame. The images are the same as render()'s, bit for bit.
 class FrameRenderer {
   public:
     FrameRenderer();

@@ -1,0 +1,82 @@
+#include "object_volumes.h"
+
+#include <algorithm>
+
+namespace deltagi {
+
+namespace {
+
+// A frame whose changed box holds more than this fraction of the voxels injects every voxel instead: the
+// box's share of the texels would then cost more to gather than to scatter them all.
+constexpr size_t kFreshInjectionFraction = 4;  // 1/4
+
+bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
+    return a.origin == b.origin && a.size == b.size && a.resolution == b.resolution;
+}
+
+}  // namespace
+
+void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region) {
+    if (objectVisibility_.empty() || !sameRegion(region, region_)) {
+        *this = ObjectVolumes{};
+        region_ = region;
+        objects_ = deltagi::voxelize(objects, region);
+        objectsChanged_ = VoxelBox::all(region.resolution);
+        return;
+    }
+    objectsChanged_ = revoxelize(objects_, objects, region);
+    objectsChanged_.extend(objects_.bounds);
+}
+
+void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const ReflectiveShadowMap> withObjects,
+                           std::span<const std::vector<TexelRange>> retraced) {
+    const RsmChanges changes = compareRsms(real.rsms, withObjects, retraced, region_);
+    const VoxelGeometry* both[] = {&real.geometry, &objects_};
+    VoxelBox differs = objects_.bounds;
+    differs.extend(changes.bounds);
+    VoxelBox changed = differs;
+    changed.extend(lightDiffers_);
+    lightDiffers_ = differs;
+    const size_t voxels = VoxelBox::all(region_.resolution).count();
+    if (fullLight_.empty() || changed.count() > voxels / kFreshInjectionFraction) {
+        freshFull_ = injectLight(withObjects, region_, both);
+        freshDelta_ = deltaVolume(*freshFull_, real.light);
+        lightChanged_ = VoxelBox::all(region_.resolution);
+        return;
+    }
+    if (!sceneTexels_) sceneTexels_ = binTexels(real.rsms, region_);
+    if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, VoxelBox::all(region_.resolution));
+    reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, fullLight_.levelForUpdate(0),
+                  deltaLight_.levelForUpdate(0));
+    lightChanged_ = changed;
+}
+
+void ObjectVolumes::mipmap() {
+    if (objectVisibility_.empty()) {
+        objectVisibility_ = buildMipChain(region_, objects_.visibility.clone());
+    } else {
+        // Level 0 is the objects' voxels again: copy the box that changed.
+        Grid3& level0 = objectVisibility_.levelForUpdate(0);
+        const VoxelBox& box = objectsChanged_;
+        forEachRow(box, [&](int y, int z) {
+            const size_t first = level0.index(box.lo.x, y, z);
+            std::copy_n(&objects_.visibility[first], box.hi.x - box.lo.x, &level0[first]);
+        });
+        updateMipChain(objectVisibility_, box, nonZeroBounds(level0, objects_.bounds));
+    }
+    if (freshFull_) {
+        fullLight_ = buildMipChain(region_, std::move(*freshFull_));
+        deltaLight_ = buildMipChain(region_, std::move(*freshDelta_));
+        freshFull_.reset();
+        freshDelta_.reset();
+        return;
+    }
+    // Outside lightDiffers_ both are non-zero only where the scene's light is.
+    for (MipVolume* volume : {&fullLight_, &deltaLight_}) {
+        VoxelBox occupied = *sceneLightBounds_;
+        occupied.extend(nonZeroBounds(volume->level(0), lightDiffers_));
+        updateMipChain(*volume, lightChanged_, occupied);
+    }
+}
+
+}  // namespace deltagi

@@ -1,0 +1,64 @@
+// The volumes that depend on the virtual objects (§3.2): their visibility volume, the full light volume and
+// the delta volume, mip-mapped; kept from one frame to the next and, as the objects move, redone only where
+// they change them, with the same bits as computing them from scratch:
+//   1. voxelize: the objects are voxelized again into their box, their old box cleared (revoxelize);
+//   3. inject: outside the objects' voxels and the voxels of the RSM texels they change (where each texel
+//      landed without them and where it lands with them), the full light volume is the real scene's own and
+//      the delta volume is (0, 0, 0, occupancy); the box around those voxels is injected again
+//      (reinjectLight), together with last frame's box, which puts the scene's light back where the objects
+//      have left;
+//   4. mipmap: every level is recomputed above the changed boxes only (updateMipChain).
+// The first frame, and one in which the changes cover a large part of the volume, computes them as render()
+// does.
+#pragma once
+
+#include <optional>
+#include <span>
+
+#include "inject.h"
+#include "mipmap.h"
+#include "voxelize.h"
+
+namespace deltagi {
+
+// The real scene's share of the volumes (kept by the renderer). The same from frame to frame: a changed real
+// scene, light or region needs a new ObjectVolumes (the renderer keeps both in one place and drops both).
+struct RealSceneVolumes {
+    const VoxelGeometry& geometry;
+    std::span<const ReflectiveShadowMap> rsms;  // of the real scene alone, one per light
+    const Grid3& light;                         // injected from rsms
+};
+
+class ObjectVolumes {
+  public:
+    // Stage 1: the objects' voxels, over `region` (a new region starts afresh).
+    void voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region);
+    // Stage 3: the full and delta light volumes (level 0). `withObjects` are the real scene's RSMs updated
+    // for the objects (updateReflectiveShadowMap), `retraced` the texels the update traced again
+    // (retracedTexels), one list per light.
+    void inject(const RealSceneVolumes& real, std::span<const ReflectiveShadowMap> withObjects,
+                std::span<const std::vector<TexelRange>> retraced);
+    // Stage 4: the mip chains of the three volumes.
+    void mipmap();
+
+    const MipVolume& objectVisibility() const { return objectVisibility_; }
+    const MipVolume& fullLight() const { return fullLight_; }
+    const MipVolume& deltaLight() const { return deltaLight_; }
+    // The level-0 voxels of the light volumes that the last inject() wrote (all of them when it injected
+    // from scratch): what a frame cost, for tests and measurements.
+    const VoxelBox& injectedBox() const { return lightChanged_; }
+
+  private:
+    VolumeRegion region_;
+    VoxelGeometry objects_;  // the objects' voxels (level 0 of objectVisibility_, copied there by mipmap())
+    MipVolume objectVisibility_, fullLight_, deltaLight_;
+    VoxelBox objectsChanged_;  // level-0 voxels that this frame's voxelization changed
+    VoxelBox lightDiffers_;    // outside it the full light volume is the scene's (the last injection)
+    VoxelBox lightChanged_;    // level-0 voxels that this frame's injection rewrote
+    std::optional<Grid3> freshFull_, freshDelta_;  // injected from scratch this frame, for mipmap()
+    // Built on the first frame that needs them:
+    std::optional<TexelBins> sceneTexels_;      // the real scene's RSM texels by voxel row
+    std::optional<VoxelBox> sceneLightBounds_;  // the real scene's non-zero light voxels
+};
+
+}  // namespace deltagi
