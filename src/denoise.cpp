@@ -25,7 +25,7 @@ struct Sample {
 
 // Everything one filter pass reads, shared by its rows.
 struct FilterPass {
-    std::span<const float> values;
+    std::span<float> values;
     int channels;
     std::span<const SurfacePoint> points;
     int width, height;
@@ -169,7 +169,8 @@ bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
 // The whole pass for C channels: every pixel filtered, or (settings.interpolate) the samples filtered and the
 // pixels between interpolated from them.
 template <int C>
-void filterImage(const FilterPass& f, std::span<float> out, std::vector<std::vector<size_t>>& rowHoles) {
+void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> out,
+                 std::vector<std::vector<size_t>>& rowHoles) {
     const int channels = C > 0 ? C : f.channels;
     std::vector<float> filtered;
     std::vector<uint8_t> filteredNonZero;
@@ -177,8 +178,11 @@ void filterImage(const FilterPass& f, std::span<float> out, std::vector<std::vec
     if (interpolate) {
         filtered.assign(f.samples.size() * channels, 0.0f);
         filteredNonZero.assign(f.samples.size(), 0);
-        parallelFor(0, f.sh, 4, [&](int64_t sy) {
-            for (int sx = 0; sx < f.sw; ++sx) {
+        // Samples at valid points, which lie inside the rectangle.
+        const int sx0 = (rect.x0 + f.stride - 1) / f.stride, sx1 = (rect.x1 + f.stride - 1) / f.stride;
+        const int sy0 = (rect.y0 + f.stride - 1) / f.stride, sy1 = (rect.y1 + f.stride - 1) / f.stride;
+        parallelFor(sy0, sy1, 4, [&](int64_t sy) {
+            for (int sx = sx0; sx < sx1; ++sx) {
                 const size_t k = static_cast<size_t>(sy) * f.sw + sx;
                 if (!f.samples[k].valid) continue;
                 const size_t i =
@@ -189,9 +193,9 @@ void filterImage(const FilterPass& f, std::span<float> out, std::vector<std::vec
             }
         });
     }
-    parallelFor(0, f.height, 4, [&](int64_t y64) {
+    parallelFor(rect.y0, rect.y1, 4, [&](int64_t y64) {
         const int y = static_cast<int>(y64);
-        for (int x = 0; x < f.width; ++x) {
+        for (int x = rect.x0; x < rect.x1; ++x) {
             const size_t i = static_cast<size_t>(y) * f.width + x;
             const SurfacePoint& p = f.points[i];
             if (!p.valid()) continue;
@@ -205,11 +209,35 @@ void filterImage(const FilterPass& f, std::span<float> out, std::vector<std::vec
 
 }  // namespace
 
+PixelRect validPointBounds(std::span<const SurfacePoint> points, int width) {
+    PixelRect r{width, 0, 0, 0};
+    const int height = width > 0 ? static_cast<int>(points.size() / width) : 0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            if (points[static_cast<size_t>(y) * width + x].valid()) {
+                if (r.y1 == 0) r.y0 = y;
+                r.y1 = y + 1;
+                r.x0 = std::min(r.x0, x);
+                r.x1 = std::max(r.x1, x + 1);
+            }
+    if (r.y1 == 0) r = {};
+    return r;
+}
+
 std::vector<float> denoise(std::span<const float> values, int channels, std::span<const SurfacePoint> points,
                            int width, int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& s,
                            std::vector<size_t>* holes) {
     std::vector<float> out(values.begin(), values.end());
-    if (s.radius <= 0 || channels <= 0) return out;
+    denoiseInto(out, channels, points, width, height, eye, pixelAngle, s, holes);
+    return out;
+}
+
+void denoiseInto(std::span<float> values, int channels, std::span<const SurfacePoint> points, int width,
+                 int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& s,
+                 std::vector<size_t>* holes, const PixelRect* bounds) {
+    if (s.radius <= 0 || channels <= 0) return;
+    const PixelRect rect = bounds ? *bounds : PixelRect{0, 0, width, height};
+    if (rect.empty()) return;
     const int r = s.radius, stride = std::max(s.stride, 1);
     const int reach = (r + 1) * stride;
     FilterPass f{values,
@@ -243,8 +271,11 @@ std::vector<float> denoise(std::span<const float> values, int channels, std::spa
     f.samples.resize(static_cast<size_t>(sw) * sh);
     f.sampleValues.resize(f.samples.size() * channels);
     std::vector<uint8_t> nonZero(f.samples.size());
-    parallelFor(0, sh, 16, [&](int64_t sy) {
-        for (int sx = 0; sx < sw; ++sx) {
+    // Only samples inside the rectangle can be valid; the others stay invalid.
+    const int sx0 = (rect.x0 + stride - 1) / stride, sx1 = (rect.x1 + stride - 1) / stride;
+    const int sy0 = (rect.y0 + stride - 1) / stride, sy1 = (rect.y1 + stride - 1) / stride;
+    parallelFor(sy0, sy1, 16, [&](int64_t sy) {
+        for (int sx = sx0; sx < sx1; ++sx) {
             const size_t j = static_cast<size_t>(sy) * stride * width + static_cast<size_t>(sx) * stride;
             const size_t k = static_cast<size_t>(sy) * sw + sx;
             f.samples[k] = {points[j].position, points[j].normal, points[j].valid()};
@@ -275,21 +306,20 @@ std::vector<float> denoise(std::span<const float> values, int channels, std::spa
     std::vector<std::vector<size_t>> rowHoles(height);
     switch (channels) {
         case 1:
-            filterImage<1>(f, out, rowHoles);
+            filterImage<1>(f, rect, values, rowHoles);
             break;
         case 3:
-            filterImage<3>(f, out, rowHoles);
+            filterImage<3>(f, rect, values, rowHoles);
             break;
         case 6:
-            filterImage<6>(f, out, rowHoles);
+            filterImage<6>(f, rect, values, rowHoles);
             break;
         default:
-            filterImage<0>(f, out, rowHoles);
+            filterImage<0>(f, rect, values, rowHoles);
             break;
     }
     if (holes)
         for (const std::vector<size_t>& row : rowHoles) holes->insert(holes->end(), row.begin(), row.end());
-    return out;
 }
 
 }  // namespace deltagi

@@ -7,7 +7,6 @@
 // or the photo, so textures and highlights are untouched.
 #pragma once
 
-#include <cstring>
 #include <span>
 #include <type_traits>
 #include <vector>
@@ -31,6 +30,14 @@ struct DenoiseSettings {
     float planeDistance = 1.0f;  // how far a neighbour may lie off the tangent plane, in its pixel distances
 };
 
+// A rectangle of pixels [x0, x1) x [y0, y1) that holds every valid point of a pass (the others are skipped).
+struct PixelRect {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool empty() const { return x0 >= x1 || y0 >= y1; }
+};
+// The bounds of the valid points of a width-wide image.
+PixelRect validPointBounds(std::span<const SurfacePoint> points, int width);
+
 // Filters `values`, `channels` floats per pixel of `points` (width x height, row-major), returning the
 // result. Invalid points keep their values and are never used as neighbours. `eye` is the camera position and
 // `pixelAngle` the angle one pixel subtends (1 / fy), which together give a pixel's size on a surface.
@@ -39,21 +46,25 @@ struct DenoiseSettings {
 std::vector<float> denoise(std::span<const float> values, int channels, std::span<const SurfacePoint> points,
                            int width, int height, glm::vec3 eye, float pixelAngle,
                            const DenoiseSettings& settings, std::vector<size_t>* holes = nullptr);
+// The same in place, where the valid points all lie inside `bounds` (nullptr: anywhere).
+void denoiseInto(std::span<float> values, int channels, std::span<const SurfacePoint> points, int width,
+                 int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& settings,
+                 std::vector<size_t>* holes = nullptr, const PixelRect* bounds = nullptr);
 
-// In place, for the cone passes' per-pixel results: `perPixel` values of T (trivially copyable, made of
-// floats: glm::vec3, ShadowOcclusion) per pixel of the camera's image. Empty vectors are left alone.
+// In place, for the cone passes' per-pixel results: `perPixel` values of T (made of floats: glm::vec3,
+// ShadowOcclusion) per pixel of the camera's image. Empty vectors are left alone.
 template <typename T>
 void denoiseInPlace(std::vector<T>& values, int perPixel, std::span<const SurfacePoint> points,
                     const Camera& camera, const DenoiseSettings& settings,
-                    std::vector<size_t>* holes = nullptr) {
-    static_assert(sizeof(T) % sizeof(float) == 0 && std::is_trivially_copyable_v<T>);
+                    std::vector<size_t>* holes = nullptr, const PixelRect* bounds = nullptr) {
+    static_assert(sizeof(T) % sizeof(float) == 0 && std::is_trivially_copyable_v<T> &&
+                  std::is_standard_layout_v<T>);
     if (values.empty() || settings.radius <= 0) return;
     const int channels = perPixel * static_cast<int>(sizeof(T) / sizeof(float));
-    std::vector<float> flat(values.size() * sizeof(T) / sizeof(float));
-    std::memcpy(flat.data(), values.data(), flat.size() * sizeof(float));
-    flat = denoise(flat, channels, points, camera.width, camera.height, camera.position(), 1.0f / camera.fy,
-                   settings, holes);
-    std::memcpy(static_cast<void*>(values.data()), flat.data(), flat.size() * sizeof(float));
+    const std::span<float> flat(reinterpret_cast<float*>(values.data()),
+                                values.size() * sizeof(T) / sizeof(float));
+    denoiseInto(flat, channels, points, camera.width, camera.height, camera.position(), 1.0f / camera.fy,
+                settings, holes, bounds);
 }
 
 }  // namespace deltagi

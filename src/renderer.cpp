@@ -80,6 +80,7 @@ struct ConeJob {
     bool indirect;  // trace diffuse and specular cones too
     ShadowMode
         mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
+    PixelRect bounds;  // holds every valid point
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -125,17 +126,19 @@ void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
 // stride-th pixel of every stride-th row, then filtered: the edge-aware filter interpolates the pixels
 // between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),
 // and the pixels that have none are traced as well. With stride 1 every pixel is traced and filtered.
+// `bounds` holds all valid points.
 template <typename T, typename Trace>
-std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& camera, int stride,
-                           int perPixel, const DenoiseSettings& filter, Trace&& trace) {
+std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect& bounds,
+                           const Camera& camera, int stride, int perPixel, const DenoiseSettings& filter,
+                           Trace&& trace) {
     if (stride <= 1) {
         std::vector<T> values = trace(std::span<const uint32_t>{});
-        denoiseInPlace(values, perPixel, points, camera, filter);
+        denoiseInPlace(values, perPixel, points, camera, filter, nullptr, &bounds);
         return values;
     }
     std::vector<uint32_t> samples;
-    for (int y = 0; y < camera.height; y += stride)
-        for (int x = 0; x < camera.width; x += stride) {
+    for (int y = (bounds.y0 + stride - 1) / stride * stride; y < bounds.y1; y += stride)
+        for (int x = (bounds.x0 + stride - 1) / stride * stride; x < bounds.x1; x += stride) {
             const size_t i = static_cast<size_t>(y) * camera.width + x;
             if (points[i].valid()) samples.push_back(static_cast<uint32_t>(i));
         }
@@ -147,7 +150,7 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const Camera& c
     fill.radius = std::max(filter.radius, 1);
     fill.stride = stride;
     std::vector<size_t> holes;
-    denoiseInPlace(values, perPixel, points, camera, fill, &holes);
+    denoiseInPlace(values, perPixel, points, camera, fill, &holes, &bounds);
     if (holes.empty()) return values;
     const std::vector<uint32_t> holePixels(holes.begin(), holes.end());
     const std::vector<T> filled = trace(std::span<const uint32_t>(holePixels));
@@ -166,7 +169,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         results[j].shadows = traceSparse<ShadowOcclusion>(
-            job.points, scene.camera, job.shadowStride(o, scene.camera), lights, job.filter(o),
+            job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights, job.filter(o),
             [&](std::span<const uint32_t> pixels) {
                 return traceShadowCones(job.points, scene.lights, job.visibility, o,
                                         job.mode == ShadowMode::DeltaShadow, pixels);
@@ -177,7 +180,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
         results[j].diffuse = traceSparse<glm::vec3>(
-            job.points, scene.camera, job.diffuseStride(o, scene.camera), 1, job.filter(o),
+            job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1, job.filter(o),
             [&](std::span<const uint32_t> pixels) {
                 return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels);
             });
@@ -191,7 +194,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         };
         // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
         results[j].specular =
-            job.relit() ? traceSparse<glm::vec3>(job.points, scene.camera,
+            job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
                                                  job.specularStride(o, scene.camera), 1, job.filter(o), trace)
                         : trace({});
     }
@@ -203,8 +206,9 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         for (size_t j = 0; j < jobs.size(); ++j) {
             const ConeJob& job = jobs[j];
             addInto(results[j].diffuse,
-                    traceSparse<glm::vec3>(job.points, scene.camera, job.diffuseStride(o, scene.camera), 1,
-                                           job.filter(o), [&](std::span<const uint32_t> pixels) {
+                    traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
+                                           job.diffuseStride(o, scene.camera), 1, job.filter(o),
+                                           [&](std::span<const uint32_t> pixels) {
                                                return traceSkyCones(job.points, environment, job.visibility,
                                                                     job.mode, o, SkyParts::Diffuse, pixels)
                                                    .diffuse;
@@ -337,7 +341,8 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
                       &light,
                       {&visibility, nullptr, VisibilityVolumes::Self::Scene},
                       o.render.indirect,
-                      ShadowMode::SceneOnly};
+                      ShadowMode::SceneOnly,
+                      {0, 0, scene.camera.width, scene.camera.height}};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
     const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
@@ -415,12 +420,14 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          volumes.fullLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Object},
          o.render.indirect,
-         ShadowMode::Shaded},
+         ShadowMode::Shaded,
+         validPointBounds(gbuffer.object, camera.width)},
         {realPoints,
          volumes.deltaLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
          o.render.indirect && o.render.relightIndirect,
-         relightMode}};
+         relightMode,
+         {0, 0, camera.width, camera.height}}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];
