@@ -101,12 +101,9 @@ void BM_MovingObjectFrame(benchmark::State& state, FrameStage stage) {
         const auto t0 = Clock::now();
         volumes.voxelize(k.scene.virtuals, k.region);
         const auto t1 = Clock::now();
-        const std::vector<ReflectiveShadowMap> withObjects = {
-            updateReflectiveShadowMap(sceneRsms[0], all, light, k.region, bounds)};
-        const std::vector<std::vector<TexelRange>> retraced = {
-            retracedTexels(sceneRsms[0], all, light, k.region, bounds)};
+        const std::vector<RsmUpdate> updates = {traceRsmUpdate(sceneRsms[0], all, light, k.region, bounds)};
         const auto t2 = Clock::now();
-        volumes.inject({sceneGeometry, sceneRsms, sceneLight}, withObjects, retraced);
+        volumes.inject({sceneGeometry, sceneRsms, sceneLight}, updates);
         const auto t3 = Clock::now();
         volumes.mipmap();
         const auto t4 = Clock::now();

@@ -124,9 +124,8 @@ TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegio
     return bins;
 }
 
-RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone,
-                       std::span<const ReflectiveShadowMap> withObjects,
-                       std::span<const std::vector<TexelRange>> retraced, const VolumeRegion& region) {
+RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone, std::span<const RsmUpdate> updates,
+                       const VolumeRegion& region) {
     // Texels are compared as bytes: a copy is the same bytes.
     static_assert(sizeof(RsmTexel) == 11 * sizeof(float), "RsmTexel has padding");
     const int n = region.resolution;
@@ -139,13 +138,14 @@ RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone,
         std::vector<RsmChanges::Texel> removed, added;
     };
     std::vector<Piece> pieces;
-    for (size_t l = 0; l < retraced.size(); ++l)
-        for (const TexelRange& r : retraced[l]) pieces.push_back({static_cast<uint32_t>(l), r, {}, {}});
+    for (size_t l = 0; l < updates.size(); ++l)
+        for (const TexelRange& r : updates[l].retraced)
+            pieces.push_back({static_cast<uint32_t>(l), r, {}, {}});
     auto byIndex = [](const RsmTexel& t, uint32_t index) { return t.index < index; };
     parallelFor(0, static_cast<int64_t>(pieces.size()), 1, [&](int64_t p) {
         Piece& piece = pieces[p];
         const std::vector<RsmTexel>& before = sceneAlone[piece.light].texels;
-        const std::vector<RsmTexel>& after = withObjects[piece.light].texels;
+        const std::vector<RsmTexel>& after = updates[piece.light].texels;
         auto b = std::lower_bound(before.begin(), before.end(), piece.range.first, byIndex);
         auto a = std::lower_bound(after.begin(), after.end(), piece.range.first, byIndex);
         auto removed = [&](std::vector<RsmTexel>::const_iterator t) {

@@ -72,18 +72,17 @@ struct RsmChanges {
     struct Texel {
         uint32_t voxel;  // index in the level-0 grid
         uint32_t light;
-        const RsmTexel* texel;  // into the maps compared (scene's for removed, with objects for added)
-        uint32_t position;      // in its map's texels
+        const RsmTexel* texel;  // into the scene's maps (removed) or the updates (added)
+        uint32_t position;      // removed: in its map's texels
     };
     std::vector<Texel> removed;  // by light and texel
     std::vector<Texel> added;    // by voxel, light and texel: injectLight's order in each voxel
     VoxelBox bounds;             // the voxels all of them land in
 };
-// Compares each map of `withObjects` (updateReflectiveShadowMap of the same map of `sceneAlone`) with its
-// base, only in the texels `retraced` (retracedTexels, one list per light): the others are copies.
-RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone,
-                       std::span<const ReflectiveShadowMap> withObjects,
-                       std::span<const std::vector<TexelRange>> retraced, const VolumeRegion& region);
+// Compares each map of `sceneAlone` with its update for the objects (traceRsmUpdate, one per light) in the
+// texels the update traced again: the others are the same. Added texels point into the updates.
+RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone, std::span<const RsmUpdate> updates,
+                       const VolumeRegion& region);
 
 // injectLight(withObjects, region, geometry) and deltaVolume(it, sceneLight), written into `fullLight` and
 // `deltaLight` inside `box` only, where withObjects = the maps of `sceneTexels` (binTexels of `sceneAlone`)

@@ -28,9 +28,8 @@ void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const Volume
     objectsChanged_.extend(objects_.bounds);
 }
 
-void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const ReflectiveShadowMap> withObjects,
-                           std::span<const std::vector<TexelRange>> retraced) {
-    const RsmChanges changes = compareRsms(real.rsms, withObjects, retraced, region_);
+void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates) {
+    const RsmChanges changes = compareRsms(real.rsms, updates, region_);
     const VoxelGeometry* both[] = {&real.geometry, &objects_};
     VoxelBox differs = objects_.bounds;
     differs.extend(changes.bounds);
@@ -39,6 +38,9 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const Reflect
     lightDiffers_ = differs;
     const size_t voxels = VoxelBox::all(region_.resolution).count();
     if (fullLight_.empty() || changed.count() > voxels / kFreshInjectionFraction) {
+        std::vector<ReflectiveShadowMap> withObjects;
+        for (size_t l = 0; l < updates.size(); ++l)
+            withObjects.push_back(applyRsmUpdate(real.rsms[l], updates[l]));
         freshFull_ = injectLight(withObjects, region_, both);
         freshDelta_ = deltaVolume(*freshFull_, real.light);
         lightChanged_ = VoxelBox::all(region_.resolution);

@@ -33,11 +33,9 @@ class ObjectVolumes {
   public:
     // Stage 1: the objects' voxels, over `region` (a new region starts afresh).
     void voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region);
-    // Stage 3: the full and delta light volumes (level 0). `withObjects` are the real scene's RSMs updated
-    // for the objects (updateReflectiveShadowMap), `retraced` the texels the update traced again
-    // (retracedTexels), one list per light.
-    void inject(const RealSceneVolumes& real, std::span<const ReflectiveShadowMap> withObjects,
-                std::span<const std::vector<TexelRange>> retraced);
+    // Stage 3: the full and delta light volumes (level 0). `updates` are the real scene's RSMs' updates for
+    // the objects (traceRsmUpdate), one per light.
+    void inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates);
     // Stage 4: the mip chains of the three volumes.
     void mipmap();
 

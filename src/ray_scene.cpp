@@ -71,7 +71,7 @@ RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* bas
 RayScene::~RayScene() = default;
 
 RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
-    RayHit hit = intersectLayer(origin, direction, tMin, tMax);
+    RayHit hit = intersectTopLayer(origin, direction, tMin, tMax);
     if (base_) {
         RayHit below = base_->intersect(origin, direction, tMin, hit.hit() ? hit.t : tMax);
         if (below.hit()) hit = below;
@@ -79,7 +79,7 @@ RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, fl
     return hit;
 }
 
-RayHit RayScene::intersectLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
     RayHit result;
     if (meshes_.empty()) return result;
     RTCIntersectContext context;

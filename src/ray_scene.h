@@ -42,6 +42,10 @@ class RayScene {
     // Closest hit along origin + t * direction (direction unit length), t in (tMin, tMax).
     RayHit intersect(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
                      float tMax = std::numeric_limits<float>::infinity()) const;
+    // The closest hit in this layer alone, without the base's.
+    RayHit intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
+                             float tMax = std::numeric_limits<float>::infinity()) const;
+    const RayScene* base() const { return base_; }
     Bounds3f bounds() const { return bounds_; }  // of this layer and its base
     bool empty() const { return meshes_.empty() && (!base_ || base_->empty()); }
 
@@ -52,7 +56,6 @@ class RayScene {
         const TriangleMesh* mesh;
         bool isVirtual;
     };
-    RayHit intersectLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const;
 
     std::vector<MeshRef> meshes_;  // indexed by Embree geometry ID
     const RayScene* base_ = nullptr;

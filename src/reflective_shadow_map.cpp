@@ -90,27 +90,48 @@ class MapLayout {
     }
 
     // The texels [i0, i1] x [j0, j1] of `face` whose rays may meet the box `b` (a margin of one texel); none
-    // (nullopt) when the box lies outside the face.
+    // (nullopt) when the box lies outside the face. A perspective face's rays only reach the part of the box
+    // in front of the light (along the face's axis): the box is clipped to that half-space before it is
+    // projected, so that the faces looking away from the objects trace nothing.
     std::optional<std::array<int, 4>> texelsCovering(int face, const Bounds3f& b) const {
+        if (b.empty()) return std::nullopt;
         const Face& f = faces_[face];
         float xMin = INFINITY, xMax = -INFINITY, yMin = INFINITY, yMax = -INFINITY;
+        auto project = [&](glm::vec3 p, float z) {
+            const glm::vec3 d = light_.type == Light::Type::Directional ? p - center_ : p - light_.position;
+            const float x = glm::dot(d, f.right), y = glm::dot(d, f.up);
+            const float s = light_.type == Light::Type::Directional ? 1.0f : 1.0f / z;
+            xMin = std::min(xMin, x * s), xMax = std::max(xMax, x * s);
+            yMin = std::min(yMin, y * s), yMax = std::max(yMax, y * s);
+        };
+        std::array<glm::vec3, 8> corners;
+        std::array<float, 8> depth;  // along the face's axis, from the light
         for (int c = 0; c < 8; ++c) {
-            const glm::vec3 p(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y,
-                              c & 4 ? b.max.z : b.min.z);
-            float x, y;
-            if (light_.type == Light::Type::Directional) {
-                x = glm::dot(p - center_, f.right);
-                y = glm::dot(p - center_, f.up);
-            } else {
-                const glm::vec3 d = p - light_.position;
-                const float z = glm::dot(d, f.forward);
-                if (z <= 1e-6f * glm::length(d))
-                    return std::array<int, 4>{0, res_ - 1, 0, res_ - 1};  // behind
-                x = glm::dot(d, f.right) / z;
-                y = glm::dot(d, f.up) / z;
+            corners[c] =
+                glm::vec3(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y, c & 4 ? b.max.z : b.min.z);
+            depth[c] = glm::dot(corners[c] - light_.position, f.forward);
+        }
+        if (light_.type == Light::Type::Directional) {
+            for (const glm::vec3& p : corners) project(p, 1.0f);
+        } else {
+            // Clip at a small depth: the rays of the face leave the light inside its frustum, so a point
+            // closer than `nearDepth` to the light's plane is only on a ray when it is within about
+            // nearDepth * sqrt(3) of the light, i.e. when the (slightly grown) box holds the light.
+            const float nearDepth =
+                1e-4f * (glm::length(b.diagonal()) + glm::length(b.center() - light_.position));
+            Bounds3f grown = b;
+            grown.min -= glm::vec3(2.0f * nearDepth), grown.max += glm::vec3(2.0f * nearDepth);
+            if (grown.contains(light_.position)) return std::array<int, 4>{0, res_ - 1, 0, res_ - 1};
+            for (int c = 0; c < 8; ++c) {
+                if (depth[c] >= nearDepth) project(corners[c], depth[c]);
+                for (int axis = 0; axis < 3; ++axis) {  // the box's edges from c to its neighbours
+                    const int n = c | (1 << axis);
+                    if (n == c || (depth[c] >= nearDepth) == (depth[n] >= nearDepth)) continue;
+                    const float t = (nearDepth - depth[c]) / (depth[n] - depth[c]);
+                    project(corners[c] + t * (corners[n] - corners[c]), nearDepth);
+                }
             }
-            xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y),
-            yMax = std::max(yMax, y);
+            if (xMin > xMax) return std::nullopt;  // the box is behind the face
         }
         const float res = static_cast<float>(res_);
         auto column = [&](float x) { return (x / f.halfTan + 1.0f) * 0.5f * res - 0.5f; };
@@ -132,21 +153,45 @@ class MapLayout {
     std::vector<Face> faces_;
 };
 
+// The texel `index` made from its ray's closest hit, if that hit is on a surface inside the region.
+std::optional<RsmTexel> texelFromHit(const RayHit& hit, const TexelRay& ray, const Bounds3f& regionBounds,
+                                     uint32_t index) {
+    if (!hit.hit() || !regionBounds.contains(hit.position)) return std::nullopt;
+    const float cosTheta = std::max(glm::dot(hit.normal, -ray.dir), kMinCos);
+    const float area = (ray.areaConst + ray.areaPerT2 * hit.t * hit.t) / cosTheta;
+    return RsmTexel{hit.position, hit.normal, hit.material->albedo * ray.fluxIn, area, index};
+}
+
+uint32_t texelIndex(int res, int face, int i, int j) {
+    return static_cast<uint32_t>((static_cast<size_t>(face) * res + j) * res + i);
+}
+
+bool carriesLight(const TexelRay& ray) {
+    return ray.fluxIn.x > 0.0f || ray.fluxIn.y > 0.0f || ray.fluxIn.z > 0.0f;
+}
+
 // The texel (face, i, j) if its ray hits a surface inside the region.
 std::optional<RsmTexel> traceTexel(const RayScene& scene, const MapLayout& layout,
                                    const Bounds3f& regionBounds, int res, int face, int i, int j) {
-    const auto [origin, dir, fluxIn, areaConst, areaPerT2] = layout.ray(face, i, j);
-    if (fluxIn.x <= 0.0f && fluxIn.y <= 0.0f && fluxIn.z <= 0.0f) return std::nullopt;
-    const RayHit hit = scene.intersect(origin, dir);
-    if (!hit.hit()) return std::nullopt;
-    const glm::vec3 p = hit.position;
-    if (p.x < regionBounds.min.x || p.y < regionBounds.min.y || p.z < regionBounds.min.z ||
-        p.x > regionBounds.max.x || p.y > regionBounds.max.y || p.z > regionBounds.max.z)
-        return std::nullopt;
-    const float cosTheta = std::max(glm::dot(hit.normal, -dir), kMinCos);
-    const float area = (areaConst + areaPerT2 * hit.t * hit.t) / cosTheta;
-    const uint32_t index = static_cast<uint32_t>((static_cast<size_t>(face) * res + j) * res + i);
-    return RsmTexel{p, hit.normal, hit.material->albedo * fluxIn, area, index};
+    const TexelRay ray = layout.ray(face, i, j);
+    if (!carriesLight(ray)) return std::nullopt;
+    return texelFromHit(scene.intersect(ray.origin, ray.dir), ray, regionBounds, texelIndex(res, face, i, j));
+}
+
+// traceTexel() over a layered `scene` whose base layer is the scene a map was rendered over, `baseTexel` the
+// texel there (null: none). Where the ray misses the top layer, the closest hit is the base layer's, which
+// the map holds already: only the rays that meet the objects are traced again below them.
+std::optional<RsmTexel> retraceTexel(const RayScene& scene, const MapLayout& layout,
+                                     const Bounds3f& regionBounds, int res, int face, int i, int j,
+                                     const RsmTexel* baseTexel) {
+    if (!scene.base()) return traceTexel(scene, layout, regionBounds, res, face, i, j);
+    const TexelRay ray = layout.ray(face, i, j);
+    if (!carriesLight(ray)) return std::nullopt;
+    RayHit hit = scene.intersectTopLayer(ray.origin, ray.dir);
+    if (!hit.hit()) return baseTexel ? std::optional(*baseTexel) : std::nullopt;
+    const RayHit below = scene.base()->intersect(ray.origin, ray.dir, 0.0f, hit.t);
+    if (below.hit()) hit = below;
+    return texelFromHit(hit, ray, regionBounds, texelIndex(res, face, i, j));
 }
 
 // Renders every face row by row (rows in parallel, then concatenated in order). `rowTexels(face, j, out)`
@@ -188,53 +233,70 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
     });
 }
 
-ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, const RayScene& scene,
-                                              const Light& light, const VolumeRegion& region,
-                                              const Bounds3f& changed) {
-    const int res = base.resolution;
-    const MapLayout layout(scene, light, region, res);
-    const std::optional<FaceRects> retraced = retracedRects(layout, base, changed);
-    if (!retraced) return renderReflectiveShadowMap(scene, light, region, res);
-    const Bounds3f regionBounds = region.bounds();
-    const FaceRects& dirty = *retraced;
-    auto byIndex = [](const RsmTexel& t, uint32_t index) { return t.index < index; };
-    return renderRows(layout, res, [&](int face, int j, std::vector<RsmTexel>& row) {
-        // The base's texels of this row, and the columns to trace again.
-        const uint32_t rowStart = static_cast<uint32_t>((static_cast<size_t>(face) * res + j) * res);
-        auto first = std::lower_bound(base.texels.begin(), base.texels.end(), rowStart, byIndex);
-        auto last = std::lower_bound(first, base.texels.end(), rowStart + res, byIndex);
-        const auto& rect = dirty[face];
-        if (!rect || j < (*rect)[2] || j > (*rect)[3]) {
-            row.assign(first, last);
-            return;
-        }
-        const int i0 = (*rect)[0], i1 = (*rect)[1];
-        for (auto t = first; t != last && t->index < rowStart + i0; ++t) row.push_back(*t);
-        for (int i = i0; i <= i1; ++i)
-            if (auto t = traceTexel(scene, layout, regionBounds, res, face, i, j)) row.push_back(*t);
-        for (auto t = first; t != last; ++t)
-            if (t->index > rowStart + i1) row.push_back(*t);
-    });
-}
-
-std::vector<TexelRange> retracedTexels(const ReflectiveShadowMap& base, const RayScene& scene,
-                                       const Light& light, const VolumeRegion& region,
-                                       const Bounds3f& changed) {
+RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene, const Light& light,
+                         const VolumeRegion& region, const Bounds3f& changed) {
     const int res = base.resolution;
     const MapLayout layout(scene, light, region, res);
     const std::optional<FaceRects> rects = retracedRects(layout, base, changed);
-    if (!rects) return {{0, std::numeric_limits<uint32_t>::max()}};
-    std::vector<TexelRange> ranges;
-    for (int face = 0; face < layout.faceCount(); ++face) {
-        const auto& rect = (*rects)[face];
-        if (!rect) continue;
-        for (int j = (*rect)[2]; j <= (*rect)[3]; ++j) {
-            const uint32_t rowStart = static_cast<uint32_t>((static_cast<size_t>(face) * res + j) * res);
-            ranges.push_back({rowStart + static_cast<uint32_t>((*rect)[0]),
-                              rowStart + static_cast<uint32_t>((*rect)[1]) + 1});
-        }
+    RsmUpdate update;
+    if (!rects) {
+        update.retraced = {{0, std::numeric_limits<uint32_t>::max()}};
+        update.texels = renderReflectiveShadowMap(scene, light, region, res).texels;
+        return update;
     }
-    return ranges;
+    // One row of a face's rectangle per piece of work.
+    struct Row {
+        int face, j, i0, i1;
+    };
+    std::vector<Row> rows;
+    for (int face = 0; face < layout.faceCount(); ++face)
+        if (const auto& rect = (*rects)[face])
+            for (int j = (*rect)[2]; j <= (*rect)[3]; ++j) rows.push_back({face, j, (*rect)[0], (*rect)[1]});
+    const Bounds3f regionBounds = region.bounds();
+    std::vector<std::vector<RsmTexel>> traced(rows.size());
+    auto byIndex = [](const RsmTexel& t, uint32_t index) { return t.index < index; };
+    parallelFor(0, static_cast<int64_t>(rows.size()), 4, [&](int64_t r) {
+        const auto [face, j, i0, i1] = rows[r];
+        auto b =
+            std::lower_bound(base.texels.begin(), base.texels.end(), texelIndex(res, face, i0, j), byIndex);
+        for (int i = i0; i <= i1; ++i) {
+            const uint32_t index = texelIndex(res, face, i, j);
+            while (b != base.texels.end() && b->index < index) ++b;
+            const RsmTexel* baseTexel = b != base.texels.end() && b->index == index ? &*b : nullptr;
+            if (auto t = retraceTexel(scene, layout, regionBounds, res, face, i, j, baseTexel))
+                traced[r].push_back(*t);
+        }
+    });
+    for (size_t r = 0; r < rows.size(); ++r) {
+        update.retraced.push_back({texelIndex(res, rows[r].face, rows[r].i0, rows[r].j),
+                                   texelIndex(res, rows[r].face, rows[r].i1, rows[r].j) + 1});
+        update.texels.insert(update.texels.end(), traced[r].begin(), traced[r].end());
+    }
+    return update;
+}
+
+ReflectiveShadowMap applyRsmUpdate(const ReflectiveShadowMap& base, const RsmUpdate& update) {
+    ReflectiveShadowMap map;
+    map.resolution = base.resolution;
+    map.faces = base.faces;
+    map.rayStart = base.rayStart;
+    map.texels.reserve(base.texels.size() + update.texels.size());
+    auto b = base.texels.begin();
+    auto u = update.texels.begin();
+    for (const TexelRange& range : update.retraced) {
+        for (; b != base.texels.end() && b->index < range.first; ++b) map.texels.push_back(*b);
+        for (; b != base.texels.end() && b->index < range.last; ++b) {
+        }
+        for (; u != update.texels.end() && u->index < range.last; ++u) map.texels.push_back(*u);
+    }
+    map.texels.insert(map.texels.end(), b, base.texels.end());
+    return map;
+}
+
+ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, const RayScene& scene,
+                                              const Light& light, const VolumeRegion& region,
+                                              const Bounds3f& changed) {
+    return applyRsmUpdate(base, traceRsmUpdate(base, scene, light, region, changed));
 }
 
 }  // namespace deltagi

@@ -29,26 +29,34 @@ struct ReflectiveShadowMap {
 ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
                                               const VolumeRegion& region, int resolution);
 
-// The same map for `scene` = the scene of `base` plus objects inside `changed` (world bounds): the texels
-// whose rays cannot meet `changed` (outside its projection onto each face) are copied from `base`, which was
-// rendered for the same light, region and resolution; the others are traced again. Equal to
-// renderReflectiveShadowMap() over `scene`, texel for texel, at a fraction of the rays when the objects are
-// small in the light's view.
-ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, const RayScene& scene,
-                                              const Light& light, const VolumeRegion& region,
-                                              const Bounds3f& changed);
-
 // Texel indices [first, last).
 struct TexelRange {
     uint32_t first = 0, last = 0;
 };
 
-// The texels that updateReflectiveShadowMap(base, scene, light, region, changed) traces again, in increasing
-// order (one range per row of a face); every texel of its result outside them is a copy of base's. One range
-// over every index when it renders the map afresh. Light injection uses them to find the texels that the
-// objects changed without comparing whole maps.
-std::vector<TexelRange> retracedTexels(const ReflectiveShadowMap& base, const RayScene& scene,
-                                       const Light& light, const VolumeRegion& region,
-                                       const Bounds3f& changed);
+// What objects change in a map, per frame: the texels whose rays can meet the objects, traced again.
+struct RsmUpdate {
+    // Increasing (one range per row of a face); every texel outside them is the base map's. One range over
+    // every index when the map is rendered afresh.
+    std::vector<TexelRange> retraced;
+    std::vector<RsmTexel> texels;  // the retraced texels that hit a surface inside the region, in texel order
+};
+
+// The update of `base` for `scene` = the scene `base` was rendered over (same light, region and resolution)
+// plus objects inside `changed` (world bounds): the texels whose rays cannot meet `changed` (outside its
+// projection onto each face, clipped to the light's front) are left to `base`, the others are traced again.
+// When `scene` is layered over the base scene (RayScene's `base`), a ray that misses the top layer takes the
+// base map's texel without being traced below it. A directional light whose ray origins the objects move is
+// rendered afresh.
+RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene, const Light& light,
+                         const VolumeRegion& region, const Bounds3f& changed);
+
+// `base` with `update`'s texels: renderReflectiveShadowMap() over the update's scene, texel for texel.
+ReflectiveShadowMap applyRsmUpdate(const ReflectiveShadowMap& base, const RsmUpdate& update);
+
+// applyRsmUpdate(base, traceRsmUpdate(base, scene, light, region, changed)).
+ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, const RayScene& scene,
+                                              const Light& light, const VolumeRegion& region,
+                                              const Bounds3f& changed);
 
 }  // namespace deltagi

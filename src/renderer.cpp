@@ -302,19 +302,15 @@ DgiVolumes buildVolumes(const Scene& scene, const VolumeRegion& region, const Ra
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
     if (!kept.sceneRsms) kept.sceneRsms = renderRsms(realOnly, scene.lights, region, rsmResolution);
-    std::vector<ReflectiveShadowMap> rsmFull;
-    std::vector<std::vector<TexelRange>> retraced;
+    std::vector<RsmUpdate> updates;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
-    for (size_t l = 0; l < scene.lights.size(); ++l) {
-        const ReflectiveShadowMap& base = (*kept.sceneRsms)[l];
-        rsmFull.push_back(updateReflectiveShadowMap(base, all, scene.lights[l], region, objectBounds));
-        retraced.push_back(retracedTexels(base, all, scene.lights[l], region, objectBounds));
-    }
+    for (size_t l = 0; l < scene.lights.size(); ++l)
+        updates.push_back(traceRsmUpdate((*kept.sceneRsms)[l], all, scene.lights[l], region, objectBounds));
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
     if (!kept.sceneLight) kept.sceneLight = injectLight(*kept.sceneRsms, region, sceneAlone);
-    objects.inject({*kept.sceneGeometry, *kept.sceneRsms, *kept.sceneLight}, rsmFull, retraced);
+    objects.inject({*kept.sceneGeometry, *kept.sceneRsms, *kept.sceneLight}, updates);
     timer.lap("inject");
     // 4. Mipmaps of all four volumes.
     if (!kept.sceneVisibility)

@@ -5,6 +5,7 @@
 #include "shapes.h"
 
 #include <algorithm>
+#include <array>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -138,6 +139,18 @@ TEST(ReflectiveShadowMap, UpdateForTheObjectsEqualsAFullRender) {
         }
         EXPECT_GT(differentFromBase, 0u);  // the object is in the map
     }
+    // The light inside the region has six faces; the object is below it, so the face looking up (+y, the
+    // third) and the faces looking away from it along x and z trace nothing again.
+    const Light& inside = lights[1];
+    const ReflectiveShadowMap base = renderReflectiveShadowMap(realOnly, inside, kRegion, 128);
+    ASSERT_EQ(base.faces, 6);
+    std::array<uint32_t, 6> perFace{};
+    for (const TexelRange& r : traceRsmUpdate(base, all, inside, kRegion, objectBounds).retraced)
+        for (uint32_t t = r.first; t < r.last; ++t) ++perFace[t / (128 * 128)];
+    EXPECT_GT(perFace[3], 0u);  // -y: below the light
+    EXPECT_EQ(perFace[1], 0u);  // -x: the object is at +x
+    EXPECT_EQ(perFace[2], 0u);  // +y
+    EXPECT_EQ(perFace[4], 0u);  // +z: the object is at -z
 }
 
 }  // namespace

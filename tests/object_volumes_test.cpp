@@ -78,14 +78,13 @@ size_t frameEqualsScratch(ObjectVolumes& kept, const RealScene& real, const Scen
     Bounds3f objectBounds;
     for (const TriangleMesh& m : s.virtuals) objectBounds.extend(m.bounds());
     kept.voxelize(s.virtuals, kRegion);
+    std::vector<RsmUpdate> updates;
     std::vector<ReflectiveShadowMap> withObjects;
-    std::vector<std::vector<TexelRange>> retraced;
     for (size_t l = 0; l < s.lights.size(); ++l) {
-        withObjects.push_back(
-            updateReflectiveShadowMap(real.rsms[l], all, s.lights[l], kRegion, objectBounds));
-        retraced.push_back(retracedTexels(real.rsms[l], all, s.lights[l], kRegion, objectBounds));
+        updates.push_back(traceRsmUpdate(real.rsms[l], all, s.lights[l], kRegion, objectBounds));
+        withObjects.push_back(applyRsmUpdate(real.rsms[l], updates.back()));
     }
-    kept.inject({real.geometry, real.rsms, real.light}, withObjects, retraced);
+    kept.inject({real.geometry, real.rsms, real.light}, updates);
     kept.mipmap();
 
     // From scratch, as render() does (the updated maps are the maps rendered with the objects, texel for

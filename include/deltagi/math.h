@@ -22,6 +22,9 @@ struct Bounds3f {
         min = glm::min(min, b.min);
         max = glm::max(max, b.max);
     }
+    bool contains(glm::vec3 p) const {
+        return p.x >= min.x && p.y >= min.y && p.z >= min.z && p.x <= max.x && p.y <= max.y && p.z <= max.z;
+    }
     glm::vec3 center() const { return 0.5f * (min + max); }
     glm::vec3 diagonal() const { return max - min; }
     float maxExtent() const {
