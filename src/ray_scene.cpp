@@ -1,6 +1,7 @@
 #include "ray_scene.h"
 
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 
 #include <embree3/rtcore.h>
@@ -33,16 +34,39 @@ void initRay(RTCRay& ray, glm::vec3 origin, glm::vec3 direction, float tMin, flo
     ray.flags = 0;
 }
 
+// The hit of a ray on the triangle Embree found, computed again from the mesh's vertices (Moller-Trumbore in
+// double precision): the same bits whichever BVH found it, built afresh or refit. Embree's own figures
+// depend, in the last bits, on how its leaves store the triangle.
+struct TriangleHit {
+    float t, u, v;
+    glm::vec3 ng;  // the triangle's plane normal (e1 x e2), not normalized
+};
+std::optional<TriangleHit> recomputeHit(glm::vec3 origin, glm::vec3 direction, glm::vec3 a, glm::vec3 b,
+                                        glm::vec3 c) {
+    const glm::dvec3 o(origin), d(direction), v0(a);
+    const glm::dvec3 e1 = glm::dvec3(b) - v0, e2 = glm::dvec3(c) - v0;
+    const glm::dvec3 p = glm::cross(d, e2);
+    const double det = glm::dot(e1, p);
+    if (det == 0.0) return std::nullopt;
+    const double inv = 1.0 / det;
+    const glm::dvec3 s = o - v0;
+    const glm::dvec3 q = glm::cross(s, e1);
+    return TriangleHit{static_cast<float>(glm::dot(e2, q) * inv), static_cast<float>(glm::dot(s, p) * inv),
+                       static_cast<float>(glm::dot(d, q) * inv), glm::vec3(glm::cross(e1, e2))};
+}
+
 }  // namespace
 
 RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* base)
-    : impl_(std::make_unique<Impl>()), base_(base) {
+    : impl_(std::make_unique<Impl>()), content_(content), base_(base) {
     impl_->device = rtcNewDevice(nullptr);
     if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
     impl_->scene = rtcNewScene(impl_->device);
-    // A layer of virtual objects is rebuilt every frame: a faster build for slightly slower rays.
-    rtcSetSceneBuildQuality(impl_->scene, content == SceneContent::VirtualOnly ? RTC_BUILD_QUALITY_MEDIUM
-                                                                               : RTC_BUILD_QUALITY_HIGH);
+    // A layer of virtual objects moves every frame: a faster build for slightly slower rays, and a two-level
+    // structure (build quality low) whose meshes' BVHs can be refit (refit()).
+    const bool dynamic = content == SceneContent::VirtualOnly;
+    rtcSetSceneBuildQuality(impl_->scene, dynamic ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_HIGH);
+    if (dynamic) rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_DYNAMIC);
     if (base) bounds_ = base->bounds();
     auto add = [&](const TriangleMesh& mesh, bool isVirtual) {
         if (mesh.triangles.empty()) return;
@@ -54,11 +78,13 @@ RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* bas
         auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
             geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
         std::memcpy(indices, mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
+        if (dynamic) rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_REFIT);
         rtcCommitGeometry(geom);
         unsigned id = rtcAttachGeometry(impl_->scene, geom);
         rtcReleaseGeometry(geom);
         if (id != meshes_.size()) throw std::logic_error("Embree geometry IDs are not consecutive");
-        meshes_.push_back({&mesh, isVirtual});
+        meshes_.push_back(
+            {&mesh, isVirtual, vertices, indices, mesh.positions.size(), mesh.triangles.size()});
         bounds_.extend(mesh.bounds());
     };
     if (content != SceneContent::VirtualOnly)
@@ -69,6 +95,36 @@ RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* bas
 }
 
 RayScene::~RayScene() = default;
+
+bool RayScene::refit(const Scene& scene) {
+    std::vector<const TriangleMesh*> meshes;
+    auto collect = [&](const std::vector<TriangleMesh>& list) {
+        for (const TriangleMesh& m : list)
+            if (!m.triangles.empty()) meshes.push_back(&m);
+    };
+    if (content_ != SceneContent::VirtualOnly) collect(scene.real);
+    if (content_ != SceneContent::RealOnly) collect(scene.virtuals);
+    if (meshes.size() != meshes_.size()) return false;
+    for (size_t g = 0; g < meshes.size(); ++g) {
+        const TriangleMesh& now = *meshes[g];
+        const MeshRef& built = meshes_[g];
+        if (now.positions.size() != built.vertexCount || now.triangles.size() != built.triangleCount ||
+            std::memcmp(built.indices, now.triangles.data(), now.triangles.size() * sizeof(glm::uvec3)) != 0)
+            return false;
+    }
+    bounds_ = base_ ? base_->bounds() : Bounds3f{};
+    for (size_t g = 0; g < meshes.size(); ++g) {
+        const TriangleMesh& mesh = *meshes[g];
+        std::memcpy(meshes_[g].vertices, mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
+        RTCGeometry geom = rtcGetGeometry(impl_->scene, static_cast<unsigned>(g));
+        rtcUpdateGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(geom);
+        meshes_[g].mesh = &mesh;
+        bounds_.extend(mesh.bounds());
+    }
+    rtcCommitScene(impl_->scene);
+    return true;
+}
 
 RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
     RayHit hit = intersectTopLayer(origin, direction, tMin, tMax);
@@ -94,15 +150,19 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
     const MeshRef& ref = meshes_[rh.hit.geomID];
     const TriangleMesh& mesh = *ref.mesh;
     const glm::uvec3 tri = mesh.triangles[rh.hit.primID];
-    const float u = rh.hit.u, v = rh.hit.v;
-    glm::vec3 n = (1.0f - u - v) * mesh.normals[tri.x] + u * mesh.normals[tri.y] + v * mesh.normals[tri.z];
+    float u = rh.hit.u, v = rh.hit.v, t = rh.ray.tfar;
     glm::vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    if (const auto again = recomputeHit(origin, direction, mesh.positions[tri.x], mesh.positions[tri.y],
+                                        mesh.positions[tri.z])) {
+        t = again->t, u = again->u, v = again->v, ng = again->ng;
+    }
+    glm::vec3 n = (1.0f - u - v) * mesh.normals[tri.x] + u * mesh.normals[tri.y] + v * mesh.normals[tri.z];
     float len = glm::length(n);
     n = len > 0.0f ? n / len : glm::normalize(ng);
     // Two-sided: the shading normal faces the side the ray came from.
     if (glm::dot(ng, direction) > 0.0f) ng = -ng;
     if (glm::dot(n, ng) < 0.0f) n = -n;
-    result.t = rh.ray.tfar;
+    result.t = t;
     // Interpolate the position on the triangle (more precise than origin + t * direction far away).
     result.position =
         (1.0f - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] + v * mesh.positions[tri.z];

@@ -39,6 +39,12 @@ class RayScene {
     RayScene(const RayScene&) = delete;
     RayScene& operator=(const RayScene&) = delete;
 
+    // Moves this layer to `scene`'s meshes (its content, as at construction) when they have the same
+    // triangles as the meshes it was built over, only other vertex positions and normals: the BVH is refit
+    // instead of built again (objects that move from frame to frame). False, and nothing changed, when the
+    // triangles differ. `scene` must outlive the layer from then on.
+    bool refit(const Scene& scene);
+
     // Closest hit along origin + t * direction (direction unit length), t in (tMin, tMax).
     RayHit intersect(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
                      float tMax = std::numeric_limits<float>::infinity()) const;
@@ -55,7 +61,11 @@ class RayScene {
     struct MeshRef {
         const TriangleMesh* mesh;
         bool isVirtual;
+        float* vertices;  // Embree's buffers, of vertexCount vertices and triangleCount triangles
+        const unsigned* indices;
+        size_t vertexCount, triangleCount;
     };
+    SceneContent content_;
 
     std::vector<MeshRef> meshes_;  // indexed by Embree geometry ID
     const RayScene* base_ = nullptr;

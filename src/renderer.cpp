@@ -227,6 +227,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
 struct StaticWork {
     uint64_t signature = 0;
     std::unique_ptr<RayScene> realOnly;
+    std::unique_ptr<RayScene> objects;  // the virtual objects' layer over realOnly, refit as they move
     std::optional<std::vector<SurfacePoint>> realSurfaces;  // the G-buffer's real half
     std::optional<Image> background;                        // the real scene rendered alone (no photo)
     // Over `region`:
@@ -366,9 +367,10 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
 
     if (!kept.realOnly) kept.realOnly = std::make_unique<RayScene>(scene, SceneContent::RealOnly);
     const RayScene& realOnly = *kept.realOnly;
-    // The virtual objects get their own BVH, layered over the reconstruction's.
-    std::optional<RayScene> all;
-    if (!scene.virtuals.empty()) all.emplace(scene, SceneContent::VirtualOnly, &realOnly);
+    // The virtual objects get their own BVH, layered over the reconstruction's; refit when they only moved.
+    if (!scene.virtuals.empty() && !(kept.objects && kept.objects->refit(scene)))
+        kept.objects = std::make_unique<RayScene>(scene, SceneContent::VirtualOnly, &realOnly);
+    const RayScene* all = scene.virtuals.empty() ? nullptr : kept.objects.get();
     timer.lap("bvh");
 
     auto realSurfaces = [&]() -> const std::vector<SurfacePoint>& {

@@ -79,6 +79,10 @@ TEST(FrameRenderer, FramesOfObjectsThatMoveLeaveTheRegionAndChangeAreExactlyRend
     sameAsScratch();  // one object more
     moveVirtuals(s, {0.02f, 0.0f, 0.02f});
     sameAsScratch();
+    for (glm::vec3& p : s.virtuals[0].positions) p.y = 0.3f + 1.2f * (p.y - 0.3f);  // deformed: refit
+    sameAsScratch();
+    s.virtuals[1].triangles[0] = s.virtuals[1].triangles[1];  // other triangles, as many: built again
+    sameAsScratch();
     const std::vector<TriangleMesh> objects = s.virtuals;
     s.virtuals.clear();  // none: the photo
     sameAsScratch();
