@@ -8,63 +8,6 @@
 
 namespace deltagi {
 
-bool triangleBoxOverlap(glm::vec3 boxCenter, glm::vec3 h, glm::vec3 a, glm::vec3 b, glm::vec3 c) {
-    const glm::vec3 v[3] = {a - boxCenter, b - boxCenter, c - boxCenter};
-    // 1. The box's face normals: the triangle's bounds against the box.
-    for (int i = 0; i < 3; ++i) {
-        float mn = std::min({v[0][i], v[1][i], v[2][i]}), mx = std::max({v[0][i], v[1][i], v[2][i]});
-        if (mn > h[i] || mx < -h[i]) return false;
-    }
-    // 2. The triangle's plane.
-    const glm::vec3 e[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
-    glm::vec3 n = glm::cross(e[0], e[1]);
-    float r = glm::dot(h, glm::abs(n));
-    if (std::abs(glm::dot(n, v[0])) > r) return false;
-    // 3. The nine cross products of box axes and triangle edges.
-    for (int k = 0; k < 3; ++k) {
-        for (int i = 0; i < 3; ++i) {
-            glm::vec3 axis(0.0f);
-            axis[i] = 1.0f;
-            glm::vec3 l = glm::cross(axis, e[k]);
-            float p0 = glm::dot(l, v[0]), p1 = glm::dot(l, v[1]), p2 = glm::dot(l, v[2]);
-            float rad = glm::dot(h, glm::abs(l));
-            if (std::min({p0, p1, p2}) > rad || std::max({p0, p1, p2}) < -rad) return false;
-        }
-    }
-    return true;
-}
-
-float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMin, glm::vec3 boxMax) {
-    // A triangle clipped by 6 planes has at most 9 vertices.
-    std::array<glm::vec3, 12> polyA{a, b, c}, polyB{};
-    int count = 3;
-    glm::vec3* in = polyA.data();
-    glm::vec3* out = polyB.data();
-    for (int plane = 0; plane < 6 && count > 0; ++plane) {
-        const int axis = plane / 2;
-        const bool keepAbove = plane % 2 == 0;  // keep p[axis] >= min, or p[axis] <= max
-        const float bound = keepAbove ? boxMin[axis] : boxMax[axis];
-        auto inside = [&](const glm::vec3& p) { return keepAbove ? p[axis] >= bound : p[axis] <= bound; };
-        if (std::all_of(in, in + count, inside)) continue;  // the plane cuts nothing off (the usual case)
-        int outCount = 0;
-        for (int i = 0; i < count; ++i) {
-            const glm::vec3& p = in[i];
-            const glm::vec3& q = in[(i + 1) % count];
-            const bool pIn = inside(p), qIn = inside(q);
-            if (pIn) out[outCount++] = p;
-            if (pIn != qIn) {
-                float t = (bound - p[axis]) / (q[axis] - p[axis]);
-                out[outCount++] = p + t * (q - p);
-            }
-        }
-        count = outCount;
-        std::swap(in, out);
-    }
-    glm::vec3 sum(0.0f);
-    for (int i = 1; i + 1 < count; ++i) sum += glm::cross(in[i] - in[0], in[i + 1] - in[0]);
-    return 0.5f * glm::length(sum);
-}
-
 namespace {
 
 struct VoxelTriangle {
@@ -77,6 +20,69 @@ struct VoxelTriangle {
     glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
     bool touchesGrid() const { return hi.x >= lo.x; }
 };
+
+// A convex polygon in voxel space: a triangle cut by voxel planes (at most 3 + 2 per axis vertices).
+struct Polygon {
+    std::array<glm::vec3, 12> v;
+    int count = 0;
+    void push(glm::vec3 p) { v[count++] = p; }
+    float area() const {
+        glm::vec3 sum(0.0f);
+        for (int i = 1; i + 1 < count; ++i) sum += glm::cross(v[i] - v[0], v[i + 1] - v[0]);
+        return 0.5f * glm::length(sum);
+    }
+};
+
+// The parts of `p` on each side of the plane q[axis] = k, both closed (a vertex on the plane is in both; a
+// polygon that only touches the plane leaves a part without area on that side). Either may be null.
+void splitPolygon(const Polygon& p, int axis, float k, Polygon* below, Polygon* above) {
+    if (below) below->count = 0;
+    if (above) above->count = 0;
+    for (int i = 0; i < p.count; ++i) {
+        const glm::vec3 a = p.v[i], b = p.v[i + 1 < p.count ? i + 1 : 0];
+        const float da = a[axis] - k, db = b[axis] - k;
+        if (below && da <= 0.0f) below->push(a);
+        if (above && da >= 0.0f) above->push(a);
+        if ((da < 0.0f && db > 0.0f) || (da > 0.0f && db < 0.0f)) {
+            glm::vec3 m = a + (da / (da - db)) * (b - a);
+            m[axis] = k;  // exactly on the plane, for the next cuts
+            if (below) below->push(m);
+            if (above) above->push(m);
+        }
+    }
+}
+
+// Calls f(x, y, z, area) for each voxel with lo <= (x, y) <= hi and z0 <= z < z1 that the triangle t touches
+// (closed voxels), with the area of the triangle inside it: the triangle is cut into the voxels' pieces by
+// the grid planes, one plane at a time. In x, then y, then z order within each z layer.
+template <typename F>
+void forEachTouchedVoxel(const VoxelTriangle& t, int z0, int z1, F&& f) {
+    Polygon triangle;
+    for (const glm::vec3& p : t.p) triangle.push(p);
+    const glm::ivec3 lo = t.lo, hi = t.hi;
+    // Calls each(i, part) with the part of `p` in layer i of `axis`, for the layers first <= i <= last that
+    // it touches.
+    auto layers = [](const Polygon& p, int axis, int first, int last, auto&& each) {
+        Polygon rest, next, part;
+        splitPolygon(p, axis, static_cast<float>(first), nullptr, &rest);
+        for (int i = first; i <= last && rest.count > 0; ++i) {
+            splitPolygon(rest, axis, static_cast<float>(i + 1), &part, i < last ? &next : nullptr);
+            if (part.count > 0) each(i, part);
+            rest = next;
+        }
+    };
+    Polygon layerZ;
+    for (int z = z0; z < z1; ++z) {
+        // This layer's part, from the whole triangle (layers are cut in slabs, each on its own).
+        Polygon above;
+        splitPolygon(triangle, 2, static_cast<float>(z), nullptr, &above);
+        splitPolygon(above, 2, static_cast<float>(z + 1), &layerZ, nullptr);
+        if (layerZ.count == 0) continue;
+        layers(layerZ, 1, lo.y, hi.y, [&](int y, const Polygon& rowY) {
+            layers(rowY, 0, lo.x, hi.x, [&](int x, const Polygon& piece) { f(x, y, z, piece.area()); });
+        });
+    }
+}
 
 // Every triangle of `meshes` in voxel space, in mesh and triangle order; in parallel (a detailed object has
 // many).
@@ -164,33 +170,28 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
         return std::pair{(tris[i].lo.z - box.lo.z) / kSlabThickness,
                          (tris[i].hi.z - box.lo.z) / kSlabThickness};
     });
-    const glm::vec3 half(0.5f);
     parallelFor(0, slabCount, 1, [&](int64_t s) {
         const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
         const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
+        auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a) {
+            const size_t i = out.visibility.index(x, y, z);
+            glm::vec4& v = out.visibility[i];
+            v.x = 1.0f;
+            v.y += t.normal.x * a;
+            v.z += t.normal.y * a;
+            v.w += t.normal.z * a;
+            out.area[i] += a;
+            if (emissive) out.emission[i] += t.emission * a;
+        };
         for (uint32_t ti : bins.slab(s)) {
             const VoxelTriangle& t = tris[ti];
-            for (int z = std::max(zBegin, t.lo.z); z < std::min(zEnd, t.hi.z + 1); ++z)
-                for (int y = t.lo.y; y <= t.hi.y; ++y)
-                    for (int x = t.lo.x; x <= t.hi.x; ++x) {
-                        glm::vec3 boxMin(x, y, z);
-                        // A triangle inside one voxel (most of a detailed mesh's) needs no test and no
-                        // clipping.
-                        const bool inside = t.oneVoxel;
-                        if (!inside && !triangleBoxOverlap(boxMin + half, half, t.p[0], t.p[1], t.p[2]))
-                            continue;
-                        const float a =
-                            inside ? t.area
-                                   : clippedTriangleArea(t.p[0], t.p[1], t.p[2], boxMin, boxMin + 1.0f);
-                        size_t i = out.visibility.index(x, y, z);
-                        glm::vec4& v = out.visibility[i];
-                        v.x = 1.0f;
-                        v.y += t.normal.x * a;
-                        v.z += t.normal.y * a;
-                        v.w += t.normal.z * a;
-                        out.area[i] += a;
-                        if (emissive) out.emission[i] += t.emission * a;
-                    }
+            // A triangle inside one voxel (most of a detailed mesh's) needs no cutting.
+            if (t.oneVoxel) {
+                add(t.lo.x, t.lo.y, t.lo.z, t, t.area);
+                continue;
+            }
+            forEachTouchedVoxel(t, std::max(zBegin, t.lo.z), std::min(zEnd, t.hi.z + 1),
+                                [&](int x, int y, int z, float a) { add(x, y, z, t, a); });
         }
     });
     // Normal sums to area-weighted means; areas from voxel units to world units.

@@ -1,6 +1,9 @@
 // Stage 1: voxelization into a visibility volume (§3.2): occlusion 1 in every voxel that any triangle touches
-// (exact triangle/box overlap, Akenine-Möller 2001) and the area-weighted average normal of the geometry in
-// it; also the area of the geometry in each voxel and, for emissive materials, the radiance they emit.
+// (closed voxels) and the area-weighted average normal of the geometry in it; also the area of the geometry
+// in each voxel and, for emissive materials, the radiance they emit. Each triangle is cut by the grid planes
+// it crosses, one plane at a time, into its pieces in each voxel: what a triangle/box overlap test
+// (Akenine-Möller 2001) and clipping the triangle to each voxel of its bounds give, at a fraction of the
+// cost.
 #pragma once
 
 #include <span>
@@ -32,12 +35,6 @@ VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion&
 // for bit. Returns the old bounds.
 VoxelBox revoxelize(VoxelGeometry& geometry, std::span<const TriangleMesh> meshes,
                     const VolumeRegion& region);
-
-// Exact overlap test of a triangle with the axis-aligned box centre +- halfSize (separating axis theorem).
-bool triangleBoxOverlap(glm::vec3 boxCenter, glm::vec3 halfSize, glm::vec3 a, glm::vec3 b, glm::vec3 c);
-
-// Area of the part of triangle abc inside the box [boxMin, boxMax] (Sutherland-Hodgman clipping).
-float clippedTriangleArea(glm::vec3 a, glm::vec3 b, glm::vec3 c, glm::vec3 boxMin, glm::vec3 boxMax);
 
 // Counting sort of items into consecutive z-slabs of a grid, keeping item order inside a slab: the basis of
 // the deterministic parallel scatter used by voxelization and light injection. `slabOf(item, first, last)`
