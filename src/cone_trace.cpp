@@ -198,6 +198,40 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
     return acc;
 }
 
+namespace {
+
+// Occlusion accumulated along the cone by `volume` alone; `sparse`: skip the steps that cannot read a
+// non-zero voxel.
+float traceOneVolume(const Cone& cone, const MipVolume& volume, float backface, bool sparse,
+                     const ConeTraceSettings& settings) {
+    float acc = 0.0f;
+    marchCone(cone, volume, settings, [&](glm::vec3 position, float level, float levelScale) {
+        if (sparse && !volume.mayReadNonZero(position, static_cast<int>(level))) return true;
+        const float local = stepOpacity(adaptedOcclusion(volume.gather(volume.lookup(position, level)),
+                                                         cone.direction, levelScale, settings, backface),
+                                        settings.stepScale);
+        acc += local * (1.0f - acc);
+        return acc < settings.maxOcclusion;
+    });
+    return acc;
+}
+
+}  // namespace
+
+float traceSceneOcclusion(const Cone& cone, const VisibilityVolumes& visibility,
+                          const ConeTraceSettings& settings) {
+    if (!visibility.scene) return 0.0f;
+    return traceOneVolume(cone, *visibility.scene, backfaceWeights(visibility, settings).first, false,
+                          settings);
+}
+
+float traceObjectOcclusion(const Cone& cone, const VisibilityVolumes& visibility,
+                           const ConeTraceSettings& settings) {
+    if (!visibility.object) return 0.0f;
+    return traceOneVolume(cone, *visibility.object, backfaceWeights(visibility, settings).second, true,
+                          settings);
+}
+
 bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibility,
                             const ConeTraceSettings& settings) {
     if (!visibility.object) return false;

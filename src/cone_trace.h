@@ -65,6 +65,16 @@ struct ShadowOcclusion {
 ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
                                 const ConeTraceSettings& settings, int64_t* steps = nullptr);
 
+// The occlusion along a shadow cone by one visibility volume alone, marched on its own: what
+// traceShadowCone accumulates as `scene` (traceSceneOcclusion) or `object` (traceObjectOcclusion; steps where
+// the sparse object volume reads only zeros are skipped). 0 without that volume. Since combined occlusion is
+// 1 - (1 - scene)(1 - object), the relit shadow change scene - combined is -(1 - scene) * object: the scene's
+// share, which only the real scene changes, can be kept from frame to frame.
+float traceSceneOcclusion(const Cone& cone, const VisibilityVolumes& visibility,
+                          const ConeTraceSettings& settings);
+float traceObjectOcclusion(const Cone& cone, const VisibilityVolumes& visibility,
+                           const ConeTraceSettings& settings);
+
 // Whether the object volume occludes the shadow cone anywhere along its march (traceShadowCone would give
 // object > 0). When it does not, scene and combined occlusion are equal: the objects change nothing for the
 // point, and relighting can skip the cone. Reads the object volume alone, only near its occupied voxels.

@@ -80,7 +80,8 @@ struct ConeJob {
     bool indirect;  // trace diffuse and specular cones too
     ShadowMode
         mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
-    PixelRect bounds;  // holds every valid point
+    PixelRect bounds;                             // holds every valid point
+    SceneOcclusionCache* sceneShadows = nullptr;  // relit with DeltaShadow: the scene's share, kept
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -172,7 +173,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights, job.filter(o),
             [&](std::span<const uint32_t> pixels) {
                 return traceShadowCones(job.points, scene.lights, job.visibility, o,
-                                        job.mode == ShadowMode::DeltaShadow, pixels);
+                                        job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
     }
     timer.lap("shadow");
@@ -234,6 +235,7 @@ struct StaticWork {
     std::optional<VolumeRegion> region;
     std::optional<VoxelGeometry> sceneGeometry;
     std::optional<MipVolume> sceneVisibility;
+    SceneOcclusionCache relitShadows;  // the scene's share of the real surfaces' shadow cones
     std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
     std::optional<Grid3> sceneLight;                            // injected from sceneRsms
     // The objects' volumes of the last frame, updated where the objects changed them.
@@ -359,6 +361,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     if (kept.region && !sameRegion(*kept.region, region)) {
         kept.sceneGeometry.reset();
         kept.sceneVisibility.reset();
+        kept.relitShadows = {};
         kept.sceneRsms.reset();
         kept.sceneLight.reset();
         kept.objectVolumes.reset();
@@ -425,7 +428,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
          o.render.indirect && o.render.relightIndirect,
          relightMode,
-         {0, 0, camera.width, camera.height}}};
+         {0, 0, camera.width, camera.height},
+         &kept.relitShadows}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];

@@ -36,8 +36,13 @@ float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points,
                                               std::span<const Light> lights,
                                               const VisibilityVolumes& visibility, const Options& options,
-                                              bool objectShadowOnly, std::span<const uint32_t> pixels) {
+                                              bool objectShadowOnly, std::span<const uint32_t> pixels,
+                                              SceneOcclusionCache* sceneCache) {
     std::vector<ShadowOcclusion> out(points.size() * lights.size());
+    if (sceneCache && sceneCache->known.size() != out.size()) {
+        sceneCache->occlusion.assign(out.size(), 0.0f);
+        sceneCache->known.assign(out.size(), 0);
+    }
     if (lights.empty() || (!visibility.scene && !visibility.object)) return out;
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     const VolumeRegion& region = visibility.scene ? visibility.scene->region() : visibility.object->region();
@@ -59,8 +64,21 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
                                    ? s.distance / (1.0f + kShadowConeStopDiameters * 2.0f * tanHalf)
                                    : s.distance;
             cone.jitter = hashToUnit(i, static_cast<uint32_t>(l));
-            if (objectShadowOnly && !shadowConeMeetsObjects(cone, visibility, settings)) continue;
-            out[i * lights.size() + l] = traceShadowCone(cone, visibility, settings);
+            const size_t k = i * lights.size() + l;
+            if (!objectShadowOnly) {
+                out[k] = traceShadowCone(cone, visibility, settings);
+                continue;
+            }
+            const float object = traceObjectOcclusion(cone, visibility, settings);
+            if (object == 0.0f) continue;
+            float scene;
+            if (sceneCache && sceneCache->known[k]) {
+                scene = sceneCache->occlusion[k];
+            } else {
+                scene = traceSceneOcclusion(cone, visibility, settings);
+                if (sceneCache) sceneCache->occlusion[k] = scene, sceneCache->known[k] = 1;
+            }
+            out[k] = {scene, object, scene + object - scene * object};
         }
     });
     return out;

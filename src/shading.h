@@ -15,17 +15,28 @@
 
 namespace deltagi {
 
+// The scene's share of the relit shadow cones (traceSceneOcclusion), per point and light, computed on first
+// use: kept from frame to frame by the renderer while the real surfaces, the lights, the options and the
+// scene's visibility volume are unchanged (only the objects move).
+struct SceneOcclusionCache {
+    std::vector<float> occlusion;  // points x lights
+    std::vector<uint8_t> known;
+};
+
 // Shadow cones (§3.5): for every point and light (index point * lights + light) the occlusion by the scene
 // alone, the objects alone and both. Invalid points get zero occlusion. With `objectShadowOnly` (relighting
-// with ShadowMode::DeltaShadow, where only scene - combined counts), cones that the objects do not occlude
-// anywhere are skipped and get zero occlusion too: their change is zero either way.
+// with ShadowMode::DeltaShadow, where only scene - combined = -(1 - scene) * object counts), the objects'
+// occlusion is traced first and the cones it is zero for get zero occlusion: their change is zero either way;
+// the scene's occlusion of the others comes from `sceneCache` when given (else it is traced), and the two
+// volumes are marched apart (traceSceneOcclusion, traceObjectOcclusion).
 // Each pass traces the points listed in `pixels` (indices into `points`), or all of them when it is empty;
 // the others get zero. The results are per point of `points` either way.
 std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points,
                                               std::span<const Light> lights,
                                               const VisibilityVolumes& visibility, const Options& options,
                                               bool objectShadowOnly = false,
-                                              std::span<const uint32_t> pixels = {});
+                                              std::span<const uint32_t> pixels = {},
+                                              SceneOcclusionCache* sceneCache = nullptr);
 
 // Diffuse cones: cosine-weighted incoming radiance sum_k w_k L_k (so that albedo times it is the reflected
 // radiance). Zero for invalid points.

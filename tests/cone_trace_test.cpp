@@ -34,9 +34,9 @@ ConeTraceSettings settings(bool paper) {
     return s;
 }
 
-// A uniform participating "fog" of occlusion a and radiance L, traced with a ray (a cone of zero aperture stays
-// at level 0): front-to-back compositing gives L times the accumulated occlusion; the paper's formula keeps
-// light_acc at L times one step's opacity. Incoherent normals: the isotropic coverage (0.5) applies.
+// A uniform participating "fog" of occlusion a and radiance L, traced with a ray (a cone of zero aperture
+// stays at level 0): front-to-back compositing gives L times the accumulated occlusion; the paper's formula
+// keeps light_acc at L times one step's opacity. Incoherent normals: the isotropic coverage (0.5) applies.
 TEST(ConeTrace, UniformEmittingVolumeGivesTheClosedFormRadiance) {
     const glm::vec3 radiance(0.3f, 0.6f, 0.9f);
     const float a = 0.6f;
@@ -89,6 +89,34 @@ TEST(ConeTrace, ShadowConeSeparatesSceneAndObjectOcclusion) {
     EXPECT_EQ(traceShadowCone(shortCone, {&empty, &object}, settings(false)).object, 0.0f);
 }
 
+// Each volume marched on its own gives traceShadowCone's share of it (as long as neither saturates, which
+// stops the joint march earlier), and the combined occlusion is 1 - (1 - scene)(1 - object).
+TEST(ConeTrace, EachVolumeAloneGivesItsShareOfTheShadowCone) {
+    Grid3 sceneWall(kN), objectWall(kN);
+    for (int z = 0; z < kN; ++z)
+        for (int y = 0; y < kN; ++y) {
+            sceneWall.at(20, y, z) = glm::vec4(0.3f, -0.3f, 0.0f, 0.0f);
+            objectWall.at(26, y, z) = glm::vec4(0.4f, -0.4f, 0.0f, 0.0f);
+        }
+    const MipVolume scene = buildMipChain(kRegion, std::move(sceneWall));
+    const MipVolume object = buildMipChain(kRegion, std::move(objectWall));
+    const ConeTraceSettings s = settings(false);
+    for (glm::vec3 dir : {glm::vec3(1, 0, 0), glm::vec3(1, 0.3f, -0.2f)}) {
+        const Cone cone = centreCone(dir, 0.02f);
+        const VisibilityVolumes both{&scene, &object, VisibilityVolumes::Self::Scene};
+        const ShadowOcclusion joint = traceShadowCone(cone, both, s);
+        const float sceneAlone = traceSceneOcclusion(cone, both, s);
+        const float objectAlone = traceObjectOcclusion(cone, both, s);
+        EXPECT_GT(sceneAlone, 0.1f);
+        EXPECT_GT(objectAlone, 0.1f);
+        EXPECT_FLOAT_EQ(sceneAlone, joint.scene);
+        EXPECT_FLOAT_EQ(objectAlone, joint.object);
+        EXPECT_NEAR(1.0f - (1.0f - sceneAlone) * (1.0f - objectAlone), joint.combined, 1e-5f);
+    }
+    EXPECT_EQ(traceObjectOcclusion(centreCone({-1, 0, 0}, 0.02f), {&scene, &object}, s), 0.0f);
+    EXPECT_EQ(traceSceneOcclusion(centreCone({1, 0, 0}, 0.02f), {nullptr, &object}, s), 0.0f);
+}
+
 // The stored normal adapts occlusion: a surface occludes a cone that meets its front, not one that leaves
 // through its back (backface_weight 1), so a surface does not shadow the cones that start on it.
 TEST(ConeTrace, BackFacesDoNotOccludeWithFullBackfaceWeight) {
@@ -135,8 +163,10 @@ TEST(DiffuseCones, CoverTheHemisphereWithCosineWeightsSummingToOne) {
 }
 
 TEST(SpecularCone, ApertureNarrowsWithGlossinessAndIsClamped) {
-    const float rough = specularConeTanHalfAngle(Material{glm::vec3(0), glm::vec3(0), 0.8f}.phongExponent(), 1, 90);
-    const float glossy = specularConeTanHalfAngle(Material{glm::vec3(0), glm::vec3(0), 0.1f}.phongExponent(), 1, 90);
+    const float rough =
+        specularConeTanHalfAngle(Material{glm::vec3(0), glm::vec3(0), 0.8f}.phongExponent(), 1, 90);
+    const float glossy =
+        specularConeTanHalfAngle(Material{glm::vec3(0), glm::vec3(0), 0.1f}.phongExponent(), 1, 90);
     EXPECT_GT(rough, glossy);
     // Mirror-like: clamped to the minimum aperture.
     EXPECT_NEAR(specularConeTanHalfAngle(1e6f, 4.0f, 90.0f), std::tan(glm::radians(2.0f)), 1e-6f);

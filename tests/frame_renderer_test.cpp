@@ -98,6 +98,23 @@ TEST(FrameRenderer, FramesOfObjectsThatMoveLeaveTheRegionAndChangeAreExactlyRend
     sameAsScratch();
 }
 
+// Without a fixed volume, the region follows the objects: every move gives a new region, and what was kept
+// over the old one (the scene's voxels, light and shadow cones) must not be used.
+TEST(FrameRenderer, ARegionThatFollowsTheObjectsIsNotMistakenForTheOldOne) {
+    Scene s = ballOverFloor();
+    s.options.volume.center.reset();
+    s.options.volume.size.reset();
+    // A real shelf between the light and the ball: the scene shadows part of the ball's shadow.
+    s.real.push_back(
+        placed(makeBox({0.25f, 0.03f, 0.25f}), {0.2f, 0.6f, 0.05f}, diffuse(glm::vec3(0.5f)), "shelf"));
+    FrameRenderer frames;
+    expectSameImages(frames.render(s), render(s));
+    moveVirtuals(s, {0.04f, 0.0f, -0.03f});
+    expectSameImages(frames.render(s), render(s));
+    moveVirtuals(s, {-0.02f, 0.01f, 0.05f});
+    expectSameImages(frames.render(s), render(s));
+}
+
 TEST(FrameRenderer, ChangesToTheRealSceneAreNotMissed) {
     Scene s = ballOverFloor();
     FrameRenderer frames;
