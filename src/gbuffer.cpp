@@ -15,10 +15,13 @@ SurfacePoint toSurfacePoint(const RayHit& hit, glm::vec3 rayDir) {
     return {hit.position, hit.normal, -rayDir, hit.material};
 }
 
-// The first surface along a camera ray if it is virtual.
+// The first surface along a camera ray if it is virtual. With the objects in a layer of their own, the real
+// scene below is traced only for rays that meet an object, up to it (most rays near an object miss it).
 RayHit visibleObjectHit(const RayScene& all, glm::vec3 eye, glm::vec3 dir) {
-    RayHit hit = all.intersect(eye, dir);
-    return hit.isVirtual ? hit : RayHit{};
+    const RayHit hit = all.base() ? all.intersectTopLayer(eye, dir) : all.intersect(eye, dir);
+    if (!hit.isVirtual) return {};
+    if (all.base() && all.base()->intersect(eye, dir, 0.0f, hit.t).hit()) return {};
+    return hit;
 }
 
 // The pixel rows and columns [x0, x1] x [y0, y1] whose rays may meet the box `b` (its corners' projections,
