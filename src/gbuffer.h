@@ -37,9 +37,10 @@ void forEachValidPoint(std::span<const SurfacePoint> points, std::span<const uin
     });
 }
 
+// The virtual half of the G-buffer; the real half (renderRealSurfaces) is kept apart, since it does not change
+// while only the objects move.
 struct GBuffer {
     int width = 0, height = 0;
-    std::vector<SurfacePoint> real;    // the real surface behind the pixel centre (what the photo shows)
     std::vector<SurfacePoint> object;  // the virtual surface seen in the pixel, where coverage > 0
     std::vector<float> coverage;       // fraction of sub-samples that see a virtual object first
 };

@@ -192,7 +192,6 @@ ReferenceOutput assemble(const Scene& scene, std::span<const PixelSums> sums, in
     GBuffer coverage;  // only the coverage is read by the composite
     coverage.width = w;
     coverage.height = h;
-    coverage.real.resize(sums.size());
     coverage.object.resize(sums.size());
     coverage.coverage.assign(sums.size(), 0.0f);
     std::vector<glm::vec3> objectRadiance(sums.size()), realChange(sums.size());

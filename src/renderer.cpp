@@ -404,9 +404,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     GBuffer gbuffer;
     gbuffer.width = camera.width;
     gbuffer.height = camera.height;
-    gbuffer.real = realSurfaces();
     renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer);
-    std::vector<SurfacePoint> realPoints = gbuffer.real;
+    std::vector<SurfacePoint> realPoints = realSurfaces();
     for (size_t i = 0; i < realPoints.size(); ++i)
         if (gbuffer.coverage[i] >= 1.0f) realPoints[i] = {};
     timer.lap("gbuffer");
