@@ -59,29 +59,41 @@ template <typename F>
 void forEachTouchedVoxel(const VoxelTriangle& t, int z0, int z1, F&& f) {
     Polygon triangle;
     for (const glm::vec3& p : t.p) triangle.push(p);
-    const glm::ivec3 lo = t.lo, hi = t.hi;
-    // Calls each(i, part) with the part of `p` in layer i of `axis`, for the layers first <= i <= last that
-    // it touches.
-    auto layers = [](const Polygon& p, int axis, int first, int last, auto&& each) {
-        Polygon rest, next, part;
-        splitPolygon(p, axis, static_cast<float>(first), nullptr, &rest);
-        for (int i = first; i <= last && rest.count > 0; ++i) {
-            splitPolygon(rest, axis, static_cast<float>(i + 1), &part, i < last ? &next : nullptr);
+    const glm::vec3 mn = glm::min(t.p[0], glm::min(t.p[1], t.p[2]));
+    const glm::vec3 mx = glm::max(t.p[0], glm::max(t.p[1], t.p[2]));
+    // Calls each(i, part) with the part of `p` (a part of the triangle) in layer i of `axis`, for the layers
+    // first <= i <= last that it touches. A plane that the triangle does not reach beyond is not cut at: the
+    // cut would copy the polygon unchanged.
+    auto layers = [&](const Polygon& p, int axis, int first, int last, auto&& each) {
+        Polygon buffers[3];
+        Polygon& part = buffers[2];
+        const Polygon* rest = &p;
+        if (mn[axis] < static_cast<float>(first)) {
+            splitPolygon(p, axis, static_cast<float>(first), nullptr, &buffers[0]);
+            rest = &buffers[0];
+        }
+        for (int i = first; i <= last && rest->count > 0; ++i) {
+            if (i == last) {
+                if (mx[axis] <= static_cast<float>(last + 1)) {
+                    each(i, *rest);
+                } else {
+                    splitPolygon(*rest, axis, static_cast<float>(last + 1), &part, nullptr);
+                    if (part.count > 0) each(i, part);
+                }
+                return;
+            }
+            Polygon& next = buffers[rest == &buffers[0] ? 1 : 0];
+            splitPolygon(*rest, axis, static_cast<float>(i + 1), &part, &next);
             if (part.count > 0) each(i, part);
-            rest = next;
+            rest = &next;
         }
     };
-    Polygon layerZ;
-    for (int z = z0; z < z1; ++z) {
-        // This layer's part, from the whole triangle (layers are cut in slabs, each on its own).
-        Polygon above;
-        splitPolygon(triangle, 2, static_cast<float>(z), nullptr, &above);
-        splitPolygon(above, 2, static_cast<float>(z + 1), &layerZ, nullptr);
-        if (layerZ.count == 0) continue;
-        layers(layerZ, 1, lo.y, hi.y, [&](int y, const Polygon& rowY) {
-            layers(rowY, 0, lo.x, hi.x, [&](int x, const Polygon& piece) { f(x, y, z, piece.area()); });
+    // Layers are cut in slabs, each on its own: z from the whole triangle.
+    layers(triangle, 2, z0, z1 - 1, [&](int z, const Polygon& layerZ) {
+        layers(layerZ, 1, t.lo.y, t.hi.y, [&](int y, const Polygon& rowY) {
+            layers(rowY, 0, t.lo.x, t.hi.x, [&](int x, const Polygon& piece) { f(x, y, z, piece.area()); });
         });
-    }
+    });
 }
 
 // Every triangle of `meshes` in voxel space, in mesh and triangle order; in parallel (a detailed object has
