@@ -102,14 +102,11 @@ bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float
     return true;
 }
 
-// Stride > 1, the pixels between the samples: the filtered values of the (up to) 4 samples around the pixel,
-// bilinearly weighted and, like the filter's, only those on the pixel's surface. A pixel with none of them
-// on its surface (an edge between samples) takes the full filter over its window. Returns false for a hole.
-template <int C>
-bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
-                      std::span<const uint8_t> filteredNonZero, int x, int y, const SurfacePoint& p,
-                      float* dst) {
-    const int channels = C > 0 ? C : f.channels;
+// Stride > 1, the interpolation weights of pixel (x, y), whose surface is p, over the (up to) 4 samples
+// around it: bilinear, and like the filter's only for the samples on the pixel's surface; normalized, in
+// InterpolationPlan's order. All zero when none of them is on its surface.
+std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const Sample> samples, int x, int y,
+                                          const SurfacePoint& p) {
     const int stride = f.stride;
     const int sx0 = x / stride, sy0 = y / stride;
     const float fx = static_cast<float>(x - sx0 * stride) / static_cast<float>(stride);
@@ -118,52 +115,75 @@ bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
     // A small floor under the bilinear weight: a pixel on a sample's row still reads the row below when the
     // sample is on another surface.
     constexpr float kMinBilinear = 1e-3f;
-    const bool lastColumn = sx0 + 1 >= f.sw, lastRow = sy0 + 1 >= f.sh;
-    const size_t k00 = static_cast<size_t>(sy0) * f.sw + sx0;
-    if (!filteredNonZero[k00] && (lastColumn || !filteredNonZero[k00 + 1]) &&
-        (lastRow || (!filteredNonZero[k00 + f.sw] && (lastColumn || !filteredNonZero[k00 + f.sw + 1])))) {
-        // Zeros all around (most of a shadow's change): zero if any of them is on the pixel's surface.
-        for (int dy = 0; dy <= 1; ++dy)
-            for (int dx = 0; dx <= 1; ++dx) {
-                const int sx = sx0 + dx, sy = sy0 + dy;
-                if (sx >= f.sw || sy >= f.sh) continue;
-                const float allowance =
-                    planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
-                                                    sx * stride - x + f.reach];
-                if (neighbourWeight(f, p, f.samples[static_cast<size_t>(sy) * f.sw + sx], allowance) > 0.0f) {
-                    std::fill_n(dst, channels, 0.0f);
-                    return true;
-                }
-            }
-        return filterPixel<C>(f, x, y, p, dst);
-    }
-    size_t keys[4];
-    float weights[4];
-    int count = 0;
+    std::array<float, 4> weights{};
     float weightSum = 0.0f;
-    for (int dy = 0; dy <= 1; ++dy)
-        for (int dx = 0; dx <= 1; ++dx) {
-            const int sx = sx0 + dx, sy = sy0 + dy;
-            if (sx >= f.sw || sy >= f.sh) continue;
-            const size_t k = static_cast<size_t>(sy) * f.sw + sx;
-            const float allowance =
-                planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
-                                                sx * stride - x + f.reach];
-            float w = neighbourWeight(f, p, f.samples[k], allowance);
-            if (w == 0.0f) continue;
-            w *= std::max((dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy), kMinBilinear);
-            keys[count] = k;
-            weights[count++] = w;
-            weightSum += w;
+    for (int n = 0; n < 4; ++n) {
+        const int dx = n & 1, dy = n >> 1;
+        const int sx = sx0 + dx, sy = sy0 + dy;
+        if (sx >= f.sw || sy >= f.sh) continue;
+        const float allowance =
+            planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
+                                            sx * stride - x + f.reach];
+        float w = neighbourWeight(f, p, samples[static_cast<size_t>(sy) * f.sw + sx], allowance);
+        if (w == 0.0f) continue;
+        w *= std::max((dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy), kMinBilinear);
+        weights[n] = w;
+        weightSum += w;
+    }
+    if (weightSum > 0.0f)
+        for (float& w : weights) w /= weightSum;
+    return weights;
+}
+
+// Stride > 1, the pixels between the samples: the filtered values of the (up to) 4 samples around the pixel
+// with `weights` (interpolationWeights). A pixel with none of them on its surface (an edge between samples)
+// takes the full filter over its window. Returns false for a hole.
+template <int C>
+bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
+                      std::span<const uint8_t> filteredNonZero, int x, int y, const SurfacePoint* p,
+                      const std::array<float, 4>& weights, float* dst) {
+    const int channels = C > 0 ? C : f.channels;
+    const size_t k00 = static_cast<size_t>(y / f.stride) * f.sw + x / f.stride;
+    const size_t keys[4] = {k00, k00 + 1, k00 + f.sw, k00 + f.sw + 1};
+    bool any = false, anyNonZero = false;
+    for (int n = 0; n < 4; ++n)
+        if (weights[n] > 0.0f) {
+            any = true;
+            anyNonZero = anyNonZero || filteredNonZero[keys[n]];
         }
-    if (count == 0) return filterPixel<C>(f, x, y, p, dst);
+    if (!any) return filterPixel<C>(f, x, y, p ? *p : f.points[static_cast<size_t>(y) * f.width + x], dst);
     std::fill_n(dst, channels, 0.0f);
-    for (int n = 0; n < count; ++n) {
-        const float w = weights[n] / weightSum;
+    if (!anyNonZero) return true;  // zeros all around (most of a shadow's change)
+    for (int n = 0; n < 4; ++n) {
+        if (weights[n] == 0.0f) continue;
         const float* v = &filtered[keys[n] * channels];
-        for (int c = 0; c < channels; ++c) dst[c] += v[c] * w;
+        for (int c = 0; c < channels; ++c) dst[c] += v[c] * weights[n];
     }
     return true;
+}
+
+// The plan's weights for f's stride and settings, from its surfaces (built when it has none for them).
+void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
+    const size_t pixels = static_cast<size_t>(f.width) * f.height;
+    if (plan.stride == f.stride && plan.weights.size() == pixels) return;
+    std::vector<Sample> samples(static_cast<size_t>(f.sw) * f.sh);
+    parallelFor(0, f.sh, 16, [&](int64_t sy) {
+        for (int sx = 0; sx < f.sw; ++sx) {
+            const SurfacePoint& q = plan.surfaces[static_cast<size_t>(sy) * f.stride * f.width +
+                                                  static_cast<size_t>(sx) * f.stride];
+            samples[static_cast<size_t>(sy) * f.sw + sx] = {q.position, q.normal, q.valid()};
+        }
+    });
+    plan.stride = f.stride;
+    plan.weights.resize(pixels);
+    parallelFor(0, f.height, 4, [&](int64_t y) {
+        for (int x = 0; x < f.width; ++x) {
+            const size_t i = static_cast<size_t>(y) * f.width + x;
+            const SurfacePoint& p = plan.surfaces[i];
+            plan.weights[i] = p.valid() ? interpolationWeights(f, samples, x, static_cast<int>(y), p)
+                                        : std::array<float, 4>{-1.0f, 0.0f, 0.0f, 0.0f};  // no surface
+        }
+    });
 }
 
 // The whole pass for C channels: every pixel filtered, or (settings.interpolate) the samples filtered and the
@@ -193,15 +213,37 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
             }
         });
     }
+    InterpolationPlan* plan =
+        interpolate && f.s.plan && f.s.plan->surfaces.size() == f.points.size() ? f.s.plan : nullptr;
+    if (plan) buildPlan(f, *plan);
+    // With a plan: the pixels whose points, or the samples around them, may differ from the plan's surfaces.
+    const PixelRect changed = f.s.planChanged;
+    const int stride = f.stride;
     parallelFor(rect.y0, rect.y1, 4, [&](int64_t y64) {
         const int y = static_cast<int>(y64);
+        // Whether the pixel's cell of samples, [cx, cx + stride] x [cy, cy + stride], misses `changed`.
+        const int cy = y / stride * stride;
+        const bool rowMisses = changed.empty() || cy + stride < changed.y0 || cy >= changed.y1;
+        auto usesPlan = [&](int x) {
+            if (!plan) return false;
+            const int cx = x / stride * stride;
+            return rowMisses || cx + stride < changed.x0 || cx >= changed.x1;
+        };
         for (int x = rect.x0; x < rect.x1; ++x) {
             const size_t i = static_cast<size_t>(y) * f.width + x;
-            const SurfacePoint& p = f.points[i];
-            if (!p.valid()) continue;
-            const bool ok =
-                interpolate ? interpolatePixel<C>(f, filtered, filteredNonZero, x, y, p, &out[i * channels])
-                            : filterPixel<C>(f, x, y, p, &out[i * channels]);
+            bool ok;
+            if (usesPlan(x)) {
+                const std::array<float, 4>& w = plan->weights[i];
+                if (w[0] < 0.0f) continue;  // no surface
+                ok = interpolatePixel<C>(f, filtered, filteredNonZero, x, y, nullptr, w, &out[i * channels]);
+            } else {
+                const SurfacePoint& p = f.points[i];
+                if (!p.valid()) continue;
+                ok = interpolate ? interpolatePixel<C>(f, filtered, filteredNonZero, x, y, &p,
+                                                       interpolationWeights(f, f.samples, x, y, p),
+                                                       &out[i * channels])
+                                 : filterPixel<C>(f, x, y, p, &out[i * channels]);
+            }
             if (!ok) rowHoles[y].push_back(i);
         }
     });
@@ -285,23 +327,26 @@ void denoiseInto(std::span<float> values, int channels, std::span<const SurfaceP
                 f.samples[k].valid && std::any_of(v, v + channels, [](float c) { return c != 0.0f; });
         }
     });
-    // Dilate the non-zero samples by the window (rows, then columns) onto the window centres.
+    // Dilate the non-zero samples by the window (rows, then columns) onto the window centres, with running
+    // counts: a centre's window holds a value when the count over its span is not zero.
     std::vector<uint8_t> rows(static_cast<size_t>(sw + 1) * sh);
-    for (int sy = 0; sy < sh; ++sy)
-        for (int cx = 0; cx <= sw; ++cx) {
-            uint8_t any = 0;
-            for (int sx = std::max(cx - r, 0); sx <= std::min(cx + r, sw - 1); ++sx)
-                any |= nonZero[static_cast<size_t>(sy) * sw + sx];
-            rows[static_cast<size_t>(sy) * (sw + 1) + cx] = any;
-        }
+    parallelFor(0, sh, 16, [&](int64_t sy) {
+        std::vector<uint32_t> prefix(sw + 1, 0);
+        const uint8_t* row = &nonZero[static_cast<size_t>(sy) * sw];
+        for (int sx = 0; sx < sw; ++sx) prefix[sx + 1] = prefix[sx] + row[sx];
+        for (int cx = 0; cx <= sw; ++cx)
+            rows[static_cast<size_t>(sy) * (sw + 1) + cx] =
+                prefix[std::min(cx + r, sw - 1) + 1] != prefix[std::max(cx - r, 0)];
+    });
     f.windowHasValue.assign(static_cast<size_t>(sw + 1) * (sh + 1), 0);
-    for (int cy = 0; cy <= sh; ++cy)
-        for (int cx = 0; cx <= sw; ++cx) {
-            uint8_t any = 0;
-            for (int sy = std::max(cy - r, 0); sy <= std::min(cy + r, sh - 1); ++sy)
-                any |= rows[static_cast<size_t>(sy) * (sw + 1) + cx];
-            f.windowHasValue[static_cast<size_t>(cy) * (sw + 1) + cx] = any;
-        }
+    parallelFor(0, sw + 1, 16, [&](int64_t cx) {
+        std::vector<uint32_t> prefix(sh + 1, 0);
+        for (int sy = 0; sy < sh; ++sy)
+            prefix[sy + 1] = prefix[sy] + rows[static_cast<size_t>(sy) * (sw + 1) + cx];
+        for (int cy = 0; cy <= sh; ++cy)
+            f.windowHasValue[static_cast<size_t>(cy) * (sw + 1) + cx] =
+                prefix[std::min(cy + r, sh - 1) + 1] != prefix[std::max(cy - r, 0)];
+    });
 
     std::vector<std::vector<size_t>> rowHoles(height);
     switch (channels) {

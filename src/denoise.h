@@ -7,6 +7,7 @@
 // or the photo, so textures and highlights are untouched.
 #pragma once
 
+#include <array>
 #include <span>
 #include <type_traits>
 #include <vector>
@@ -16,6 +17,13 @@
 
 namespace deltagi {
 
+struct InterpolationPlan;
+
+// A rectangle of pixels [x0, x1) x [y0, y1) that holds every valid point of a pass (the others are skipped).
+struct PixelRect {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool empty() const { return x0 >= x1 || y0 >= y1; }
+};
 struct DenoiseSettings {
     int radius = 2;             // samples: a (2r+1)^2 window of them; 0 disables the filter
     float spatialSigma = 1.5f;  // samples
@@ -28,13 +36,28 @@ struct DenoiseSettings {
     bool interpolate = false;
     int normalPower = 16;        // weight dot(n_i, n_j)^power
     float planeDistance = 1.0f;  // how far a neighbour may lie off the tangent plane, in its pixel distances
+    // With interpolate: the weights of each pixel between the samples, kept for surfaces that stay the same
+    // from pass to pass (see InterpolationPlan); null: computed every time.
+    InterpolationPlan* plan = nullptr;
+    // The pixels whose points may differ from the plan's surfaces (made invalid): they, and the pixels whose
+    // samples lie in it, are computed without the plan. Empty: none.
+    PixelRect planChanged;
 };
 
-// A rectangle of pixels [x0, x1) x [y0, y1) that holds every valid point of a pass (the others are skipped).
-struct PixelRect {
-    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-    bool empty() const { return x0 >= x1 || y0 >= y1; }
+// The interpolation weights (DenoiseSettings::interpolate) of every pixel of a fixed set of surfaces, such as
+// the real scene's G-buffer, which does not change while only the objects move: a pass reads them instead of
+// testing the samples around each pixel again. A pass whose points are these surfaces with some made invalid
+// (the real surfaces the objects hide) uses a pixel's weights when the samples they weight are all still
+// valid, and computes the pixel as without a plan otherwise: the result is the same bits either way.
+struct InterpolationPlan {
+    std::span<const SurfacePoint> surfaces;  // the fixed surfaces (must outlive the plan)
+    // Built by the first pass that uses the plan, for its stride and settings:
+    int stride = 0;
+    // Per pixel, the normalized weights of the samples (sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)
+    // with sx = x / stride, sy = y / stride; all zero: none of them lies on the pixel's surface.
+    std::vector<std::array<float, 4>> weights;
 };
+
 // The bounds of the valid points of a width-wide image.
 PixelRect validPointBounds(std::span<const SurfacePoint> points, int width);
 

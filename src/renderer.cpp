@@ -82,6 +82,10 @@ struct ConeJob {
         mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
     PixelRect bounds;                             // holds every valid point
     SceneOcclusionCache* sceneShadows = nullptr;  // relit with DeltaShadow: the scene's share, kept
+    // Relit real surfaces: the filter's interpolation weights of the shadow, diffuse and specular passes,
+    // kept (their surfaces are the real G-buffer's), and the pixels whose points differ from it (covered).
+    std::array<InterpolationPlan, 3>* plans = nullptr;
+    PixelRect changed;
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -94,9 +98,12 @@ struct ConeJob {
     }
     // The edge-aware filter of its sparse cones; the real surfaces' change varies slowly, so its pixels
     // between samples are interpolated.
-    DenoiseSettings filter(const Options& o) const {
+    enum Pass { Shadow, Diffuse, Specular };
+    DenoiseSettings filter(const Options& o, Pass pass) const {
         DenoiseSettings s{o.render.denoiseRadius};
         s.interpolate = relit();
+        if (plans) s.plan = &(*plans)[pass];
+        s.planChanged = changed;
         return s;
     }
     int specularStride(const Options& o, const Camera& c) const {
@@ -170,8 +177,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         results[j].shadows = traceSparse<ShadowOcclusion>(
-            job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights, job.filter(o),
-            [&](std::span<const uint32_t> pixels) {
+            job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
+            job.filter(o, ConeJob::Shadow), [&](std::span<const uint32_t> pixels) {
                 return traceShadowCones(job.points, scene.lights, job.visibility, o,
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
@@ -181,8 +188,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
         results[j].diffuse = traceSparse<glm::vec3>(
-            job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1, job.filter(o),
-            [&](std::span<const uint32_t> pixels) {
+            job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
+            job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
                 return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels);
             });
     }
@@ -194,10 +201,10 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             return traceSpecularCones(job.points, *job.light, job.visibility, o, pixels);
         };
         // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
-        results[j].specular =
-            job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
-                                                 job.specularStride(o, scene.camera), 1, job.filter(o), trace)
-                        : trace({});
+        results[j].specular = job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
+                                                                   job.specularStride(o, scene.camera), 1,
+                                                                   job.filter(o, ConeJob::Specular), trace)
+                                          : trace({});
     }
     timer.lap("specular");
     // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
@@ -207,13 +214,13 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         for (size_t j = 0; j < jobs.size(); ++j) {
             const ConeJob& job = jobs[j];
             addInto(results[j].diffuse,
-                    traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
-                                           job.diffuseStride(o, scene.camera), 1, job.filter(o),
-                                           [&](std::span<const uint32_t> pixels) {
-                                               return traceSkyCones(job.points, environment, job.visibility,
-                                                                    job.mode, o, SkyParts::Diffuse, pixels)
-                                                   .diffuse;
-                                           }));
+                    traceSparse<glm::vec3>(
+                        job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
+                        job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
+                            return traceSkyCones(job.points, environment, job.visibility, job.mode, o,
+                                                 SkyParts::Diffuse, pixels)
+                                .diffuse;
+                        }));
             addInto(results[j].specular,
                     traceSkyCones(job.points, environment, job.visibility, job.mode, o, SkyParts::Specular)
                         .specular);
@@ -235,7 +242,8 @@ struct StaticWork {
     std::optional<VolumeRegion> region;
     std::optional<VoxelGeometry> sceneGeometry;
     std::optional<MipVolume> sceneVisibility;
-    SceneOcclusionCache relitShadows;  // the scene's share of the real surfaces' shadow cones
+    SceneOcclusionCache relitShadows;             // the scene's share of the real surfaces' shadow cones
+    std::array<InterpolationPlan, 3> relitPlans;  // the relit passes' filter weights over realSurfaces
     std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
     std::optional<Grid3> sceneLight;                            // injected from sceneRsms
     // The objects' volumes of the last frame, updated where the objects changed them.
@@ -415,20 +423,26 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // only.
     const ShadowMode relightMode =
         o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
+    // The real points differ from the kept real surfaces only where the objects cover them, inside the
+    // objects' pixels.
+    const PixelRect objectPixels = validPointBounds(gbuffer.object, camera.width);
+    for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
     const ConeJob jobs[] = {
         {gbuffer.object,
          volumes.fullLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Object},
          o.render.indirect,
          ShadowMode::Shaded,
-         validPointBounds(gbuffer.object, camera.width)},
+         objectPixels},
         {realPoints,
          volumes.deltaLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
          o.render.indirect && o.render.relightIndirect,
          relightMode,
          {0, 0, camera.width, camera.height},
-         &kept.relitShadows}};
+         &kept.relitShadows,
+         &kept.relitPlans,
+         objectPixels}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include <gtest/gtest.h>
 
@@ -142,6 +143,48 @@ TEST(Denoise, InterpolationBetweenSamplesKeepsRampsAndEdges) {
         EXPECT_NEAR(direct[static_cast<size_t>(y) * Fixture::kW + 3], 0.1f * static_cast<float>(y + y % 2),
                     1e-4f)
             << y;
+}
+
+// A plan of the interpolation weights over fixed surfaces gives the filter's bits without it, also for a pass
+// in which some of those surfaces are invalid (hidden by an object) inside `planChanged`; the plan is kept
+// for later passes, which use it as they are.
+TEST(Denoise, InterpolationPlanGivesTheSameBits) {
+    Fixture f;
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    std::vector<float> values(f.points.size() * 3, 0.0f);
+    for (int y = 0; y < Fixture::kH; y += 4)
+        for (int x = 0; x < Fixture::kW; x += 4)
+            for (int c = 0; c < 3; ++c)
+                values[(static_cast<size_t>(y) * Fixture::kW + x) * 3 + c] =
+                    x == 8 && y == 8 ? 0.0f : std::sin(0.7f * x + 1.3f * y + c);
+    InterpolationPlan plan;
+    plan.surfaces = f.points;
+    for (int pass = 0; pass < 3; ++pass) {
+        // Pass 1 hides a block of pixels (and so the samples in it) as an object would.
+        std::vector<SurfacePoint> points = f.points;
+        PixelRect hidden{};
+        if (pass == 1) {
+            hidden = {9, 3, 15, 10};
+            for (int y = hidden.y0; y < hidden.y1; ++y)
+                for (int x = hidden.x0; x < hidden.x1; ++x)
+                    points[static_cast<size_t>(y) * Fixture::kW + x] = {};
+        }
+        DenoiseSettings settings;
+        settings.stride = 4;
+        settings.interpolate = true;
+        std::vector<size_t> holesWithout, holesWith;
+        const auto without =
+            denoise(values, 3, points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holesWithout);
+        settings.plan = &plan;
+        settings.planChanged = hidden;
+        const auto with =
+            denoise(values, 3, points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holesWith);
+        EXPECT_EQ(plan.stride, 4);
+        EXPECT_EQ(holesWith, holesWithout);
+        for (size_t i = 0; i < with.size(); ++i)
+            ASSERT_EQ(std::memcmp(&with[i], &without[i], sizeof(float)), 0)
+                << "pass " << pass << " value " << i;
+    }
 }
 
 }  // namespace
