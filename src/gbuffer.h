@@ -4,6 +4,7 @@
 // pixels are virtual (§3.3).
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include "deltagi/scene.h"
@@ -37,12 +38,15 @@ void forEachValidPoint(std::span<const SurfacePoint> points, std::span<const uin
     });
 }
 
-// The virtual half of the G-buffer; the real half (renderRealSurfaces) is kept apart, since it does not change
-// while only the objects move.
+// The virtual half of the G-buffer; the real half (renderRealSurfaces) is kept apart, since it does not
+// change while only the objects move.
 struct GBuffer {
     int width = 0, height = 0;
     std::vector<SurfacePoint> object;  // the virtual surface seen in the pixel, where coverage > 0
     std::vector<float> coverage;       // fraction of sub-samples that see a virtual object first
+    // The pixels [x0, x1] x [y0, y1] that renderObjectSurfaces wrote (outside them object and coverage are
+    // empty): a G-buffer kept from frame to frame is cleared there only.
+    std::array<int, 4> written{0, -1, 0, -1};
 };
 
 // The real surfaces behind the pixel centres (what the photo shows): rays against the real scene alone. They
@@ -54,6 +58,7 @@ std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScen
 // pixels near the bounds' projection can see them. One ray per pixel centre decides which pixels are virtual;
 // pixels on a silhouette (whose 3x3 neighbourhood has both kinds) take `samplesPerPixel` sub-samples on a
 // regular k x k grid for their coverage. The virtual surface nearest the pixel centre represents the pixel.
+// `g` may hold an earlier frame's (of the same camera): only its written pixels are cleared.
 void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
                           int samplesPerPixel, GBuffer& g);
 

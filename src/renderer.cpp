@@ -244,6 +244,10 @@ struct StaticWork {
     std::optional<MipVolume> sceneVisibility;
     SceneOcclusionCache relitShadows;             // the scene's share of the real surfaces' shadow cones
     std::array<InterpolationPlan, 3> relitPlans;  // the relit passes' filter weights over realSurfaces
+    GBuffer gbuffer;                              // the objects' half, redone where they were and are
+    // realSurfaces without the pixels the objects cover (the last frame's `hidden`).
+    std::vector<SurfacePoint> relitSurfaces;
+    std::vector<uint32_t> hidden;
     std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
     std::optional<Grid3> sceneLight;                            // injected from sceneRsms
     // The objects' volumes of the last frame, updated where the objects changed them.
@@ -293,6 +297,28 @@ uint64_t staticSignature(const Scene& scene) {
     const std::string options = optionsToJson(scene.options).dump();
     bytes(options.data(), options.size());
     return h;
+}
+
+// The real surfaces that show through (coverage < 1), to be relit: `real` without the pixels the objects
+// cover, kept in `kept` and changed only where the covered pixels were or are.
+const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePoint>& real,
+                                                     const GBuffer& gbuffer, StaticWork& kept) {
+    std::vector<SurfacePoint>& points = kept.relitSurfaces;
+    if (points.size() != real.size()) {
+        points = real;
+        kept.hidden.clear();
+    }
+    for (uint32_t i : kept.hidden) points[i] = real[i];
+    kept.hidden.clear();
+    const auto [x0, x1, y0, y1] = gbuffer.written;
+    for (int y = y0; y <= y1; ++y)
+        for (int x = x0; x <= x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * gbuffer.width + x;
+            if (gbuffer.coverage[i] < 1.0f) continue;
+            points[i] = {};
+            kept.hidden.push_back(static_cast<uint32_t>(i));
+        }
+    return points;
 }
 
 // Stages 1-4 (§3.2): the two visibility volumes, the full light volume and the delta volume, mip-mapped. The
@@ -409,13 +435,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     const DgiVolumes volumes = buildVolumes(scene, region, realOnly, *all, kept, timer);
 
     // 5. G-buffer. Real surfaces are relit only where they show through (coverage < 1).
-    GBuffer gbuffer;
-    gbuffer.width = camera.width;
-    gbuffer.height = camera.height;
+    GBuffer& gbuffer = kept.gbuffer;
     renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer);
-    std::vector<SurfacePoint> realPoints = realSurfaces();
-    for (size_t i = 0; i < realPoints.size(); ++i)
-        if (gbuffer.coverage[i] >= 1.0f) realPoints[i] = {};
+    const std::vector<SurfacePoint>& realPoints = hideCoveredSurfaces(realSurfaces(), gbuffer, kept);
     timer.lap("gbuffer");
 
     // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both
