@@ -140,7 +140,7 @@ struct EnvironmentOptions {
 // its surfaces alike at any size) and rounded down to a power of two, at least 1.
 inline constexpr int kAutoDiffuseStride = 8, kAutoRelightDiffuseStride = 16;
 inline constexpr int kAutoShadowStride = 2, kAutoRelightShadowStride = 4;
-inline constexpr int kAutoRelightSpecularStride = 2;
+inline constexpr int kAutoRelightSpecularStride = 4;
 // The stride an option (0: "auto", with `autoStride` at 640x480) gives for a width x height image.
 inline int pixelStrideFor(int option, int autoStride, int width, int height) {
     if (option > 0) return option;
