@@ -136,14 +136,14 @@ std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const S
 }
 
 // Stride > 1, the pixels between the samples: the filtered values of the (up to) 4 samples around the pixel
-// with `weights` (interpolationWeights). A pixel with none of them on its surface (an edge between samples)
-// takes the full filter over its window. Returns false for a hole.
+// with `weights` (interpolationWeights); k00 is the first of them, (x / stride, y / stride). A pixel with
+// none of them on its surface (an edge between samples) takes the full filter over its window. Returns false
+// for a hole.
 template <int C>
 bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
-                      std::span<const uint8_t> filteredNonZero, int x, int y, const SurfacePoint* p,
-                      const std::array<float, 4>& weights, float* dst) {
+                      std::span<const uint8_t> filteredNonZero, int x, int y, size_t k00,
+                      const SurfacePoint* p, const std::array<float, 4>& weights, float* dst) {
     const int channels = C > 0 ? C : f.channels;
-    const size_t k00 = static_cast<size_t>(y / f.stride) * f.sw + x / f.stride;
     const size_t keys[4] = {k00, k00 + 1, k00 + f.sw, k00 + f.sw + 1};
     bool any = false, anyNonZero = false;
     for (int n = 0; n < 4; ++n)
@@ -221,30 +221,32 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
     const int stride = f.stride;
     parallelFor(rect.y0, rect.y1, 4, [&](int64_t y64) {
         const int y = static_cast<int>(y64);
-        // Whether the pixel's cell of samples, [cx, cx + stride] x [cy, cy + stride], misses `changed`.
-        const int cy = y / stride * stride;
+        // Pixels by cell of samples, [cx, cx + stride] x [cy, cy + stride]: with a plan, those whose cell
+        // misses `changed` read it.
+        const int sy = y / stride, cy = sy * stride;
         const bool rowMisses = changed.empty() || cy + stride < changed.y0 || cy >= changed.y1;
-        auto usesPlan = [&](int x) {
-            if (!plan) return false;
-            const int cx = x / stride * stride;
-            return rowMisses || cx + stride < changed.x0 || cx >= changed.x1;
-        };
-        for (int x = rect.x0; x < rect.x1; ++x) {
-            const size_t i = static_cast<size_t>(y) * f.width + x;
-            bool ok;
-            if (usesPlan(x)) {
-                const std::array<float, 4>& w = plan->weights[i];
-                if (w[0] < 0.0f) continue;  // no surface
-                ok = interpolatePixel<C>(f, filtered, filteredNonZero, x, y, nullptr, w, &out[i * channels]);
-            } else {
-                const SurfacePoint& p = f.points[i];
-                if (!p.valid()) continue;
-                ok = interpolate ? interpolatePixel<C>(f, filtered, filteredNonZero, x, y, &p,
-                                                       interpolationWeights(f, f.samples, x, y, p),
-                                                       &out[i * channels])
-                                 : filterPixel<C>(f, x, y, p, &out[i * channels]);
+        for (int x = rect.x0; x < rect.x1;) {
+            const int sx = x / stride, cx = sx * stride, cellEnd = std::min(cx + stride, rect.x1);
+            const bool cellPlan = plan && (rowMisses || cx + stride < changed.x0 || cx >= changed.x1);
+            const size_t k00 = static_cast<size_t>(sy) * f.sw + sx;
+            for (; x < cellEnd; ++x) {
+                const size_t i = static_cast<size_t>(y) * f.width + x;
+                bool ok;
+                if (cellPlan) {
+                    const std::array<float, 4>& w = plan->weights[i];
+                    if (w[0] < 0.0f) continue;  // no surface
+                    ok = interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, nullptr, w,
+                                             &out[i * channels]);
+                } else {
+                    const SurfacePoint& p = f.points[i];
+                    if (!p.valid()) continue;
+                    ok = interpolate ? interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, &p,
+                                                           interpolationWeights(f, f.samples, x, y, p),
+                                                           &out[i * channels])
+                                     : filterPixel<C>(f, x, y, p, &out[i * channels]);
+                }
+                if (!ok) rowHoles[y].push_back(i);
             }
-            if (!ok) rowHoles[y].push_back(i);
         }
     });
 }
