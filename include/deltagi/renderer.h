@@ -36,15 +36,15 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 // Renders a sequence of frames of one scene whose virtual objects change from frame to frame, as in a mixed
 // reality session. What depends only on the real side (the reconstruction's ray-casting BVH, its voxels, its
 // reflective shadow maps and injected light, the real half of the G-buffer, the rendered background, the real
-// scene's share of the real surfaces' shadow cones, the edge-aware filter's weights over the real surfaces) is
-// kept from the previous frame while the scene object, its real meshes, lights, camera, photo size, options
-// and the volume region are unchanged (compared by identity and content at every call). The virtual objects'
-// voxels, the full and delta light volumes and their mipmaps are kept too and redone only where the objects
-// change them (their voxels, and the voxels lit differently because of them); so are the objects' half of
-// the G-buffer (redone where they were and are) and their BVH (refit when only their vertices moved). The RSM
-// texels the objects can change and the cones are redone every frame. The images are the same as render()'s,
-// bit for bit, but for one case: a refit BVH may find the other of two triangles that a ray meets on their
-// shared edge, at the same point to rounding (tests/ray_scene_test.cpp).
+// scene's share of the real surfaces' shadow cones, the edge-aware filter's weights over the real surfaces)
+// is kept from the previous frame while the scene object, its real meshes, lights, camera, photo size,
+// options and the volume region are unchanged (compared by identity and content at every call). The virtual
+// objects' voxels, the full and delta light volumes and their mipmaps are kept too and redone only where the
+// objects change them (their voxels, and the voxels lit differently because of them); so are the objects'
+// half of the G-buffer (redone where they were and are) and their BVH (refit when only their vertices moved).
+// The RSM texels the objects can change and the cones are redone every frame. The images are the same as
+// render()'s, bit for bit, but for one case: a refit BVH may find the other of two triangles that a ray meets
+// on their shared edge, at the same point to rounding (tests/ray_scene_test.cpp).
 class FrameRenderer {
   public:
     FrameRenderer();
