@@ -239,6 +239,7 @@ RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene,
     const MapLayout layout(scene, light, region, res);
     const std::optional<FaceRects> rects = retracedRects(layout, base, changed);
     RsmUpdate update;
+    update.rayStart = layout.rayStart();
     if (!rects) {
         update.retraced = {{0, std::numeric_limits<uint32_t>::max()}};
         update.texels = renderReflectiveShadowMap(scene, light, region, res).texels;
@@ -279,14 +280,13 @@ ReflectiveShadowMap applyRsmUpdate(const ReflectiveShadowMap& base, const RsmUpd
     ReflectiveShadowMap map;
     map.resolution = base.resolution;
     map.faces = base.faces;
-    map.rayStart = base.rayStart;
+    map.rayStart = update.rayStart;
     map.texels.reserve(base.texels.size() + update.texels.size());
     auto b = base.texels.begin();
     auto u = update.texels.begin();
     for (const TexelRange& range : update.retraced) {
         for (; b != base.texels.end() && b->index < range.first; ++b) map.texels.push_back(*b);
-        for (; b != base.texels.end() && b->index < range.last; ++b) {
-        }
+        while (b != base.texels.end() && b->index < range.last) ++b;  // traced again
         for (; u != update.texels.end() && u->index < range.last; ++u) map.texels.push_back(*u);
     }
     map.texels.insert(map.texels.end(), b, base.texels.end());

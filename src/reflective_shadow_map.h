@@ -40,6 +40,7 @@ struct RsmUpdate {
     // every index when the map is rendered afresh.
     std::vector<TexelRange> retraced;
     std::vector<RsmTexel> texels;  // the retraced texels that hit a surface inside the region, in texel order
+    float rayStart = 0.0f;         // the map's with the objects (ReflectiveShadowMap::rayStart)
 };
 
 // The update of `base` for `scene` = the scene `base` was rendered over (same light, region and resolution)

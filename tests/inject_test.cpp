@@ -127,6 +127,8 @@ TEST(ReflectiveShadowMap, UpdateForTheObjectsEqualsAFullRender) {
         const ReflectiveShadowMap updated =
             updateReflectiveShadowMap(base, all, light, kRegion, objectBounds);
         ASSERT_EQ(updated.texels.size(), full.texels.size());
+        EXPECT_EQ(updated.rayStart, full.rayStart);
+        EXPECT_EQ(updated.faces, full.faces);
         size_t differentFromBase = 0;
         for (size_t i = 0; i < full.texels.size(); ++i) {
             const RsmTexel &a = updated.texels[i], &b = full.texels[i];
