@@ -253,21 +253,6 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
 
 }  // namespace
 
-PixelRect validPointBounds(std::span<const SurfacePoint> points, int width) {
-    PixelRect r{width, 0, 0, 0};
-    const int height = width > 0 ? static_cast<int>(points.size() / width) : 0;
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x)
-            if (points[static_cast<size_t>(y) * width + x].valid()) {
-                if (r.y1 == 0) r.y0 = y;
-                r.y1 = y + 1;
-                r.x0 = std::min(r.x0, x);
-                r.x1 = std::max(r.x1, x + 1);
-            }
-    if (r.y1 == 0) r = {};
-    return r;
-}
-
 std::vector<float> denoise(std::span<const float> values, int channels, std::span<const SurfacePoint> points,
                            int width, int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& s,
                            std::vector<size_t>* holes) {

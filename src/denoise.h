@@ -58,8 +58,6 @@ struct InterpolationPlan {
     std::vector<std::array<float, 4>> weights;
 };
 
-// The bounds of the valid points of a width-wide image.
-PixelRect validPointBounds(std::span<const SurfacePoint> points, int width);
 
 // Filters `values`, `channels` floats per pixel of `points` (width x height, row-major), returning the
 // result. Invalid points keep their values and are never used as neighbours. `eye` is the camera position and

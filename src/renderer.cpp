@@ -445,9 +445,11 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // only.
     const ShadowMode relightMode =
         o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
-    // The real points differ from the kept real surfaces only where the objects cover them, inside the
-    // objects' pixels.
-    const PixelRect objectPixels = validPointBounds(gbuffer.object, camera.width);
+    // The pixels the objects' G-buffer was rendered over hold every virtual point; the real points differ
+    // from the kept real surfaces only there, where the objects cover them.
+    const auto [wx0, wx1, wy0, wy1] = gbuffer.written;
+    const PixelRect objectPixels =
+        wx1 < wx0 || wy1 < wy0 ? PixelRect{} : PixelRect{wx0, wy0, wx1 + 1, wy1 + 1};
     for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
     const ConeJob jobs[] = {
         {gbuffer.object,
