@@ -23,14 +23,17 @@ CompositeImages differentialComposite(const Image& background, const GBuffer& gb
             const glm::vec3 bg = background.rgb(x, y);
             const float coverage = gbuffer.coverage[i];
             const glm::vec3 real = glm::max(bg + realChange[i], glm::vec3(0.0f));
-            const glm::vec3 c = glm::mix(real, glm::max(objectRadiance[i], glm::vec3(0.0f)), coverage);
+            glm::vec3 c = glm::mix(real, glm::max(objectRadiance[i], glm::vec3(0.0f)), coverage);
+            glm::vec3 d = c - bg;
+            for (int k = 0; k < 3; ++k) {  // as sanitize(): no NaN or infinity in the images
+                if (!std::isfinite(c[k])) c[k] = 0.0f;
+                if (!std::isfinite(d[k])) d[k] = 0.0f;
+            }
             out.composite.setRgb(x, y, c);
             out.objectMask.at(x, y, 0) = coverage;
-            out.delta.setRgb(x, y, c - bg);
+            out.delta.setRgb(x, y, d);
         }
     });
-    sanitize(out.composite);
-    sanitize(out.delta);
     return out;
 }
 

@@ -19,11 +19,6 @@ namespace deltagi {
 
 struct InterpolationPlan;
 
-// A rectangle of pixels [x0, x1) x [y0, y1) that holds every valid point of a pass (the others are skipped).
-struct PixelRect {
-    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-    bool empty() const { return x0 >= x1 || y0 >= y1; }
-};
 struct DenoiseSettings {
     int radius = 2;             // samples: a (2r+1)^2 window of them; 0 disables the filter
     float spatialSigma = 1.5f;  // samples
@@ -57,7 +52,6 @@ struct InterpolationPlan {
     // with sx = x / stride, sy = y / stride; all zero: none of them lies on the pixel's surface.
     std::vector<std::array<float, 4>> weights;
 };
-
 
 // Filters `values`, `channels` floats per pixel of `points` (width x height, row-major), returning the
 // result. Invalid points keep their values and are never used as neighbours. `eye` is the camera position and

@@ -21,6 +21,11 @@ struct SurfacePoint {
     bool valid() const { return material != nullptr; }
 };
 
+// A rectangle of pixels [x0, x1) x [y0, y1) that holds every valid point of a pass (the others are skipped).
+struct PixelRect {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool empty() const { return x0 >= x1 || y0 >= y1; }
+};
 // Calls body(i) in parallel for the valid points among `pixels` (indices into `points`), or among all points
 // when `pixels` is empty: how the cone passes visit a sparse subset of the image (`grain` points per task).
 template <typename Body>

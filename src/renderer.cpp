@@ -472,8 +472,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     const ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
-    const auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows,
-                                                ShadowMode::Shaded, object.diffuse, object.specular);
+    const auto objectRadiance =
+        combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded, object.diffuse,
+                        object.specular, &objectPixels, camera.width);
     const auto realChange =
         combineLighting(realPoints, scene.lights, real.shadows, relightMode, real.diffuse, real.specular);
     timer.lap("shading");

@@ -137,11 +137,12 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
                                        std::span<const glm::vec3> diffuse,
-                                       std::span<const glm::vec3> specular) {
+                                       std::span<const glm::vec3> specular, const PixelRect* bounds,
+                                       int width) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     // A rendered surface shows what it emits; a relit one only changes, and its emission is in the photo.
     const bool emits = mode == ShadowMode::Shaded || mode == ShadowMode::SceneOnly;
-    parallelFor(0, static_cast<int64_t>(points.size()), 4096, [&](int64_t i) {
+    auto shade = [&](size_t i) {
         const SurfacePoint& p = points[i];
         if (!p.valid()) return;
         glm::vec3 radiance = emits ? p.material->emission : glm::vec3(0.0f);
@@ -153,6 +154,13 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
         if (!diffuse.empty()) radiance += p.material->albedo * diffuse[i];
         if (!specular.empty()) radiance += p.material->specular * specular[i];
         out[i] = radiance;
+    };
+    if (!bounds) {
+        parallelFor(0, static_cast<int64_t>(points.size()), 4096, [&](int64_t i) { shade(i); });
+        return out;
+    }
+    parallelFor(bounds->y0, bounds->y1, 4, [&](int64_t y) {
+        for (int x = bounds->x0; x < bounds->x1; ++x) shade(static_cast<size_t>(y) * width + x);
     });
     return out;
 }

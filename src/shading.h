@@ -68,9 +68,11 @@ float shadowFactor(const ShadowOcclusion& occlusion, ShadowMode mode);
 // Per point: sum over lights of direct radiance times the shadow factor of `mode`, plus albedo * diffuse
 // plus specular colour * specular (either span may be empty: no indirect light), plus the material's emission
 // in the modes that render a surface (Shaded, SceneOnly), not in those that relight it.
+// With `bounds` (of a `width`-wide image), only the points inside it are valid: the others are skipped.
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
                                        std::span<const glm::vec3> diffuse,
-                                       std::span<const glm::vec3> specular);
+                                       std::span<const glm::vec3> specular, const PixelRect* bounds = nullptr,
+                                       int width = 0);
 
 }  // namespace deltagi
