@@ -69,11 +69,11 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     const int width = camera.width, height = camera.height;
     const size_t count = static_cast<size_t>(width) * height;
     if (g.object.size() == count && g.coverage.size() == count && g.width == width && g.height == height) {
-        const auto [wx0, wx1, wy0, wy1] = g.written;
-        for (int y = wy0; y <= wy1; ++y) {
+        const PixelRect& w = g.written;
+        for (int y = w.y0; y < w.y1; ++y) {
             const size_t row = static_cast<size_t>(y) * width;
-            std::fill(g.object.begin() + row + wx0, g.object.begin() + row + wx1 + 1, SurfacePoint{});
-            std::fill(g.coverage.begin() + row + wx0, g.coverage.begin() + row + wx1 + 1, 0.0f);
+            std::fill(g.object.begin() + row + w.x0, g.object.begin() + row + w.x1, SurfacePoint{});
+            std::fill(g.coverage.begin() + row + w.x0, g.coverage.begin() + row + w.x1, 0.0f);
         }
     } else {
         g.object.assign(count, {});
@@ -86,7 +86,7 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
 
     // Pixel centres first, where the objects can be.
     const auto [x0, x1, y0, y1] = pixelsCovering(camera, objectBounds);
-    g.written = {x0, x1, y0, y1};
+    g.written = x1 < x0 || y1 < y0 ? PixelRect{} : PixelRect{x0, y0, x1 + 1, y1 + 1};
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;

@@ -4,7 +4,6 @@
 // pixels are virtual (§3.3).
 #pragma once
 
-#include <array>
 #include <vector>
 
 #include "deltagi/scene.h"
@@ -49,9 +48,9 @@ struct GBuffer {
     int width = 0, height = 0;
     std::vector<SurfacePoint> object;  // the virtual surface seen in the pixel, where coverage > 0
     std::vector<float> coverage;       // fraction of sub-samples that see a virtual object first
-    // The pixels [x0, x1] x [y0, y1] that renderObjectSurfaces wrote (outside them object and coverage are
-    // empty): a G-buffer kept from frame to frame is cleared there only.
-    std::array<int, 4> written{0, -1, 0, -1};
+    // The pixels that renderObjectSurfaces wrote: outside them object and coverage are empty, so they hold
+    // every virtual point, and a G-buffer kept from frame to frame is cleared there only.
+    PixelRect written;
 };
 
 // The real surfaces behind the pixel centres (what the photo shows): rays against the real scene alone. They

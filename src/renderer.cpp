@@ -310,9 +310,9 @@ const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePo
     }
     for (uint32_t i : kept.hidden) points[i] = real[i];
     kept.hidden.clear();
-    const auto [x0, x1, y0, y1] = gbuffer.written;
-    for (int y = y0; y <= y1; ++y)
-        for (int x = x0; x <= x1; ++x) {
+    const PixelRect& w = gbuffer.written;
+    for (int y = w.y0; y < w.y1; ++y)
+        for (int x = w.x0; x < w.x1; ++x) {
             const size_t i = static_cast<size_t>(y) * gbuffer.width + x;
             if (gbuffer.coverage[i] < 1.0f) continue;
             points[i] = {};
@@ -447,9 +447,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         o.render.doubleShadowFix ? ShadowMode::DeltaShadow : ShadowMode::DeltaSingleVisibility;
     // The pixels the objects' G-buffer was rendered over hold every virtual point; the real points differ
     // from the kept real surfaces only there, where the objects cover them.
-    const auto [wx0, wx1, wy0, wy1] = gbuffer.written;
-    const PixelRect objectPixels =
-        wx1 < wx0 || wy1 < wy0 ? PixelRect{} : PixelRect{wx0, wy0, wx1 + 1, wy1 + 1};
+    const PixelRect& objectPixels = gbuffer.written;
     for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
     const ConeJob jobs[] = {
         {gbuffer.object,

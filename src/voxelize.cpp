@@ -54,7 +54,7 @@ void splitPolygon(const Polygon& p, int axis, float k, Polygon* below, Polygon* 
 
 // Calls f(x, y, z, area) for each voxel with lo <= (x, y) <= hi and z0 <= z < z1 that the triangle t touches
 // (closed voxels), with the area of the triangle inside it: the triangle is cut into the voxels' pieces by
-// the grid planes, one plane at a time. In x, then y, then z order within each z layer.
+// the grid planes, one plane at a time. Layer by layer in z, row by row in y, then x.
 template <typename F>
 void forEachTouchedVoxel(const VoxelTriangle& t, int z0, int z1, F&& f) {
     Polygon triangle;
@@ -88,7 +88,7 @@ void forEachTouchedVoxel(const VoxelTriangle& t, int z0, int z1, F&& f) {
             rest = &next;
         }
     };
-    // Layers are cut in slabs, each on its own: z from the whole triangle.
+    // z from the slab's first layer z0 (slabs are cut each on its own), then y and x within each part.
     layers(triangle, 2, z0, z1 - 1, [&](int z, const Polygon& layerZ) {
         layers(layerZ, 1, t.lo.y, t.hi.y, [&](int y, const Polygon& rowY) {
             layers(rowY, 0, t.lo.x, t.hi.x, [&](int x, const Polygon& piece) { f(x, y, z, piece.area()); });
