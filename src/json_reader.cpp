@@ -284,7 +284,14 @@ Options readOptions(const JsonNode& node) {
                                          options.specular.maxApertureDeg, options.specular.minApertureDeg));
     }
     if (auto n = node.find("shadow")) {
-        n->allowKeys({"aperture_deg", "pixel_stride", "relight_pixel_stride"});
+        n->allowKeys({"method", "ray_samples", "aperture_deg", "pixel_stride", "relight_pixel_stride"});
+        if (auto m = n->find("method")) {
+            std::string method = m->string();
+            if (method != "rays" && method != "cones")
+                m->fail("expected \"rays\" or \"cones\", got \"" + method + "\"");
+            options.shadow.method = method;
+        }
+        if (auto r = n->find("ray_samples")) options.shadow.raySamples = r->integer(1, 256);
         if (auto a = n->find("aperture_deg"))
             options.shadow.apertureDeg = a->floatNumber({0.0, 90.0, true, false});
         if (auto st = n->find("pixel_stride")) options.shadow.pixelStride = readPixelStride(*st);
@@ -323,7 +330,9 @@ json optionsToJson(const Options& o) {
           {"max_aperture_deg", o.specular.maxApertureDeg},
           {"relight_pixel_stride", strideJson(o.specular.relightPixelStride)}}},
         {"shadow",
-         {{"aperture_deg", o.shadow.apertureDeg},
+         {{"method", o.shadow.method},
+          {"ray_samples", o.shadow.raySamples},
+          {"aperture_deg", o.shadow.apertureDeg},
           {"pixel_stride", strideJson(o.shadow.pixelStride)},
           {"relight_pixel_stride", strideJson(o.shadow.relightPixelStride)}}},
         {"trace",

@@ -173,4 +173,19 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
     return result;
 }
 
+bool RayScene::occluded(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    return occludedTopLayer(origin, direction, tMin, tMax) ||
+           (base_ && base_->occluded(origin, direction, tMin, tMax));
+}
+
+bool RayScene::occludedTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    if (meshes_.empty()) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray;
+    initRay(ray, origin, direction, tMin, tMax);
+    rtcOccluded1(impl_->scene, &context, &ray);
+    return ray.tfar < 0.0f;  // Embree sets tfar to -inf when the ray is occluded
+}
+
 }  // namespace deltagi

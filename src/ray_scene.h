@@ -51,6 +51,12 @@ class RayScene {
     // The closest hit in this layer alone, without the base's.
     RayHit intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
                              float tMax = std::numeric_limits<float>::infinity()) const;
+    // Whether anything lies along origin + t * direction, t in (tMin, tMax): shadow rays (any hit, cheaper
+    // than the closest). Of this layer and its base, or of this layer alone.
+    bool occluded(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
+                  float tMax = std::numeric_limits<float>::infinity()) const;
+    bool occludedTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
+                          float tMax = std::numeric_limits<float>::infinity()) const;
     const RayScene* base() const { return base_; }
     Bounds3f bounds() const { return bounds_; }  // of this layer and its base
     bool empty() const { return meshes_.empty() && (!base_ || base_->empty()); }

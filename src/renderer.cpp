@@ -15,6 +15,7 @@
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
 #include "shading.h"
+#include "shadow_rays.h"
 #include "sky_light.h"
 #include "voxelize.h"
 
@@ -86,6 +87,7 @@ struct ConeJob {
     // kept (their surfaces are the real G-buffer's), and the pixels whose points differ from it (covered).
     std::array<InterpolationPlan, 3>* plans = nullptr;
     PixelRect changed;
+    ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -179,6 +181,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         results[j].shadows = traceSparse<ShadowOcclusion>(
             job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
             job.filter(o, ConeJob::Shadow), [&](std::span<const uint32_t> pixels) {
+                if (o.shadow.method == "rays")
+                    return traceShadowRays(job.points, scene.lights, job.rays, o, job.mode, pixels);
                 return traceShadowCones(job.points, scene.lights, job.visibility, o,
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
@@ -375,7 +379,11 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
                       {&visibility, nullptr, VisibilityVolumes::Self::Scene},
                       o.render.indirect,
                       ShadowMode::SceneOnly,
-                      {0, 0, scene.camera.width, scene.camera.height}};
+                      {0, 0, scene.camera.width, scene.camera.height},
+                      nullptr,
+                      nullptr,
+                      {},
+                      {&realOnly, nullptr, {}}};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
     const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
@@ -449,13 +457,18 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // from the kept real surfaces only there, where the objects cover them.
     const PixelRect& objectPixels = gbuffer.written;
     for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
+    const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals)};
     const ConeJob jobs[] = {
         {gbuffer.object,
          volumes.fullLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Object},
          o.render.indirect,
          ShadowMode::Shaded,
-         objectPixels},
+         objectPixels,
+         nullptr,
+         nullptr,
+         {},
+         shadowRays},
         {realPoints,
          volumes.deltaLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
@@ -464,7 +477,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          {0, 0, camera.width, camera.height},
          &kept.relitShadows,
          &kept.relitPlans,
-         objectPixels}};
+         objectPixels,
+         shadowRays}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];

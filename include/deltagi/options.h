@@ -60,8 +60,18 @@ struct SpecularConeOptions {
     int relightPixelStride = 0;
 };
 
-// options.shadow: the shadow cone towards each light (§3.5).
+// options.shadow: how the direct light of each light is shadowed: the shadow cone of §3.5, or shadow rays.
 struct ShadowConeOptions {
+    // "method": "rays" (the default) casts `ray_samples` shadow rays per point and light towards points
+    // spread over the light's area (a sphere light's disk, a directional light's cone of directions), against
+    // the real scene's and the objects' triangles (Embree), and filters them like the cones; "cones" marches
+    // the paper's shadow cone through the visibility volumes. Rays give the path tracer's shadows (width,
+    // depth, penumbra, the objects' self-shadowing) at any volume size; cones blur every occluder to voxels
+    // and are cut off at the volume's faces (docs/ground-truth.md has the figures of both).
+    std::string method = "rays";
+    // "ray_samples": shadow rays per point and light with a size (a radius or an angular radius), on a
+    // jittered grid (rounded down to a square, 1 to 256). A light without a size takes one ray.
+    int raySamples = 16;
     // "aperture_deg": full apex angle in degrees of the shadow cone of a light without a "radius".
     // A light with a radius r at distance d uses 2*atan(r/d) instead.
     float apertureDeg = 4.0f;

@@ -1,0 +1,167 @@
+#include "shadow_rays.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "brdf_sampling.h"
+#include "lights.h"
+#include "path_tracer.h"
+
+namespace deltagi {
+
+namespace {
+
+constexpr int64_t kPointGrain = 64;
+// Random streams of hashToUnit for the per-pixel offset of the sample grid (two per light).
+constexpr uint32_t kShadowRayStream = 5000;
+
+// Shirley & Chiu's concentric map of the unit square onto the unit disk: keeps the grid's strata compact.
+glm::vec2 concentricDisk(float u, float v) {
+    const float a = 2.0f * u - 1.0f, b = 2.0f * v - 1.0f;
+    if (a == 0.0f && b == 0.0f) return glm::vec2(0.0f);
+    constexpr float kQuarterPi = std::numbers::pi_v<float> / 4.0f;
+    float r, phi;
+    if (std::abs(a) > std::abs(b)) {
+        r = a;
+        phi = kQuarterPi * (b / a);
+    } else {
+        r = b;
+        phi = 2.0f * kQuarterPi - kQuarterPi * (a / b);
+    }
+    return r * glm::vec2(std::cos(phi), std::sin(phi));
+}
+
+// Whether a segment from `p` to any point within `radius` of `target` can pass within `sphereRadius` of
+// `sphereCentre` (conservative: the capsule around the segment p-target, as wide as the light everywhere).
+bool segmentMayMeetSphere(glm::vec3 p, glm::vec3 target, float radius, glm::vec3 sphereCentre,
+                          float sphereRadius) {
+    const glm::vec3 d = target - p;
+    const float len2 = glm::dot(d, d);
+    const float t = len2 > 0.0f ? glm::clamp(glm::dot(sphereCentre - p, d) / len2, 0.0f, 1.0f) : 0.0f;
+    const glm::vec3 closest = p + t * d;
+    const float reach = sphereRadius + radius;
+    return glm::dot(sphereCentre - closest, sphereCentre - closest) <= reach * reach;
+}
+
+// Whether a ray from `p` within `halfAngle` of `direction` can pass within `sphereRadius` of `sphereCentre`.
+bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
+                       float sphereRadius) {
+    const glm::vec3 toCentre = sphereCentre - p;
+    const float distance = glm::length(toCentre);
+    if (distance <= sphereRadius) return true;
+    const float angle = std::acos(glm::clamp(glm::dot(toCentre / distance, direction), -1.0f, 1.0f));
+    return angle <= halfAngle + std::asin(sphereRadius / distance);
+}
+
+}  // namespace
+
+ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v) {
+    ShadowRaySample s;
+    if (light.type == Light::Type::Directional) {
+        s.distance = std::numeric_limits<float>::infinity();
+        s.wi = -light.direction;
+        if (light.angularRadius > 0.0f) {
+            // Uniform over the cone's solid angle.
+            const float cosTheta = 1.0f - u * (1.0f - std::cos(light.angularRadius));
+            const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
+            const float phi = 2.0f * std::numbers::pi_v<float> * v;
+            s.wi = glm::normalize(frameAround(s.wi) *
+                                  glm::vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta));
+        }
+        return s;
+    }
+    glm::vec3 target = light.position;
+    const glm::vec3 axis = p - light.position;
+    const float d = glm::length(axis);
+    if (light.radius > 0.0f && d > 0.0f) {
+        const glm::vec2 onDisk = light.radius * concentricDisk(u, v);
+        target += frameAround(axis / d) * glm::vec3(onDisk, 0.0f);
+    }
+    const glm::vec3 toLight = target - p;
+    s.distance = glm::length(toLight);
+    s.wi = s.distance > 0.0f ? toLight / s.distance : glm::vec3(0.0f);
+    return s;
+}
+
+int shadowRayCount(const Light& light, int raySamples) {
+    const bool sized =
+        light.type == Light::Type::Directional ? light.angularRadius > 0.0f : light.radius > 0.0f;
+    if (!sized) return 1;
+    const int side = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(raySamples)) + 1e-3f));
+    return side * side;
+}
+
+std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> points,
+                                             std::span<const Light> lights, const ShadowRayScenes& rays,
+                                             const Options& options, ShadowMode mode,
+                                             std::span<const uint32_t> pixels) {
+    std::vector<ShadowOcclusion> out(points.size() * lights.size());
+    if (lights.empty() || !rays.scene) return out;
+    const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
+    const bool relit = mode == ShadowMode::DeltaShadow;
+    const bool sceneOnly = mode == ShadowMode::SceneOnly;
+    // As the path tracer offsets its shadow rays (so that DGI and its reference agree on grazing light).
+    const Bounds3f sceneBounds = rays.scene->bounds();
+    const float offset =
+        kRayOffsetScale * std::max(sceneBounds.empty() ? 1.0f : sceneBounds.maxExtent(), 1e-3f);
+    const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
+    const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
+
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        const glm::vec3 origin = p.position + offset * p.normal;
+        for (size_t l = 0; l < lights.size(); ++l) {
+            const Light& light = lights[l];
+            const LightSample centre = sampleLight(light, p.position);
+            if (glm::dot(centre.wi, p.normal) <= 0.0f || centre.irradiance == glm::vec3(0.0f)) continue;
+            // Relit points whose rays cannot reach the objects do not change: no rays at all.
+            bool mayMeetObjects = objects != nullptr && !sceneOnly;
+            if (mayMeetObjects && relit) {
+                mayMeetObjects = light.type == Light::Type::Directional
+                                     ? coneMayMeetSphere(origin, centre.wi, light.angularRadius, objectCentre,
+                                                         objectRadius)
+                                     : segmentMayMeetSphere(origin, light.position, light.radius,
+                                                            objectCentre, objectRadius);
+                if (!mayMeetObjects) continue;
+            }
+            const int count = shadowRayCount(light, options.shadow.raySamples);
+            const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
+            const float jitterU = hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l));
+            const float jitterV = hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l) + 1);
+            // Per sample: blocked by the objects, by the scene; the scene is tested only where needed.
+            int byObjects = 0, byScene = 0, byEither = 0;
+            for (int k = 0; k < count; ++k) {
+                const float u = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
+                const float v = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+                const ShadowRaySample s = sampleShadowRay(light, p.position, u, v);
+                const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
+                const bool horizon = glm::dot(s.wi, p.normal) <= 0.0f || !(tMax > 0.0f);
+                const bool object =
+                    horizon || (mayMeetObjects && objects->occludedTopLayer(origin, s.wi, 0.0f, tMax));
+                byObjects += object;
+                // Relit: a sample the objects leave alone does not change.
+                if (relit && !object) continue;
+                const bool scene = horizon || rays.scene->occluded(origin, s.wi, 0.0f, tMax);
+                byScene += scene;
+                byEither += scene || object;
+            }
+            if (relit && byObjects == 0) continue;
+            const float n = static_cast<float>(count);
+            ShadowOcclusion& o = out[i * lights.size() + l];
+            o.object = static_cast<float>(byObjects) / n;
+            if (relit) {
+                // Only the samples the objects block were tested against the scene: those count once in
+                // `combined`; the others are the same with and without the objects, so scene and combined
+                // carry only the change, which is all that DeltaShadow reads.
+                o.scene = 0.0f;
+                o.combined = static_cast<float>(byObjects - byScene) / n;
+            } else {
+                o.scene = static_cast<float>(byScene) / n;
+                o.combined = static_cast<float>(byEither) / n;
+            }
+        }
+    });
+    return out;
+}
+
+}  // namespace deltagi

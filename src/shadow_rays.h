@@ -1,0 +1,54 @@
+// Stage 6, shadows by rays: the fraction of each light that reaches a G-buffer point, from shadow rays cast
+// towards points spread over the light's area, against the real scene's and the virtual objects' triangles.
+//
+// The paper's shadow cone (§3.5, shading.h) reads the visibility volumes: an occluder smaller than a coarse
+// voxel fills it, so its shadow comes out too wide and too dark, and it ends where the volumes end. On a CPU
+// a ray against the triangles costs about as much as a cone step, so the default is rays
+// (options.shadow.method); the cones stay available. The result has the same form as the cones'
+// (ShadowOcclusion), is traced at the same sparse pixels and goes through the same edge-aware filter.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "deltagi/scene.h"
+#include "gbuffer.h"
+#include "ray_scene.h"
+#include "shading.h"
+
+namespace deltagi {
+
+// What shadow rays are cast against.
+struct ShadowRayScenes {
+    const RayScene* scene = nullptr;    // the real scene alone
+    const RayScene* objects = nullptr;  // the virtual objects (only this layer of it is tested); may be null
+    Bounds3f objectBounds;              // of the virtual objects: rays that cannot reach it skip `objects`
+};
+
+// One point on a light for shadow sample (u, v) in [0,1)^2 seen from `p`: the direction towards it and how
+// far it is. A sphere light (radius > 0) is sampled uniformly over its disk facing `p` (as the path tracer
+// samples it), a directional light with an angular radius over its cone of directions; a light without a
+// size always gives its centre (or its direction).
+struct ShadowRaySample {
+    glm::vec3 wi{0.0f};
+    float distance = 0.0f;  // infinity for directional lights
+};
+ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v);
+
+// Shadow rays per point and light for options.shadow.ray_samples: a square number, 1 for a light without a
+// size.
+int shadowRayCount(const Light& light, int raySamples);
+
+// For every point and light (index point * lights + light), the fraction of the light's samples that do not
+// reach the point (the light's side of the surface, a sample below the horizon counts as blocked): by the
+// scene alone, by the objects alone, by both. Points facing away from a light, or out of its reach, get zero,
+// as the cones give them. Under ShadowMode::DeltaShadow (relighting), where only scene - combined counts, a
+// point whose rays cannot meet the objects, or meet none, gets zeros: its change is zero either way.
+// Samples lie on a jittered grid offset per pixel (seeded by the point's index: the same with any number of
+// threads). Traces the points listed in `pixels` (indices into `points`), or all of them when it is empty.
+std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> points,
+                                             std::span<const Light> lights, const ShadowRayScenes& rays,
+                                             const Options& options, ShadowMode mode,
+                                             std::span<const uint32_t> pixels = {});
+
+}  // namespace deltagi
