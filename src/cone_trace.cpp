@@ -170,6 +170,44 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
     return lightAcc;
 }
 
+glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, const MipVolume& deltaLight,
+                               const VisibilityVolumes& visibility, const ConeTraceSettings& settings) {
+    // With the objects (a) and without them (b).
+    glm::vec3 lightA(0.0f), lightB(0.0f);
+    float occlusionA = 0.0f, occlusionB = 0.0f;
+    const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
+    auto composite = [&](glm::vec3& light, float& occlusion, glm::vec3 local, float opacity) {
+        const glm::vec3 contribution = local * (opacity * (1.0f - occlusion));
+        light = settings.paperAccumulation ? light * occlusion + contribution : light + contribution;
+        occlusion += opacity * (1.0f - occlusion);
+    };
+    marchCone(cone, fullLight, settings, [&](glm::vec3 position, float level, float levelScale) {
+        const VolumeLookup at = fullLight.lookup(position, level);
+        const glm::vec4 sceneVisibility = visibility.scene ? visibility.scene->gather(at) : glm::vec4(0.0f);
+        const float scene =
+            adaptedOcclusion(sceneVisibility, cone.direction, levelScale, settings, sceneBackface);
+        const float object = visibility.object
+                                 ? adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
+                                                    settings, objectBackface)
+                                 : 0.0f;
+        const float opacityA = stepOpacity(scene + object - scene * object, settings.stepScale);
+        const float opacityB = stepOpacity(scene, settings.stepScale);
+        if (opacityA > 0.0f) {
+            const glm::vec4 full = fullLight.gather(at);
+            const glm::vec4 delta = deltaLight.gather(at);
+            // The volumes hold radiance times occupancy (inject.cpp): the full volume's by the occupancy of
+            // both visibility volumes, the scene's alone (full - delta) by the scene's. Dividing the scene's
+            // light by the objects' occupancy too would dim it in every coarse voxel the objects share, while
+            // its opacity (B) does not count them: B would fall short of A far from the objects.
+            if (full.w > 1e-6f) composite(lightA, occlusionA, glm::vec3(full) / full.w, opacityA);
+            if (opacityB > 0.0f && sceneVisibility.x > 1e-6f)
+                composite(lightB, occlusionB, glm::vec3(full - delta) / sceneVisibility.x, opacityB);
+        }
+        return occlusionA < settings.maxOcclusion || occlusionB < settings.maxOcclusion;
+    });
+    return lightA - lightB;
+}
+
 ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
                                 const ConeTraceSettings& settings, int64_t* steps) {
     ShadowOcclusion acc;

@@ -58,6 +58,16 @@ glm::vec3 coneOrigin(glm::vec3 position, glm::vec3 normal, glm::vec3 direction, 
 glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const VisibilityVolumes& visibility,
                          const ConeTraceSettings& settings, int64_t* steps = nullptr);
 
+// The change the virtual objects make to the light arriving along a cone at a real surface (relighting,
+// §3.3), as a difference of two cones marched together: the full light volume seen through both visibility
+// volumes, minus the light of the real scene alone (full - delta) seen through the scene's visibility alone.
+// The paper reads the delta volume through both visibility volumes, which holds what the objects add and the
+// light they take from surfaces they shadow, but not the light they block on its way between two real
+// surfaces (the red wall's light that no longer reaches the floor behind the object); the difference holds
+// all three, and is exactly the delta volume's cone wherever the objects do not occlude the cone.
+glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, const MipVolume& deltaLight,
+                               const VisibilityVolumes& visibility, const ConeTraceSettings& settings);
+
 // Occlusion accumulated along a shadow cone, by the scene volume alone, the object volume alone and both.
 struct ShadowOcclusion {
     float scene = 0.0f, object = 0.0f, combined = 0.0f;

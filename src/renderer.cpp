@@ -88,6 +88,8 @@ struct ConeJob {
     std::array<InterpolationPlan, 3>* plans = nullptr;
     PixelRect changed;
     ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
+    // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
+    const MipVolume* fullLight = nullptr;
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -194,7 +196,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         results[j].diffuse = traceSparse<glm::vec3>(
             job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
             job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
-                return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels);
+                return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight);
             });
     }
     timer.lap("diffuse");
@@ -202,7 +204,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
         auto trace = [&](std::span<const uint32_t> pixels) {
-            return traceSpecularCones(job.points, *job.light, job.visibility, o, pixels);
+            return traceSpecularCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight);
         };
         // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
         results[j].specular = job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
@@ -478,7 +480,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          &kept.relitShadows,
          &kept.relitPlans,
          objectPixels,
-         shadowRays}};
+         shadowRays,
+         o.render.relightCones == "differential" ? volumes.fullLight : nullptr}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];

@@ -39,16 +39,19 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
                                               SceneOcclusionCache* sceneCache = nullptr);
 
 // Diffuse cones: cosine-weighted incoming radiance sum_k w_k L_k (so that albedo times it is the reflected
-// radiance). Zero for invalid points.
+// radiance). Zero for invalid points. With `fullLight`, `light` is the delta volume and the cones give the
+// change of the incoming light (traceLightChangeCone): options.render.relight_cones "differential".
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                          const VisibilityVolumes& visibility, const Options& options,
-                                         std::span<const uint32_t> pixels = {});
+                                         std::span<const uint32_t> pixels = {},
+                                         const MipVolume* fullLight = nullptr);
 
 // The specular cone along the mirrored view direction, aperture from the material's roughness. Zero for
-// invalid points and materials without a specular part.
+// invalid points and materials without a specular part. `fullLight` as for traceDiffuseCones.
 std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                           const VisibilityVolumes& visibility, const Options& options,
-                                          std::span<const uint32_t> pixels = {});
+                                          std::span<const uint32_t> pixels = {},
+                                          const MipVolume* fullLight = nullptr);
 
 // The BRDF of deltagi::Material times cos(theta_i) times the light's irradiance: unshadowed direct radiance.
 glm::vec3 directRadiance(const SurfacePoint& point, const Light& light);

@@ -39,7 +39,8 @@ TEST(Render, NoVirtualObjectReturnsTheBackgroundExactly) {
 TEST(Render, WithoutAPhotoTheRealSceneIsRenderedAsBackground) {
     Scene s = test::floorScene();
     RenderOutput out = render(s);
-    // The floor under the light: albedo/pi * I / d^2 = 0.5/pi * 2/2.25, plus a little indirect (none: a plane).
+    // The floor under the light: albedo/pi * I / d^2 = 0.5/pi * 2/2.25, plus a little indirect (none: a
+    // plane).
     const glm::ivec2 p = test::project(s.camera, {0, 0, 0});
     const float expected = 0.5f / 3.14159265f * 2.0f / 2.25f;
     EXPECT_NEAR(out.background.rgb(p.x, p.y).x, expected, 0.05f * expected);
@@ -48,7 +49,8 @@ TEST(Render, WithoutAPhotoTheRealSceneIsRenderedAsBackground) {
 
 Scene sphereOverFloor() {
     Scene s = test::floorScene();
-    s.virtuals.push_back(placed(makeSphere(0.2f, 32), {0.0f, 0.35f, 0.0f}, diffuse({0.7f, 0.7f, 0.7f}), "ball"));
+    s.virtuals.push_back(
+        placed(makeSphere(0.2f, 32), {0.0f, 0.35f, 0.0f}, diffuse({0.7f, 0.7f, 0.7f}), "ball"));
     return s;
 }
 
@@ -85,7 +87,8 @@ TEST(Render, AnObjectOutOfTheLightsReachChangesOnlyItsOwnPixels) {
     spot.outerAngleDeg = 20.0f;
     spot.intensity = 3.0f;
     s.lights.push_back(spot);
-    s.virtuals.push_back(placed(makeBox(glm::vec3(0.3f)), {2.0f, 0.15f, 0.0f}, diffuse({0.9f, 0.2f, 0.2f}), "box"));
+    s.virtuals.push_back(
+        placed(makeBox(glm::vec3(0.3f)), {2.0f, 0.15f, 0.0f}, diffuse({0.9f, 0.2f, 0.2f}), "box"));
     s.camera = test::lookAtCamera({0.0f, 2.5f, 3.0f}, {0, 0, 0}, 64, 48, 70.0f);
     s.options.volume.resolution = 32;
     s.options.rsm.resolution = 128;
@@ -106,8 +109,10 @@ TEST(Render, AnObjectOutOfTheLightsReachChangesOnlyItsOwnPixels) {
 // A real table shadows the floor; a virtual ball under it must not darken that shadow again (§3.2).
 Scene ballUnderTable() {
     Scene s = test::floorScene();
-    s.real.push_back(placed(makeBox({1.0f, 0.05f, 1.0f}), {0.0f, 0.8f, 0.0f}, diffuse(glm::vec3(0.5f)), "table"));
-    s.virtuals.push_back(placed(makeSphere(0.15f, 32), {0.0f, 0.15f, 0.0f}, diffuse(glm::vec3(0.7f)), "ball"));
+    s.real.push_back(
+        placed(makeBox({1.0f, 0.05f, 1.0f}), {0.0f, 0.8f, 0.0f}, diffuse(glm::vec3(0.5f)), "table"));
+    s.virtuals.push_back(
+        placed(makeSphere(0.15f, 32), {0.0f, 0.15f, 0.0f}, diffuse(glm::vec3(0.7f)), "ball"));
     s.camera = test::lookAtCamera({0.0f, 0.5f, 1.8f}, {0, 0.1f, 0}, 64, 48, 60.0f);
     s.options.volume.center = glm::vec3(0.0f, 0.4f, 0.0f);
     s.options.volume.size = 1.2f;
@@ -145,7 +150,8 @@ TEST(Render, ABrightObjectNextToAWhiteWallBleedsItsColourOntoIt) {
                             glm::rotate(glm::mat4(1.0f), glm::radians(90.0f), glm::vec3(1, 0, 0)));
     wall.material = diffuse(glm::vec3(0.8f));
     s.real.push_back(wall);
-    s.virtuals.push_back(placed(makeBox(glm::vec3(0.4f)), {0.0f, 0.2f, -0.25f}, diffuse({0.9f, 0.1f, 0.05f}), "box"));
+    s.virtuals.push_back(
+        placed(makeBox(glm::vec3(0.4f)), {0.0f, 0.2f, -0.25f}, diffuse({0.9f, 0.1f, 0.05f}), "box"));
     s.lights.push_back(test::pointLight({1.0f, 1.0f, 0.5f}, 3.0f));
     s.camera = test::lookAtCamera({0.3f, 0.6f, 1.5f}, {0.0f, 0.2f, -0.5f}, 64, 48, 60.0f);
     s.options.volume.resolution = 32;
@@ -160,6 +166,40 @@ TEST(Render, ABrightObjectNextToAWhiteWallBleedsItsColourOntoIt) {
     EXPECT_GT(d.x, d.z + 0.002f);
 }
 
+// The light an object blocks between two real surfaces: a red wall lights the floor in front of it; a
+// black board stands between them, out of the lamp's way (it shadows neither the wall nor the floor point).
+// The floor point loses the wall's red light. The paper's delta volume holds no change here (nothing the lamp
+// lights is shadowed), so its cones see none; the differential cones (full light through both visibility
+// volumes minus the scene's light through its own) do.
+TEST(Render, AnObjectBlocksTheLightBouncingBetweenTwoRealSurfaces) {
+    Scene s;
+    s.real.push_back(placed(makeQuad({2.0f, 2.0f}), {0, 0, 0}, diffuse(glm::vec3(0.8f)), "floor"));
+    TriangleMesh wall = makeQuad({1.0f, 2.0f});
+    transformMesh(wall, glm::translate(glm::mat4(1.0f), glm::vec3(-0.5f, 0.5f, 0.0f)) *
+                            glm::rotate(glm::mat4(1.0f), glm::radians(-90.0f), glm::vec3(0, 0, 1)));
+    wall.material = diffuse({0.9f, 0.05f, 0.05f});
+    s.real.push_back(wall);
+    s.virtuals.push_back(
+        placed(makeBox({0.05f, 0.6f, 0.8f}), {-0.2f, 0.35f, 0.0f}, diffuse(glm::vec3(0.0f)), "board"));
+    s.lights.push_back(test::pointLight({0.6f, 1.5f, 0.0f}, 3.0f));
+    s.camera = test::lookAtCamera({0.8f, 0.8f, 0.8f}, {0.1f, 0.0f, 0.0f}, 64, 48, 60.0f);
+    s.options.volume.resolution = 32;
+    s.options.volume.center = glm::vec3(0.0f, 0.5f, 0.0f);
+    s.options.volume.size = 1.2f;
+    s.options.rsm.resolution = 128;
+    s.background = Image(64, 48, 3, 0.3f);
+    const glm::ivec2 p = test::project(s.camera, {0.15f, 0.0f, 0.0f});
+    s.options.render.relightCones = "differential";
+    const RenderOutput differential = render(s);
+    s.options.render.relightCones = "delta_volume";
+    const RenderOutput deltaVolume = render(s);
+    ASSERT_EQ(differential.objectMask.at(p.x, p.y, 0), 0.0f);
+    const glm::vec3 a = differential.delta.rgb(p.x, p.y), b = deltaVolume.delta.rgb(p.x, p.y);
+    EXPECT_LT(a.x, -0.01f) << "the wall's red light is blocked";
+    EXPECT_LT(a.x, a.y - 0.005f);
+    EXPECT_GT(b.x, 0.3f * a.x) << "the delta volume holds (almost) none of it";
+}
+
 TEST(Render, ResultDoesNotDependOnTheThreadCount) {
     auto run = [](int threads) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
@@ -171,7 +211,8 @@ TEST(Render, ResultDoesNotDependOnTheThreadCount) {
         return render(s);
     };
     RenderOutput a = run(1), b = run(2);
-    for (size_t i = 0; i < a.composite.data().size(); ++i) ASSERT_EQ(a.composite.data()[i], b.composite.data()[i]);
+    for (size_t i = 0; i < a.composite.data().size(); ++i)
+        ASSERT_EQ(a.composite.data()[i], b.composite.data()[i]);
     for (size_t i = 0; i < a.background.data().size(); ++i)
         ASSERT_EQ(a.background.data()[i], b.background.data()[i]);
 }
