@@ -6,7 +6,7 @@
 namespace deltagi {
 
 AreaLights::AreaLights(const Scene& scene, SceneContent content) {
-    auto add = [&](const TriangleMesh& mesh) {
+    auto add = [&](const TriangleMesh& mesh, bool isVirtual) {
         if (!mesh.material.emits()) return;
         const float weight = emitterWeight(mesh.material.emission);
         for (const glm::uvec3& t : mesh.triangles) {
@@ -14,15 +14,15 @@ AreaLights::AreaLights(const Scene& scene, SceneContent content) {
             const glm::vec3 cross = glm::cross(b - a, c - a);
             const float doubleArea = glm::length(cross);
             if (!(doubleArea > 0.0f)) continue;  // never sampled, and a ray cannot hit it either
-            triangles_.push_back({a, b, c, cross / doubleArea, mesh.material.emission});
+            triangles_.push_back({a, b, c, cross / doubleArea, mesh.material.emission, isVirtual});
             totalPower_ += 0.5 * static_cast<double>(doubleArea) * weight;
             cdf_.push_back(totalPower_);
         }
     };
     if (content != SceneContent::VirtualOnly)
-        for (const TriangleMesh& m : scene.real) add(m);
+        for (const TriangleMesh& m : scene.real) add(m, false);
     if (content != SceneContent::RealOnly)
-        for (const TriangleMesh& m : scene.virtuals) add(m);
+        for (const TriangleMesh& m : scene.virtuals) add(m, true);
 }
 
 AreaLightSample AreaLights::sample(float uTriangle, float u1, float u2) const {
@@ -40,6 +40,7 @@ AreaLightSample AreaLights::sample(float uTriangle, float u1, float u2) const {
     s.normal = t.normal;
     s.radiance = t.radiance;
     s.pdfArea = pdfArea(t.radiance);
+    s.isVirtual = t.isVirtual;
     return s;
 }
 

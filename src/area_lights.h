@@ -23,6 +23,7 @@ struct AreaLightSample {
     glm::vec3 normal{0.0f};    // unit plane normal of the triangle (either side: emitters are two-sided)
     glm::vec3 radiance{0.0f};  // emitted radiance
     float pdfArea = 0.0f;      // density of `position` per unit area
+    bool isVirtual = false;    // on a virtual object's triangle
 };
 
 class AreaLights {
@@ -46,6 +47,7 @@ class AreaLights {
         glm::vec3 a, b, c;
         glm::vec3 normal;
         glm::vec3 radiance;
+        bool isVirtual;
     };
     std::vector<Triangle> triangles_;
     std::vector<double> cdf_;  // running sum of area * emitterWeight, one per triangle

@@ -1,6 +1,7 @@
 // Light from point, spot and directional lights arriving at a point (no shadowing).
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -12,6 +13,7 @@ namespace deltagi {
 
 // Spot cone: 1 inside the inner half-angle, 0 outside the outer one, smooth in between.
 inline float spotFalloff(const Light& light, glm::vec3 directionFromLight) {
+    if (light.lambertian) return std::max(glm::dot(directionFromLight, light.direction), 0.0f);
     if (light.type != Light::Type::Spot) return 1.0f;
     const float cosTheta = glm::dot(directionFromLight, light.direction);
     const float cosOuter = std::cos(glm::radians(light.outerAngleDeg));

@@ -16,15 +16,16 @@ bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
 
 }  // namespace
 
-void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region) {
+void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region,
+                             bool withEmission) {
     if (objectVisibility_.empty() || !sameRegion(region, region_)) {
         *this = ObjectVolumes{};
         region_ = region;
-        objects_ = deltagi::voxelize(objects, region);
+        objects_ = deltagi::voxelize(objects, region, withEmission);
         objectsChanged_ = VoxelBox::all(region.resolution);
         return;
     }
-    objectsChanged_ = revoxelize(objects_, objects, region);
+    objectsChanged_ = revoxelize(objects_, objects, region, withEmission);
     objectsChanged_.extend(objects_.bounds);
 }
 

@@ -32,7 +32,8 @@ struct RealSceneVolumes {
 class ObjectVolumes {
   public:
     // Stage 1: the objects' voxels, over `region` (a new region starts afresh).
-    void voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region);
+    void voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region,
+                  bool withEmission = true);
     // Stage 3: the full and delta light volumes (level 0). `updates` are the real scene's RSMs' updates for
     // the objects (traceRsmUpdate), one per light.
     void inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates);

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <optional>
 
+#include "area_light_rays.h"
 #include "composite.h"
 #include "deltagi/scene_io.h"
 #include "denoise.h"
@@ -85,11 +86,13 @@ struct ConeJob {
     SceneOcclusionCache* sceneShadows = nullptr;  // relit with DeltaShadow: the scene's share, kept
     // Relit real surfaces: the filter's interpolation weights of the shadow, diffuse and specular passes,
     // kept (their surfaces are the real G-buffer's), and the pixels whose points differ from it (covered).
-    std::array<InterpolationPlan, 3>* plans = nullptr;
+    std::array<InterpolationPlan, 4>* plans = nullptr;
     PixelRect changed;
     ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
     // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
     const MipVolume* fullLight = nullptr;
+    // Emitting surfaces lighting the points through shadow rays (options.shadow.method "rays"), or none.
+    const AreaLights* emitters = nullptr;
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -102,7 +105,7 @@ struct ConeJob {
     }
     // The edge-aware filter of its sparse cones; the real surfaces' change varies slowly, so its pixels
     // between samples are interpolated.
-    enum Pass { Shadow, Diffuse, Specular };
+    enum Pass { Shadow, Diffuse, Specular, AreaLight };
     DenoiseSettings filter(const Options& o, Pass pass) const {
         DenoiseSettings s{o.render.denoiseRadius};
         s.interpolate = relit();
@@ -123,10 +126,23 @@ struct ConeJob {
 struct ConeResults {
     std::vector<ShadowOcclusion> shadows;      // points x lights
     std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
+    std::vector<glm::vec3> areaLight;          // direct light of emitting surfaces; empty without
 };
 
-// a += b, where an empty `a` is zero.
+// The lights whose reflective shadow maps light the volumes: the scene's, and with area lights by rays the
+// stand-ins of its emitting surfaces (their direct light comes from traceAreaLightRays, not the volumes).
+std::vector<Light> rsmLights(const Scene& scene, const RayScene& realOnly) {
+    std::vector<Light> lights = scene.lights;
+    if (scene.options.shadow.method == "rays") {
+        const std::vector<Light> standIns = emitterStandInLights(scene, realOnly);
+        lights.insert(lights.end(), standIns.begin(), standIns.end());
+    }
+    return lights;
+}
+
+// a += b, where an empty vector is zero.
 void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
+    if (b.empty()) return;
     if (a.empty()) {
         a = std::move(b);
         return;
@@ -189,6 +205,15 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
     }
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        const ConeJob& job = jobs[j];
+        if (!job.emitters || job.emitters->empty()) continue;
+        results[j].areaLight = traceSparse<glm::vec3>(
+            job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), 1,
+            job.filter(o, ConeJob::AreaLight), [&](std::span<const uint32_t> pixels) {
+                return traceAreaLightRays(job.points, *job.emitters, job.rays, o, job.mode, pixels);
+            });
+    }
     timer.lap("shadow");
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
@@ -249,7 +274,7 @@ struct StaticWork {
     std::optional<VoxelGeometry> sceneGeometry;
     std::optional<MipVolume> sceneVisibility;
     SceneOcclusionCache relitShadows;             // the scene's share of the real surfaces' shadow cones
-    std::array<InterpolationPlan, 3> relitPlans;  // the relit passes' filter weights over realSurfaces
+    std::array<InterpolationPlan, 4> relitPlans;  // the relit passes' filter weights over realSurfaces
     GBuffer gbuffer;                              // the objects' half, redone where they were and are
     // realSurfaces without the pixels the objects cover (the last frame's `hidden`).
     std::vector<SurfacePoint> relitSurfaces;
@@ -334,21 +359,23 @@ struct DgiVolumes {
     const MipVolume *sceneVisibility, *objectVisibility, *fullLight, *deltaLight;
 };
 
-DgiVolumes buildVolumes(const Scene& scene, const VolumeRegion& region, const RayScene& realOnly,
-                        const RayScene& all, StaticWork& kept, StageTimer& timer) {
+DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const VolumeRegion& region,
+                        const RayScene& realOnly, const RayScene& all, StaticWork& kept, StageTimer& timer) {
+    // With area lights by rays, emitting surfaces light the volumes through their stand-ins' RSMs instead.
+    const bool withEmission = scene.options.shadow.method != "rays";
     const int rsmResolution = scene.options.rsm.resolution;
     ObjectVolumes& objects = kept.objectVolumes ? *kept.objectVolumes : kept.objectVolumes.emplace();
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
-    if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region);
-    objects.voxelize(scene.virtuals, region);
+    if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region, withEmission);
+    objects.voxelize(scene.virtuals, region, withEmission);
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
-    if (!kept.sceneRsms) kept.sceneRsms = renderRsms(realOnly, scene.lights, region, rsmResolution);
+    if (!kept.sceneRsms) kept.sceneRsms = renderRsms(realOnly, lights, region, rsmResolution);
     std::vector<RsmUpdate> updates;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
-    for (size_t l = 0; l < scene.lights.size(); ++l)
-        updates.push_back(traceRsmUpdate((*kept.sceneRsms)[l], all, scene.lights[l], region, objectBounds));
+    for (size_t l = 0; l < lights.size(); ++l)
+        updates.push_back(traceRsmUpdate((*kept.sceneRsms)[l], all, lights[l], region, objectBounds));
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
@@ -370,9 +397,11 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     // One voxel of margin on each side so that surfaces on the bounds are inside.
     const float margin = 1.0f + 2.0f / static_cast<float>(o.volume.resolution);
     const VolumeRegion region = cubeAround(boundsOf(scene.real), margin, o.volume.resolution);
-    VoxelGeometry geometry = voxelize(scene.real, region);
+    const bool areaRays = o.shadow.method == "rays";
+    VoxelGeometry geometry = voxelize(scene.real, region, !areaRays);
     const std::vector<ReflectiveShadowMap> rsms =
-        renderRsms(realOnly, scene.lights, region, o.rsm.resolution);
+        renderRsms(realOnly, rsmLights(scene, realOnly), region, o.rsm.resolution);
+    const AreaLights emitters(scene, SceneContent::RealOnly);
     const VoxelGeometry* geometries[] = {&geometry};
     const MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
     const MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
@@ -385,12 +414,15 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
                       nullptr,
                       nullptr,
                       {},
-                      {&realOnly, nullptr, {}}};
+                      {&realOnly, nullptr, {}},
+                      nullptr,
+                      areaRays ? &emitters : nullptr};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
     const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
-    const std::vector<glm::vec3> radiance = combineLighting(
-        points, scene.lights, cones.shadows, ShadowMode::SceneOnly, cones.diffuse, cones.specular);
+    std::vector<glm::vec3> radiance = combineLighting(points, scene.lights, cones.shadows,
+                                                      ShadowMode::SceneOnly, cones.diffuse, cones.specular);
+    addInto(radiance, std::vector<glm::vec3>(cones.areaLight));
     return toImage(radiance, scene.camera.width, scene.camera.height);
 }
 
@@ -442,7 +474,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         return out;
     }
 
-    const DgiVolumes volumes = buildVolumes(scene, region, realOnly, *all, kept, timer);
+    const std::vector<Light> lights = rsmLights(scene, realOnly);
+    const DgiVolumes volumes = buildVolumes(scene, lights, region, realOnly, *all, kept, timer);
 
     // 5. G-buffer. Real surfaces are relit only where they show through (coverage < 1).
     GBuffer& gbuffer = kept.gbuffer;
@@ -460,6 +493,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     const PixelRect& objectPixels = gbuffer.written;
     for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
     const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals)};
+    // Emitting surfaces light the scene through shadow rays (with options.shadow.method "rays").
+    const AreaLights emitters = o.shadow.method == "rays" ? AreaLights(scene, SceneContent::RealAndVirtual)
+                                                          : AreaLights(Scene{}, SceneContent::RealOnly);
     const ConeJob jobs[] = {
         {gbuffer.object,
          volumes.fullLight,
@@ -470,7 +506,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          nullptr,
          nullptr,
          {},
-         shadowRays},
+         shadowRays,
+         nullptr,
+         &emitters},
         {realPoints,
          volumes.deltaLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
@@ -481,17 +519,19 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          &kept.relitPlans,
          objectPixels,
          shadowRays,
-         o.render.relightCones == "differential" ? volumes.fullLight : nullptr}};
+         o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
+         &emitters}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
-    const auto objectRadiance =
-        combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded, object.diffuse,
-                        object.specular, &objectPixels, camera.width);
-    const auto realChange =
+    auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded,
+                                          object.diffuse, object.specular, &objectPixels, camera.width);
+    auto realChange =
         combineLighting(realPoints, scene.lights, real.shadows, relightMode, real.diffuse, real.specular);
+    addInto(objectRadiance, std::vector<glm::vec3>(object.areaLight));
+    addInto(realChange, std::vector<glm::vec3>(real.areaLight));
     timer.lap("shading");
 
     // The background: the photo, or the real scene rendered alone.

@@ -146,16 +146,18 @@ std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
 
 }  // namespace
 
-VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
+VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission) {
     const int n = region.resolution;
     VoxelGeometry out{Grid3(n), {}, {}, {}};
     out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
-    revoxelize(out, meshes, region);
+    revoxelize(out, meshes, region, withEmission);
     return out;
 }
 
-VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
+VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                    bool withEmission) {
     const bool emissive =
+        withEmission &&
         std::any_of(meshes.begin(), meshes.end(), [](const TriangleMesh& m) { return m.material.emits(); });
     // Clear the old geometry: the grid is zero everywhere then.
     const VoxelBox old = out.bounds;

@@ -27,14 +27,17 @@ struct VoxelGeometry {
 
 // Voxelizes `meshes` over `region`. Deterministic for any thread count (each voxel sums its triangles in
 // mesh and triangle order).
-VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region);
+// `withEmission` false leaves emitting surfaces' radiance out (VoxelGeometry::emission empty): their light
+// reaches the scene through shadow rays and reflective shadow maps instead (options.shadow.method "rays").
+VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                       bool withEmission = true);
 
 // Voxelizes `meshes` again into `geometry`, a voxelization over the same region (of other or moved meshes):
 // the voxels of its old bounds are cleared and the new geometry is written, so the cost is that of the
 // triangles and the two boxes, not of the grid. Afterwards `geometry` equals voxelize(meshes, region) bit
 // for bit. Returns the old bounds.
-VoxelBox revoxelize(VoxelGeometry& geometry, std::span<const TriangleMesh> meshes,
-                    const VolumeRegion& region);
+VoxelBox revoxelize(VoxelGeometry& geometry, std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                    bool withEmission = true);
 
 // Counting sort of items into consecutive z-slabs of a grid, keeping item order inside a slab: the basis of
 // the deterministic parallel scatter used by voxelization and light injection. `slabOf(item, first, last)`

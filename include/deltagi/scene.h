@@ -81,6 +81,10 @@ struct Light {
     // map itself). Not read from scene files.
     bool fromEnvironment = false;
     float angularRadius = 0.0f;
+    // An emitting surface's stand-in for the reflective shadow maps (renderer.cpp): its intensity falls off
+    // as the cosine of the angle to `direction` and is zero behind it, as a Lambertian emitter's. Not read
+    // from scene files.
+    bool lambertian = false;
 
     glm::vec3 power() const { return color * intensity; }
 };

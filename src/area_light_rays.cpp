@@ -1,0 +1,150 @@
+#include "area_light_rays.h"
+
+#include <cmath>
+
+#include "brdf.h"
+#include "cone_trace.h"
+#include "path_tracer.h"
+
+namespace deltagi {
+
+namespace {
+
+constexpr int64_t kPointGrain = 64;
+constexpr uint32_t kAreaLightStream = 7000;  // hashToUnit streams of the sample grid's offsets
+
+// Whether a segment from `p` to `q` can pass within `radius` of `centre`.
+bool segmentNearSphere(glm::vec3 p, glm::vec3 q, glm::vec3 centre, float radius) {
+    const glm::vec3 d = q - p;
+    const float len2 = glm::dot(d, d);
+    const float t = len2 > 0.0f ? glm::clamp(glm::dot(centre - p, d) / len2, 0.0f, 1.0f) : 0.0f;
+    const glm::vec3 closest = p + t * d;
+    return glm::dot(centre - closest, centre - closest) <= radius * radius;
+}
+
+}  // namespace
+
+std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, const AreaLights& emitters,
+                                          const ShadowRayScenes& rays, const Options& options,
+                                          ShadowMode mode, std::span<const uint32_t> pixels) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    if (emitters.empty() || !rays.scene) return out;
+    const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
+    const bool relit = mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
+    const Bounds3f sceneBounds = rays.scene->bounds();
+    const float offset =
+        kRayOffsetScale * std::max(sceneBounds.empty() ? 1.0f : sceneBounds.maxExtent(), 1e-3f);
+    const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
+    const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
+    const int side =
+        std::max(1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.raySamples)) + 1e-3f));
+    const int count = side * side;
+
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        const Material& m = *p.material;
+        if (m.albedo == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)) return;
+        const glm::vec3 origin = p.position + offset * p.normal;
+        const float jitterU = hashToUnit(i, kAreaLightStream), jitterV = hashToUnit(i, kAreaLightStream + 1);
+        const float jitterT = hashToUnit(i, kAreaLightStream + 2);
+        glm::vec3 sum(0.0f);
+        for (int k = 0; k < count; ++k) {
+            // A jittered grid over the point on the triangle, and a stratified (permuted) triangle choice.
+            const float u1 = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
+            const float u2 = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+            const float uTriangle =
+                (static_cast<float>((k * 5 + 3) % count) + jitterT) / static_cast<float>(count);
+            const AreaLightSample s = emitters.sample(uTriangle, u1, u2);
+            const glm::vec3 toLight = s.position - origin;
+            const float d2 = glm::dot(toLight, toLight);
+            if (!(d2 > 0.0f) || !(s.pdfArea > 0.0f)) continue;
+            const float d = std::sqrt(d2);
+            const glm::vec3 wi = toLight / d;
+            const float cosSurface = glm::dot(wi, p.normal);
+            const float cosLight = std::abs(glm::dot(wi, s.normal));
+            const float tMax = d - 2.0f * offset;
+            if (cosSurface <= 0.0f || !(cosLight > 0.0f) || !(tMax > 0.0f)) continue;
+            // Whether the objects can be in the way at all; a real emitter's light they cannot block does not
+            // change.
+            const bool mayMeetObjects =
+                objects && segmentNearSphere(origin, s.position, objectCentre, objectRadius);
+            if (mode == ShadowMode::SceneOnly && s.isVirtual) continue;
+            if (mode == ShadowMode::DeltaShadow && !s.isVirtual && !mayMeetObjects) continue;
+            const bool byObjects = mayMeetObjects && mode != ShadowMode::SceneOnly &&
+                                   objects->occludedTopLayer(origin, wi, 0.0f, tMax);
+            if (mode == ShadowMode::DeltaShadow && !s.isVirtual && !byObjects) continue;
+            float visibility;  // of the light, or its change
+            switch (mode) {
+                case ShadowMode::Shaded:
+                    visibility = !byObjects && !rays.scene->occluded(origin, wi, 0.0f, tMax) ? 1.0f : 0.0f;
+                    break;
+                case ShadowMode::SceneOnly:
+                    visibility = rays.scene->occluded(origin, wi, 0.0f, tMax) ? 0.0f : 1.0f;
+                    break;
+                case ShadowMode::DeltaShadow: {
+                    const bool byScene = rays.scene->occluded(origin, wi, 0.0f, tMax);
+                    // A virtual emitter adds its light where nothing blocks it; a real one loses it where
+                    // only the objects block it.
+                    visibility =
+                        s.isVirtual ? (!byObjects && !byScene ? 1.0f : 0.0f) : (byScene ? 0.0f : -1.0f);
+                    break;
+                }
+                case ShadowMode::DeltaSingleVisibility: {
+                    const bool blocked = byObjects || rays.scene->occluded(origin, wi, 0.0f, tMax);
+                    visibility = s.isVirtual ? (blocked ? 0.0f : 1.0f) : (blocked ? -1.0f : 0.0f);
+                    break;
+                }
+            }
+            if (visibility == 0.0f) continue;
+            sum += evalBrdf(m, p.normal, p.toEye, wi) * s.radiance *
+                   (visibility * cosSurface * cosLight / (d2 * s.pdfArea));
+        }
+        out[i] = sum / static_cast<float>(count);
+    });
+    (void)relit;
+    return out;
+}
+
+std::vector<Light> emitterStandInLights(const Scene& scene, const RayScene& realOnly) {
+    std::vector<Light> lights;
+    const Bounds3f bounds = realOnly.bounds();
+    const float extent = bounds.empty() ? 1.0f : bounds.maxExtent();
+    for (const TriangleMesh& mesh : scene.real) {
+        if (!mesh.material.emits()) continue;
+        double area = 0.0;
+        glm::dvec3 centroid(0.0), normal(0.0);
+        for (const glm::uvec3& t : mesh.triangles) {
+            const glm::vec3 a = mesh.positions[t.x], b = mesh.positions[t.y], c = mesh.positions[t.z];
+            const glm::vec3 cross = glm::cross(b - a, c - a);
+            const double triangleArea = 0.5 * glm::length(cross);
+            area += triangleArea;
+            centroid += triangleArea * glm::dvec3(a + b + c) / 3.0;
+            normal += 0.5 * glm::dvec3(cross);
+        }
+        // Only flat emitters (a panel, a screen) get stand-ins: a closed one (a glowing ball) has no side to
+        // face, and its centroid lies inside it. Its light still reaches surfaces directly, by rays.
+        if (!(area > 0.0) || !(glm::length(normal) >= 0.5 * area)) continue;
+        const glm::vec3 centre(centroid / area);
+        const glm::vec3 n(glm::normalize(normal));
+        for (const float sideSign : {1.0f, -1.0f}) {
+            const glm::vec3 facing = sideSign * n;
+            const glm::vec3 position = centre + (1e-4f * extent) * facing;
+            // A side set against another surface (within 1% of the scene's size) sends nothing out.
+            const RayHit hit = realOnly.intersect(centre, facing, 1e-5f * extent);
+            if (hit.hit() && hit.t < 0.01f * extent) continue;
+            Light light;
+            light.type = Light::Type::Spot;
+            light.lambertian = true;
+            light.position = position;
+            light.direction = facing;
+            light.innerAngleDeg = light.outerAngleDeg = 90.0f;
+            light.color = mesh.material.emission;
+            // A Lambertian emitter of radiance L and area A sends L A cos(theta) per steradian.
+            light.intensity = static_cast<float>(area);
+            lights.push_back(light);
+        }
+    }
+    return lights;
+}
+
+}  // namespace deltagi
