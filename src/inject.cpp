@@ -251,14 +251,15 @@ std::vector<glm::vec4> rowTexelSums(int y, int z, int x0, int x1, const TexelBin
 void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
                    std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
                    std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight, Grid3& fullLight,
-                   Grid3& deltaLight) {
+                   Grid3& deltaLight, const Grid3* bounce) {
     const std::vector<uint32_t> gone = goneEntries(sceneTexels, changes);
     forEachRow(box, [&](int y, int z) {
         const std::vector<glm::vec4> sums =
             rowTexelSums(y, z, box.lo.x, box.hi.x, sceneTexels, sceneAlone, gone, changes);
         for (int x = box.lo.x; x < box.hi.x; ++x) {
             const size_t i = fullLight.index(x, y, z);
-            const glm::vec4 light = voxelLight(sums[x - box.lo.x], geometry, i);
+            glm::vec4 light = voxelLight(sums[x - box.lo.x], geometry, i);
+            if (bounce) light += (*bounce)[i];
             fullLight[i] = light;
             deltaLight[i] = deltaVoxel(light, sceneLight[i]);
         }

@@ -212,7 +212,7 @@ void readTrace(const JsonNode& node, TraceOptions& trace) {
 
 void readRender(const JsonNode& node, RenderOptions& render) {
     node.allowKeys({"samples_per_pixel", "indirect", "double_shadow_fix", "relight_indirect", "relight_cones",
-                    "denoise_radius"});
+                    "light_bounces", "denoise_radius"});
     if (auto n = node.find("samples_per_pixel")) {
         int spp = n->integer(1, 16);
         if (spp != 1 && spp != 4 && spp != 9 && spp != 16)
@@ -223,6 +223,7 @@ void readRender(const JsonNode& node, RenderOptions& render) {
     if (auto n = node.find("double_shadow_fix")) render.doubleShadowFix = n->boolean();
     if (auto n = node.find("relight_indirect")) render.relightIndirect = n->boolean();
     if (auto n = node.find("denoise_radius")) render.denoiseRadius = n->integer(0, 8);
+    if (auto n = node.find("light_bounces")) render.lightBounces = n->integer(1, 8);
     if (auto n = node.find("relight_cones")) {
         std::string mode = n->string();
         if (mode != "differential" && mode != "delta_volume")
@@ -355,6 +356,7 @@ json optionsToJson(const Options& o) {
           {"double_shadow_fix", o.render.doubleShadowFix},
           {"relight_indirect", o.render.relightIndirect},
           {"relight_cones", o.render.relightCones},
+          {"light_bounces", o.render.lightBounces},
           {"denoise_radius", o.render.denoiseRadius}}},
         {"environment",
          {{"light_count", o.environment.lightCount},

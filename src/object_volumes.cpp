@@ -43,6 +43,8 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
         for (size_t l = 0; l < updates.size(); ++l)
             withObjects.push_back(applyRsmUpdate(real.rsms[l], updates[l]));
         freshFull_ = injectLight(withObjects, region_, both);
+        if (real.bounce)
+            for (size_t i = 0; i < freshFull_->size(); ++i) (*freshFull_)[i] += (*real.bounce)[i];
         freshDelta_ = deltaVolume(*freshFull_, real.light);
         lightChanged_ = VoxelBox::all(region_.resolution);
         return;
@@ -50,7 +52,7 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     if (!sceneTexels_) sceneTexels_ = binTexels(real.rsms, region_);
     if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, VoxelBox::all(region_.resolution));
     reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, fullLight_.levelForUpdate(0),
-                  deltaLight_.levelForUpdate(0));
+                  deltaLight_.levelForUpdate(0), real.bounce);
     lightChanged_ = changed;
 }
 

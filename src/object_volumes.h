@@ -26,7 +26,10 @@ namespace deltagi {
 struct RealSceneVolumes {
     const VoxelGeometry& geometry;
     std::span<const ReflectiveShadowMap> rsms;  // of the real scene alone, one per light
-    const Grid3& light;                         // injected from rsms
+    const Grid3& light;                         // injected from rsms, plus `bounce`
+    // The real scene's further bounces of light (bounceLight), added to the full light volume as well; null:
+    // none.
+    const Grid3* bounce = nullptr;
 };
 
 class ObjectVolumes {

@@ -6,6 +6,7 @@
 #include <optional>
 
 #include "area_light_rays.h"
+#include "bounce_light.h"
 #include "composite.h"
 #include "deltagi/scene_io.h"
 #include "denoise.h"
@@ -280,7 +281,9 @@ struct StaticWork {
     std::vector<SurfacePoint> relitSurfaces;
     std::vector<uint32_t> hidden;
     std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
-    std::optional<Grid3> sceneLight;                            // injected from sceneRsms
+    std::optional<Grid3> sceneLight;                            // injected from sceneRsms, plus sceneBounce
+    std::optional<Grid3>
+        sceneBounce;  // the further bounces of the scene's light (options.render.light_bounces)
     // The objects' volumes of the last frame, updated where the objects changed them.
     std::optional<ObjectVolumes> objectVolumes;
 };
@@ -366,7 +369,8 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     const int rsmResolution = scene.options.rsm.resolution;
     ObjectVolumes& objects = kept.objectVolumes ? *kept.objectVolumes : kept.objectVolumes.emplace();
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
-    if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region, withEmission);
+    const int bounces = scene.options.render.lightBounces - 1;
+    if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region, withEmission, bounces > 0);
     objects.voxelize(scene.virtuals, region, withEmission);
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
@@ -379,8 +383,20 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
-    if (!kept.sceneLight) kept.sceneLight = injectLight(*kept.sceneRsms, region, sceneAlone);
-    objects.inject({*kept.sceneGeometry, *kept.sceneRsms, *kept.sceneLight}, updates);
+    if (!kept.sceneLight) {
+        kept.sceneLight = injectLight(*kept.sceneRsms, region, sceneAlone);
+        if (bounces > 0) {
+            if (!kept.sceneVisibility)
+                kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
+            kept.sceneBounce = bounceLight(*kept.sceneLight, *kept.sceneGeometry, *kept.sceneVisibility,
+                                           scene.options, bounces, scene.camera.position());
+            for (size_t i = 0; i < kept.sceneLight->size(); ++i)
+                (*kept.sceneLight)[i] += (*kept.sceneBounce)[i];
+        }
+    }
+    objects.inject({*kept.sceneGeometry, *kept.sceneRsms, *kept.sceneLight,
+                    kept.sceneBounce ? &*kept.sceneBounce : nullptr},
+                   updates);
     timer.lap("inject");
     // 4. Mipmaps of all four volumes.
     if (!kept.sceneVisibility)
@@ -398,13 +414,19 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const float margin = 1.0f + 2.0f / static_cast<float>(o.volume.resolution);
     const VolumeRegion region = cubeAround(boundsOf(scene.real), margin, o.volume.resolution);
     const bool areaRays = o.shadow.method == "rays";
-    VoxelGeometry geometry = voxelize(scene.real, region, !areaRays);
+    const int bounces = o.render.lightBounces - 1;
+    VoxelGeometry geometry = voxelize(scene.real, region, !areaRays, bounces > 0);
     const std::vector<ReflectiveShadowMap> rsms =
         renderRsms(realOnly, rsmLights(scene, realOnly), region, o.rsm.resolution);
     const AreaLights emitters(scene, SceneContent::RealOnly);
     const VoxelGeometry* geometries[] = {&geometry};
-    const MipVolume light = buildMipChain(region, injectLight(rsms, region, geometries));
-    const MipVolume visibility = buildMipChain(region, std::move(geometry.visibility));
+    const MipVolume visibility = buildMipChain(region, geometry.visibility.clone());
+    Grid3 direct = injectLight(rsms, region, geometries);
+    if (bounces > 0) {
+        const Grid3 bounced = bounceLight(direct, geometry, visibility, o, bounces, scene.camera.position());
+        for (size_t i = 0; i < direct.size(); ++i) direct[i] += bounced[i];
+    }
+    const MipVolume light = buildMipChain(region, std::move(direct));
     const ConeJob job{points,
                       &light,
                       {&visibility, nullptr, VisibilityVolumes::Self::Scene},
@@ -440,6 +462,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         kept.relitShadows = {};
         kept.sceneRsms.reset();
         kept.sceneLight.reset();
+        kept.sceneBounce.reset();
         kept.objectVolumes.reset();
     }
     kept.region = region;

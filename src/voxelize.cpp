@@ -17,6 +17,7 @@ struct VoxelTriangle {
     float area;          // voxel units^2
     bool oneVoxel;       // lies inside a single voxel of the grid
     glm::vec3 emission;  // the material's emitted radiance
+    glm::vec3 albedo;    // the material's diffuse albedo
     glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
     bool touchesGrid() const { return hi.x >= lo.x; }
 };
@@ -131,6 +132,7 @@ std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
             vt.normal = cr / len;
             vt.area = 0.5f * len;
             vt.emission = mesh.material.emission;
+            vt.albedo = mesh.material.albedo;
             glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
             glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
             if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
@@ -146,10 +148,12 @@ std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
 
 }  // namespace
 
-VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission) {
+VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission,
+                       bool withAlbedo) {
     const int n = region.resolution;
-    VoxelGeometry out{Grid3(n), {}, {}, {}};
+    VoxelGeometry out{Grid3(n), {}, {}, {}, {}};
     out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
+    if (withAlbedo) out.albedo.assign(out.area.size(), glm::vec3(0.0f));
     revoxelize(out, meshes, region, withEmission);
     return out;
 }
@@ -162,11 +166,13 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     // Clear the old geometry: the grid is zero everywhere then.
     const VoxelBox old = out.bounds;
     const bool hadEmission = !out.emission.empty();
+    const bool withAlbedo = !out.albedo.empty();
     forEachRow(old, [&](int y, int z) {
         const size_t first = out.visibility.index(old.lo.x, y, z), count = old.hi.x - old.lo.x;
         std::fill_n(&out.visibility[first], count, glm::vec4(0.0f));
         std::fill_n(out.area.begin() + first, count, 0.0f);
         if (hadEmission) std::fill_n(out.emission.begin() + first, count, glm::vec3(0.0f));
+        if (withAlbedo) std::fill_n(out.albedo.begin() + first, count, glm::vec3(0.0f));
     });
     if (!emissive) out.emission.clear();
     if (emissive && !hadEmission) out.emission.assign(out.area.size(), glm::vec3(0.0f));
@@ -196,6 +202,7 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             v.w += t.normal.z * a;
             out.area[i] += a;
             if (emissive) out.emission[i] += t.emission * a;
+            if (withAlbedo) out.albedo[i] += t.albedo * a;
         };
         for (uint32_t ti : bins.slab(s)) {
             const VoxelTriangle& t = tris[ti];
@@ -218,6 +225,7 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
                 v.y /= a;
                 v.z /= a;
                 v.w /= a;
+                if (withAlbedo) out.albedo[i] /= a;
             }
             out.area[i] = a * voxelArea;
             if (emissive) out.emission[i] *= voxelArea;

@@ -21,6 +21,9 @@ struct VoxelGeometry {
     // Emitted radiance times area of the emissive surfaces in each voxel, summed (same indexing); empty when
     // no mesh emits. Divided by `area` it is the voxel's mean emitted radiance (light injection).
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> emission;
+    // The area-weighted mean diffuse albedo of the surfaces in each voxel (same indexing); empty unless asked
+    // for (voxelize's `withAlbedo`: the multi-bounce light of bounceLight() reflects by it).
+    std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> albedo;
     // Every voxel outside it is zero in all three: the voxels that the triangles' bounding boxes touch.
     VoxelBox bounds;
 };
@@ -30,7 +33,7 @@ struct VoxelGeometry {
 // `withEmission` false leaves emitting surfaces' radiance out (VoxelGeometry::emission empty): their light
 // reaches the scene through shadow rays and reflective shadow maps instead (options.shadow.method "rays").
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region,
-                       bool withEmission = true);
+                       bool withEmission = true, bool withAlbedo = false);
 
 // Voxelizes `meshes` again into `geometry`, a voxelization over the same region (of other or moved meshes):
 // the voxels of its old bounds are cleared and the new geometry is written, so the cost is that of the

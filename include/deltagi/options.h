@@ -134,6 +134,11 @@ struct RenderOptions {
     // path tracer's further bounces give much of it back. Against a path tracer limited to one bounce the two
     // are equal (0.222 vs 0.226, 0.208 vs 0.204); it becomes the default with multi-bounce light.
     std::string relightCones = "delta_volume";
+    // "light_bounces": bounces of indirect light the light volumes carry (1 to 8). 1 is the paper: the
+    // reflective shadow maps inject the directly lit surfaces, and the cones gather one bounce. Each more
+    // gathers the volume at every surface voxel of the real scene and adds what it reflects (bounceLight,
+    // once while the real side stays the same).
+    int lightBounces = 2;
     // "denoise_radius": pixels of the edge-aware filter over the shadow and diffuse cone results, which
     // averages the noise of the jittered cone starts (0 disables it).
     int denoiseRadius = 2;

@@ -1,0 +1,86 @@
+#include "bounce_light.h"
+
+#include "brdf_sampling.h"
+#include "cone_trace.h"
+#include "mipmap.h"
+#include "parallel.h"
+
+namespace deltagi {
+
+namespace {
+
+// A mean normal shorter than this (surfaces facing several ways in one voxel) gathers nothing: its
+// hemisphere is not defined.
+constexpr float kMinCoherence = 0.2f;
+// The mip level whose voxels gather (1: each gathers for 2 x 2 x 2 level-0 voxels).
+constexpr int kGatherLevel = 1;
+constexpr uint32_t kBounceStream = 9000;  // hashToUnit streams of the cones' jitter
+
+}  // namespace
+
+Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
+                  const Options& options, int bounces, glm::vec3 viewpoint) {
+    const int n = direct.resolution();
+    Grid3 indirect(n);
+    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= kGatherLevel) return indirect;
+    const VolumeRegion& region = visibility.region();
+    const Grid3& coarse = visibility.level(kGatherLevel);
+    const int m = coarse.resolution();
+    const int factor = n / m;  // level-0 voxels per coarse voxel along each axis
+    const float coarseSize = region.voxelSize() * static_cast<float>(factor);
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const VisibilityVolumes occluders{&visibility, nullptr, VisibilityVolumes::Self::Scene};
+    std::vector<glm::vec3> gathered(coarse.size());
+    for (int bounce = 0; bounce < bounces; ++bounce) {
+        // The light so far: direct plus the bounces gathered before.
+        Grid3 total = direct.clone();
+        for (size_t i = 0; i < total.size(); ++i) total[i] += indirect[i];
+        const MipVolume light = buildMipChain(region, std::move(total));
+        // Gather at each surface voxel of the coarse level.
+        parallelFor(0, static_cast<int64_t>(m) * m, 4, [&](int64_t row) {
+            const int z = static_cast<int>(row / m), y = static_cast<int>(row % m);
+            for (int x = 0; x < m; ++x) {
+                const size_t i = coarse.index(x, y, z);
+                const glm::vec4 v = coarse[i];
+                gathered[i] = glm::vec3(0.0f);
+                if (v.x <= 0.0f) continue;
+                const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / v.x;
+                const float coherence = glm::length(meanNormal);
+                if (coherence < kMinCoherence) continue;
+                const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+                // Surfaces are two-sided and the winding of a reconstruction is not reliable: the side that
+                // gathers is the one facing the viewpoint.
+                const glm::vec3 normal =
+                    (glm::dot(meanNormal, viewpoint - centre) < 0.0f ? -1.0f : 1.0f) * meanNormal / coherence;
+                const glm::mat3 frame = frameAround(normal);
+                glm::vec3 sum(0.0f);
+                for (size_t k = 0; k < cones.directions.size(); ++k) {
+                    Cone cone;
+                    cone.direction = frame * cones.directions[k];
+                    // From the coarse voxel's face along the normal, so that its own surfaces do not occlude.
+                    cone.origin = coneOrigin(centre + (0.5f * coarseSize) * normal, normal, cone.direction,
+                                             region, settings);
+                    cone.tanHalfAngle = cones.tanHalfAngle;
+                    cone.jitter = hashToUnit(i, kBounceStream + static_cast<uint32_t>(k));
+                    sum += cones.weights[k] * traceLightCone(cone, light, occluders, settings);
+                }
+                gathered[i] = sum;
+            }
+        });
+        // Reflect it at every surface voxel of level 0 by the voxel's albedo.
+        parallelFor(0, static_cast<int64_t>(n) * n, 16, [&](int64_t row) {
+            const int z = static_cast<int>(row / n), y = static_cast<int>(row % n);
+            for (int x = 0; x < n; ++x) {
+                const size_t i = direct.index(x, y, z);
+                const float occupancy = geometry.visibility[i].x;
+                if (occupancy <= 0.0f) continue;
+                const glm::vec3 g = gathered[coarse.index(x / factor, y / factor, z / factor)];
+                indirect[i] = glm::vec4(geometry.albedo[i] * g * occupancy, 0.0f);
+            }
+        });
+    }
+    return indirect;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,31 @@
+// Stage 3b: light that bounces more than once. The reflective shadow maps inject the surfaces the lights
+// reach directly, so the cones of §3.1 gather one bounce of indirect light; in a closed room of bright walls
+// the further bounces are a third or more of the light (the Cornell box: the real scene's mean radiance is
+// 0.27 with one bounce and 0.37 with all of them, in the path tracer). bounceLight() gathers the light volume
+// at every surface voxel of the real scene with the diffuse cones, reflects it by the voxel's albedo, and
+// adds it to the volume, as many times as asked: each pass adds one bounce.
+//
+// It runs on the real scene alone, once while the real side stays the same (FrameRenderer keeps it), and the
+// result is added to the full light volume as well, so that the delta volume keeps only what the objects
+// change directly: the objects receive the room's bounced light, and the light they block between real
+// surfaces (options.render.relight_cones "differential") carries it too. The objects' own light is not
+// bounced again, and neither is the change they make.
+#pragma once
+
+#include "deltagi/options.h"
+#include "volume.h"
+#include "voxelize.h"
+
+namespace deltagi {
+
+// The light `bounces` further bounces add to `direct` (level 0 of the real scene's light volume: radiance
+// times occupancy, occupancy) as a grid of the same form with zero occupancy, to be added to it. `geometry`
+// is the scene's voxelization with albedo (voxelize's `withAlbedo`), `visibility` its visibility mip chain.
+// The light is gathered at the voxels of mip level 1 (each gathers for its 8 children, whose albedos reflect
+// it), with the diffuse cones of `options` around the voxel's mean normal, turned to face `viewpoint` (the
+// camera, which stands in the room it sees: surfaces are two-sided, and a reconstruction's winding does not
+// say which side is the room's). Deterministic for any thread count; zero for bounces <= 0.
+Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
+                  const Options& options, int bounces, glm::vec3 viewpoint);
+
+}  // namespace deltagi
