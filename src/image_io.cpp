@@ -10,6 +10,7 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/image.h"
 
@@ -162,8 +163,11 @@ void writeImage(const Image& image, const std::filesystem::path& path) {
     if (channels == 1) spec.channelnames = {"Y"};
     if (channels == 4) spec.alpha_channel = 3;
 
-    auto output = OIIO::ImageOutput::create(path.string());
-    if (!output || !output->open(path.string(), spec))
+    // OpenImageIO writes by name, to a temporary that keeps the extension (it picks the format by it).
+    AtomicFile file(path);
+    const std::string temporary = file.temporaryPath().string();
+    auto output = OIIO::ImageOutput::create(temporary);
+    if (!output || !output->open(temporary, spec))
         throw InputError(path.string(),
                          "cannot write image: " + (output ? output->geterror() : OIIO::geterror()));
     bool ok;
@@ -179,6 +183,7 @@ void writeImage(const Image& image, const std::filesystem::path& path) {
     }
     ok = output->close() && ok;
     if (!ok) throw InputError(path.string(), "cannot write image: " + output->geterror());
+    file.commit();
 }
 
 }  // namespace deltagi
