@@ -1,0 +1,46 @@
+// The CLI's outputs: checked before any work (not one of the run's inputs, a folder that takes files),
+// written atomically (deltagi/atomic_file.h), and cleaned up when SIGINT or SIGTERM stops the run.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "deltagi/scene.h"
+
+namespace deltagi::cli {
+
+// Exit statuses: 0 done, 1 bad input or an output that cannot be written, 2 a command-line usage error,
+// 128 + the signal (130 SIGINT, 143 SIGTERM) when interrupted.
+constexpr int kExitInputError = 1;
+constexpr int kExitUsageError = 2;
+constexpr int kExitSignalBase = 128;
+
+// SIGINT and SIGTERM: remove this run's temporary files and the output folders it created that are still
+// empty, print one line, exit 128 + signal. Outputs already in place stay; none is left half written.
+// For tests, DELTAGI_TEST_SIGNAL_BEFORE_RENAME=N raises signal N when an output is complete but not yet
+// renamed into place.
+void installInterruptHandlers();
+
+// A file the run reads, and what it is to the run ("the scene file").
+struct RunInput {
+    std::filesystem::path path;
+    std::string what;
+};
+
+// The scene file and every file it names that the loader read: background photo, environment map, meshes.
+std::vector<RunInput> sceneInputs(const Scene& scene);
+
+// Throws InputError "OUT: is an input of this run (WHAT); choose another output" when an output is one of the
+// inputs (the same file, by any path or link).
+void refuseInputs(const std::vector<std::filesystem::path>& outputs, const std::vector<RunInput>& inputs);
+
+// refuseInputs, then checkWritable for each output: before the work, so that a bad path costs nothing.
+void checkOutputs(const std::vector<std::filesystem::path>& outputs, const std::vector<RunInput>& inputs);
+
+// Writes JSON (2-space indent) atomically, creating the folder when needed.
+void writeJson(const nlohmann::ordered_json& json, const std::filesystem::path& path);
+
+}  // namespace deltagi::cli
