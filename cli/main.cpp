@@ -37,9 +37,9 @@
 namespace fs = std::filesystem;
 using namespace deltagi;
 using cli::checkOutputs;
+using cli::OutputFiles;
 using cli::refuseInputs;
 using cli::sceneInputs;
-using cli::writeJson;
 
 namespace {
 
@@ -169,13 +169,6 @@ std::vector<fs::path> outputFiles(const fs::path& output, const fs::path& aovDir
     return files;
 }
 
-// Each file is renamed into place when complete; a folder is created only when its first file is written
-// (one that stays empty after an interruption is removed).
-void writeOutputImage(const Image& image, const fs::path& path) {
-    createOutputFolder(path.parent_path());
-    writeImage(image, path);
-}
-
 // timings.json: the stages in pipeline order (a stage run more than once, e.g. per light, is summed); the
 // scene loading is not a pipeline stage and is reported beside them.
 nlohmann::ordered_json timingsJson(const RenderOutput& output, const Scene& scene, int threads,
@@ -198,13 +191,12 @@ constexpr auto kRenderAovFiles = {"background.exr", "composite.exr", "object_mas
                                   "timings.json"};
 
 void writeAovs(const RenderOutput& output, const Scene& scene, int threads, double loadMs,
-               const fs::path& folder) {
-    createOutputFolder(folder);
-    writeImage(output.background, folder / "background.exr");
-    writeImage(output.composite, folder / "composite.exr");
-    writeImage(output.objectMask, folder / "object_mask.exr");
-    writeImage(output.delta, folder / "delta.exr");
-    writeJson(timingsJson(output, scene, threads, loadMs), folder / "timings.json");
+               const fs::path& folder, OutputFiles& out) {
+    out.image(output.background, folder / "background.exr");
+    out.image(output.composite, folder / "composite.exr");
+    out.image(output.objectMask, folder / "object_mask.exr");
+    out.image(output.delta, folder / "delta.exr");
+    out.json(timingsJson(output, scene, threads, loadMs), folder / "timings.json");
 }
 
 int runRender(const RenderArgs& args) {
@@ -234,8 +226,10 @@ int runRender(const RenderArgs& args) {
     if (progress) onStage = [&](const StageTiming& stage) { printStep(stage.name, stage.ms); };
     const RenderOutput output = render(scene, onStage);
 
-    writeOutputImage(output.composite, args.output);
-    if (!args.aovDir.empty()) writeAovs(output, scene, threads, loadMs, args.aovDir);
+    OutputFiles out;
+    out.image(output.composite, args.output);
+    if (!args.aovDir.empty()) writeAovs(output, scene, threads, loadMs, args.aovDir, out);
+    out.commit();
 
     if (progress) printStep("total", output.totalMs);
     if (!args.quiet) {
@@ -294,14 +288,13 @@ ReferenceOptions referenceOptions(const ReferenceArgs& args) {
 constexpr auto kReferenceAovFiles = {"with.exr",      "without.exr",     "background.exr",
                                      "composite.exr", "object_mask.exr", "delta.exr"};
 
-void writeReferenceAovs(const ReferenceOutput& output, const fs::path& folder) {
-    createOutputFolder(folder);
-    writeImage(output.with, folder / "with.exr");
-    writeImage(output.without, folder / "without.exr");
-    writeImage(output.background, folder / "background.exr");
-    writeImage(output.composite, folder / "composite.exr");
-    writeImage(output.objectMask, folder / "object_mask.exr");
-    writeImage(output.delta, folder / "delta.exr");
+void writeReferenceAovs(const ReferenceOutput& output, const fs::path& folder, OutputFiles& out) {
+    out.image(output.with, folder / "with.exr");
+    out.image(output.without, folder / "without.exr");
+    out.image(output.background, folder / "background.exr");
+    out.image(output.composite, folder / "composite.exr");
+    out.image(output.objectMask, folder / "object_mask.exr");
+    out.image(output.delta, folder / "delta.exr");
 }
 
 // The images writeReferenceAovs wrote, for `eval --reference`; each must match the camera.
@@ -339,8 +332,10 @@ int runReference(const ReferenceArgs& args) {
         scene, referenceOptions(args), progress ? progressBar(args.timeLimit) : ReferenceProgress{});
     if (progress && output.samplesPerPixel < args.samplesPerPixel) note("\n");
 
-    writeOutputImage(output.composite, args.output);
-    if (!args.aovDir.empty()) writeReferenceAovs(output, args.aovDir);
+    OutputFiles out;
+    out.image(output.composite, args.output);
+    if (!args.aovDir.empty()) writeReferenceAovs(output, args.aovDir, out);
+    out.commit();
     if (!args.quiet) {
         note("deltagi: wrote {} ({}x{}, {} spp{}, {:.1f} s, {}){}\n", args.output.string(),
              scene.camera.width, scene.camera.height, output.samplesPerPixel,
@@ -369,7 +364,9 @@ int runCompare(const CompareArgs& args) {
     if (!args.difference.empty()) {
         const Image squared = squaredDifference(test, reference);
         if (!(maxValue > 0.0f)) maxValue = robustMaximum(squared);
-        writeOutputImage(falseColour(squared, maxValue), args.difference);
+        OutputFiles out;
+        out.image(falseColour(squared, maxValue), args.difference);
+        out.commit();
     }
     if (args.json) {
         nlohmann::ordered_json json;
@@ -394,21 +391,22 @@ constexpr auto kEvaluationAovFiles = {"with.exr",       "without.exr",         "
                                       "dgi.png",        "dgi_object_mask.exr", "no_relight.exr",
                                       "difference.exr", "difference.png",      "pixel_classes.exr"};
 
-void writeEvaluationAovs(const Evaluation& e, const fs::path& folder) {
-    writeReferenceAovs(e.reference, folder);  // with, without, background, composite (the reference's) ...
-    writeImage(e.reference.composite, folder / "reference.exr");
-    writeImage(e.reference.composite, folder / "reference.png");
-    writeImage(e.dgiRender.composite, folder / "dgi.exr");
-    writeImage(e.dgiRender.composite, folder / "dgi.png");
-    writeImage(e.dgiRender.objectMask, folder / "dgi_object_mask.exr");
-    writeImage(e.noRelightComposite, folder / "no_relight.exr");
+void writeEvaluationAovs(const Evaluation& e, const fs::path& folder, OutputFiles& out) {
+    writeReferenceAovs(e.reference, folder,
+                       out);  // with, without, background, composite (the reference's) ...
+    out.image(e.reference.composite, folder / "reference.exr");
+    out.image(e.reference.composite, folder / "reference.png");
+    out.image(e.dgiRender.composite, folder / "dgi.exr");
+    out.image(e.dgiRender.composite, folder / "dgi.png");
+    out.image(e.dgiRender.objectMask, folder / "dgi_object_mask.exr");
+    out.image(e.noRelightComposite, folder / "no_relight.exr");
     const Image squared = squaredDifference(e.dgiRender.composite, e.reference.composite);
-    writeImage(squared, folder / "difference.exr");
-    writeImage(falseColour(squared, robustMaximum(squared)), folder / "difference.png");
+    out.image(squared, folder / "difference.exr");
+    out.image(falseColour(squared, robustMaximum(squared)), folder / "difference.png");
     Image classes(e.classes.width, e.classes.height, 1);
     for (size_t i = 0; i < e.classes.classes.size(); ++i)  // 0 silhouette, 1 object, 2 lit, 3 shadowed
         classes.data()[i] = static_cast<float>(e.classes.classes[i]);
-    writeImage(classes, folder / "pixel_classes.exr");
+    out.image(classes, folder / "pixel_classes.exr");
 }
 
 int runEval(const ReferenceArgs& args) {
@@ -432,9 +430,10 @@ int runEval(const ReferenceArgs& args) {
                                         progress ? progressBar(args.timeLimit) : ReferenceProgress{});
     if (progress && e.reference.samplesPerPixel < args.samplesPerPixel) note("\n");
 
-    createOutputFolder(args.output.parent_path());
-    writeJson(evaluationToJson(e), args.output);
-    if (!args.aovDir.empty()) writeEvaluationAovs(e, args.aovDir);
+    OutputFiles out;
+    out.json(evaluationToJson(e), args.output);
+    if (!args.aovDir.empty()) writeEvaluationAovs(e, args.aovDir, out);
+    out.commit();
     if (!args.quiet) {
         note(
             "deltagi: delta_rel_error {:.4f}, object_rel_rmse {:.4f}, composite_rmse {:.5f} "
@@ -530,10 +529,11 @@ int main(int argc, char** argv) {
         "differential rendering)"};
     app.require_subcommand(1);
     app.footer(
-        "Outputs are written to a temporary file beside them and renamed into place when complete; an output "
-        "that is one of the run's inputs is refused.\nExit status: 0 done, 1 bad input or an output that "
-        "cannot be written, 2 usage error, 130 or 143 interrupted by SIGINT or SIGTERM (no output half "
-        "written; outputs not yet renamed into place are left as they were).");
+        "Outputs are written to temporary files beside them and renamed into place together when all are "
+        "complete; an output that is one of the run's inputs is refused.\nExit status: 0 done, 1 bad input "
+        "or "
+        "an output that cannot be written, 2 usage error, 130 or 143 interrupted by SIGINT or SIGTERM (the "
+        "previous outputs left as they were).");
     cli::installInterruptHandlers();
 
     RenderArgs renderArgs;

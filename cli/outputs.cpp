@@ -71,8 +71,28 @@ void checkOutputs(const std::vector<fs::path>& outputs, const std::vector<RunInp
 }
 
 void writeJson(const nlohmann::ordered_json& json, const fs::path& path) {
-    createOutputFolder(path.parent_path());
     writeFileAtomically(path, json.dump(2) + '\n');
+}
+
+AtomicFile& OutputFiles::add(const fs::path& path) {
+    createOutputFolder(path.parent_path());
+    files_.push_back(std::make_unique<AtomicFile>(path));
+    return *files_.back();
+}
+
+void OutputFiles::image(const Image& image, const fs::path& path) {
+    writeImage(image, add(path));
+}
+
+void OutputFiles::json(const nlohmann::ordered_json& json, const fs::path& path) {
+    AtomicFile& file = add(path);
+    file.write(json.dump(2) + '\n');
+    file.close();
+}
+
+void OutputFiles::commit() {
+    for (const std::unique_ptr<AtomicFile>& file : files_) file->commit();
+    files_.clear();
 }
 
 }  // namespace deltagi::cli

@@ -3,11 +3,14 @@
 #pragma once
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "deltagi/atomic_file.h"
+#include "deltagi/image.h"
 #include "deltagi/scene.h"
 
 namespace deltagi::cli {
@@ -19,7 +22,8 @@ constexpr int kExitUsageError = 2;
 constexpr int kExitSignalBase = 128;
 
 // SIGINT and SIGTERM: remove this run's temporary files and the output folders it created that are still
-// empty, print one line, exit 128 + signal. Outputs already in place stay; none is left half written.
+// empty, print one line, exit 128 + signal. No output is left half written; with OutputFiles, none is
+// replaced unless the signal comes during the renames.
 // For tests, DELTAGI_TEST_SIGNAL_BEFORE_RENAME=N raises signal N when an output is complete but not yet
 // renamed into place.
 void installInterruptHandlers();
@@ -40,7 +44,21 @@ void refuseInputs(const std::vector<std::filesystem::path>& outputs, const std::
 // refuseInputs, then checkWritable for each output: before the work, so that a bad path costs nothing.
 void checkOutputs(const std::vector<std::filesystem::path>& outputs, const std::vector<RunInput>& inputs);
 
-// Writes JSON (2-space indent) atomically, creating the folder when needed.
+// Writes JSON (2-space indent) atomically; the folder must exist.
 void writeJson(const nlohmann::ordered_json& json, const std::filesystem::path& path);
+
+// A run's outputs, each written whole to its temporary as it comes, all renamed into place by commit(): a
+// failure or a signal before then replaces none of them (the temporaries go, the previous files stay).
+// Folders are created when their first file is written.
+class OutputFiles {
+  public:
+    void image(const Image& image, const std::filesystem::path& path);
+    void json(const nlohmann::ordered_json& json, const std::filesystem::path& path);
+    void commit();
+
+  private:
+    AtomicFile& add(const std::filesystem::path& path);
+    std::vector<std::unique_ptr<AtomicFile>> files_;
+};
 
 }  // namespace deltagi::cli

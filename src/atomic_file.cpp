@@ -131,7 +131,8 @@ void AtomicFile::write(std::string_view bytes) {
     }
 }
 
-void AtomicFile::commit() {
+void AtomicFile::close() {
+    if (fd_ < 0) return;
     auto fail = [&](const char* what) {
         throw InputError(destination_.string(),
                          fmt::format("cannot write file ({}): {}", what, errnoText(errno)));
@@ -143,8 +144,13 @@ void AtomicFile::commit() {
     const int fd = fd_;
     fd_ = -1;
     if (::close(fd) != 0) fail("close");
+}
+
+void AtomicFile::commit() {
+    close();
     if (auto hook = gBeforeRename.load()) hook(temporary_.c_str());
-    if (::rename(temporary_.c_str(), destination_.c_str()) != 0) fail("rename");
+    if (::rename(temporary_.c_str(), destination_.c_str()) != 0)
+        throw InputError(destination_.string(), "cannot write file (rename): " + errnoText(errno));
     committed_ = true;
     unregisterPath(gTemporaries, slot_);
     slot_ = -1;

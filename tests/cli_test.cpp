@@ -554,6 +554,8 @@ TEST_F(CliTest, SignalBeforeRenameLeavesThePreviousOutput) {
     const fs::path output = dir_ / "out.png";
     deltagi::writeImage(deltagi::Image(4, 4, 3, 0.1f), output);
     const std::string previous = readText(output);
+    fs::create_directories(dir_ / "aov");
+    writeText(dir_ / "aov" / "timings.json", "{\"previous\": true}\n");
     const auto signalling = [](int signal) {
         return "DELTAGI_TEST_SIGNAL_BEFORE_RENAME=" + std::to_string(signal) + " ";
     };
@@ -562,7 +564,10 @@ TEST_F(CliTest, SignalBeforeRenameLeavesThePreviousOutput) {
             run(renderArgs(scene) + " --aov " + quote((dir_ / "aov").string()), signalling(signal));
         EXPECT_EQ(result.exitCode, 128 + signal) << result.err;
         EXPECT_NE(result.err.find("interrupted"), std::string::npos) << result.err;
+        // The outputs are renamed into place together, after all are written: none is replaced.
         EXPECT_EQ(readText(output), previous);
+        EXPECT_EQ(readText(dir_ / "aov" / "timings.json"), "{\"previous\": true}\n");
+        EXPECT_FALSE(fs::exists(dir_ / "aov" / "composite.exr"));
         EXPECT_TRUE(temporaries().empty());
         // Into folders that do not exist yet: they go again.
         const fs::path fresh = dir_ / "fresh";

@@ -28,8 +28,10 @@ class AtomicFile {
     const std::filesystem::path& destination() const { return destination_; }
     void write(std::string_view bytes);
 
-    // Flushes the file to disk and renames it onto the destination. Throws InputError on failure (the
-    // temporary is removed and the destination left as it was).
+    // Flushes the file to disk and closes it; commit() does it when it was not done. Throws InputError.
+    void close();
+    // Renames the file onto the destination (after close()). Throws InputError on failure (the temporary is
+    // removed and the destination left as it was).
     void commit();
 
   private:

@@ -63,4 +63,9 @@ ImageFile readImageFile(const std::filesystem::path& path);
 // must exist).
 void writeImage(const Image& image, const std::filesystem::path& path);
 
+// The same into `file`'s temporary, closed but not renamed into place: for callers that commit several
+// outputs together (a failure before then replaces none of them).
+class AtomicFile;
+void writeImage(const Image& image, AtomicFile& file);
+
 }  // namespace deltagi
