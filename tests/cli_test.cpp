@@ -472,6 +472,14 @@ TEST_F(CliTest, OutputThatIsAnInputIsRefused) {
     refused("reference " + qs + " --spp 1 -o " + qphoto, "the background photo");
     refused("eval " + qs + " --spp 1 --json " + quote((dir_ / "e.json").string()) + " --aov " + photos,
             "the background photo");
+    json withSky = tinyScene();
+    withSky["environment"] = {{"file", "sky.exr"}};
+    deltagi::writeImage(deltagi::Image(16, 8, 3, 0.25f), dir_ / "sky.exr");
+    const std::string skyBytes = readText(dir_ / "sky.exr");
+    refused("render " + quote(writeScene(withSky, "sky.json").string()) + " -o " +
+                quote((dir_ / "sky.exr").string()),
+            "the environment map");
+    EXPECT_EQ(readText(dir_ / "sky.exr"), skyBytes);
 
     const fs::path a = dir_ / "a.exr", b = dir_ / "b.exr";
     deltagi::writeImage(deltagi::Image(8, 6, 3, 0.5f), a);
