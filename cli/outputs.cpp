@@ -37,10 +37,14 @@ void installInterruptHandlers() {
     struct sigaction action {};
     action.sa_handler = onInterrupt;
     sigemptyset(&action.sa_mask);
-    sigaddset(&action.sa_mask, SIGINT);  // one handler at a time
+    sigaddset(&action.sa_mask, SIGINT);  // one handler at a time in a thread
     sigaddset(&action.sa_mask, SIGTERM);
-    sigaction(SIGINT, &action, nullptr);
-    sigaction(SIGTERM, &action, nullptr);
+    for (int signal : {SIGINT, SIGTERM}) {
+        struct sigaction previous {};
+        sigaction(signal, nullptr, &previous);
+        // A signal ignored by whoever started the run stays ignored (SIGINT of a shell's background job).
+        if (previous.sa_handler != SIG_IGN) sigaction(signal, &action, nullptr);
+    }
     if (const char* value = std::getenv("DELTAGI_TEST_SIGNAL_BEFORE_RENAME")) {
         gTestSignal = std::atoi(value);
         if (gTestSignal > 0) testing::setBeforeRenameHook(raiseTestSignal);

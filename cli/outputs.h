@@ -21,11 +21,11 @@ constexpr int kExitInputError = 1;
 constexpr int kExitUsageError = 2;
 constexpr int kExitSignalBase = 128;
 
-// SIGINT and SIGTERM: remove this run's temporary files and the output folders it created that are still
-// empty, print one line, exit 128 + signal. No output is left half written; with OutputFiles, none is
-// replaced unless the signal comes during the renames.
-// For tests, DELTAGI_TEST_SIGNAL_BEFORE_RENAME=N raises signal N when an output is complete but not yet
-// renamed into place.
+// SIGINT and SIGTERM (unless ignored when the run started): remove this run's temporary files and the output
+// folders it created that are still empty, print one line, exit 128 + signal. No output is left half written;
+// with OutputFiles, none is replaced unless the signal comes during the renames. For tests,
+// DELTAGI_TEST_SIGNAL_BEFORE_RENAME=N raises signal N when an output is complete but not yet renamed into
+// place.
 void installInterruptHandlers();
 
 // A file the run reads, and what it is to the run ("the scene file").
