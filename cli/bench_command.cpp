@@ -3,7 +3,6 @@
 #include <unistd.h>
 
 #include <cstdio>
-#include <fstream>
 #include <optional>
 
 #include <fmt/core.h>
@@ -11,6 +10,7 @@
 
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
+#include "outputs.h"
 
 namespace deltagi::cli {
 
@@ -40,13 +40,18 @@ CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
 int runBench(const BenchArgs& args) {
     std::optional<tbb::global_control> threadLimit;
     if (args.threads > 0) threadLimit.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
-    // A bad JSON path fails before the frames are rendered.
-    std::optional<std::ofstream> jsonFile;
-    if (!args.json.empty()) {
-        jsonFile.emplace(args.json);
-        if (!*jsonFile) throw InputError(args.json.string(), "cannot write file");
+    // A bad JSON path fails before the frames are rendered; the file is written only at the end, whole, so
+    // a failed or interrupted run leaves the previous figures in it.
+    const bool json = !args.json.empty();
+    if (json) {
+        const std::filesystem::path folder = args.json.parent_path();
+        if (!folder.empty() && !std::filesystem::is_directory(folder))
+            throw InputError(args.json.string(),
+                             fmt::format("cannot write file: folder '{}' does not exist", folder.string()));
+        checkOutputs({args.json}, {{args.scene, "the scene file"}});
     }
     Scene scene = loadScene(args.scene, args.overrides);
+    if (json) refuseInputs({args.json}, sceneInputs(scene));
     if (scene.virtuals.empty())
         throw InputError(args.scene.string(),
                          "virtual: the benchmark needs at least one virtual object to move");
@@ -57,10 +62,7 @@ int runBench(const BenchArgs& args) {
     });
     fmt::print("{}", benchTable(result));
     std::fflush(stdout);
-    if (jsonFile) {
-        *jsonFile << benchToJson(result).dump(2) << '\n';
-        if (!*jsonFile) throw InputError(args.json.string(), "cannot write file");
-    }
+    if (json) writeJson(benchToJson(result), args.json);
     return 0;
 }
 

@@ -2,7 +2,8 @@
 // the path-traced `reference`, `compare` two images, or `eval` DGI against the reference.
 //
 // Errors: bad input (InputError) and any other exception become one line `deltagi: error: <message>` on
-// stderr and exit code 1; command-line usage errors exit with code 2.
+// stderr and exit code 1; command-line usage errors exit with code 2; SIGINT and SIGTERM exit with 130 and
+// 143. Outputs (cli/outputs.h) are checked before any work and written atomically.
 #include <unistd.h>
 
 #include <algorithm>
@@ -12,7 +13,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -24,6 +24,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_command.h"
+#include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/evaluation.h"
 #include "deltagi/image.h"
@@ -31,14 +32,19 @@
 #include "deltagi/renderer.h"
 #include "deltagi/scene_info.h"
 #include "deltagi/scene_io.h"
+#include "outputs.h"
 
 namespace fs = std::filesystem;
 using namespace deltagi;
+using cli::checkOutputs;
+using cli::OutputFiles;
+using cli::refuseInputs;
+using cli::sceneInputs;
 
 namespace {
 
-constexpr int kExitInputError = 1;
-constexpr int kExitUsageError = 2;
+using cli::kExitInputError;
+using cli::kExitUsageError;
 constexpr int kMaxThreads = 4096;  // a sanity bound for --threads, far above any machine this runs on
 
 struct RenderArgs {
@@ -154,17 +160,13 @@ void checkOutputPath(const fs::path& output) {
         throw InputError(output.string(), "is a folder, expected an image file name");
 }
 
-void createFolder(const fs::path& folder) {
-    if (folder.empty()) return;
-    std::error_code error;
-    fs::create_directories(folder, error);
-    if (error) throw InputError(folder.string(), "cannot create folder: " + error.message());
-}
-
-void writeJson(const nlohmann::ordered_json& json, const fs::path& path) {
-    std::ofstream out(path);
-    out << json.dump(2) << '\n';
-    if (!out) throw InputError(path.string(), "cannot write file");
+// The output and, with an AOV folder, the files the run writes into it (`names`).
+std::vector<fs::path> outputFiles(const fs::path& output, const fs::path& aovDir,
+                                  std::initializer_list<const char*> names) {
+    std::vector<fs::path> files{output};
+    if (!aovDir.empty())
+        for (const char* name : names) files.push_back(aovDir / name);
+    return files;
 }
 
 // timings.json: the stages in pipeline order (a stage run more than once, e.g. per light, is summed); the
@@ -185,13 +187,16 @@ nlohmann::ordered_json timingsJson(const RenderOutput& output, const Scene& scen
     return json;
 }
 
+constexpr auto kRenderAovFiles = {"background.exr", "composite.exr", "object_mask.exr", "delta.exr",
+                                  "timings.json"};
+
 void writeAovs(const RenderOutput& output, const Scene& scene, int threads, double loadMs,
-               const fs::path& folder) {
-    writeImage(output.background, folder / "background.exr");
-    writeImage(output.composite, folder / "composite.exr");
-    writeImage(output.objectMask, folder / "object_mask.exr");
-    writeImage(output.delta, folder / "delta.exr");
-    writeJson(timingsJson(output, scene, threads, loadMs), folder / "timings.json");
+               const fs::path& folder, OutputFiles& out) {
+    out.image(output.background, folder / "background.exr");
+    out.image(output.composite, folder / "composite.exr");
+    out.image(output.objectMask, folder / "object_mask.exr");
+    out.image(output.delta, folder / "delta.exr");
+    out.json(timingsJson(output, scene, threads, loadMs), folder / "timings.json");
 }
 
 int runRender(const RenderArgs& args) {
@@ -205,23 +210,26 @@ int runRender(const RenderArgs& args) {
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     auto printStep = [](const std::string& name, double ms) { note("  {:<12} {:>9.1f} ms\n", name, ms); };
 
-    // Bad paths fail before the render, not after it.
+    // Bad paths fail before the render, not after it; so does an output that is one of the inputs.
     checkOutputPath(args.output);
-    createFolder(args.output.parent_path());
-    if (!args.aovDir.empty()) createFolder(args.aovDir);
+    const std::vector<fs::path> outputs = outputFiles(args.output, args.aovDir, kRenderAovFiles);
+    checkOutputs(outputs, {{args.scene, "the scene file"}});
 
     const auto loadStart = std::chrono::steady_clock::now();
     const Scene scene = loadAndWarn(args.scene, args.overrides);
     const double loadMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - loadStart).count();
     if (progress) printStep("load", loadMs);
+    refuseInputs(outputs, sceneInputs(scene));
 
     StageCallback onStage;
     if (progress) onStage = [&](const StageTiming& stage) { printStep(stage.name, stage.ms); };
     const RenderOutput output = render(scene, onStage);
 
-    writeImage(output.composite, args.output);
-    if (!args.aovDir.empty()) writeAovs(output, scene, threads, loadMs, args.aovDir);
+    OutputFiles out;
+    out.image(output.composite, args.output);
+    if (!args.aovDir.empty()) writeAovs(output, scene, threads, loadMs, args.aovDir, out);
+    out.commit();
 
     if (progress) printStep("total", output.totalMs);
     if (!args.quiet) {
@@ -277,13 +285,16 @@ ReferenceOptions referenceOptions(const ReferenceArgs& args) {
     return options;
 }
 
-void writeReferenceAovs(const ReferenceOutput& output, const fs::path& folder) {
-    writeImage(output.with, folder / "with.exr");
-    writeImage(output.without, folder / "without.exr");
-    writeImage(output.background, folder / "background.exr");
-    writeImage(output.composite, folder / "composite.exr");
-    writeImage(output.objectMask, folder / "object_mask.exr");
-    writeImage(output.delta, folder / "delta.exr");
+constexpr auto kReferenceAovFiles = {"with.exr",      "without.exr",     "background.exr",
+                                     "composite.exr", "object_mask.exr", "delta.exr"};
+
+void writeReferenceAovs(const ReferenceOutput& output, const fs::path& folder, OutputFiles& out) {
+    out.image(output.with, folder / "with.exr");
+    out.image(output.without, folder / "without.exr");
+    out.image(output.background, folder / "background.exr");
+    out.image(output.composite, folder / "composite.exr");
+    out.image(output.objectMask, folder / "object_mask.exr");
+    out.image(output.delta, folder / "delta.exr");
 }
 
 // The images writeReferenceAovs wrote, for `eval --reference`; each must match the camera.
@@ -307,20 +318,24 @@ ReferenceOutput readReferenceAovs(const fs::path& folder, const Camera& camera) 
     return r;
 }
 
+// Interrupted (SIGINT, SIGTERM), it writes nothing: the outputs stay as they were (installInterruptHandlers).
 int runReference(const ReferenceArgs& args) {
     const ThreadLimit limit(args.threads);
     checkOutputPath(args.output);
-    createFolder(args.output.parent_path());
-    if (!args.aovDir.empty()) createFolder(args.aovDir);
+    const std::vector<fs::path> outputs = outputFiles(args.output, args.aovDir, kReferenceAovFiles);
+    checkOutputs(outputs, {{args.scene, "the scene file"}});
     const Scene scene = loadAndWarn(args.scene, args.overrides);
+    refuseInputs(outputs, sceneInputs(scene));
 
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const ReferenceOutput output = renderReference(
         scene, referenceOptions(args), progress ? progressBar(args.timeLimit) : ReferenceProgress{});
     if (progress && output.samplesPerPixel < args.samplesPerPixel) note("\n");
 
-    writeImage(output.composite, args.output);
-    if (!args.aovDir.empty()) writeReferenceAovs(output, args.aovDir);
+    OutputFiles out;
+    out.image(output.composite, args.output);
+    if (!args.aovDir.empty()) writeReferenceAovs(output, args.aovDir, out);
+    out.commit();
     if (!args.quiet) {
         note("deltagi: wrote {} ({}x{}, {} spp{}, {:.1f} s, {}){}\n", args.output.string(),
              scene.camera.width, scene.camera.height, output.samplesPerPixel,
@@ -334,7 +349,8 @@ int runReference(const ReferenceArgs& args) {
 int runCompare(const CompareArgs& args) {
     if (!args.difference.empty()) {
         checkOutputPath(args.difference);
-        createFolder(args.difference.parent_path());
+        checkOutputs({args.difference},
+                     {{args.test, "the image to judge"}, {args.reference, "the reference image"}});
     }
     const Image test = readImage(args.test);
     const Image reference = readImage(args.reference);
@@ -348,7 +364,9 @@ int runCompare(const CompareArgs& args) {
     if (!args.difference.empty()) {
         const Image squared = squaredDifference(test, reference);
         if (!(maxValue > 0.0f)) maxValue = robustMaximum(squared);
-        writeImage(falseColour(squared, maxValue), args.difference);
+        OutputFiles out;
+        out.image(falseColour(squared, maxValue), args.difference);
+        out.commit();
     }
     if (args.json) {
         nlohmann::ordered_json json;
@@ -367,30 +385,42 @@ int runCompare(const CompareArgs& args) {
     return 0;
 }
 
-void writeEvaluationAovs(const Evaluation& e, const fs::path& folder) {
-    writeReferenceAovs(e.reference, folder);  // with, without, background, composite (the reference's) ...
-    writeImage(e.reference.composite, folder / "reference.exr");
-    writeImage(e.reference.composite, folder / "reference.png");
-    writeImage(e.dgiRender.composite, folder / "dgi.exr");
-    writeImage(e.dgiRender.composite, folder / "dgi.png");
-    writeImage(e.dgiRender.objectMask, folder / "dgi_object_mask.exr");
-    writeImage(e.noRelightComposite, folder / "no_relight.exr");
+constexpr auto kEvaluationAovFiles = {"with.exr",       "without.exr",         "background.exr",
+                                      "composite.exr",  "object_mask.exr",     "delta.exr",
+                                      "reference.exr",  "reference.png",       "dgi.exr",
+                                      "dgi.png",        "dgi_object_mask.exr", "no_relight.exr",
+                                      "difference.exr", "difference.png",      "pixel_classes.exr"};
+
+void writeEvaluationAovs(const Evaluation& e, const fs::path& folder, OutputFiles& out) {
+    writeReferenceAovs(e.reference, folder,
+                       out);  // with, without, background, composite (the reference's) ...
+    out.image(e.reference.composite, folder / "reference.exr");
+    out.image(e.reference.composite, folder / "reference.png");
+    out.image(e.dgiRender.composite, folder / "dgi.exr");
+    out.image(e.dgiRender.composite, folder / "dgi.png");
+    out.image(e.dgiRender.objectMask, folder / "dgi_object_mask.exr");
+    out.image(e.noRelightComposite, folder / "no_relight.exr");
     const Image squared = squaredDifference(e.dgiRender.composite, e.reference.composite);
-    writeImage(squared, folder / "difference.exr");
-    writeImage(falseColour(squared, robustMaximum(squared)), folder / "difference.png");
+    out.image(squared, folder / "difference.exr");
+    out.image(falseColour(squared, robustMaximum(squared)), folder / "difference.png");
     Image classes(e.classes.width, e.classes.height, 1);
     for (size_t i = 0; i < e.classes.classes.size(); ++i)  // 0 silhouette, 1 object, 2 lit, 3 shadowed
         classes.data()[i] = static_cast<float>(e.classes.classes[i]);
-    writeImage(classes, folder / "pixel_classes.exr");
+    out.image(classes, folder / "pixel_classes.exr");
 }
 
 int runEval(const ReferenceArgs& args) {
     const ThreadLimit limit(args.threads);
     if (lowerExtension(args.output) != ".json")
         throw InputError(args.output.string(), "expected a .json file for the figures");
-    createFolder(args.output.parent_path());
-    if (!args.aovDir.empty()) createFolder(args.aovDir);
+    const std::vector<fs::path> outputs = outputFiles(args.output, args.aovDir, kEvaluationAovFiles);
+    std::vector<cli::RunInput> inputs{{args.scene, "the scene file"}};
+    if (!args.referenceDir.empty())
+        for (const char* name : kReferenceAovFiles)
+            inputs.push_back({args.referenceDir / name, "a reference image of --reference"});
+    checkOutputs(outputs, inputs);
     const Scene scene = loadAndWarn(args.scene, args.overrides);
+    refuseInputs(outputs, sceneInputs(scene));
 
     const bool progress = !args.quiet && isatty(STDERR_FILENO) && args.referenceDir.empty();
     if (progress) note("reference\n");
@@ -400,8 +430,10 @@ int runEval(const ReferenceArgs& args) {
                                         progress ? progressBar(args.timeLimit) : ReferenceProgress{});
     if (progress && e.reference.samplesPerPixel < args.samplesPerPixel) note("\n");
 
-    writeJson(evaluationToJson(e), args.output);
-    if (!args.aovDir.empty()) writeEvaluationAovs(e, args.aovDir);
+    OutputFiles out;
+    out.json(evaluationToJson(e), args.output);
+    if (!args.aovDir.empty()) writeEvaluationAovs(e, args.aovDir, out);
+    out.commit();
     if (!args.quiet) {
         note(
             "deltagi: delta_rel_error {:.4f}, object_rel_rmse {:.4f}, composite_rmse {:.5f} "
@@ -496,6 +528,13 @@ int main(int argc, char** argv) {
         "deltagi: Delta Global Illumination, virtual objects in real images (voxel cone tracing + "
         "differential rendering)"};
     app.require_subcommand(1);
+    app.footer(
+        "Outputs are written to temporary files beside them and renamed into place together when all are "
+        "complete; an output that is one of the run's inputs is refused.\nExit status: 0 done, 1 bad input "
+        "or "
+        "an output that cannot be written, 2 usage error, 130 or 143 interrupted by SIGINT or SIGTERM (the "
+        "previous outputs left as they were).");
+    cli::installInterruptHandlers();
 
     RenderArgs renderArgs;
     CLI::App* renderCommand = app.add_subcommand("render", "Render a scene file to an image");
@@ -600,8 +639,10 @@ int main(int argc, char** argv) {
         if (*benchCommand) return cli::runBench(benchArgs);
         return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
+        removeTemporaryOutputs();            // output folders made for nothing
         return reportError(error.what(), kExitInputError);
     } catch (...) {
+        removeTemporaryOutputs();
         return reportError("unexpected error", kExitInputError);
     }
 }

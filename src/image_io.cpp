@@ -10,6 +10,7 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/image.h"
 
@@ -137,17 +138,34 @@ std::vector<uint8_t> encodeSrgb8(const Image& image) {
 
 }  // namespace
 
-void writeImage(const Image& image, const std::filesystem::path& path) {
+namespace {
+
+void checkImagePath(const Image& image, const std::filesystem::path& path) {
     std::string ext = lowerExtension(path);
     if (ext != ".png" && ext != ".exr" && ext != ".hdr")
         throw InputError(
             path.string(),
             fmt::format("cannot write image: unsupported extension '{}'; use .png, .exr or .hdr", ext));
     if (image.empty()) throw InputError(path.string(), "cannot write image: the image is empty");
+}
+
+}  // namespace
+
+void writeImage(const Image& image, const std::filesystem::path& path) {
+    checkImagePath(image, path);
     std::filesystem::path folder = path.parent_path();
     if (!folder.empty() && !std::filesystem::is_directory(folder))
         throw InputError(path.string(),
                          fmt::format("cannot write image: folder '{}' does not exist", folder.string()));
+    AtomicFile file(path);
+    writeImage(image, file);
+    file.commit();
+}
+
+void writeImage(const Image& image, AtomicFile& file) {
+    const std::filesystem::path& path = file.destination();
+    checkImagePath(image, path);
+    const std::string ext = lowerExtension(path);
 
     // Radiance HDR holds RGB only: grey is expanded and alpha dropped.
     Image rgbForHdr;
@@ -162,8 +180,10 @@ void writeImage(const Image& image, const std::filesystem::path& path) {
     if (channels == 1) spec.channelnames = {"Y"};
     if (channels == 4) spec.alpha_channel = 3;
 
-    auto output = OIIO::ImageOutput::create(path.string());
-    if (!output || !output->open(path.string(), spec))
+    // OpenImageIO writes by name, to the temporary that keeps the extension (it picks the format by it).
+    const std::string temporary = file.temporaryPath().string();
+    auto output = OIIO::ImageOutput::create(temporary);
+    if (!output || !output->open(temporary, spec))
         throw InputError(path.string(),
                          "cannot write image: " + (output ? output->geterror() : OIIO::geterror()));
     bool ok;
@@ -179,6 +199,7 @@ void writeImage(const Image& image, const std::filesystem::path& path) {
     }
     ok = output->close() && ok;
     if (!ok) throw InputError(path.string(), "cannot write image: " + output->geterror());
+    file.close();
 }
 
 }  // namespace deltagi

@@ -363,7 +363,8 @@ TriangleMesh readShape(const JsonNode& node) {
     typeNode.fail("expected \"box\", \"sphere\", \"quad\", \"torus\" or \"triangles\", got \"" + type + "\"");
 }
 
-std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& sceneFolder) {
+std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& sceneFolder,
+                                        std::vector<fs::path>& files) {
     entry.allowKeys({"name", "file", "shape", "transform", "material"});
     auto fileNode = entry.find("file"), shapeNode = entry.find("shape");
     if (fileNode && shapeNode) shapeNode->fail("give either \"file\" or \"shape\", not both");
@@ -379,6 +380,7 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
     std::vector<FileMesh> meshes;
     if (fileNode) {
         fs::path path = inputFile(*fileNode, sceneFolder);
+        files.push_back(path);
         meshes = loadMeshFile(path, fileNode->where(), name.value_or(path.stem().string()));
     } else {
         meshes.push_back({readShape(*shapeNode), {}});
@@ -395,11 +397,13 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
     return result;
 }
 
-std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sceneFolder) {
+// Appends the mesh files it reads to `files`.
+std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sceneFolder,
+                                       std::vector<fs::path>& files) {
     list.requireArray();
     std::vector<TriangleMesh> meshes;
     for (size_t i = 0; i < list.size(); ++i) {
-        std::vector<TriangleMesh> entry = readMeshEntry(list.element(i), sceneFolder);
+        std::vector<TriangleMesh> entry = readMeshEntry(list.element(i), sceneFolder, files);
         std::move(entry.begin(), entry.end(), std::back_inserter(meshes));
     }
     return meshes;
@@ -456,8 +460,8 @@ Scene loadScene(const json& document, const fs::path& file) {
 
     if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
-    if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder);
-    if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder);
+    if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder, scene.meshFiles);
+    if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles);
     return scene;
 }
 

@@ -1,14 +1,21 @@
 // The `deltagi` command end to end: bad input gives one `deltagi: error:` line naming the file and key and a
-// non-zero exit; a tiny scene renders with every AOV; `info --json` is valid JSON.
+// non-zero exit; a tiny scene renders with every AOV; `info --json` is valid JSON; outputs are never inputs,
+// are checked before the work, and survive interruptions whole.
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -91,17 +98,26 @@ class CliTest : public ::testing::Test {
         fs::remove_all(dir_, ignored);
     }
 
-    // Runs `deltagi ARGS` (already quoted as needed), capturing stdout and stderr.
-    CliResult run(const std::string& args) const {
+    // Runs `deltagi ARGS` (already quoted as needed), capturing stdout and stderr; `environment` is put
+    // before the command ("NAME=VALUE ").
+    CliResult run(const std::string& args, const std::string& environment = "") const {
         const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string command =
-            quote(DELTAGI_CLI) + " " + args + " >" + quote(out.string()) + " 2>" + quote(err.string());
+        const std::string command = environment + quote(DELTAGI_CLI) + " " + args + " >" +
+                                    quote(out.string()) + " 2>" + quote(err.string());
         const int status = std::system(command.c_str());
         CliResult result;
         result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
         result.out = readText(out);
         result.err = readText(err);
         return result;
+    }
+
+    // The temporary output files left anywhere under the test's folder.
+    std::vector<fs::path> temporaries() const {
+        std::vector<fs::path> found;
+        for (const auto& entry : fs::recursive_directory_iterator(dir_))
+            if (entry.path().filename().string().find(".tmp-") != std::string::npos) found.push_back(entry);
+        return found;
     }
 
     fs::path writeScene(const json& scene, const std::string& name = "scene.json") const {
@@ -422,6 +438,259 @@ TEST_F(CliTest, FieldBunnyExampleLoadsOrNamesTheMissingSharedFile) {
     ASSERT_EQ(result.exitCode, 0) << result.err;
     EXPECT_EQ(json::parse(result.out).at("lights"), 16);
     EXPECT_TRUE(result.err.empty()) << result.err;  // an HDR probe: no warning
+}
+
+// ---- outputs: never an input, checked before the work, whole after any interruption ----
+
+// Every command refuses, in one line and before any work, an output that is one of its inputs; the input is
+// left as it was.
+TEST_F(CliTest, OutputThatIsAnInputIsRefused) {
+    fs::create_directories(dir_ / "photos");
+    const fs::path photo = dir_ / "photos" / "background.exr";
+    deltagi::writeImage(deltagi::Image(64, 48, 3, 0.5f), photo);
+    json withPhoto = tinyScene();
+    withPhoto["background"] = "photos/background.exr";
+    const fs::path scene = writeScene(withPhoto);
+    const std::string sceneText = readText(scene), photoBytes = readText(photo);
+    fs::create_symlink(scene, dir_ / "link.json");
+    const std::string qs = quote(scene.string()), qphoto = quote(photo.string());
+    const std::string photos = quote((dir_ / "photos").string());
+
+    const auto refused = [&](const std::string& args, const std::string& what) {
+        const CliResult result = run(args);
+        expectOneErrorLine(result, {"is an input of this run (" + what + "); choose another output"});
+        EXPECT_EQ(result.exitCode, 1) << args;
+        EXPECT_EQ(readText(scene), sceneText) << args;
+        EXPECT_EQ(readText(photo), photoBytes) << args;
+    };
+    refused("bench " + qs + " --frames 1 --json " + qs, "the scene file");
+    refused("bench " + qs + " --frames 1 --json " + quote((dir_ / "link.json").string()), "the scene file");
+    refused("eval " + qs + " --spp 1 --json " + qs, "the scene file");
+    refused("render " + qs + " -o " + qphoto, "the background photo");
+    refused("render " + qs + " -o " + quote((dir_ / "out.png").string()) + " --aov " + photos,
+            "the background photo");
+    refused("reference " + qs + " --spp 1 -o " + qphoto, "the background photo");
+    refused("eval " + qs + " --spp 1 --json " + quote((dir_ / "e.json").string()) + " --aov " + photos,
+            "the background photo");
+    json withSky = tinyScene();
+    withSky["environment"] = {{"file", "sky.exr"}};
+    deltagi::writeImage(deltagi::Image(16, 8, 3, 0.25f), dir_ / "sky.exr");
+    const std::string skyBytes = readText(dir_ / "sky.exr");
+    refused("render " + quote(writeScene(withSky, "sky.json").string()) + " -o " +
+                quote((dir_ / "sky.exr").string()),
+            "the environment map");
+    EXPECT_EQ(readText(dir_ / "sky.exr"), skyBytes);
+
+    const fs::path a = dir_ / "a.exr", b = dir_ / "b.exr";
+    deltagi::writeImage(deltagi::Image(8, 6, 3, 0.5f), a);
+    deltagi::writeImage(deltagi::Image(8, 6, 3, 0.25f), b);
+    const std::string aBytes = readText(a), bBytes = readText(b);
+    refused("compare " + quote(a.string()) + " " + quote(b.string()) + " -o " + quote(a.string()),
+            "the image to judge");
+    refused("compare " + quote(a.string()) + " " + quote(b.string()) + " -o " + quote(b.string()),
+            "the reference image");
+    EXPECT_EQ(readText(a), aBytes);
+    EXPECT_EQ(readText(b), bBytes);
+
+    // eval --aov into the folder of its --reference would write over the reference's images.
+    const fs::path reference = dir_ / "reference";
+    fs::create_directories(reference);
+    for (const char* name :
+         {"with.exr", "without.exr", "background.exr", "composite.exr", "object_mask.exr", "delta.exr"})
+        deltagi::writeImage(deltagi::Image(64, 48, 3, 0.5f), reference / name);
+    refused("eval " + qs + " --json " + quote((dir_ / "e.json").string()) + " --reference " +
+                quote(reference.string()) + " --aov " + quote(reference.string()),
+            "a reference image of --reference");
+    EXPECT_FALSE(fs::exists(dir_ / "e.json"));
+    EXPECT_FALSE(fs::exists(dir_ / "out.png"));
+}
+
+// An output where no file can be written fails in one line before the scene is even loaded (so before the
+// render): the scene named here does not exist, and the error is about the output.
+TEST_F(CliTest, UnwritableOutputIsRefusedBeforeTheRender) {
+    writeText(dir_ / "file", "");
+    const std::string missing = quote((dir_ / "no-such-scene.json").string());
+    const std::string inFile = (dir_ / "file").string();
+    for (const std::string& args : {"render " + missing + " -o " + quote(inFile + "/out.png"),
+                                    "render " + missing + " -o " + quote((dir_ / "out.png").string()) +
+                                        " --aov " + quote(inFile + "/aov"),
+                                    "reference " + missing + " -o " + quote(inFile + "/ref.exr"),
+                                    "eval " + missing + " --json " + quote(inFile + "/sub/e.json")}) {
+        const CliResult result = run(args);
+        expectOneErrorLine(result, {"is not a folder", "file"});
+        EXPECT_EQ(result.err.find("no-such-scene"), std::string::npos) << result.err;
+    }
+    const fs::path a = dir_ / "a.exr";
+    deltagi::writeImage(deltagi::Image(8, 6, 3, 0.5f), a);
+    expectOneErrorLine(
+        run("compare " + quote(a.string()) + " " + quote(a.string()) + " -o " + quote(inFile + "/d.png")),
+        {"is not a folder"});
+    expectOneErrorLine(
+        run("bench " + quote(writeScene(tinyScene()).string()) + " --json " + quote(inFile + "/b.json")),
+        {"b.json"});
+    if (geteuid() != 0) {  // root writes into read-only folders
+        fs::create_directories(dir_ / "read-only");
+        fs::permissions(dir_ / "read-only", fs::perms::owner_read | fs::perms::owner_exec);
+        expectOneErrorLine(
+            run("render " + missing + " -o " + quote((dir_ / "read-only" / "out.png").string())),
+            {"read-only", "cannot write"});
+        fs::permissions(dir_ / "read-only", fs::perms::owner_all);
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "out.png"));
+    EXPECT_TRUE(temporaries().empty());
+}
+
+// bench reads the scene and renders its frames before it touches --json: a failed run keeps the figures of
+// the run before.
+TEST_F(CliTest, FailedBenchKeepsThePreviousFigures) {
+    const fs::path figures = dir_ / "bench.json";
+    const std::string scene = quote(writeScene(tinyScene()).string());
+    ASSERT_EQ(run("bench " + scene + " --frames 1 --warmup 0 -q --json " + quote(figures.string())).exitCode,
+              0);
+    const std::string previous = readText(figures);
+    ASSERT_NE(previous, "");
+    expectOneErrorLine(run("bench " + scene + " --frames 1 --warmup 0 -q --set 'virtual=[]' --json " +
+                           quote(figures.string())),
+                       {"virtual"});
+    EXPECT_EQ(readText(figures), previous);
+}
+
+// A signal when an output is complete but not yet renamed into place (DELTAGI_TEST_SIGNAL_BEFORE_RENAME):
+// exit 128 + signal, the previous file still whole, no temporary left, nor a folder the run created.
+TEST_F(CliTest, SignalBeforeRenameLeavesThePreviousOutput) {
+    const fs::path scene = writeScene(tinyScene());
+    const fs::path output = dir_ / "out.png";
+    deltagi::writeImage(deltagi::Image(4, 4, 3, 0.1f), output);
+    const std::string previous = readText(output);
+    fs::create_directories(dir_ / "aov");
+    writeText(dir_ / "aov" / "timings.json", "{\"previous\": true}\n");
+    const auto signalling = [](int signal) {
+        return "DELTAGI_TEST_SIGNAL_BEFORE_RENAME=" + std::to_string(signal) + " ";
+    };
+    for (int signal : {SIGTERM, SIGINT}) {
+        CliResult result =
+            run(renderArgs(scene) + " --aov " + quote((dir_ / "aov").string()), signalling(signal));
+        EXPECT_EQ(result.exitCode, 128 + signal) << result.err;
+        EXPECT_NE(result.err.find("interrupted"), std::string::npos) << result.err;
+        // The outputs are renamed into place together, after all are written: none is replaced.
+        EXPECT_EQ(readText(output), previous);
+        EXPECT_EQ(readText(dir_ / "aov" / "timings.json"), "{\"previous\": true}\n");
+        EXPECT_FALSE(fs::exists(dir_ / "aov" / "composite.exr"));
+        EXPECT_TRUE(temporaries().empty());
+        // Into folders that do not exist yet: they go again.
+        const fs::path fresh = dir_ / "fresh";
+        result = run("render " + quote(scene.string()) + " -o " + quote((fresh / "out.png").string()) +
+                         " --aov " + quote((fresh / "aov").string()),
+                     signalling(signal));
+        EXPECT_EQ(result.exitCode, 128 + signal) << result.err;
+        EXPECT_FALSE(fs::exists(fresh));
+    }
+    // bench's JSON alike.
+    const fs::path figures = dir_ / "bench.json";
+    writeText(figures, "{\"previous\": true}\n");
+    const CliResult bench =
+        run("bench " + quote(scene.string()) + " --frames 1 --warmup 0 -q --json " + quote(figures.string()),
+            signalling(SIGTERM));
+    EXPECT_EQ(bench.exitCode, 128 + SIGTERM) << bench.err;
+    EXPECT_EQ(readText(figures), "{\"previous\": true}\n");
+    EXPECT_TRUE(temporaries().empty());
+    // SIGKILL cannot be caught: its temporary stays behind, but the output is still the previous one.
+    const CliResult killed = run(renderArgs(scene), signalling(SIGKILL));
+    EXPECT_TRUE(killed.exitCode == -1 || killed.exitCode == 128 + SIGKILL) << killed.exitCode;
+    EXPECT_EQ(readText(output), previous);
+}
+
+// Starts `deltagi ARGS` with stdout and stderr into files in `dir`; returns its pid.
+pid_t startCli(const std::vector<std::string>& args, const fs::path& dir) {
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, (dir / "stdout.txt").c_str(),
+                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, (dir / "stderr.txt").c_str(),
+                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    std::vector<std::string> all{DELTAGI_CLI};
+    all.insert(all.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& arg : all) argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    pid_t pid = -1;
+    if (posix_spawn(&pid, DELTAGI_CLI, &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+    posix_spawn_file_actions_destroy(&actions);
+    return pid;
+}
+
+// A field of /proc/PID/status ("SigCgt", "Threads"); empty once the process is gone.
+std::string procStatus(pid_t pid, const std::string& field) {
+    std::ifstream in("/proc/" + std::to_string(pid) + "/status");
+    for (std::string line; std::getline(in, line);)
+        if (line.rfind(field + ":", 0) == 0) return line.substr(field.size() + 1);
+    return {};
+}
+
+// Polls `done` for up to 10 s.
+template <typename Done>
+bool waitFor(Done done) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+    while (!done()) {
+        if (std::chrono::steady_clock::now() > end) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return true;
+}
+
+// SIGTERM or SIGINT while `reference` path-traces (once it catches the signal and its worker threads run):
+// exit 143 or 130, the previous output untouched, no temporary, no AOV folder.
+TEST_F(CliTest, InterruptedReferenceWritesNothing) {
+    const fs::path scene = writeScene(tinyScene());
+    const fs::path output = dir_ / "ref.exr", aov = dir_ / "aov";
+    writeText(output, "the previous output\n");
+    for (int signal : {SIGTERM, SIGINT}) {
+        const pid_t pid = startCli({"reference", scene.string(), "-o", output.string(), "--aov", aov.string(),
+                                    "--spp", "1000000", "--threads", "2"},
+                                   dir_);
+        ASSERT_GT(pid, 0);
+        EXPECT_TRUE(waitFor([&] {
+            const std::string caught = procStatus(pid, "SigCgt");
+            return !caught.empty() && (std::stoull(caught, nullptr, 16) >> (SIGTERM - 1) & 1) != 0;
+        }));
+        EXPECT_TRUE(waitFor([&] {
+            const std::string threads = procStatus(pid, "Threads");
+            return threads.empty() || std::stoi(threads) >= 2;
+        }));
+        kill(pid, signal);
+        int status = 0;
+        waitpid(pid, &status, 0);
+        ASSERT_TRUE(WIFEXITED(status)) << "status " << status;
+        EXPECT_EQ(WEXITSTATUS(status), 128 + signal) << readText(dir_ / "stderr.txt");
+        EXPECT_NE(readText(dir_ / "stderr.txt").find("interrupted"), std::string::npos);
+        EXPECT_EQ(readText(output), "the previous output\n");
+        EXPECT_FALSE(fs::exists(aov));
+        EXPECT_TRUE(temporaries().empty());
+    }
+}
+
+// Two renders of different images onto one EXR at once: both succeed and the file is one of the two, whole.
+TEST_F(CliTest, ConcurrentRendersLeaveOneWholeImage) {
+    const std::string scene = quote(writeScene(tinyScene()).string());
+    const std::string red = " --set 'virtual.0.material.albedo=[0.9,0.1,0.1]' -q";
+    ASSERT_EQ(run("render " + scene + " -q -o " + quote((dir_ / "blue.exr").string())).exitCode, 0);
+    ASSERT_EQ(run("render " + scene + red + " -o " + quote((dir_ / "red.exr").string())).exitCode, 0);
+    const std::string out = quote((dir_ / "out.exr").string());
+    const std::string cli = quote(DELTAGI_CLI);
+    const std::string command = "(" + cli + " render " + scene + " -q -o " + out + "; echo $? >" +
+                                quote((dir_ / "rc1").string()) + ") & (" + cli + " render " + scene + red +
+                                " -o " + out + "; echo $? >" + quote((dir_ / "rc2").string()) + ") & wait";
+    ASSERT_EQ(std::system(command.c_str()), 0);
+    EXPECT_EQ(readText(dir_ / "rc1"), "0\n");
+    EXPECT_EQ(readText(dir_ / "rc2"), "0\n");
+    // The files differ in their header's time stamp: compare the pixels.
+    const auto samePixels = [](const fs::path& a, const fs::path& b) {
+        const deltagi::Image x = deltagi::readImage(a), y = deltagi::readImage(b);
+        return std::equal(x.data().begin(), x.data().end(), y.data().begin(), y.data().end());
+    };
+    EXPECT_TRUE(samePixels(dir_ / "out.exr", dir_ / "blue.exr") ||
+                samePixels(dir_ / "out.exr", dir_ / "red.exr"));
+    EXPECT_TRUE(temporaries().empty());
 }
 
 // 16 bytes per voxel over the mip chain r^3 + (r/2)^3 + ... + 1.

@@ -304,6 +304,20 @@ TEST_F(SceneIoTest, FileWithoutMaterialsGetsDefaults) {
     expectNear(mesh.normals[0], {0, 0, 1});
 }
 
+// The mesh files read, resolved against the scene's folder (the CLI refuses to write over them).
+TEST_F(SceneIoTest, MeshFilesAreListed) {
+    write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write("meshes/other.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    json doc = baseScene();
+    doc["scene"][1] = {{"file", "meshes/other.obj"}};
+    doc["virtual"][0] = {{"file", "tri.obj"}};
+    const Scene scene = load(doc);
+    ASSERT_EQ(scene.meshFiles.size(), 2u);
+    EXPECT_TRUE(fs::equivalent(scene.meshFiles[0], dir_ / "meshes" / "other.obj")) << scene.meshFiles[0];
+    EXPECT_TRUE(fs::equivalent(scene.meshFiles[1], dir_ / "tri.obj")) << scene.meshFiles[1];
+    EXPECT_TRUE(load(baseScene()).meshFiles.empty());  // shapes only
+}
+
 TEST_F(SceneIoTest, EmptyVirtualListAndNoLightsAreFine) {
     json doc = baseScene();
     doc["virtual"] = json::array();

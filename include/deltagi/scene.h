@@ -94,6 +94,8 @@ struct Scene {
     Camera camera;
     std::optional<Image> background;  // the real camera image, linear RGB, camera-sized; absent: rendered
     std::filesystem::path backgroundFile;
+    // The mesh files read ("file" keys), in the scene's order.
+    std::vector<std::filesystem::path> meshFiles;
     std::vector<TriangleMesh> real;      // "scene": the reconstruction of the real scene
     std::vector<TriangleMesh> virtuals;  // "virtual": the virtual objects
     std::vector<Light> lights;           // the scene file's lights, then those extracted from the environment

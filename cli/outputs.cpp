@@ -1,0 +1,102 @@
+#include "outputs.h"
+
+#include <unistd.h>
+
+#include <csignal>
+#include <cstdlib>
+#include <cstring>
+#include <system_error>
+
+#include "deltagi/atomic_file.h"
+#include "deltagi/error.h"
+
+namespace fs = std::filesystem;
+
+namespace deltagi::cli {
+
+namespace {
+
+volatile std::sig_atomic_t gTestSignal = 0;  // DELTAGI_TEST_SIGNAL_BEFORE_RENAME
+
+// Async-signal-safe only: unlink, rmdir, write, _exit.
+void onInterrupt(int signal) {
+    removeTemporaryOutputs();
+    const char* message =
+        signal == SIGINT ? "deltagi: interrupted (SIGINT)\n" : "deltagi: interrupted (SIGTERM)\n";
+    [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, message, std::strlen(message));
+    ::_exit(kExitSignalBase + signal);
+}
+
+void raiseTestSignal(const char*) {
+    std::raise(gTestSignal);
+}
+
+}  // namespace
+
+void installInterruptHandlers() {
+    struct sigaction action {};
+    action.sa_handler = onInterrupt;
+    sigemptyset(&action.sa_mask);
+    sigaddset(&action.sa_mask, SIGINT);  // one handler at a time in a thread
+    sigaddset(&action.sa_mask, SIGTERM);
+    for (int signal : {SIGINT, SIGTERM}) {
+        struct sigaction previous {};
+        sigaction(signal, nullptr, &previous);
+        // A signal ignored by whoever started the run stays ignored (SIGINT of a shell's background job).
+        if (previous.sa_handler != SIG_IGN) sigaction(signal, &action, nullptr);
+    }
+    if (const char* value = std::getenv("DELTAGI_TEST_SIGNAL_BEFORE_RENAME")) {
+        gTestSignal = std::atoi(value);
+        if (gTestSignal > 0) testing::setBeforeRenameHook(raiseTestSignal);
+    }
+}
+
+std::vector<RunInput> sceneInputs(const Scene& scene) {
+    std::vector<RunInput> inputs{{scene.file, "the scene file"}};
+    if (!scene.backgroundFile.empty()) inputs.push_back({scene.backgroundFile, "the background photo"});
+    if (scene.environment) inputs.push_back({scene.environment->file, "the environment map"});
+    for (const fs::path& mesh : scene.meshFiles) inputs.push_back({mesh, "a mesh file of the scene"});
+    return inputs;
+}
+
+void refuseInputs(const std::vector<fs::path>& outputs, const std::vector<RunInput>& inputs) {
+    for (const fs::path& output : outputs)
+        for (const RunInput& input : inputs) {
+            std::error_code error;  // false when either does not exist: a new file is no input
+            if (fs::equivalent(output, input.path, error))
+                throw InputError(output.string(),
+                                 "is an input of this run (" + input.what + "); choose another output");
+        }
+}
+
+void checkOutputs(const std::vector<fs::path>& outputs, const std::vector<RunInput>& inputs) {
+    refuseInputs(outputs, inputs);
+    for (const fs::path& output : outputs) checkWritable(output);
+}
+
+void writeJson(const nlohmann::ordered_json& json, const fs::path& path) {
+    writeFileAtomically(path, json.dump(2) + '\n');
+}
+
+AtomicFile& OutputFiles::add(const fs::path& path) {
+    createOutputFolder(path.parent_path());
+    files_.push_back(std::make_unique<AtomicFile>(path));
+    return *files_.back();
+}
+
+void OutputFiles::image(const Image& image, const fs::path& path) {
+    writeImage(image, add(path));
+}
+
+void OutputFiles::json(const nlohmann::ordered_json& json, const fs::path& path) {
+    AtomicFile& file = add(path);
+    file.write(json.dump(2) + '\n');
+    file.close();
+}
+
+void OutputFiles::commit() {
+    for (const std::unique_ptr<AtomicFile>& file : files_) file->commit();
+    files_.clear();
+}
+
+}  // namespace deltagi::cli

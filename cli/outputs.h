@@ -1,0 +1,64 @@
+// The CLI's outputs: checked before any work (not one of the run's inputs, a folder that takes files),
+// written atomically (deltagi/atomic_file.h), and cleaned up when SIGINT or SIGTERM stops the run.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "deltagi/atomic_file.h"
+#include "deltagi/image.h"
+#include "deltagi/scene.h"
+
+namespace deltagi::cli {
+
+// Exit statuses: 0 done, 1 bad input or an output that cannot be written, 2 a command-line usage error,
+// 128 + the signal (130 SIGINT, 143 SIGTERM) when interrupted.
+constexpr int kExitInputError = 1;
+constexpr int kExitUsageError = 2;
+constexpr int kExitSignalBase = 128;
+
+// SIGINT and SIGTERM (unless ignored when the run started): remove this run's temporary files and the output
+// folders it created that are still empty, print one line, exit 128 + signal. No output is left half written;
+// with OutputFiles, none is replaced unless the signal comes during the renames. For tests,
+// DELTAGI_TEST_SIGNAL_BEFORE_RENAME=N raises signal N when an output is complete but not yet renamed into
+// place.
+void installInterruptHandlers();
+
+// A file the run reads, and what it is to the run ("the scene file").
+struct RunInput {
+    std::filesystem::path path;
+    std::string what;
+};
+
+// The scene file and every file it names that the loader read: background photo, environment map, meshes.
+std::vector<RunInput> sceneInputs(const Scene& scene);
+
+// Throws InputError "OUT: is an input of this run (WHAT); choose another output" when an output is one of the
+// inputs (the same file, by any path or link).
+void refuseInputs(const std::vector<std::filesystem::path>& outputs, const std::vector<RunInput>& inputs);
+
+// refuseInputs, then checkWritable for each output: before the work, so that a bad path costs nothing.
+void checkOutputs(const std::vector<std::filesystem::path>& outputs, const std::vector<RunInput>& inputs);
+
+// Writes JSON (2-space indent) atomically; the folder must exist.
+void writeJson(const nlohmann::ordered_json& json, const std::filesystem::path& path);
+
+// A run's outputs, each written whole to its temporary as it comes, all renamed into place by commit(): a
+// failure or a signal before then replaces none of them (the temporaries go, the previous files stay).
+// Folders are created when their first file is written.
+class OutputFiles {
+  public:
+    void image(const Image& image, const std::filesystem::path& path);
+    void json(const nlohmann::ordered_json& json, const std::filesystem::path& path);
+    void commit();
+
+  private:
+    AtomicFile& add(const std::filesystem::path& path);
+    std::vector<std::unique_ptr<AtomicFile>> files_;
+};
+
+}  // namespace deltagi::cli
