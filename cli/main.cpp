@@ -32,6 +32,7 @@
 #include "deltagi/renderer.h"
 #include "deltagi/scene_info.h"
 #include "deltagi/scene_io.h"
+#include "eval_suite.h"
 #include "outputs.h"
 
 namespace fs = std::filesystem;
@@ -569,12 +570,12 @@ int main(int argc, char** argv) {
         "eval", "Render DGI and the path-traced reference and write how close they are (JSON)");
     for (auto [command, args] :
          {std::pair{referenceCommand, &referenceArgs}, std::pair{evalCommand, &evalArgs}}) {
-        command->add_option("scene", args->scene, "Scene file (JSON)")->required();
-        const bool isEval = command == evalCommand;
+        const bool isEval = command == evalCommand;  // eval: a scene, or --suite
+        command->add_option("scene", args->scene, "Scene file (JSON)")->required(!isEval);
         command
             ->add_option(isEval ? "--json" : "-o,--output", args->output,
                          isEval ? "Figures (JSON)" : "Output image: .png, .exr or .hdr")
-            ->required();
+            ->required(!isEval);
         command->add_option(
             "--aov", args->aovDir,
             isEval ? "Also write the images (DGI, reference, difference, with/without, pixel classes)"
@@ -598,6 +599,8 @@ int main(int argc, char** argv) {
         ->excludes("--spp")
         ->excludes("--time-limit")
         ->excludes("--seed");
+    cli::SuiteArgs suiteArgs;
+    cli::addSuiteOptions(*evalCommand, suiteArgs);
 
     CompareArgs compareArgs;
     CLI::App* compareCommand = app.add_subcommand(
@@ -635,6 +638,11 @@ int main(int argc, char** argv) {
         if (*renderCommand) return runRender(renderArgs);
         if (*referenceCommand) return runReference(referenceArgs);
         if (*compareCommand) return runCompare(compareArgs);
+        if (*evalCommand && !suiteArgs.suite.empty()) return cli::runSuite(*evalCommand, suiteArgs);
+        if (*evalCommand && (evalArgs.scene.empty() || evalArgs.output.empty()))
+            return reportError(
+                "eval: expected SCENE.json and --json OUT.json, or --suite FILE (see deltagi --help)",
+                kExitUsageError);
         if (*evalCommand) return runEval(evalArgs);
         if (*benchCommand) return cli::runBench(benchArgs);
         return runInfo(infoArgs);

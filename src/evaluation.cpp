@@ -166,7 +166,8 @@ Evaluation evaluate(const Scene& scene, ReferenceOutput reference) {
 
     Scene shadowOnly = dgiScene;
     shadowOnly.options.render.relightIndirect = false;
-    e.shadowOnly = deltaFigures(render(shadowOnly).composite, truth, background, e.classes);
+    e.shadowOnlyComposite = render(shadowOnly).composite;
+    e.shadowOnly = deltaFigures(e.shadowOnlyComposite, truth, background, e.classes);
 
     Scene singleVisibility = std::move(dgiScene);
     singleVisibility.options.render.doubleShadowFix = false;

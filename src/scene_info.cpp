@@ -2,7 +2,11 @@
 // §3.4).
 #include "deltagi/scene_info.h"
 
+#include <algorithm>
+#include <cmath>
 #include <span>
+
+#include <fmt/format.h>
 
 namespace deltagi {
 namespace {
@@ -42,7 +46,80 @@ nlohmann::json boundsToJson(const Bounds3f& bounds) {
     return {{"min", vecToJson(bounds.min)}, {"max", vecToJson(bounds.max)}};
 }
 
+// The point of triangle (a, b, c) closest to p (Ericson, Real-Time Collision Detection, 5.1.5).
+glm::vec3 closestPointOnTriangle(glm::vec3 p, glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    const glm::vec3 ab = b - a, ac = c - a, ap = p - a;
+    const float d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0.0f && d2 <= 0.0f) return a;
+    const glm::vec3 bp = p - b;
+    const float d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    if (d3 >= 0.0f && d4 <= d3) return b;
+    const float vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) return a + ab * (d1 / (d1 - d3));
+    const glm::vec3 cp = p - c;
+    const float d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    if (d6 >= 0.0f && d5 <= d6) return c;
+    const float vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) return a + ac * (d2 / (d2 - d6));
+    const float va = d3 * d6 - d5 * d4;
+    if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f)
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    const float denominator = va + vb + vc;
+    if (!(std::abs(denominator) > 0.0f)) return a;  // a degenerate triangle: its first corner
+    return a + ab * (vb / denominator) + ac * (vc / denominator);
+}
+
+// Distance from p to the closest triangle of the mesh.
+float distanceToMesh(glm::vec3 p, const TriangleMesh& mesh) {
+    float best = std::numeric_limits<float>::infinity();
+    for (const glm::uvec3& t : mesh.triangles) {
+        const glm::vec3 q =
+            closestPointOnTriangle(p, mesh.positions[t.x], mesh.positions[t.y], mesh.positions[t.z]);
+        best = std::min(best, glm::length(p - q));
+    }
+    return best;
+}
+
 }  // namespace
+
+std::vector<std::string> lightPlacementWarnings(const Scene& scene) {
+    Bounds3f bounds = boundsOf(scene.real);
+    bounds.extend(boundsOf(scene.virtuals));
+    const float clearance = kLightClearanceScale * (bounds.empty() ? 1.0f : bounds.maxExtent());
+    std::vector<std::string> warnings;
+    for (size_t i = 0; i < scene.lights.size(); ++i) {
+        const Light& light = scene.lights[i];
+        if (light.type == Light::Type::Directional || light.fromEnvironment) continue;
+        const float reach = std::max(light.radius, clearance);
+        std::string surfaces;
+        float closest = std::numeric_limits<float>::infinity();
+        for (const auto& [meshes, kind] :
+             {std::pair{std::span<const TriangleMesh>(scene.real), "real"},
+              std::pair{std::span<const TriangleMesh>(scene.virtuals), "virtual"}})
+            for (const TriangleMesh& mesh : meshes) {
+                const float d = distanceToMesh(light.position, mesh);
+                if (!(d < reach)) continue;
+                closest = std::min(closest, d);
+                surfaces += fmt::format("{}{} '{}'", surfaces.empty() ? "" : ", ", kind, mesh.name);
+            }
+        if (surfaces.empty()) continue;
+        const glm::vec3 p = light.position;
+        if (light.radius > 0.0f)
+            warnings.push_back(fmt::format(
+                "lights[{}]: the light's sphere (centre ({:.4g}, {:.4g}, {:.4g}), radius {:.4g}) intersects "
+                "the "
+                "surface of {} ({:.4g} from its centre): the path tracer loses the light of the part inside "
+                "or behind it, DGI does not; move the light at least {:.4g} further from the surface",
+                i, p.x, p.y, p.z, light.radius, surfaces, closest, light.radius - closest));
+        else
+            warnings.push_back(
+                fmt::format("lights[{}]: the light at ({:.4g}, {:.4g}, {:.4g}) lies on the surface of {} "
+                            "({:.3g} from it): "
+                            "half of its light goes behind the surface; move it off the surface",
+                            i, p.x, p.y, p.z, surfaces, closest));
+    }
+    return warnings;
+}
 
 size_t volumeBytes(int resolution) {
     size_t voxels = 0;

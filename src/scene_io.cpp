@@ -11,6 +11,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/error.h"
+#include "deltagi/scene_info.h"
 #include "environment_io.h"
 #include "json_reader.h"
 #include "mesh_io.h"
@@ -462,6 +463,8 @@ Scene loadScene(const json& document, const fs::path& file) {
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
     if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder, scene.meshFiles);
     if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles);
+    for (const std::string& warning : lightPlacementWarnings(scene))
+        scene.warnings.push_back(file.string() + ": " + warning);
     return scene;
 }
 

@@ -84,6 +84,7 @@ struct Evaluation {
     ReferenceOutput reference;
     RenderOutput dgiRender;  // background = reference.background
     Image noRelightComposite;
+    Image shadowOnlyComposite;  // the quality suite splits DGI's change into its shadow and indirect parts
 };
 
 // Renders the reference first, then DGI and its baselines over the same background: the scene's photo, or the

@@ -2,6 +2,8 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -17,13 +19,25 @@ struct SceneInfo {
     Bounds3f realBounds, virtualBounds;
     VolumeRegion region;
     int mipLevels = 0;
-    // Each of the four volumes (two visibility, two light) stores 4 floats per voxel over the whole mip chain.
+    // Each of the four volumes (two visibility, two light) stores 4 floats per voxel over the whole mip
+    // chain.
     size_t bytesPerVolume = 0;
     size_t bytesAllVolumes = 0;
 };
 
 SceneInfo sceneInfo(const Scene& scene);
 nlohmann::json toJson(const SceneInfo& info);
+
+// Point and spot lights placed where the path tracer cannot render them as the pipeline does: a light's
+// sphere (its "radius"; a point light without one is a point) that intersects a surface of the real scene or
+// of the virtual objects, i.e. whose centre lies within its radius of a triangle (for radius 0: on it, to
+// kLightClearanceScale of the scene's extent). Part of such a lamp lies inside or behind the surface: the
+// path tracer loses that part's light (shadow rays towards it are blocked), DGI's cones do not. One warning
+// per light, naming the light by its JSON path ("lights[0]"), the surfaces and the distance.
+std::vector<std::string> lightPlacementWarnings(const Scene& scene);
+
+// Clearance of a light without radius, as a fraction of the scene's largest extent.
+constexpr float kLightClearanceScale = 1e-4f;
 
 // Bytes of one volume of `resolution`^3 voxels with its full mip chain, 16 bytes per voxel.
 size_t volumeBytes(int resolution);

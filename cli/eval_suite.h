@@ -1,0 +1,23 @@
+// `deltagi eval --suite FILE_OR_FOLDER`: the quality suite (include/deltagi/quality_suite.h).
+#pragma once
+
+#include <filesystem>
+
+#include <CLI/CLI.hpp>
+
+namespace deltagi::cli {
+
+struct SuiteArgs {
+    std::filesystem::path suite;                                // empty: a plain `eval` of one scene
+    std::filesystem::path markdown = "out/quality/quality.md";  // the table as Markdown
+    std::filesystem::path cache = "out/quality/refs";           // the cached references
+};
+
+// Adds --suite, --markdown and --cache to the `eval` subcommand.
+void addSuiteOptions(CLI::App& eval, SuiteArgs& args);
+
+// Runs the suite with the `eval` subcommand's other flags (--json, --set, --spp, --seed, --threads, -q;
+// a scene, --aov, --reference and --time-limit are refused). Throws InputError on bad input.
+int runSuite(const CLI::App& eval, const SuiteArgs& args);
+
+}  // namespace deltagi::cli

@@ -1,0 +1,146 @@
+// The quality suite (`deltagi eval --suite`): DGI against path-traced references over a list of scenes, the
+// references cached on disk and keyed by the scenes' content, and one table of figures per scene: the errors
+// and baselines of `deltagi eval`, the split of the delta error into its shadow and indirect parts, and the
+// path tracer's equal-error samples and time. Definitions: docs/ground-truth.md#the-quality-suite.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "deltagi/evaluation.h"
+#include "deltagi/reference.h"
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+// ---- The suite file ----
+
+// Reference samples per pixel of a scene whose entry does not say ("spp").
+constexpr int kDefaultSuiteSamples = 256;
+
+struct SuiteScene {
+    std::string name;                            // "name"; default: the scene file's stem
+    std::filesystem::path file;                  // "scene", relative to the suite file's folder
+    std::vector<std::string> overrides;          // "set": ["KEY=VALUE", ...], applied like --set
+    int samplesPerPixel = kDefaultSuiteSamples;  // "spp": the reference's samples per pixel
+    // "direct_spp": samples of the direct-light-only reference that splits the error (at most spp); 0: spp /
+    // kDirectSamplesDivisor. Direct light alone is far less noisy than the full paths.
+    int directSamplesPerPixel = 0;
+};
+
+// The direct-light-only reference takes spp / this many samples unless a scene says ("direct_spp").
+constexpr int kDirectSamplesDivisor = 4;
+
+struct QualitySuite {
+    std::filesystem::path file;  // the suite file, or the folder whose *.json scenes make the suite
+    std::vector<SuiteScene> scenes;
+    uint64_t seed = 0;  // "seed": the path tracer's random sequence, for every reference of the suite
+    // "fit_spp": the low-sample references that measure the path tracer's noise (each below a scene's spp
+    // counts); see fitNoiseConstant().
+    std::vector<int> fitSamples{1, 4, 16};
+};
+
+// A suite file ({"scenes": [{"scene": "cornell-box.json", "spp": 512, "set": [...]}, ...]}, see
+// docs/ground-truth.md) or a folder: every *.json file in it, sorted by name, is a scene with the default
+// settings. Throws InputError naming the file and key for bad input (a missing file, a wrong type, an
+// unknown key, no scenes).
+QualitySuite loadSuite(const std::filesystem::path& fileOrFolder);
+
+// ---- The reference cache ----
+
+// Bump when the path tracer changes what it renders: every cached reference is then rendered again.
+constexpr int kReferenceCacheVersion = 1;
+
+// 16 hex digits identifying what a path-traced reference of the scene depends on: the scene file after
+// `overrides`, without "options" and "description" (the path tracer reads neither: DGI's options may change
+// without rendering the reference again), the contents of every file it references (meshes and their MTL
+// material files, the photo, the environment map), and kReferenceCacheVersion. Throws InputError when the
+// scene file cannot be read.
+std::string referenceContentKey(const std::filesystem::path& sceneFile,
+                                const std::vector<std::string>& overrides);
+
+struct CachedReference {
+    ReferenceOutput output;  // composite, background and objectMask (the images an evaluation reads)
+    bool hit = false;        // read from the cache; false: rendered now and stored
+    std::filesystem::path folder;
+};
+
+// The reference of `scene` with `options` from `folder` when it holds one rendered with the same samples,
+// seed and bounces (written by an earlier call), else rendered and stored there. The caller names the folder
+// by the scene's content (referenceContentKey()). A time limit is not allowed (the cache holds whole
+// renders only).
+CachedReference cachedReference(const Scene& scene, const ReferenceOptions& options,
+                                const std::filesystem::path& folder, const ReferenceProgress& onPass = {});
+
+// ---- The path tracer's equal-error samples ----
+
+// The path tracer's delta error falls as c / sqrt(spp). Measured against a reference of `referenceSpp`
+// samples rendered from the same random sequence (the n-sample image is the mean of the reference's first n
+// samples), its expected square is c^2 (1/n - 1/referenceSpp). Fits c by least squares on the logarithm
+// (a line of slope -1/2): the geometric mean of the points' c. Points with n >= referenceSpp or an error
+// that is not finite and > 0 are left out; NaN when none is left.
+double fitNoiseConstant(std::span<const int> samples, std::span<const double> errors, int referenceSpp);
+
+// Samples per pixel at which the path tracer's expected delta error equals `error`, DGI's error measured
+// against a reference of `referenceSpp` samples: the reference's own noise c / sqrt(referenceSpp) is taken
+// out of it first (independent errors add in squares), then spp = c^2 / error^2. Infinity when the error is
+// within the reference's noise; NaN when c is.
+double equalErrorSamples(double c, double error, int referenceSpp);
+
+// ---- Running the suite ----
+
+struct SuiteRunOptions {
+    std::filesystem::path cacheFolder = "out/quality/refs";
+    std::vector<std::string> overrides;           // applied to every scene after its own "set"
+    std::optional<int> samplesPerPixel;           // instead of every scene's "spp"
+    std::optional<uint64_t> seed;                 // instead of the suite's "seed"
+    std::function<void(const std::string&)> log;  // one line per step (cache hits, renders)
+    ReferenceProgress onPass;                     // progress of each reference being rendered
+};
+
+// The share of the noise in a figure above which the suite warns (the reference noise must stay under 5 %
+// of the figures).
+constexpr double kMaxReferenceNoiseShare = 0.05;
+
+struct SceneQuality {
+    std::string name;
+    std::filesystem::path file;
+    std::vector<std::string> overrides;
+    std::string key;  // referenceContentKey()
+    DeltaFigures dgi, shadowOnly, noRelight;
+    // ||Δdgi_shadow - Δref_direct|| / ||Δref|| and ||(Δdgi - Δdgi_shadow) - (Δref - Δref_direct)|| /
+    // ||Δref|| over real pixels (docs/ground-truth.md).
+    double shadowPart = 0.0, indirectPart = 0.0;
+    // ||Δref_direct|| / ||Δref|| and ||Δref - Δref_direct|| / ||Δref||: how much of the true change is the
+    // object's shadow (direct light) and how much indirect.
+    double referenceShadowShare = 0.0, referenceIndirectShare = 0.0;
+    double dgiMs = 0.0;
+    int referenceSpp = 0, directSpp = 0;
+    double referenceMs = 0.0;  // when the reference was rendered (both renders), from the cache
+    std::vector<int> fitSamples;
+    std::vector<double> fitDeltaErrors, fitObjectErrors;      // of the low-sample references
+    double noiseConstant = 0.0, objectNoiseConstant = 0.0;    // c of the fit, for Δ and the object
+    double referenceNoise = 0.0, objectReferenceNoise = 0.0;  // c / sqrt(referenceSpp)
+    double equalErrorSpp = 0.0, equalErrorMs = 0.0;
+    size_t cacheHits = 0, cacheMisses = 0;
+    std::vector<std::string> warnings;  // the scene's (loader) and the suite's (reference noise)
+};
+
+// Evaluates one scene of the suite: its references from the cache (or rendered and stored), DGI and its
+// baselines against them, the split and the equal-error figures.
+SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& entry,
+                                const SuiteRunOptions& options);
+
+// The table: one object per scene (keys in docs/ground-truth.md), and `command`, how it was made.
+nlohmann::ordered_json suiteToJson(std::span<const SceneQuality> scenes, const std::string& command);
+// The same as Markdown (docs/quality.md).
+std::string suiteMarkdown(std::span<const SceneQuality> scenes, const std::string& command);
+
+}  // namespace deltagi

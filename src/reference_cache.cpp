@@ -1,0 +1,185 @@
+// The quality suite's cache of path-traced references (include/deltagi/quality_suite.h): a folder per
+// reference, keyed by what the path tracer reads, so that a suite re-renders only what changed.
+#include <cstdint>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <sstream>
+#include <string>
+
+#include <fmt/format.h>
+
+#include "deltagi/error.h"
+#include "deltagi/quality_suite.h"
+#include "deltagi/scene_io.h"
+
+namespace deltagi {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The images an evaluation reads (evaluate(): composite, background, object mask); with and without are
+// not kept: a 640x480 reference takes 8.6 MiB instead of 22.
+constexpr const char* kCompositeFile = "composite.exr";
+constexpr const char* kBackgroundFile = "background.exr";
+constexpr const char* kObjectMaskFile = "object_mask.exr";
+// Written last: a folder without it holds an interrupted render and is rendered again.
+constexpr const char* kMetaFile = "reference.json";
+
+// FNV-1a, 64 bits: a cache key, not a defence against crafted collisions.
+class Hasher {
+  public:
+    void add(std::string_view bytes) {
+        for (const char c : bytes) {
+            hash_ ^= static_cast<unsigned char>(c);
+            hash_ *= 0x100000001b3ull;
+        }
+        // The length ends each piece, so that ("ab", "c") and ("a", "bc") differ.
+        const uint64_t size = bytes.size();
+        for (int i = 0; i < 8; ++i) {
+            hash_ ^= (size >> (8 * i)) & 0xffu;
+            hash_ *= 0x100000001b3ull;
+        }
+    }
+    std::string hex() const { return fmt::format("{:016x}", hash_); }
+
+  private:
+    uint64_t hash_ = 0xcbf29ce484222325ull;
+};
+
+std::string readBytes(const fs::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path.string(), "cannot read file");
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The material libraries an OBJ file names ("mtllib a.mtl b.mtl"), relative to its folder.
+std::vector<fs::path> objMaterialFiles(const fs::path& obj, const std::string& text) {
+    std::vector<fs::path> files;
+    std::istringstream lines(text);
+    std::string line;
+    while (std::getline(lines, line)) {
+        std::istringstream words(line);
+        std::string keyword, name;
+        if (!(words >> keyword) || keyword != "mtllib") continue;
+        while (words >> name) files.push_back(obj.parent_path() / name);
+    }
+    return files;
+}
+
+// Adds every file the document names: any string that is the path of a file relative to the scene's folder
+// (meshes, photo, environment map), and the MTL files of OBJ meshes.
+void hashReferencedFiles(const nlohmann::json& value, const fs::path& folder, Hasher& hasher,
+                         std::set<fs::path>& seen) {
+    if (value.is_object() || value.is_array()) {
+        for (const auto& item : value) hashReferencedFiles(item, folder, hasher, seen);
+        return;
+    }
+    if (!value.is_string() || value.get<std::string>().empty()) return;
+    const fs::path path = folder / value.get<std::string>();
+    std::error_code error;
+    if (!fs::is_regular_file(path, error) || !seen.insert(path.lexically_normal()).second) return;
+    const std::string bytes = readBytes(path);
+    hasher.add(value.get<std::string>());
+    hasher.add(bytes);
+    if (path.extension() == ".obj" || path.extension() == ".OBJ")
+        for (const fs::path& mtl : objMaterialFiles(path, bytes))
+            if (fs::is_regular_file(mtl, error) && seen.insert(mtl.lexically_normal()).second) {
+                hasher.add(mtl.filename().string());
+                hasher.add(readBytes(mtl));
+            }
+}
+
+bool sameSettings(const nlohmann::json& meta, const ReferenceOptions& options) {
+    return meta.value("version", -1) == kReferenceCacheVersion &&
+           meta.value("spp", -1) == options.samplesPerPixel &&
+           meta.value("seed", uint64_t{0}) == options.seed &&
+           meta.value("max_bounces", -1) == options.maxBounces &&
+           meta.value("roulette_start_bounce", -1) == options.rouletteStartBounce;
+}
+
+// The cached reference in `folder`, or nothing when there is none with these settings (or it is damaged).
+std::optional<ReferenceOutput> readCached(const fs::path& folder, const ReferenceOptions& options,
+                                          const Camera& camera) {
+    std::error_code error;
+    if (!fs::is_regular_file(folder / kMetaFile, error)) return std::nullopt;
+    try {
+        const nlohmann::json meta = nlohmann::json::parse(readBytes(folder / kMetaFile));
+        if (!sameSettings(meta, options)) return std::nullopt;
+        ReferenceOutput out;
+        out.composite = readImage(folder / kCompositeFile);
+        out.background = readImage(folder / kBackgroundFile);
+        out.objectMask = readImage(folder / kObjectMaskFile);
+        for (const Image* image : {&out.composite, &out.background, &out.objectMask})
+            if (image->width() != camera.width || image->height() != camera.height) return std::nullopt;
+        out.delta = out.composite;
+        for (size_t i = 0; i < out.delta.data().size(); ++i) out.delta.data()[i] -= out.background.data()[i];
+        out.samplesPerPixel = options.samplesPerPixel;
+        out.totalMs = meta.value("ms", 0.0);
+        return out;
+    } catch (const std::exception&) {
+        return std::nullopt;  // damaged: rendered again
+    }
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+    std::ofstream out(path, std::ios::binary);
+    out << text;
+    if (!out) throw InputError(path.string(), "cannot write file");
+}
+
+}  // namespace
+
+std::string referenceContentKey(const fs::path& sceneFile, const std::vector<std::string>& overrides) {
+    nlohmann::json document;
+    try {
+        document = nlohmann::json::parse(readBytes(sceneFile));
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(sceneFile.string(), std::string("not valid JSON: ") + e.what());
+    }
+    for (const std::string& override : overrides) applyOverride(document, override);
+    if (document.is_object()) {
+        document.erase("options");
+        document.erase("description");
+    }
+    Hasher hasher;
+    hasher.add(fmt::format("deltagi reference cache {}", kReferenceCacheVersion));
+    hasher.add(document.dump());  // nlohmann::json sorts object keys: the same content, the same text
+    std::set<fs::path> seen;
+    hashReferencedFiles(document, sceneFile.parent_path(), hasher, seen);
+    return hasher.hex();
+}
+
+CachedReference cachedReference(const Scene& scene, const ReferenceOptions& options, const fs::path& folder,
+                                const ReferenceProgress& onPass) {
+    if (options.timeLimitSeconds > 0.0)
+        throw InputError(folder.string(), "a cached reference cannot have a time limit");
+    CachedReference cached;
+    cached.folder = folder;
+    if (std::optional<ReferenceOutput> out = readCached(folder, options, scene.camera)) {
+        cached.output = std::move(*out);
+        cached.hit = true;
+        return cached;
+    }
+    std::error_code error;
+    fs::remove(folder / kMetaFile, error);
+    fs::create_directories(folder, error);
+    if (error) throw InputError(folder.string(), "cannot create folder: " + error.message());
+    cached.output = renderReference(scene, options, onPass);
+    writeImage(cached.output.composite, folder / kCompositeFile);
+    writeImage(cached.output.background, folder / kBackgroundFile);
+    writeImage(cached.output.objectMask, folder / kObjectMaskFile);
+    nlohmann::ordered_json meta;
+    meta["version"] = kReferenceCacheVersion;
+    meta["scene"] = scene.file.string();
+    meta["spp"] = options.samplesPerPixel;
+    meta["seed"] = options.seed;
+    meta["max_bounces"] = options.maxBounces;
+    meta["roulette_start_bounce"] = options.rouletteStartBounce;
+    meta["ms"] = cached.output.totalMs;
+    writeText(folder / kMetaFile, meta.dump(2) + "\n");
+    return cached;
+}
+
+}  // namespace deltagi
