@@ -1,6 +1,7 @@
 #include "area_light_rays.h"
 
 #include <cmath>
+#include <limits>
 
 #include "brdf.h"
 #include "cone_trace.h"
@@ -12,6 +13,16 @@ namespace {
 
 constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kAreaLightStream = 7000;  // hashToUnit streams of the sample grid's offsets
+constexpr uint32_t kEnvironmentStream = 7100;
+
+// Whether a ray from `p` within `halfAngle` of `direction` can pass within `radius` of `centre`.
+bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 centre, float radius) {
+    const glm::vec3 toCentre = centre - p;
+    const float distance = glm::length(toCentre);
+    if (distance <= radius) return true;
+    const float angle = std::acos(glm::clamp(glm::dot(toCentre / distance, direction), -1.0f, 1.0f));
+    return angle <= halfAngle + std::asin(radius / distance);
+}
 
 // Whether a segment from `p` to `q` can pass within `radius` of `centre`.
 bool segmentNearSphere(glm::vec3 p, glm::vec3 q, glm::vec3 centre, float radius) {
@@ -102,6 +113,70 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
         out[i] = sum / static_cast<float>(count);
     });
     (void)relit;
+    return out;
+}
+
+std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points,
+                                            const EnvironmentSampler& sampler, const ShadowRayScenes& rays,
+                                            const Options& options, ShadowMode mode,
+                                            std::span<const uint32_t> pixels) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    if (!rays.scene) return out;
+    const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
+    const Bounds3f sceneBounds = rays.scene->bounds();
+    const float offset =
+        kRayOffsetScale * std::max(sceneBounds.empty() ? 1.0f : sceneBounds.maxExtent(), 1e-3f);
+    const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
+    const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
+    const int side =
+        std::max(1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.raySamples)) + 1e-3f));
+    const int count = side * side;
+    constexpr float kInfinity = std::numeric_limits<float>::infinity();
+
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        const Material& m = *p.material;
+        if (m.albedo == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)) return;
+        const glm::vec3 origin = p.position + offset * p.normal;
+        const float jitterU = hashToUnit(i, kEnvironmentStream),
+                    jitterV = hashToUnit(i, kEnvironmentStream + 1);
+        // A relit point whose rays cannot reach the objects does not change.
+        if (mode == ShadowMode::DeltaShadow &&
+            (!objects || glm::length(objectCentre - origin) > objectRadius &&
+                             glm::dot(objectCentre - origin, p.normal) < -objectRadius))
+            return;
+        glm::vec3 sum(0.0f);
+        for (int k = 0; k < count; ++k) {
+            const float u1 = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
+            const float u2 = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+            const EnvironmentSampler::Sample s = sampler.sample(u1, u2);
+            const float cosSurface = glm::dot(s.wi, p.normal);
+            if (!(s.pdf > 0.0f) || cosSurface <= 0.0f || s.radiance == glm::vec3(0.0f)) continue;
+            const bool mayMeetObjects = objects && mode != ShadowMode::SceneOnly &&
+                                        coneMayMeetSphere(origin, s.wi, 0.0f, objectCentre, objectRadius);
+            if (mode == ShadowMode::DeltaShadow && !mayMeetObjects) continue;
+            const bool byObjects = mayMeetObjects && objects->occludedTopLayer(origin, s.wi, 0.0f, kInfinity);
+            if (mode == ShadowMode::DeltaShadow && !byObjects) continue;
+            float visibility = 0.0f;
+            switch (mode) {
+                case ShadowMode::Shaded:
+                case ShadowMode::SceneOnly:
+                    visibility =
+                        !byObjects && !rays.scene->occluded(origin, s.wi, 0.0f, kInfinity) ? 1.0f : 0.0f;
+                    break;
+                case ShadowMode::DeltaShadow:
+                    visibility = rays.scene->occluded(origin, s.wi, 0.0f, kInfinity) ? 0.0f : -1.0f;
+                    break;
+                case ShadowMode::DeltaSingleVisibility:
+                    visibility =
+                        byObjects || rays.scene->occluded(origin, s.wi, 0.0f, kInfinity) ? -1.0f : 0.0f;
+                    break;
+            }
+            if (visibility == 0.0f) continue;
+            sum += evalBrdf(m, p.normal, p.toEye, s.wi) * s.radiance * (visibility * cosSurface / s.pdf);
+        }
+        out[i] = sum / static_cast<float>(count);
+    });
     return out;
 }
 

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "area_lights.h"
+#include "environment_sampling.h"
 #include "shadow_rays.h"
 
 namespace deltagi {
@@ -28,6 +29,17 @@ namespace deltagi {
 std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, const AreaLights& emitters,
                                           const ShadowRayScenes& rays, const Options& options,
                                           ShadowMode mode, std::span<const uint32_t> pixels = {});
+
+// The direct light of the environment map at each point, or its change, under `mode` (as
+// traceAreaLightRays): options.shadow.ray_samples directions per point drawn by `sampler` (in proportion to
+// the map's radiance, as the path tracer draws them), each a shadow ray to infinity through the scene and the
+// objects, weighted by the BRDF. With it the map's lights (Light::fromEnvironment) light the volumes only,
+// and the sky is not gathered through the cones: the shadows and the ambient occlusion the objects cast under
+// the sky are those of the rays.
+std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points,
+                                            const EnvironmentSampler& sampler, const ShadowRayScenes& rays,
+                                            const Options& options, ShadowMode mode,
+                                            std::span<const uint32_t> pixels = {});
 
 // The stand-in lights of the real scene's emitting meshes for the reflective shadow maps: per mesh, a
 // Lambertian light (Light::lambertian) at its area-weighted centroid with the mesh's emitted power, facing

@@ -10,6 +10,7 @@
 #include "composite.h"
 #include "deltagi/scene_io.h"
 #include "denoise.h"
+#include "environment_sampling.h"
 #include "gbuffer.h"
 #include "inject.h"
 #include "mipmap.h"
@@ -94,6 +95,8 @@ struct ConeJob {
     const MipVolume* fullLight = nullptr;
     // Emitting surfaces lighting the points through shadow rays (options.shadow.method "rays"), or none.
     const AreaLights* emitters = nullptr;
+    // The environment map lighting the points through shadow rays (options.shadow.method "rays"), or none.
+    const EnvironmentSampler* environment = nullptr;
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -129,6 +132,20 @@ struct ConeResults {
     std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
     std::vector<glm::vec3> areaLight;          // direct light of emitting surfaces; empty without
 };
+
+// Whether the environment map lights the scene through shadow rays (then its extracted lights only drive the
+// reflective shadow maps, and its sky is not gathered through the cones).
+bool environmentByRays(const Scene& scene) {
+    return scene.environment && scene.options.shadow.method == "rays";
+}
+
+// The lights whose direct light is shaded with their shadows: the scene's, without the environment's lights
+// when the map is sampled by rays.
+std::vector<Light> directLights(const Scene& scene) {
+    std::vector<Light> lights = scene.lights;
+    if (environmentByRays(scene)) std::erase_if(lights, [](const Light& l) { return l.fromEnvironment; });
+    return lights;
+}
 
 // The lights whose reflective shadow maps light the volumes: the scene's, and with area lights by rays the
 // stand-ins of its emitting surfaces (their direct light comes from traceAreaLightRays, not the volumes).
@@ -191,9 +208,10 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect
 // Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs, then the
 // sky light through the cones. Shadow and diffuse cones are traced at options.shadow/diffuse.pixel_stride
 // (relight_pixel_stride for real surfaces relit) and filtered (traceSparse).
-std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, StageTimer& timer) {
+std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene,
+                                    std::span<const Light> directLights, StageTimer& timer) {
     const Options& o = scene.options;
-    const int lights = static_cast<int>(scene.lights.size());
+    const int lights = static_cast<int>(directLights.size());
     std::vector<ConeResults> results(jobs.size());
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
@@ -201,8 +219,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
             job.filter(o, ConeJob::Shadow), [&](std::span<const uint32_t> pixels) {
                 if (o.shadow.method == "rays")
-                    return traceShadowRays(job.points, scene.lights, job.rays, o, job.mode, pixels);
-                return traceShadowCones(job.points, scene.lights, job.visibility, o,
+                    return traceShadowRays(job.points, directLights, job.rays, o, job.mode, pixels);
+                return traceShadowCones(job.points, directLights, job.visibility, o,
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
     }
@@ -214,6 +232,17 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             job.filter(o, ConeJob::AreaLight), [&](std::span<const uint32_t> pixels) {
                 return traceAreaLightRays(job.points, *job.emitters, job.rays, o, job.mode, pixels);
             });
+    }
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        const ConeJob& job = jobs[j];
+        if (!job.environment) continue;
+        addInto(
+            results[j].areaLight,
+            traceSparse<glm::vec3>(job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), 1,
+                                   job.filter(o, ConeJob::AreaLight), [&](std::span<const uint32_t> pixels) {
+                                       return traceEnvironmentRays(job.points, *job.environment, job.rays, o,
+                                                                   job.mode, pixels);
+                                   }));
     }
     timer.lap("shadow");
     for (size_t j = 0; j < jobs.size(); ++j) {
@@ -241,7 +270,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     timer.lap("specular");
     // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
     // filtered like the diffuse cones (it has the same jitter noise).
-    if (scene.environment && !scene.environment->sky.empty()) {
+    // (With the environment's light by rays, its direct light, sky included, is already in `areaLight`.)
+    if (scene.environment && !scene.environment->sky.empty() && o.shadow.method != "rays") {
         const Environment& environment = *scene.environment;
         for (size_t j = 0; j < jobs.size(); ++j) {
             const ConeJob& job = jobs[j];
@@ -419,6 +449,9 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const std::vector<ReflectiveShadowMap> rsms =
         renderRsms(realOnly, rsmLights(scene, realOnly), region, o.rsm.resolution);
     const AreaLights emitters(scene, SceneContent::RealOnly);
+    std::optional<EnvironmentSampler> environment;
+    if (environmentByRays(scene)) environment.emplace(*scene.environment);
+    const std::vector<Light> shaded = directLights(scene);
     const VoxelGeometry* geometries[] = {&geometry};
     const MipVolume visibility = buildMipChain(region, geometry.visibility.clone());
     Grid3 direct = injectLight(rsms, region, geometries);
@@ -438,12 +471,13 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
                       {},
                       {&realOnly, nullptr, {}},
                       nullptr,
-                      areaRays ? &emitters : nullptr};
+                      areaRays ? &emitters : nullptr,
+                      environment ? &*environment : nullptr};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
-    const ConeResults cones = std::move(traceCones({&job, 1}, scene, quiet)[0]);
-    std::vector<glm::vec3> radiance = combineLighting(points, scene.lights, cones.shadows,
-                                                      ShadowMode::SceneOnly, cones.diffuse, cones.specular);
+    const ConeResults cones = std::move(traceCones({&job, 1}, scene, shaded, quiet)[0]);
+    std::vector<glm::vec3> radiance =
+        combineLighting(points, shaded, cones.shadows, ShadowMode::SceneOnly, cones.diffuse, cones.specular);
     addInto(radiance, std::vector<glm::vec3>(cones.areaLight));
     return toImage(radiance, scene.camera.width, scene.camera.height);
 }
@@ -519,6 +553,10 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // Emitting surfaces light the scene through shadow rays (with options.shadow.method "rays").
     const AreaLights emitters = o.shadow.method == "rays" ? AreaLights(scene, SceneContent::RealAndVirtual)
                                                           : AreaLights(Scene{}, SceneContent::RealOnly);
+    // The environment map lights the scene through shadow rays too (with options.shadow.method "rays").
+    std::optional<EnvironmentSampler> environment;
+    if (environmentByRays(scene)) environment.emplace(*scene.environment);
+    const std::vector<Light> direct = directLights(scene);
     const ConeJob jobs[] = {
         {gbuffer.object,
          volumes.fullLight,
@@ -531,7 +569,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          {},
          shadowRays,
          nullptr,
-         &emitters},
+         &emitters,
+         environment ? &*environment : nullptr},
         {realPoints,
          volumes.deltaLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
@@ -543,16 +582,17 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          objectPixels,
          shadowRays,
          o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
-         &emitters}};
-    const std::vector<ConeResults> cones = traceCones(jobs, scene, timer);
+         &emitters,
+         environment ? &*environment : nullptr}};
+    const std::vector<ConeResults> cones = traceCones(jobs, scene, direct, timer);
     const ConeResults& object = cones[0];
     const ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
-    auto objectRadiance = combineLighting(gbuffer.object, scene.lights, object.shadows, ShadowMode::Shaded,
+    auto objectRadiance = combineLighting(gbuffer.object, direct, object.shadows, ShadowMode::Shaded,
                                           object.diffuse, object.specular, &objectPixels, camera.width);
     auto realChange =
-        combineLighting(realPoints, scene.lights, real.shadows, relightMode, real.diffuse, real.specular);
+        combineLighting(realPoints, direct, real.shadows, relightMode, real.diffuse, real.specular);
     addInto(objectRadiance, std::vector<glm::vec3>(object.areaLight));
     addInto(realChange, std::vector<glm::vec3>(real.areaLight));
     timer.lap("shading");

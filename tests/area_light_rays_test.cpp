@@ -128,5 +128,30 @@ TEST(AreaLightRays, APanelUnderACeilingGetsOneStandInFacingDown) {
     EXPECT_NEAR(lights[0].position.y, 1.0f, 0.01f);
 }
 
+// Under a uniform environment of radiance L, an open floor point reflects albedo L (its irradiance is pi L);
+// under a lid that hides the whole sky, a relit point loses all of it, and a shaded point gets none.
+TEST(EnvironmentRays, AUniformSkyGivesAlbedoTimesItsRadianceAndALidTakesItAway) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.virtuals.push_back(
+        placed(makeBox({4.0f, 0.02f, 4.0f}), {0, 0.1f, 0}, diffuse(glm::vec3(0.5f)), "lid"));
+    Environment environment;
+    environment.radiance = Image(64, 32, 3, 0.7f);
+    const EnvironmentSampler sampler(environment);
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
+    const ShadowRayScenes rays{&realOnly, &objects, scene.virtuals[0].bounds()};
+    Options options;
+    options.shadow.raySamples = 256;
+    const std::vector<SurfacePoint> points = {floorPoint({0, 0, 0}, scene.real[0].material)};
+    const auto open =
+        traceEnvironmentRays(points, sampler, {&realOnly, nullptr, {}}, options, ShadowMode::SceneOnly);
+    EXPECT_NEAR(open[0].x, 0.5f * 0.7f, 0.02f * 0.35f);
+    const auto change = traceEnvironmentRays(points, sampler, rays, options, ShadowMode::DeltaShadow);
+    EXPECT_NEAR(change[0].x, -0.35f, 0.02f * 0.35f);
+    const auto shaded = traceEnvironmentRays(points, sampler, rays, options, ShadowMode::Shaded);
+    EXPECT_NEAR(shaded[0].x, 0.0f, 0.02f * 0.35f);
+}
+
 }  // namespace
 }  // namespace deltagi
