@@ -48,7 +48,7 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
     const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
     const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
     const int side =
-        std::max(1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.raySamples)) + 1e-3f));
+        std::max(1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.areaRaySamples)) + 1e-3f));
     const int count = side * side;
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
@@ -129,7 +129,7 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
     const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
     const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
     const int side =
-        std::max(1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.raySamples)) + 1e-3f));
+        std::max(1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.areaRaySamples)) + 1e-3f));
     const int count = side * side;
     constexpr float kInfinity = std::numeric_limits<float>::infinity();
 

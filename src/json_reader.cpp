@@ -291,7 +291,8 @@ Options readOptions(const JsonNode& node) {
                                          options.specular.maxApertureDeg, options.specular.minApertureDeg));
     }
     if (auto n = node.find("shadow")) {
-        n->allowKeys({"method", "ray_samples", "aperture_deg", "pixel_stride", "relight_pixel_stride"});
+        n->allowKeys({"method", "ray_samples", "area_ray_samples", "aperture_deg", "pixel_stride",
+                      "relight_pixel_stride"});
         if (auto m = n->find("method")) {
             std::string method = m->string();
             if (method != "rays" && method != "cones")
@@ -299,6 +300,7 @@ Options readOptions(const JsonNode& node) {
             options.shadow.method = method;
         }
         if (auto r = n->find("ray_samples")) options.shadow.raySamples = r->integer(1, 256);
+        if (auto r = n->find("area_ray_samples")) options.shadow.areaRaySamples = r->integer(1, 256);
         if (auto a = n->find("aperture_deg"))
             options.shadow.apertureDeg = a->floatNumber({0.0, 90.0, true, false});
         if (auto st = n->find("pixel_stride")) options.shadow.pixelStride = readPixelStride(*st);
@@ -339,6 +341,7 @@ json optionsToJson(const Options& o) {
         {"shadow",
          {{"method", o.shadow.method},
           {"ray_samples", o.shadow.raySamples},
+          {"area_ray_samples", o.shadow.areaRaySamples},
           {"aperture_deg", o.shadow.apertureDeg},
           {"pixel_stride", strideJson(o.shadow.pixelStride)},
           {"relight_pixel_stride", strideJson(o.shadow.relightPixelStride)}}},

@@ -102,6 +102,12 @@ struct ConeJob {
     }
     // The pixel strides of its shadow, specular (relit only) and diffuse cones, "auto" resolved for the
     // camera's image.
+    // Emitters' and the environment's direct light: as the shadows when given, else their own "auto".
+    int areaLightStride(const Options& o, const Camera& c) const {
+        return relit() ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightAreaLightStride, c.width,
+                                        c.height)
+                       : pixelStrideFor(o.shadow.pixelStride, kAutoAreaLightStride, c.width, c.height);
+    }
     int shadowStride(const Options& o, const Camera& c) const {
         return relit()
                    ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightShadowStride, c.width, c.height)
@@ -228,7 +234,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         const ConeJob& job = jobs[j];
         if (!job.emitters || job.emitters->empty()) continue;
         results[j].areaLight = traceSparse<glm::vec3>(
-            job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), 1,
+            job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
             job.filter(o, ConeJob::AreaLight), [&](std::span<const uint32_t> pixels) {
                 return traceAreaLightRays(job.points, *job.emitters, job.rays, o, job.mode, pixels);
             });
@@ -236,13 +242,13 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.environment) continue;
-        addInto(
-            results[j].areaLight,
-            traceSparse<glm::vec3>(job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), 1,
-                                   job.filter(o, ConeJob::AreaLight), [&](std::span<const uint32_t> pixels) {
-                                       return traceEnvironmentRays(job.points, *job.environment, job.rays, o,
-                                                                   job.mode, pixels);
-                                   }));
+        addInto(results[j].areaLight,
+                traceSparse<glm::vec3>(
+                    job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
+                    job.filter(o, ConeJob::AreaLight), [&](std::span<const uint32_t> pixels) {
+                        return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode,
+                                                    pixels);
+                    }));
     }
     timer.lap("shadow");
     for (size_t j = 0; j < jobs.size(); ++j) {

@@ -31,16 +31,25 @@ glm::vec2 concentricDisk(float u, float v) {
     return r * glm::vec2(std::cos(phi), std::sin(phi));
 }
 
-// Whether a segment from `p` to any point within `radius` of `target` can pass within `sphereRadius` of
-// `sphereCentre` (conservative: the capsule around the segment p-target, as wide as the light everywhere).
-bool segmentMayMeetSphere(glm::vec3 p, glm::vec3 target, float radius, glm::vec3 sphereCentre,
-                          float sphereRadius) {
+// Whether a segment from `p` to any point within `radius` of `target` can meet `box` (conservative: every
+// such segment stays within `radius` of the segment p-target, so the box is grown by `radius`; slab test).
+bool segmentMayMeetBox(glm::vec3 p, glm::vec3 target, float radius, const Bounds3f& box) {
+    const glm::vec3 lo = box.min - radius, hi = box.max + radius;
     const glm::vec3 d = target - p;
-    const float len2 = glm::dot(d, d);
-    const float t = len2 > 0.0f ? glm::clamp(glm::dot(sphereCentre - p, d) / len2, 0.0f, 1.0f) : 0.0f;
-    const glm::vec3 closest = p + t * d;
-    const float reach = sphereRadius + radius;
-    return glm::dot(sphereCentre - closest, sphereCentre - closest) <= reach * reach;
+    float t0 = 0.0f, t1 = 1.0f;
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(d[a]) < 1e-12f) {
+            if (p[a] < lo[a] || p[a] > hi[a]) return false;
+            continue;
+        }
+        const float inverse = 1.0f / d[a];
+        float ta = (lo[a] - p[a]) * inverse, tb = (hi[a] - p[a]) * inverse;
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) return false;
+    }
+    return true;
 }
 
 // Whether a ray from `p` within `halfAngle` of `direction` can pass within `sphereRadius` of `sphereCentre`.
@@ -117,11 +126,11 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
             // Relit points whose rays cannot reach the objects do not change: no rays at all.
             bool mayMeetObjects = objects != nullptr && !sceneOnly;
             if (mayMeetObjects && relit) {
-                mayMeetObjects = light.type == Light::Type::Directional
-                                     ? coneMayMeetSphere(origin, centre.wi, light.angularRadius, objectCentre,
-                                                         objectRadius)
-                                     : segmentMayMeetSphere(origin, light.position, light.radius,
-                                                            objectCentre, objectRadius);
+                mayMeetObjects =
+                    light.type == Light::Type::Directional
+                        ? coneMayMeetSphere(origin, centre.wi, light.angularRadius, objectCentre,
+                                            objectRadius)
+                        : segmentMayMeetBox(origin, light.position, light.radius, rays.objectBounds);
                 if (!mayMeetObjects) continue;
             }
             const int count = shadowRayCount(light, options.shadow.raySamples);

@@ -59,7 +59,7 @@ TEST(AreaLightRays, APanelLightsAPointWithTheRectanglesClosedFormIrradiance) {
     const RayScene realOnly(scene, SceneContent::RealOnly);
     const AreaLights emitters(scene, SceneContent::RealOnly);
     Options options;
-    options.shadow.raySamples = 256;
+    options.shadow.areaRaySamples = 256;
     const std::vector<SurfacePoint> points = {floorPoint({0, 0, 0}, scene.real[0].material),
                                               floorPoint({0.2f, 0, 0.2f}, scene.real[0].material)};
     const auto light =
@@ -142,7 +142,7 @@ TEST(EnvironmentRays, AUniformSkyGivesAlbedoTimesItsRadianceAndALidTakesItAway) 
     const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
     const ShadowRayScenes rays{&realOnly, &objects, scene.virtuals[0].bounds()};
     Options options;
-    options.shadow.raySamples = 256;
+    options.shadow.areaRaySamples = 256;
     const std::vector<SurfacePoint> points = {floorPoint({0, 0, 0}, scene.real[0].material)};
     const auto open =
         traceEnvironmentRays(points, sampler, {&realOnly, nullptr, {}}, options, ShadowMode::SceneOnly);

@@ -70,8 +70,13 @@ struct ShadowConeOptions {
     // and are cut off at the volume's faces (docs/ground-truth.md has the figures of both).
     std::string method = "rays";
     // "ray_samples": shadow rays per point and light with a size (a radius or an angular radius), on a
-    // jittered grid (rounded down to a square, 1 to 256). A light without a size takes one ray.
-    int raySamples = 16;
+    // jittered grid (rounded down to a square, 1 to 256). A light without a size takes one ray. The filter
+    // averages 5 x 5 traced pixels, so 4 rays already give 100 per filtered pixel.
+    int raySamples = 4;
+    // "area_ray_samples": rays per point towards the emitting surfaces, and towards the environment map (each
+    // set of rays samples many directions, so it needs more than a light's disk), on a jittered grid (rounded
+    // down to a square, 1 to 256).
+    int areaRaySamples = 16;
     // "aperture_deg": full apex angle in degrees of the shadow cone of a light without a "radius".
     // A light with a radius r at distance d uses 2*atan(r/d) instead.
     float apertureDeg = 4.0f;
@@ -164,7 +169,10 @@ struct EnvironmentOptions {
 // The "auto" pixel strides: these at a 640x480 image, scaled with its smaller side (so that an image samples
 // its surfaces alike at any size) and rounded down to a power of two, at least 1.
 inline constexpr int kAutoDiffuseStride = 8, kAutoRelightDiffuseStride = 16;
-inline constexpr int kAutoShadowStride = 2, kAutoRelightShadowStride = 4;
+// Shadows of point, spot and directional lights; the area lights' and the environment's direct light by rays
+// (noisier: many directions, few rays each) at twice their stride, so that the filter averages more samples.
+inline constexpr int kAutoShadowStride = 1, kAutoRelightShadowStride = 2;
+inline constexpr int kAutoAreaLightStride = 2, kAutoRelightAreaLightStride = 4;
 inline constexpr int kAutoRelightSpecularStride = 4;
 // The stride an option (0: "auto", with `autoStride` at 640x480) gives for a width x height image.
 inline int pixelStrideFor(int option, int autoStride, int width, int height) {
