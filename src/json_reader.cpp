@@ -174,7 +174,7 @@ bool isPowerOfTwo(int64_t v) {
 constexpr int kMinVolumeResolution = 4, kMaxVolumeResolution = 1024;
 
 void readVolume(const JsonNode& node, VolumeOptions& volume) {
-    node.allowKeys({"resolution", "extent_scale", "center", "size"});
+    node.allowKeys({"resolution", "extent_scale", "reach_scale", "center", "size"});
     if (auto n = node.find("resolution")) {
         int64_t r = n->integer64();
         if (!isPowerOfTwo(r) || r < kMinVolumeResolution || r > kMaxVolumeResolution)
@@ -183,6 +183,7 @@ void readVolume(const JsonNode& node, VolumeOptions& volume) {
         volume.resolution = static_cast<int>(r);
     }
     if (auto n = node.find("extent_scale")) volume.extentScale = n->floatNumber(kPositive);
+    if (auto n = node.find("reach_scale")) volume.reachScale = n->floatNumber({0.0, 1024.0});
     // null means "not set", so that the output of optionsToJson() reads back.
     auto center = node.find("center"), size = node.find("size");
     if (center && !center->value().is_null()) volume.center = center->vec3();
@@ -322,6 +323,7 @@ json strideJson(int stride) {
 json optionsToJson(const Options& o) {
     json volume = {{"resolution", o.volume.resolution},
                    {"extent_scale", o.volume.extentScale},
+                   {"reach_scale", o.volume.reachScale},
                    {"center", nullptr},
                    {"size", nullptr}};
     if (o.volume.center) volume["center"] = {o.volume.center->x, o.volume.center->y, o.volume.center->z};

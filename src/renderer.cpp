@@ -624,7 +624,31 @@ VolumeRegion volumeRegion(const Scene& scene) {
     if (v.center && v.size) {
         return {*v.center - glm::vec3(0.5f * *v.size), *v.size, v.resolution};
     }
-    if (!scene.virtuals.empty()) return cubeAround(boundsOf(scene.virtuals), v.extentScale, v.resolution);
+    if (!scene.virtuals.empty()) {
+        const Bounds3f objects = boundsOf(scene.virtuals);
+        VolumeRegion region = cubeAround(objects, v.extentScale, v.resolution);
+        const Bounds3f real = boundsOf(scene.real);
+        if (v.reachScale <= v.extentScale || real.empty()) return region;
+        // Grow towards the real scene, at most to reach_scale times the objects' box.
+        Bounds3f both = real;
+        both.extend(objects);
+        const float reach = std::max(objects.maxExtent(), 1e-6f) * v.reachScale;
+        region.size = std::clamp(both.maxExtent() * (1.0f + 2.0f / static_cast<float>(v.resolution)),
+                                 region.size, reach);
+        // Around the objects, moved into the scene's bounds where the cube is smaller than them (the objects
+        // stay inside it: the cube is at least extent_scale >= 1 times their box).
+        glm::vec3 centre = objects.center();
+        const float half = 0.5f * region.size;
+        for (int a = 0; a < 3; ++a) {
+            if (both.max[a] - both.min[a] <= region.size)
+                centre[a] = 0.5f * (both.min[a] + both.max[a]);
+            else
+                centre[a] = std::clamp(centre[a], both.min[a] + half, both.max[a] - half);
+            centre[a] = std::clamp(centre[a], objects.max[a] - half, objects.min[a] + half);
+        }
+        region.origin = centre - glm::vec3(half);
+        return region;
+    }
     return cubeAround(boundsOf(scene.real), 1.0f + 2.0f / static_cast<float>(v.resolution), v.resolution);
 }
 

@@ -200,6 +200,30 @@ TEST(Render, AnObjectBlocksTheLightBouncingBetweenTwoRealSurfaces) {
     EXPECT_GT(b.x, 0.3f * a.x) << "the delta volume holds (almost) none of it";
 }
 
+// The default region reaches the real surfaces that light the object: a ball hanging over a lit floor gets
+// the floor's light on its lower half, which no direct light reaches. The paper's region (twice the ball's
+// box, reach_scale 0) stops short of the floor, and the lower half went black.
+TEST(Render, TheDefaultVolumeReachesTheFloorUnderAHangingBall) {
+    Scene s = test::floorScene();
+    s.real[0] = placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.8f)), "floor");
+    s.virtuals.push_back(placed(makeSphere(0.2f, 48), {0, 0.5f, 0}, diffuse(glm::vec3(0.8f)), "ball"));
+    s.camera = test::lookAtCamera({0.0f, 0.25f, 1.6f}, {0.0f, 0.45f, 0.0f}, 64, 48, 40.0f);
+    s.background = Image(64, 48, 3, 0.3f);
+    // A point on the ball's lower front, facing down and towards the camera.
+    const glm::vec3 lower = glm::vec3(0, 0.5f, 0) + 0.2f * glm::normalize(glm::vec3(0, -0.6f, 1.0f));
+    const glm::ivec2 p = test::project(s.camera, lower);
+    const RenderOutput reaching = render(s);
+    ASSERT_GT(reaching.objectMask.at(p.x, p.y, 0), 0.99f);
+    const VolumeRegion region = volumeRegion(s);
+    EXPECT_LE(region.origin.y, 0.0f) << "the region holds the floor";
+    s.options.volume.reachScale = 0.0f;
+    EXPECT_GT(volumeRegion(s).origin.y, 0.0f) << "twice the ball's box does not";
+    const RenderOutput paper = render(s);
+    const float bounced = reaching.composite.at(p.x, p.y, 0), cut = paper.composite.at(p.x, p.y, 0);
+    EXPECT_GT(bounced, 0.02f);
+    EXPECT_GT(bounced, 2.0f * cut);
+}
+
 TEST(Render, ResultDoesNotDependOnTheThreadCount) {
     auto run = [](int threads) {
         tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);

@@ -16,6 +16,11 @@ struct VolumeOptions {
     // "extent_scale": when no region is given, the region is this multiple of the virtual objects' bounding
     // box (§3.4 uses twice the bounding box), made cubic around its centre.
     float extentScale = 2.0f;
+    // "reach_scale": without an explicit region, the cube grows from extent_scale up to this multiple of the
+    // objects' box to take in the real surfaces around them (the walls and floor that light the object and
+    // that its shadows and light fall on), and is moved, keeping the objects inside, so that it holds as much
+    // of the real scene as it can. 0 (or below extent_scale) keeps the paper's extent_scale cube.
+    float reachScale = 4.0f;
     // "center" [x,y,z] and "size" (world units, edge length of the cube): an explicit region. Both or
     // neither.
     std::optional<glm::vec3> center;
