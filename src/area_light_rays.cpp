@@ -33,6 +33,28 @@ bool segmentNearSphere(glm::vec3 p, glm::vec3 q, glm::vec3 centre, float radius)
     return glm::dot(centre - closest, centre - closest) <= radius * radius;
 }
 
+// What both kinds of rays need: the objects' layer (if any), the origins' offset, the objects' bounding
+// sphere, and the sample grid of options.shadow.area_ray_samples.
+struct RaySetup {
+    const RayScene* objects;
+    float offset;
+    glm::vec3 objectCentre{0.0f};
+    float objectRadius = 0.0f;
+    int side, count;
+    RaySetup(const ShadowRayScenes& rays, const Options& options)
+        : objects(rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr) {
+        const Bounds3f bounds = rays.scene->bounds();
+        offset = kRayOffsetScale * std::max(bounds.empty() ? 1.0f : bounds.maxExtent(), 1e-3f);
+        if (objects) {
+            objectCentre = rays.objectBounds.center();
+            objectRadius = 0.5f * glm::length(rays.objectBounds.diagonal());
+        }
+        side = std::max(
+            1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.areaRaySamples)) + 1e-3f));
+        count = side * side;
+    }
+};
+
 }  // namespace
 
 std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, const AreaLights& emitters,
@@ -40,16 +62,7 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
                                           ShadowMode mode, std::span<const uint32_t> pixels) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     if (emitters.empty() || !rays.scene) return out;
-    const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
-    const bool relit = mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
-    const Bounds3f sceneBounds = rays.scene->bounds();
-    const float offset =
-        kRayOffsetScale * std::max(sceneBounds.empty() ? 1.0f : sceneBounds.maxExtent(), 1e-3f);
-    const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
-    const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
-    const int side =
-        std::max(1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.areaRaySamples)) + 1e-3f));
-    const int count = side * side;
+    const auto [objects, offset, objectCentre, objectRadius, side, count] = RaySetup(rays, options);
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
@@ -84,7 +97,7 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
             const bool byObjects = mayMeetObjects && mode != ShadowMode::SceneOnly &&
                                    objects->occludedTopLayer(origin, wi, 0.0f, tMax);
             if (mode == ShadowMode::DeltaShadow && !s.isVirtual && !byObjects) continue;
-            float visibility;  // of the light, or its change
+            float visibility = 0.0f;  // of the light, or its change
             switch (mode) {
                 case ShadowMode::Shaded:
                     visibility = !byObjects && !rays.scene->occluded(origin, wi, 0.0f, tMax) ? 1.0f : 0.0f;
@@ -112,7 +125,6 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
         }
         out[i] = sum / static_cast<float>(count);
     });
-    (void)relit;
     return out;
 }
 
@@ -122,15 +134,7 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
                                             std::span<const uint32_t> pixels) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     if (!rays.scene) return out;
-    const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
-    const Bounds3f sceneBounds = rays.scene->bounds();
-    const float offset =
-        kRayOffsetScale * std::max(sceneBounds.empty() ? 1.0f : sceneBounds.maxExtent(), 1e-3f);
-    const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
-    const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
-    const int side =
-        std::max(1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.areaRaySamples)) + 1e-3f));
-    const int count = side * side;
+    const auto [objects, offset, objectCentre, objectRadius, side, count] = RaySetup(rays, options);
     constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
@@ -141,10 +145,9 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
         const float jitterU = hashToUnit(i, kEnvironmentStream),
                     jitterV = hashToUnit(i, kEnvironmentStream + 1);
         // A relit point whose rays cannot reach the objects does not change.
-        if (mode == ShadowMode::DeltaShadow &&
-            (!objects || glm::length(objectCentre - origin) > objectRadius &&
-                             glm::dot(objectCentre - origin, p.normal) < -objectRadius))
-            return;
+        const bool objectsBelowHorizon = glm::length(objectCentre - origin) > objectRadius &&
+                                         glm::dot(objectCentre - origin, p.normal) < -objectRadius;
+        if (mode == ShadowMode::DeltaShadow && (!objects || objectsBelowHorizon)) return;
         glm::vec3 sum(0.0f);
         for (int k = 0; k < count; ++k) {
             const float u1 = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);

@@ -175,8 +175,6 @@ Evaluation evaluate(const Scene& scene, ReferenceOutput reference) {
     return e;
 }
 
-namespace {
-
 nlohmann::ordered_json figuresJson(const DeltaFigures& f) {
     nlohmann::ordered_json j;
     j["delta_rel_error"] = f.deltaRelError;
@@ -186,8 +184,6 @@ nlohmann::ordered_json figuresJson(const DeltaFigures& f) {
     j["bias_shadowed"] = f.biasShadowed;
     return j;
 }
-
-}  // namespace
 
 nlohmann::ordered_json evaluationToJson(const Evaluation& e) {
     nlohmann::ordered_json j = figuresJson(e.dgi);

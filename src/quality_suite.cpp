@@ -276,16 +276,6 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
 
 namespace {
 
-nlohmann::ordered_json figuresJson(const DeltaFigures& f) {
-    nlohmann::ordered_json j;
-    j["delta_rel_error"] = f.deltaRelError;
-    j["object_rel_rmse"] = f.objectRelRmse;
-    j["composite_rmse"] = f.compositeRmse;
-    j["bias_lit"] = f.biasLit;
-    j["bias_shadowed"] = f.biasShadowed;
-    return j;
-}
-
 nlohmann::ordered_json sceneJson(const SceneQuality& q) {
     nlohmann::ordered_json j;
     j["name"] = q.name;

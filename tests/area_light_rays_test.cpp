@@ -14,6 +14,7 @@ namespace deltagi {
 namespace {
 
 using test::diffuse;
+using test::floorPoint;
 using test::placed;
 
 constexpr float kPi = std::numbers::pi_v<float>;
@@ -42,15 +43,6 @@ Scene panelScene() {
     s.options.volume.resolution = 32;
     s.options.rsm.resolution = 128;
     s.options.diffuse.count = 6;
-    return s;
-}
-
-SurfacePoint floorPoint(glm::vec3 p, const Material& m) {
-    SurfacePoint s;
-    s.position = p;
-    s.normal = glm::vec3(0, 1, 0);
-    s.toEye = glm::vec3(0, 1, 0);
-    s.material = &m;
     return s;
 }
 

@@ -14,16 +14,8 @@ namespace deltagi {
 namespace {
 
 using test::diffuse;
+using test::floorPoint;
 using test::placed;
-
-SurfacePoint floorPoint(glm::vec3 p, const Material& material) {
-    SurfacePoint s;
-    s.position = p;
-    s.normal = glm::vec3(0, 1, 0);
-    s.toEye = glm::vec3(0, 1, 0);
-    s.material = &material;
-    return s;
-}
 
 // A sphere of radius 0.2 at height 0.5 under a point light at 1.5 casts a round umbra of radius
 // 1.5 tan(asin(0.2 / 1.0)) = 0.306 on the floor, with no penumbra. Rendered end to end with the default

@@ -4,12 +4,14 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/scene.h"
+#include "gbuffer.h"
 #include "mesh_io.h"
 #include "shapes.h"
 
 namespace deltagi::test {
 
-inline TriangleMesh placed(TriangleMesh mesh, glm::vec3 translate, Material material, std::string name = "mesh") {
+inline TriangleMesh placed(TriangleMesh mesh, glm::vec3 translate, Material material,
+                           std::string name = "mesh") {
     transformMesh(mesh, glm::translate(glm::mat4(1.0f), translate));
     mesh.material = material;
     mesh.name = std::move(name);
@@ -41,6 +43,16 @@ inline glm::ivec2 project(const Camera& c, glm::vec3 p) {
     float px = c.cx + c.fx * (q.x / -q.z);
     float py = c.cy - c.fy * (q.y / -q.z);
     return {static_cast<int>(std::floor(px)), static_cast<int>(std::floor(py))};
+}
+
+// A G-buffer point at `p` on a floor (normal and view +y) of `material`.
+inline SurfacePoint floorPoint(glm::vec3 p, const Material& material) {
+    SurfacePoint s;
+    s.position = p;
+    s.normal = glm::vec3(0, 1, 0);
+    s.toEye = glm::vec3(0, 1, 0);
+    s.material = &material;
+    return s;
 }
 
 inline Light pointLight(glm::vec3 position, float intensity) {

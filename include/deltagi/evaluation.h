@@ -97,6 +97,9 @@ Evaluation evaluate(const Scene& scene, const ReferenceOptions& referenceOptions
 // the scene's camera.
 Evaluation evaluate(const Scene& scene, ReferenceOutput reference);
 
+// One method's figures, with the keys of `deltagi eval --json`.
+nlohmann::ordered_json figuresJson(const DeltaFigures& figures);
+
 // The figures with exactly the keys of `deltagi eval --json` (see docs/ground-truth.md).
 nlohmann::ordered_json evaluationToJson(const Evaluation& evaluation);
 
