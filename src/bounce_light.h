@@ -1,6 +1,6 @@
 // Stage 3b: light that bounces more than once. The reflective shadow maps inject the surfaces the lights
 // reach directly, so the cones of §3.1 gather one bounce of indirect light; in a closed room of bright walls
-// the further bounces are a third or more of the light (the Cornell box: the real scene's mean radiance is
+// the further bounces are a quarter or more of the light (the Cornell box: the real scene's mean radiance is
 // 0.27 with one bounce and 0.37 with all of them, in the path tracer). bounceLight() gathers the light volume
 // at every surface voxel of the real scene with the diffuse cones, reflects it by the voxel's albedo, and
 // adds it to the volume, as many times as asked: each pass adds one bounce.
