@@ -134,7 +134,12 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
     const LightSample s = sampleLight(light, point.position);
     const float cosTheta = glm::dot(s.wi, point.normal);
     if (cosTheta <= 0.0f) return glm::vec3(0.0f);
-    return evalBrdf(*point.material, point.normal, point.toEye, s.wi) * s.irradiance * cosTheta;
+    // A sphere light's glossy highlight is as wide as its disk (the path tracer samples the disk).
+    const float lightAngle = light.type == Light::Type::Directional ? light.angularRadius
+                             : light.radius > 0.0f && s.distance > 0.0f
+                                 ? std::asin(std::min(light.radius / s.distance, 1.0f))
+                                 : 0.0f;
+    return evalBrdf(*point.material, point.normal, point.toEye, s.wi, lightAngle) * s.irradiance * cosTheta;
 }
 
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
