@@ -138,11 +138,11 @@ struct RenderOptions {
     // paper's delta volume seen through both visibility volumes (§3.3), which misses the light the objects
     // block between two real surfaces. "differential": each cone is the full light volume seen through both
     // visibility volumes minus the real scene's own light (full - delta) seen through the scene's visibility
-    // alone, which includes that blocked light. Against the path tracer (320x240, 256 spp) it halves the
-    // remaining indirect error of the Cornell box with ball and ring (delta_rel_error 0.269 -> 0.216) but
-    // makes the Happy Buddha's worse (0.275 -> 0.309): one bounce of blocked light is taken away where the
-    // path tracer's further bounces give much of it back. Against a path tracer limited to one bounce the two
-    // are equal (0.222 vs 0.226, 0.208 vs 0.204); it becomes the default with multi-bounce light.
+    // alone, which includes that blocked light. On the quality suite (docs/quality.md) it lowers
+    // delta_rel_error on four scenes (ball and ring 0.255 -> 0.159, area light 0.297 -> 0.216, glossy 0.268 ->
+    // 0.260, field 0.758 -> 0.703) but raises the Happy Buddha's (0.227 -> 0.306): near a large object the full
+    // volume's radiance is averaged over the objects' occupancy too while the opacity saturates, so the cones
+    // read less light with the object than without. It becomes the default once that bias is gone.
     std::string relightCones = "delta_volume";
     // "light_bounces": bounces of indirect light the light volumes carry (1 to 8). 1 is the paper: the
     // reflective shadow maps inject the directly lit surfaces, and the cones gather one bounce. Each more
