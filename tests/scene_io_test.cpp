@@ -474,6 +474,42 @@ TEST_F(SceneIoTest, WrongTypesNameThePathAndTheExpectedType) {
     }
 }
 
+// The options of shadow rays, area lights, further bounces, the relit cones and the region's reach: read,
+// written back, and bad values refused naming the key.
+TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
+    json doc = baseScene();
+    doc["options"] = json::parse(R"({"shadow": {"method": "cones", "ray_samples": 9, "area_ray_samples": 25},
+        "render": {"light_bounces": 3, "relight_cones": "differential"}, "volume": {"reach_scale": 0}})");
+    const Options options = load(doc).options;
+    EXPECT_EQ(options.shadow.method, "cones");
+    EXPECT_EQ(options.shadow.raySamples, 9);
+    EXPECT_EQ(options.shadow.areaRaySamples, 25);
+    EXPECT_EQ(options.render.lightBounces, 3);
+    EXPECT_EQ(options.render.relightCones, "differential");
+    EXPECT_EQ(options.volume.reachScale, 0.0f);
+    const json written = optionsToJson(options);
+    EXPECT_EQ(written["shadow"]["method"], "cones");
+    EXPECT_EQ(written["render"]["light_bounces"], 3);
+    EXPECT_EQ(written["volume"]["reach_scale"], 0.0);
+    const Options defaults;
+    EXPECT_EQ(defaults.shadow.method, "rays");
+    EXPECT_EQ(defaults.render.relightCones, "delta_volume");
+    struct Bad {
+        const char* options;
+        const char* key;
+    };
+    for (const Bad& bad :
+         {Bad{R"({"shadow": {"method": "beams"}})", "options.shadow.method"},
+          Bad{R"({"shadow": {"ray_samples": 0}})", "options.shadow.ray_samples"},
+          Bad{R"({"shadow": {"area_ray_samples": 1000}})", "options.shadow.area_ray_samples"},
+          Bad{R"({"render": {"light_bounces": 0}})", "options.render.light_bounces"},
+          Bad{R"({"render": {"relight_cones": true}})", "options.render.relight_cones"},
+          Bad{R"({"volume": {"reach_scale": -1}})", "options.volume.reach_scale"}}) {
+        doc["options"] = json::parse(bad.options);
+        expectContains(loadError(doc), {std::string("scene.json: ") + bad.key});
+    }
+}
+
 // Pixel strides: "auto" (the default, 0) scales the 640x480 strides with the image; explicit ones are powers
 // of two up to 32 and are used as given.
 TEST_F(SceneIoTest, PixelStridesAreAutoOrPowersOfTwo) {
