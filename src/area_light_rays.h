@@ -23,19 +23,19 @@ namespace deltagi {
 // Shaded, the light through both the scene and the objects; SceneOnly, through the scene alone (the emitters
 // of the real scene); DeltaShadow, the change the objects make (the light a real emitter no longer sends,
 // plus all a virtual emitter sends); DeltaSingleVisibility, as DeltaShadow with every real emitter's light
-// taken as unshadowed by the scene. options.shadow.area_ray_samples rays per point on a jittered grid offset per
-// pixel (seeded by the point's index). Traces the points listed in `pixels`, or all of them when it is empty;
-// zero for the others and for invalid points.
+// taken as unshadowed by the scene. options.shadow.area_ray_samples rays per point on a jittered grid offset
+// per pixel (seeded by the point's index). Traces the points listed in `pixels`, or all of them when it is
+// empty; zero for the others and for invalid points.
 std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, const AreaLights& emitters,
                                           const ShadowRayScenes& rays, const Options& options,
                                           ShadowMode mode, std::span<const uint32_t> pixels = {});
 
 // The direct light of the environment map at each point, or its change, under `mode` (as
-// traceAreaLightRays): options.shadow.area_ray_samples directions per point drawn by `sampler` (in proportion to
-// the map's radiance, as the path tracer draws them), each a shadow ray to infinity through the scene and the
-// objects, weighted by the BRDF. With it the map's lights (Light::fromEnvironment) light the volumes only,
-// and the sky is not gathered through the cones: the shadows and the ambient occlusion the objects cast under
-// the sky are those of the rays.
+// traceAreaLightRays): options.shadow.area_ray_samples directions per point drawn by `sampler` (in proportion
+// to the map's radiance, as the path tracer draws them), each a shadow ray to infinity through the scene and
+// the objects, weighted by the BRDF. With it the map's lights (Light::fromEnvironment) light the volumes
+// only, and the sky is not gathered through the cones: the shadows and the ambient occlusion the objects cast
+// under the sky are those of the rays.
 std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points,
                                             const EnvironmentSampler& sampler, const ShadowRayScenes& rays,
                                             const Options& options, ShadowMode mode,

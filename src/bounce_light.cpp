@@ -83,4 +83,62 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     return indirect;
 }
 
+std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeometry& objects,
+                                          const MipVolume& objectVisibility, const MipVolume& sceneVisibility,
+                                          const Options& options, const VoxelBox& box, int level) {
+    std::vector<glm::vec3> added(box.empty() ? 0 : box.count(), glm::vec3(0.0f));
+    if (box.empty() || objects.albedo.empty() || objectVisibility.levelCount() <= level) return added;
+    const VolumeRegion& region = light.region();
+    const Grid3& coarse = objectVisibility.level(level);
+    const int n = region.resolution, factor = n / coarse.resolution();
+    const float coarseSize = region.voxelSize() * static_cast<float>(factor);
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
+    // The coarse voxels over the box, gathered once each.
+    const glm::ivec3 lo = box.lo / factor, hi = (box.hi + factor - 1) / factor;
+    const glm::ivec3 size = hi - lo;
+    std::vector<glm::vec3> gathered(static_cast<size_t>(size.x) * size.y * size.z, glm::vec3(0.0f));
+    parallelFor(0, static_cast<int64_t>(size.y) * size.z, 1, [&](int64_t row) {
+        const int z = lo.z + static_cast<int>(row / size.y), y = lo.y + static_cast<int>(row % size.y);
+        for (int x = lo.x; x < hi.x; ++x) {
+            const glm::vec4 v = coarse.at(x, y, z);
+            if (v.x <= 0.0f) continue;
+            const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / v.x;
+            const float coherence = glm::length(meanNormal);
+            if (coherence < kMinCoherence) continue;
+            const glm::vec3 normal = meanNormal / coherence;
+            const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+            const glm::mat3 frame = frameAround(normal);
+            const size_t i = coarse.index(x, y, z);
+            glm::vec3 sum(0.0f);
+            for (size_t k = 0; k < cones.directions.size(); ++k) {
+                Cone cone;
+                cone.direction = frame * cones.directions[k];
+                cone.origin = coneOrigin(centre + (0.5f * coarseSize) * normal, normal, cone.direction,
+                                         region, settings);
+                cone.tanHalfAngle = cones.tanHalfAngle;
+                cone.jitter = hashToUnit(i, kBounceStream + static_cast<uint32_t>(k));
+                sum += cones.weights[k] * traceLightCone(cone, light, occluders, settings);
+            }
+            gathered[(static_cast<size_t>(z - lo.z) * size.y + (y - lo.y)) * size.x + (x - lo.x)] = sum;
+        }
+    });
+    const glm::ivec3 extent = box.hi - box.lo;
+    parallelFor(0, static_cast<int64_t>(extent.y) * extent.z, 4, [&](int64_t row) {
+        const int z = box.lo.z + static_cast<int>(row / extent.y),
+                  y = box.lo.y + static_cast<int>(row % extent.y);
+        for (int x = box.lo.x; x < box.hi.x; ++x) {
+            const size_t i = objects.visibility.index(x, y, z);
+            const float occupancy = objects.visibility[i].x;
+            if (occupancy <= 0.0f) continue;
+            const glm::ivec3 c = glm::ivec3(x, y, z) / factor - lo;
+            const glm::vec3 g = gathered[(static_cast<size_t>(c.z) * size.y + c.y) * size.x + c.x];
+            added[(static_cast<size_t>(z - box.lo.z) * extent.y + (y - box.lo.y)) * extent.x +
+                  (x - box.lo.x)] = objects.albedo[i] * g * occupancy;
+        }
+    });
+    return added;
+}
+
 }  // namespace deltagi

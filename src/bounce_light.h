@@ -28,4 +28,13 @@ namespace deltagi {
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
                   const Options& options, int bounces, glm::vec3 viewpoint);
 
+// The virtual objects' own reflection of the light they receive (their further bounce): the light volume
+// `light` gathered at every mip-`level` voxel of the objects inside `box` (level-0 voxels), around its mean
+// normal (objects are closed and wound outwards), occluded by the scene and the objects, and reflected by
+// each level-0 voxel's albedo (`objects` voxelized with albedo). Returns the radiance to add per level-0
+// voxel of `box`, row by row (box.count() entries, x fastest), zero where no object is.
+std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeometry& objects,
+                                          const MipVolume& objectVisibility, const MipVolume& sceneVisibility,
+                                          const Options& options, const VoxelBox& box, int level);
+
 }  // namespace deltagi

@@ -171,13 +171,15 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
 }
 
 glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, const MipVolume& deltaLight,
-                               const VisibilityVolumes& visibility, const ConeTraceSettings& settings) {
+                               const VisibilityVolumes& visibility, const ConeTraceSettings& settings,
+                               const MipVolume* objectLight) {
     // With the objects (a) and without them (b).
     glm::vec3 lightA(0.0f), lightB(0.0f);
     float occlusionA = 0.0f, occlusionB = 0.0f;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
-    auto composite = [&](glm::vec3& light, float& occlusion, glm::vec3 local, float opacity) {
-        const glm::vec3 contribution = local * (opacity * (1.0f - occlusion));
+    // `emitted`: the step's light times its opacity.
+    auto composite = [&](glm::vec3& light, float& occlusion, glm::vec3 emitted, float opacity) {
+        const glm::vec3 contribution = emitted * (1.0f - occlusion);
         light = settings.paperAccumulation ? light * occlusion + contribution : light + contribution;
         occlusion += opacity * (1.0f - occlusion);
     };
@@ -199,9 +201,23 @@ glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, con
             // both visibility volumes, the scene's alone (full - delta) by the scene's. Dividing the scene's
             // light by the objects' occupancy too would dim it in every coarse voxel the objects share, while
             // its opacity (B) does not count them: B would fall short of A far from the objects.
-            if (full.w > 1e-6f) composite(lightA, occlusionA, glm::vec3(full) / full.w, opacityA);
+            if (objectLight) {
+                // The scene's surfaces (with the objects' effect on them) through the scene's opacity, the
+                // objects' own light through the opacity they add.
+                const glm::vec4 objects = objectLight->gather(at);
+                const glm::vec4 sceneWith = full - objects;
+                const glm::vec3 sceneRadiance =
+                    sceneWith.w > 1e-6f ? glm::vec3(sceneWith) / sceneWith.w : glm::vec3(0.0f);
+                const glm::vec3 objectRadiance =
+                    objects.w > 1e-6f ? glm::vec3(objects) / objects.w : glm::vec3(0.0f);
+                composite(lightA, occlusionA,
+                          sceneRadiance * opacityB + objectRadiance * (opacityA - opacityB), opacityA);
+            } else if (full.w > 1e-6f) {
+                composite(lightA, occlusionA, glm::vec3(full) / full.w * opacityA, opacityA);
+            }
             if (opacityB > 0.0f && sceneVisibility.x > 1e-6f)
-                composite(lightB, occlusionB, glm::vec3(full - delta) / sceneVisibility.x, opacityB);
+                composite(lightB, occlusionB, glm::vec3(full - delta) / sceneVisibility.x * opacityB,
+                          opacityB);
         }
         return occlusionA < settings.maxOcclusion || occlusionB < settings.maxOcclusion;
     });

@@ -65,8 +65,14 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
 // light they take from surfaces they shadow, but not the light they block on its way between two real
 // surfaces (the red wall's light that no longer reaches the floor behind the object); the difference holds
 // all three, and is exactly the delta volume's cone wherever the objects do not occlude the cone.
+// With `objectLight` (the full volume's voxels the objects occupy, ObjectVolumes::objectLight), a step's
+// light with the objects is told apart: the scene's surfaces shine with their own radiance through the
+// scene's opacity, the objects with theirs through the opacity they add. Without it the full volume's
+// radiance, an average over both, would shine through the objects' opacity too: a black ball would glow with
+// the floor's light in every coarse voxel it shares with the floor.
 glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, const MipVolume& deltaLight,
-                               const VisibilityVolumes& visibility, const ConeTraceSettings& settings);
+                               const VisibilityVolumes& visibility, const ConeTraceSettings& settings,
+                               const MipVolume* objectLight = nullptr);
 
 // Occlusion accumulated along a shadow cone, by the scene volume alone, the object volume alone and both.
 struct ShadowOcclusion {

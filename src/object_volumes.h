@@ -15,6 +15,7 @@
 #include <optional>
 #include <span>
 
+#include "deltagi/options.h"
 #include "inject.h"
 #include "mipmap.h"
 #include "voxelize.h"
@@ -35,25 +36,35 @@ struct RealSceneVolumes {
 class ObjectVolumes {
   public:
     // Stage 1: the objects' voxels, over `region` (a new region starts afresh).
-    void voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region,
-                  bool withEmission = true);
+    void voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region, bool withEmission = true,
+                  bool withAlbedo = false);
     // Stage 3: the full and delta light volumes (level 0). `updates` are the real scene's RSMs' updates for
     // the objects (traceRsmUpdate), one per light.
     void inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates);
-    // Stage 4: the mip chains of the three volumes.
-    void mipmap();
+    // Stage 4: the mip chains of the three volumes. With `sceneVisibility` and the objects voxelized with
+    // albedo, the objects' own further bounce is added to the full and delta volumes (gatherObjectBounce):
+    // they reflect the light of the room they receive, not only their direct light.
+    void mipmap(const MipVolume* sceneVisibility = nullptr, const Options* options = nullptr);
 
     const MipVolume& objectVisibility() const { return objectVisibility_; }
     const MipVolume& fullLight() const { return fullLight_; }
     const MipVolume& deltaLight() const { return deltaLight_; }
+    // The full light volume's voxels that the objects occupy (level 0; zero elsewhere), mip-mapped: the
+    // objects' own light, which the differential relit cones tell apart from the scene's
+    // (traceLightChangeCone).
+    const MipVolume& objectLight() const { return objectLight_; }
     // The level-0 voxels of the light volumes that the last inject() wrote (all of them when it injected
     // from scratch): what a frame cost, for tests and measurements.
     const VoxelBox& injectedBox() const { return lightChanged_; }
 
   private:
+    // mipmap() without the objects' bounce.
+    void buildLightMips();
+    // objectLight_ = the full light where the objects are, zero elsewhere, inside `box`, and its mip chain.
+    void updateObjectLight(const VoxelBox& box);
     VolumeRegion region_;
     VoxelGeometry objects_;  // the objects' voxels (level 0 of objectVisibility_, copied there by mipmap())
-    MipVolume objectVisibility_, fullLight_, deltaLight_;
+    MipVolume objectVisibility_, fullLight_, deltaLight_, objectLight_;
     VoxelBox objectsChanged_;  // level-0 voxels that this frame's voxelization changed
     VoxelBox lightDiffers_;    // outside it the full light volume is the scene's (the last injection)
     VoxelBox lightChanged_;    // level-0 voxels that this frame's injection rewrote

@@ -93,6 +93,7 @@ struct ConeJob {
     ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
     // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
     const MipVolume* fullLight = nullptr;
+    const MipVolume* objectLight = nullptr;  // with fullLight: the objects' share of it
     // Emitting surfaces lighting the points through shadow rays (options.shadow.method "rays"), or none.
     const AreaLights* emitters = nullptr;
     // The environment map lighting the points through shadow rays (options.shadow.method "rays"), or none.
@@ -254,18 +255,20 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
-        results[j].diffuse = traceSparse<glm::vec3>(
-            job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
-            job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
-                return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight);
-            });
+        results[j].diffuse =
+            traceSparse<glm::vec3>(job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera),
+                                   1, job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
+                                       return traceDiffuseCones(job.points, *job.light, job.visibility, o,
+                                                                pixels, job.fullLight, job.objectLight);
+                                   });
     }
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
         auto trace = [&](std::span<const uint32_t> pixels) {
-            return traceSpecularCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight);
+            return traceSpecularCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
+                                      job.objectLight);
         };
         // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
         results[j].specular = job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
@@ -395,7 +398,7 @@ const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePo
 // scene's share comes from `kept` when it is there; the objects' volumes are kept there too and updated
 // where the objects changed them since the last frame (ObjectVolumes).
 struct DgiVolumes {
-    const MipVolume *sceneVisibility, *objectVisibility, *fullLight, *deltaLight;
+    const MipVolume *sceneVisibility, *objectVisibility, *fullLight, *deltaLight, *objectLight;
 };
 
 DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const VolumeRegion& region,
@@ -407,7 +410,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
     const int bounces = scene.options.render.lightBounces - 1;
     if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region, withEmission, bounces > 0);
-    objects.voxelize(scene.virtuals, region, withEmission);
+    objects.voxelize(scene.virtuals, region, withEmission, bounces > 0);
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
@@ -437,9 +440,11 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     // 4. Mipmaps of all four volumes.
     if (!kept.sceneVisibility)
         kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
-    objects.mipmap();
+    // With further bounces the objects reflect the room's light they receive too.
+    objects.mipmap(bounces > 0 ? &*kept.sceneVisibility : nullptr, &scene.options);
     timer.lap("mipmap");
-    return {&*kept.sceneVisibility, &objects.objectVisibility(), &objects.fullLight(), &objects.deltaLight()};
+    return {&*kept.sceneVisibility, &objects.objectVisibility(), &objects.fullLight(), &objects.deltaLight(),
+            &objects.objectLight()};
 }
 
 // The real scene alone, rendered with regular voxel cone tracing over its own bounds: the background when the
@@ -476,6 +481,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
                       nullptr,
                       {},
                       {&realOnly, nullptr, {}},
+                      nullptr,
                       nullptr,
                       areaRays ? &emitters : nullptr,
                       environment ? &*environment : nullptr};
@@ -575,6 +581,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          {},
          shadowRays,
          nullptr,
+         nullptr,
          &emitters,
          environment ? &*environment : nullptr},
         {realPoints,
@@ -588,6 +595,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          objectPixels,
          shadowRays,
          o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
+         volumes.objectLight,
          &emitters,
          environment ? &*environment : nullptr}};
     const std::vector<ConeResults> cones = traceCones(jobs, scene, direct, timer);

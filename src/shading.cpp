@@ -86,7 +86,8 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
 
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                          const VisibilityVolumes& visibility, const Options& options,
-                                         std::span<const uint32_t> pixels, const MipVolume* fullLight) {
+                                         std::span<const uint32_t> pixels, const MipVolume* fullLight,
+                                         const MipVolume* objectLight) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
@@ -101,9 +102,9 @@ std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, c
             cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
             cone.tanHalfAngle = cones.tanHalfAngle;
             cone.jitter = hashToUnit(i, static_cast<uint32_t>(1000 + k));
-            sum += cones.weights[k] *
-                   (fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility, settings)
-                              : traceLightCone(cone, light, visibility, settings));
+            sum += cones.weights[k] * (fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility,
+                                                                        settings, objectLight)
+                                                 : traceLightCone(cone, light, visibility, settings));
         }
         out[i] = sum;
     });
@@ -112,7 +113,8 @@ std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, c
 
 std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                           const VisibilityVolumes& visibility, const Options& options,
-                                          std::span<const uint32_t> pixels, const MipVolume* fullLight) {
+                                          std::span<const uint32_t> pixels, const MipVolume* fullLight,
+                                          const MipVolume* objectLight) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
@@ -124,7 +126,7 @@ std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, 
         cone.tanHalfAngle = specularConeTanHalfAngle(
             p.material->phongExponent(), options.specular.minApertureDeg, options.specular.maxApertureDeg);
         cone.jitter = hashToUnit(i, 2000u);
-        out[i] = fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility, settings)
+        out[i] = fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility, settings, objectLight)
                            : traceLightCone(cone, light, visibility, settings);
     });
     return out;

@@ -44,14 +44,16 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                          const VisibilityVolumes& visibility, const Options& options,
                                          std::span<const uint32_t> pixels = {},
-                                         const MipVolume* fullLight = nullptr);
+                                         const MipVolume* fullLight = nullptr,
+                                         const MipVolume* objectLight = nullptr);
 
 // The specular cone along the mirrored view direction, aperture from the material's roughness. Zero for
 // invalid points and materials without a specular part. `fullLight` as for traceDiffuseCones.
 std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                           const VisibilityVolumes& visibility, const Options& options,
                                           std::span<const uint32_t> pixels = {},
-                                          const MipVolume* fullLight = nullptr);
+                                          const MipVolume* fullLight = nullptr,
+                                          const MipVolume* objectLight = nullptr);
 
 // The BRDF of deltagi::Material times cos(theta_i) times the light's irradiance: unshadowed direct radiance.
 glm::vec3 directRadiance(const SurfacePoint& point, const Light& light);

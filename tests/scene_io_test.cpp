@@ -493,7 +493,7 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
     EXPECT_EQ(written["volume"]["reach_scale"], 0.0);
     const Options defaults;
     EXPECT_EQ(defaults.shadow.method, "rays");
-    EXPECT_EQ(defaults.render.relightCones, "delta_volume");
+    EXPECT_EQ(defaults.render.relightCones, "differential");
     struct Bad {
         const char* options;
         const char* key;

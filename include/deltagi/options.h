@@ -134,16 +134,15 @@ struct RenderOptions {
     // "relight_indirect": add the indirect change (delta volume cones) to real surfaces. false keeps only the
     // object's shadow on them (the "shadow only" baseline of the evaluation); the object is shaded in full.
     bool relightIndirect = true;
-    // "relight_cones": how the real surfaces' indirect change is traced. "delta_volume" (the default): the
-    // paper's delta volume seen through both visibility volumes (§3.3), which misses the light the objects
-    // block between two real surfaces. "differential": each cone is the full light volume seen through both
-    // visibility volumes minus the real scene's own light (full - delta) seen through the scene's visibility
-    // alone, which includes that blocked light. On the quality suite (docs/quality.md) it lowers
-    // delta_rel_error on four scenes (ball and ring 0.255 -> 0.159, area light 0.297 -> 0.216, glossy 0.268 ->
-    // 0.260, field 0.758 -> 0.703) but raises the Happy Buddha's (0.227 -> 0.306): near a large object the full
-    // volume's radiance is averaged over the objects' occupancy too while the opacity saturates, so the cones
-    // read less light with the object than without. It becomes the default once that bias is gone.
-    std::string relightCones = "delta_volume";
+    // "relight_cones": how the real surfaces' indirect change is traced. "differential" (the default): each
+    // cone is the full light volume seen through both visibility volumes (the scene's surfaces and the
+    // objects' each shining with their own radiance) minus the real scene's own light (full - delta) seen
+    // through the scene's visibility alone, which includes the light the objects block between two real
+    // surfaces. "delta_volume": the paper's delta volume seen through both visibility volumes (§3.3), which
+    // misses that blocked light. Quality suite (with the objects' own further bounce): delta_rel_error 0.255
+    // -> 0.161 (ball and ring), 0.227 -> 0.204 (Buddha), 0.268 -> 0.258 (glossy), 0.297 -> 0.216 (area light),
+    // 0.758 -> 0.630 (field photo).
+    std::string relightCones = "differential";
     // "light_bounces": bounces of indirect light the light volumes carry (1 to 8). 1 is the paper: the
     // reflective shadow maps inject the directly lit surfaces, and the cones gather one bounce. Each more
     // gathers the volume at every surface voxel of the real scene and adds what it reflects (bounceLight,
