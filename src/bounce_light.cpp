@@ -16,6 +16,26 @@ constexpr float kMinCoherence = 0.2f;
 constexpr int kGatherLevel = 1;
 constexpr uint32_t kBounceStream = 9000;  // hashToUnit streams of the cones' jitter
 
+// The diffuse cones' light (cosine-weighted, so that albedo times it is the reflected radiance) gathered at a
+// coarse voxel of `size` (world units) around `normal`, from the voxel's face along the normal so that its
+// own surfaces do not occlude; jittered by the voxel's `index`.
+glm::vec3 gatherAtVoxel(glm::vec3 centre, glm::vec3 normal, float size, size_t index, const MipVolume& light,
+                        const VisibilityVolumes& occluders, const DiffuseConeSet& cones,
+                        const ConeTraceSettings& settings) {
+    const glm::mat3 frame = frameAround(normal);
+    glm::vec3 sum(0.0f);
+    for (size_t k = 0; k < cones.directions.size(); ++k) {
+        Cone cone;
+        cone.direction = frame * cones.directions[k];
+        cone.origin =
+            coneOrigin(centre + (0.5f * size) * normal, normal, cone.direction, light.region(), settings);
+        cone.tanHalfAngle = cones.tanHalfAngle;
+        cone.jitter = hashToUnit(index, kBounceStream + static_cast<uint32_t>(k));
+        sum += cones.weights[k] * traceLightCone(cone, light, occluders, settings);
+    }
+    return sum;
+}
+
 }  // namespace
 
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
@@ -53,19 +73,7 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
                 // gathers is the one facing the viewpoint.
                 const glm::vec3 normal =
                     (glm::dot(meanNormal, viewpoint - centre) < 0.0f ? -1.0f : 1.0f) * meanNormal / coherence;
-                const glm::mat3 frame = frameAround(normal);
-                glm::vec3 sum(0.0f);
-                for (size_t k = 0; k < cones.directions.size(); ++k) {
-                    Cone cone;
-                    cone.direction = frame * cones.directions[k];
-                    // From the coarse voxel's face along the normal, so that its own surfaces do not occlude.
-                    cone.origin = coneOrigin(centre + (0.5f * coarseSize) * normal, normal, cone.direction,
-                                             region, settings);
-                    cone.tanHalfAngle = cones.tanHalfAngle;
-                    cone.jitter = hashToUnit(i, kBounceStream + static_cast<uint32_t>(k));
-                    sum += cones.weights[k] * traceLightCone(cone, light, occluders, settings);
-                }
-                gathered[i] = sum;
+                gathered[i] = gatherAtVoxel(centre, normal, coarseSize, i, light, occluders, cones, settings);
             }
         });
         // Reflect it at every surface voxel of level 0 by the voxel's albedo.
@@ -109,19 +117,9 @@ std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeo
             if (coherence < kMinCoherence) continue;
             const glm::vec3 normal = meanNormal / coherence;
             const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
-            const glm::mat3 frame = frameAround(normal);
-            const size_t i = coarse.index(x, y, z);
-            glm::vec3 sum(0.0f);
-            for (size_t k = 0; k < cones.directions.size(); ++k) {
-                Cone cone;
-                cone.direction = frame * cones.directions[k];
-                cone.origin = coneOrigin(centre + (0.5f * coarseSize) * normal, normal, cone.direction,
-                                         region, settings);
-                cone.tanHalfAngle = cones.tanHalfAngle;
-                cone.jitter = hashToUnit(i, kBounceStream + static_cast<uint32_t>(k));
-                sum += cones.weights[k] * traceLightCone(cone, light, occluders, settings);
-            }
-            gathered[(static_cast<size_t>(z - lo.z) * size.y + (y - lo.y)) * size.x + (x - lo.x)] = sum;
+            gathered[(static_cast<size_t>(z - lo.z) * size.y + (y - lo.y)) * size.x + (x - lo.x)] =
+                gatherAtVoxel(centre, normal, coarseSize, coarse.index(x, y, z), light, occluders, cones,
+                              settings);
         }
     });
     const glm::ivec3 extent = box.hi - box.lo;
