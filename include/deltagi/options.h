@@ -140,8 +140,8 @@ struct RenderOptions {
     // through the scene's visibility alone, which includes the light the objects block between two real
     // surfaces. "delta_volume": the paper's delta volume seen through both visibility volumes (§3.3), which
     // misses that blocked light. Quality suite (with the objects' own further bounce): delta_rel_error 0.255
-    // -> 0.161 (ball and ring), 0.227 -> 0.204 (Buddha), 0.268 -> 0.258 (glossy), 0.297 -> 0.216 (area light),
-    // 0.758 -> 0.630 (field photo).
+    // -> 0.161 (ball and ring), 0.227 -> 0.204 (Buddha), 0.268 -> 0.258 (glossy), 0.297 -> 0.216 (area
+    // light), 0.758 -> 0.630 (field photo).
     std::string relightCones = "differential";
     // "light_bounces": bounces of indirect light the light volumes carry (1 to 8). 1 is the paper: the
     // reflective shadow maps inject the directly lit surfaces, and the cones gather one bounce. Each more

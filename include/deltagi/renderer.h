@@ -63,8 +63,8 @@ class FrameRenderer {
 };
 
 // The cubic region covered by the volumes: the explicit options.volume region, or extent_scale times the
-// virtual objects' bounding box (§3.4) grown up to reach_scale times it to take in the real scene around them;
-// the real scene's bounds when there are no virtual objects.
+// virtual objects' bounding box (§3.4) grown up to reach_scale times it to take in the real scene around
+// them; the real scene's bounds when there are no virtual objects.
 struct VolumeRegion {
     glm::vec3 origin{0.0f};  // world-space corner with the smallest coordinates
     float size = 1.0f;       // edge length, world units
