@@ -15,24 +15,6 @@ constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kAreaLightStream = 7000;  // hashToUnit streams of the sample grid's offsets
 constexpr uint32_t kEnvironmentStream = 7100;
 
-// Whether a ray from `p` within `halfAngle` of `direction` can pass within `radius` of `centre`.
-bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 centre, float radius) {
-    const glm::vec3 toCentre = centre - p;
-    const float distance = glm::length(toCentre);
-    if (distance <= radius) return true;
-    const float angle = std::acos(glm::clamp(glm::dot(toCentre / distance, direction), -1.0f, 1.0f));
-    return angle <= halfAngle + std::asin(radius / distance);
-}
-
-// Whether a segment from `p` to `q` can pass within `radius` of `centre`.
-bool segmentNearSphere(glm::vec3 p, glm::vec3 q, glm::vec3 centre, float radius) {
-    const glm::vec3 d = q - p;
-    const float len2 = glm::dot(d, d);
-    const float t = len2 > 0.0f ? glm::clamp(glm::dot(centre - p, d) / len2, 0.0f, 1.0f) : 0.0f;
-    const glm::vec3 closest = p + t * d;
-    return glm::dot(centre - closest, centre - closest) <= radius * radius;
-}
-
 // What both kinds of rays need: the objects' layer (if any), the origins' offset, the objects' bounding
 // sphere, and the sample grid of options.shadow.area_ray_samples.
 struct RaySetup {
@@ -42,16 +24,14 @@ struct RaySetup {
     float objectRadius = 0.0f;
     int side, count;
     RaySetup(const ShadowRayScenes& rays, const Options& options)
-        : objects(rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr) {
-        const Bounds3f bounds = rays.scene->bounds();
-        offset = kRayOffsetScale * std::max(bounds.empty() ? 1.0f : bounds.maxExtent(), 1e-3f);
+        : objects(rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr),
+          offset(shadowRayOffset(*rays.scene)),
+          count(squareSampleCount(options.shadow.areaRaySamples)) {
         if (objects) {
             objectCentre = rays.objectBounds.center();
             objectRadius = 0.5f * glm::length(rays.objectBounds.diagonal());
         }
-        side = std::max(
-            1, static_cast<int>(std::sqrt(static_cast<float>(options.shadow.areaRaySamples)) + 1e-3f));
-        count = side * side;
+        side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
     }
 };
 
@@ -91,7 +71,7 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
             // Whether the objects can be in the way at all; a real emitter's light they cannot block does not
             // change.
             const bool mayMeetObjects =
-                objects && segmentNearSphere(origin, s.position, objectCentre, objectRadius);
+                objects && segmentMayMeetBox(origin, s.position, 0.0f, rays.objectBounds);
             if (mode == ShadowMode::SceneOnly && s.isVirtual) continue;
             if (mode == ShadowMode::DeltaShadow && !s.isVirtual && !mayMeetObjects) continue;
             const bool byObjects = mayMeetObjects && mode != ShadowMode::SceneOnly &&

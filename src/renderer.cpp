@@ -321,8 +321,10 @@ struct StaticWork {
     std::vector<uint32_t> hidden;
     std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
     std::optional<Grid3> sceneLight;                            // injected from sceneRsms, plus sceneBounce
-    std::optional<Grid3>
-        sceneBounce;  // the further bounces of the scene's light (options.render.light_bounces)
+    // The further bounces of the scene's light (options.render.light_bounces).
+    std::optional<Grid3> sceneBounce;
+    // The environment map's sampler (its CDFs), when its light is traced by rays.
+    std::unique_ptr<EnvironmentSampler> environmentSampler;
     // The objects' volumes of the last frame, updated where the objects changed them.
     std::optional<ObjectVolumes> objectVolumes;
 };
@@ -487,10 +489,10 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
                       environment ? &*environment : nullptr};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
-    const ConeResults cones = std::move(traceCones({&job, 1}, scene, shaded, quiet)[0]);
+    ConeResults cones = std::move(traceCones({&job, 1}, scene, shaded, quiet)[0]);
     std::vector<glm::vec3> radiance =
         combineLighting(points, shaded, cones.shadows, ShadowMode::SceneOnly, cones.diffuse, cones.specular);
-    addInto(radiance, std::vector<glm::vec3>(cones.areaLight));
+    addInto(radiance, std::move(cones.areaLight));
     return toImage(radiance, scene.camera.width, scene.camera.height);
 }
 
@@ -566,8 +568,10 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     const AreaLights emitters = o.shadow.method == "rays" ? AreaLights(scene, SceneContent::RealAndVirtual)
                                                           : AreaLights(Scene{}, SceneContent::RealOnly);
     // The environment map lights the scene through shadow rays too (with options.shadow.method "rays").
-    std::optional<EnvironmentSampler> environment;
-    if (environmentByRays(scene)) environment.emplace(*scene.environment);
+    if (environmentByRays(scene) && !kept.environmentSampler)
+        kept.environmentSampler = std::make_unique<EnvironmentSampler>(*scene.environment);
+    const EnvironmentSampler* environment =
+        environmentByRays(scene) ? kept.environmentSampler.get() : nullptr;
     const std::vector<Light> direct = directLights(scene);
     const ConeJob jobs[] = {
         {gbuffer.object,
@@ -583,7 +587,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          nullptr,
          nullptr,
          &emitters,
-         environment ? &*environment : nullptr},
+         environment},
         {realPoints,
          volumes.deltaLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
@@ -597,18 +601,18 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
          volumes.objectLight,
          &emitters,
-         environment ? &*environment : nullptr}};
-    const std::vector<ConeResults> cones = traceCones(jobs, scene, direct, timer);
-    const ConeResults& object = cones[0];
-    const ConeResults& real = cones[1];
+         environment}};
+    std::vector<ConeResults> cones = traceCones(jobs, scene, direct, timer);
+    ConeResults& object = cones[0];
+    ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
     auto objectRadiance = combineLighting(gbuffer.object, direct, object.shadows, ShadowMode::Shaded,
                                           object.diffuse, object.specular, &objectPixels, camera.width);
     auto realChange =
         combineLighting(realPoints, direct, real.shadows, relightMode, real.diffuse, real.specular);
-    addInto(objectRadiance, std::vector<glm::vec3>(object.areaLight));
-    addInto(realChange, std::vector<glm::vec3>(real.areaLight));
+    addInto(objectRadiance, std::move(object.areaLight));
+    addInto(realChange, std::move(real.areaLight));
     timer.lap("shading");
 
     // The background: the photo, or the real scene rendered alone.

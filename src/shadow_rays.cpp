@@ -31,37 +31,6 @@ glm::vec2 concentricDisk(float u, float v) {
     return r * glm::vec2(std::cos(phi), std::sin(phi));
 }
 
-// Whether a segment from `p` to any point within `radius` of `target` can meet `box` (conservative: every
-// such segment stays within `radius` of the segment p-target, so the box is grown by `radius`; slab test).
-bool segmentMayMeetBox(glm::vec3 p, glm::vec3 target, float radius, const Bounds3f& box) {
-    const glm::vec3 lo = box.min - radius, hi = box.max + radius;
-    const glm::vec3 d = target - p;
-    float t0 = 0.0f, t1 = 1.0f;
-    for (int a = 0; a < 3; ++a) {
-        if (std::abs(d[a]) < 1e-12f) {
-            if (p[a] < lo[a] || p[a] > hi[a]) return false;
-            continue;
-        }
-        const float inverse = 1.0f / d[a];
-        float ta = (lo[a] - p[a]) * inverse, tb = (hi[a] - p[a]) * inverse;
-        if (ta > tb) std::swap(ta, tb);
-        t0 = std::max(t0, ta);
-        t1 = std::min(t1, tb);
-        if (t0 > t1) return false;
-    }
-    return true;
-}
-
-// Whether a ray from `p` within `halfAngle` of `direction` can pass within `sphereRadius` of `sphereCentre`.
-bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
-                       float sphereRadius) {
-    const glm::vec3 toCentre = sphereCentre - p;
-    const float distance = glm::length(toCentre);
-    if (distance <= sphereRadius) return true;
-    const float angle = std::acos(glm::clamp(glm::dot(toCentre / distance, direction), -1.0f, 1.0f));
-    return angle <= halfAngle + std::asin(sphereRadius / distance);
-}
-
 }  // namespace
 
 ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v) {
@@ -92,12 +61,48 @@ ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float 
     return s;
 }
 
+bool segmentMayMeetBox(glm::vec3 p, glm::vec3 target, float radius, const Bounds3f& box) {
+    const glm::vec3 lo = box.min - radius, hi = box.max + radius;
+    const glm::vec3 d = target - p;
+    float t0 = 0.0f, t1 = 1.0f;
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(d[a]) < 1e-12f) {
+            if (p[a] < lo[a] || p[a] > hi[a]) return false;
+            continue;
+        }
+        const float inverse = 1.0f / d[a];
+        float ta = (lo[a] - p[a]) * inverse, tb = (hi[a] - p[a]) * inverse;
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
+                       float sphereRadius) {
+    const glm::vec3 toCentre = sphereCentre - p;
+    const float distance = glm::length(toCentre);
+    if (distance <= sphereRadius) return true;
+    const float angle = std::acos(glm::clamp(glm::dot(toCentre / distance, direction), -1.0f, 1.0f));
+    return angle <= halfAngle + std::asin(sphereRadius / distance);
+}
+
+float shadowRayOffset(const RayScene& scene) {
+    const Bounds3f bounds = scene.bounds();
+    return kRayOffsetScale * std::max(bounds.empty() ? 1.0f : bounds.maxExtent(), 1e-3f);
+}
+
+int squareSampleCount(int samples) {
+    const int side = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(samples)) + 1e-3f));
+    return side * side;
+}
+
 int shadowRayCount(const Light& light, int raySamples) {
     const bool sized =
         light.type == Light::Type::Directional ? light.angularRadius > 0.0f : light.radius > 0.0f;
-    if (!sized) return 1;
-    const int side = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(raySamples)) + 1e-3f));
-    return side * side;
+    return sized ? squareSampleCount(raySamples) : 1;
 }
 
 std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> points,
@@ -109,10 +114,7 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
     const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
     const bool relit = mode == ShadowMode::DeltaShadow;
     const bool sceneOnly = mode == ShadowMode::SceneOnly;
-    // As the path tracer offsets its shadow rays (so that DGI and its reference agree on grazing light).
-    const Bounds3f sceneBounds = rays.scene->bounds();
-    const float offset =
-        kRayOffsetScale * std::max(sceneBounds.empty() ? 1.0f : sceneBounds.maxExtent(), 1e-3f);
+    const float offset = shadowRayOffset(*rays.scene);
     const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
     const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
 

@@ -35,6 +35,21 @@ struct ShadowRaySample {
 };
 ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v);
 
+// The culling tests of the relit rays (conservative: a ray they reject cannot meet the objects). Whether a
+// segment from `p` to any point within `radius` of `target` can meet `box` (every such segment stays within
+// `radius` of the segment p-target, so the box is grown by `radius`; slab test):
+bool segmentMayMeetBox(glm::vec3 p, glm::vec3 target, float radius, const Bounds3f& box);
+// Whether a ray from `p` within `halfAngle` of `direction` can pass within `sphereRadius` of `sphereCentre`.
+bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
+                       float sphereRadius);
+
+// How far shadow rays start off their surface, as the path tracer offsets its own (so that DGI and its
+// reference agree on grazing light): kRayOffsetScale times the scene's size.
+float shadowRayOffset(const RayScene& scene);
+
+// A sample count rounded down to a square (a jittered side x side grid), at least 1.
+int squareSampleCount(int samples);
+
 // Shadow rays per point and light for options.shadow.ray_samples: a square number, 1 for a light without a
 // size.
 int shadowRayCount(const Light& light, int raySamples);
