@@ -14,6 +14,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_files.h"
+
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/image.h"
@@ -22,6 +24,8 @@ namespace deltagi {
 namespace {
 
 namespace fs = std::filesystem;
+using test::readText;
+using test::writeText;
 
 class AtomicFileTest : public ::testing::Test {
   protected:
@@ -48,17 +52,6 @@ class AtomicFileTest : public ::testing::Test {
 
     fs::path dir_;
 };
-
-std::string readText(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-void writeText(const fs::path& path, const std::string& text) {
-    std::ofstream(path) << text;
-}
 
 // Pixels that do not compress away, so that writing the file takes a while (a wide window for the races).
 Image noise(int width, int height, uint32_t seed) {

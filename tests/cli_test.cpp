@@ -18,12 +18,16 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
 #include <nlohmann/json.hpp>
 
 #include "deltagi/image.h"
 #include "deltagi/scene_info.h"
+#include "test_files.h"
 
 namespace fs = std::filesystem;
+using deltagi::test::readText;
+using deltagi::test::writeText;
 using nlohmann::json;
 
 namespace {
@@ -33,19 +37,6 @@ struct CliResult {
     std::string out;  // stdout
     std::string err;  // stderr
 };
-
-std::string readText(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
-
-void writeText(const fs::path& path, const std::string& text) {
-    std::ofstream out(path);
-    out << text;
-    ASSERT_TRUE(out.good()) << path;
-}
 
 // Single-quotes an argument for /bin/sh.
 std::string quote(const std::string& arg) {
