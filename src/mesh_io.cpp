@@ -4,15 +4,21 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <fstream>
 #include <map>
+#include <sstream>
 
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
+#include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
+#include <assimp/LogStream.hpp>
 
 #include "deltagi/error.h"
+#include "json_reader.h"
 
 namespace deltagi {
 
@@ -82,34 +88,243 @@ TriangleMesh readTriangles(const aiMesh& source) {
 }
 
 bool hasPolygons(const aiScene& scene) {
-    for (unsigned m = 0; m < scene.mNumMeshes; ++m)
-        for (unsigned f = 0; f < scene.mMeshes[m]->mNumFaces; ++f)
-            if (scene.mMeshes[m]->mFaces[f].mNumIndices >= 3) return true;
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+        const aiMesh* mesh = scene.mMeshes[m];
+        if (mesh == nullptr || mesh->mFaces == nullptr) continue;
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f)
+            if (mesh->mFaces[f].mNumIndices >= 3) return true;
+    }
     return false;
+}
+
+// ---- sizes claimed by a file's header ---------------------------------------------------------------------
+
+// What loading one element costs in memory at most, Assimp's copy and ours together: a vertex's position and
+// normal in Assimp, its copies through post-processing and in TriangleMesh; a face's indices likewise.
+constexpr double kBytesPerVertex = 160.0;
+constexpr double kBytesPerFace = 96.0;
+// Formats without counts in a header: memory in proportion to the file (OBJ text or glTF binary data).
+constexpr double kBytesPerFileByte = 16.0;
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+
+struct ClaimedElement {
+    std::string name;
+    uint64_t count = 0;
+    uint64_t minBytes = 0;  // the fewest bytes one element takes in the file
+};
+
+// Where the stream is; past the end when it has reached it.
+uint64_t streamPosition(std::istream& in) {
+    const std::streamoff position = in.tellg();
+    return position < 0 ? UINT64_MAX : static_cast<uint64_t>(position);
+}
+
+// The elements a PLY header declares, with the fewest bytes each can take (binary: the sizes of its scalar
+// properties and list counts; ASCII: 2 characters per property, a digit and a separator). The header's
+// length goes to `headerBytes`. Nothing when the header cannot be read (Assimp then says why).
+std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes) {
+    static const std::map<std::string, uint64_t> kTypeBytes = {
+        {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
+        {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
+        {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+    std::vector<ClaimedElement> elements;
+    bool binary = false;
+    std::string line;
+    for (int lines = 0; lines < 10000 && std::getline(in, line); ++lines) {
+        std::istringstream words(line);
+        std::string word;
+        words >> word;
+        if (word == "format") {
+            std::string format;
+            words >> format;
+            binary = format != "ascii";
+        } else if (word == "element") {
+            ClaimedElement element;
+            if (!(words >> element.name >> element.count)) return {};
+            elements.push_back(element);
+        } else if (word == "property" && !elements.empty()) {
+            std::string type;
+            words >> type;
+            if (type == "list") words >> type;  // the count's type; the list itself may be empty
+            auto size = kTypeBytes.find(type);
+            elements.back().minBytes += binary ? (size != kTypeBytes.end() ? size->second : 1) : 2;
+        } else if (word == "end_header") {
+            headerBytes = streamPosition(in);
+            return elements;
+        }
+    }
+    return {};
+}
+
+// OFF: "OFF" (or COFF, NOFF, ...) then "vertices faces edges"; a vertex takes at least "0 0 0\n", a face
+// at least "0\n".
+std::vector<ClaimedElement> offElements(std::istream& in, uint64_t& headerBytes) {
+    std::string line;
+    std::getline(in, line);
+    std::istringstream first(line);
+    std::string magic;
+    first >> magic;
+    uint64_t vertices = 0, faces = 0;
+    if (!(first >> vertices >> faces)) {  // the counts on a line of their own
+        do {
+            if (!std::getline(in, line)) return {};
+        } while (line.empty() || line[0] == '#');
+        std::istringstream counts(line);
+        if (!(counts >> vertices >> faces)) return {};
+    }
+    headerBytes = streamPosition(in);
+    return {{"vertex", vertices, 6}, {"face", faces, 2}};
+}
+
+// Checks the element counts a PLY or OFF header claims against the file's size (a truncated file, or a
+// header claiming 3.5e11 vertices in 300 bytes), and the memory the mesh needs against the machine's,
+// before Assimp allocates for them.
+void checkClaimedSizes(const std::filesystem::path& file, const std::string& where, uint64_t memoryBytes) {
+    std::error_code error;
+    const uint64_t fileBytes = std::filesystem::file_size(file, error);
+    if (error) return;  // Assimp reports the unreadable file
+    std::ifstream in(file, std::ios::binary);
+    char magic[4] = {};
+    in.read(magic, 4);
+    in.seekg(0);
+    std::vector<ClaimedElement> elements;
+    uint64_t headerBytes = 0;
+    if (std::string(magic, 4) == "ply\n" || std::string(magic, 4) == "ply\r")
+        elements = plyElements(in, headerBytes);
+    else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
+             std::string(magic, 4) == "STOF")
+        elements = offElements(in, headerBytes);
+
+    double neededMemory = 0.0, neededBytes = 0.0;
+    std::string claims;
+    for (const ClaimedElement& element : elements) {
+        neededBytes += static_cast<double>(element.count) * static_cast<double>(element.minBytes);
+        neededMemory +=
+            static_cast<double>(element.count) * (element.name == "vertex" ? kBytesPerVertex : kBytesPerFace);
+        claims += fmt::format("{}{} {} element{}", claims.empty() ? "" : ", ", element.count, element.name,
+                              element.count == 1 ? "" : "s");
+    }
+    const std::string name = file.filename().string();
+    const uint64_t dataBytes = fileBytes - std::min(fileBytes, headerBytes);
+    if (!elements.empty() && neededBytes > static_cast<double>(dataBytes))
+        throw InputError(where,
+                         fmt::format("'{}' is truncated or corrupt: its header claims {}, which take at "
+                                     "least {:.0f} bytes, but the file holds {} bytes after the header",
+                                     name, claims, neededBytes, dataBytes));
+    if (elements.empty()) neededMemory = kBytesPerFileByte * static_cast<double>(fileBytes);
+    if (neededMemory > static_cast<double>(memoryBytes))
+        throw InputError(where,
+                         fmt::format("loading '{}' needs about {:.1f} GiB, more than the {:.1f} GiB of "
+                                     "physical memory",
+                                     name, neededMemory / kGiB, static_cast<double>(memoryBytes) / kGiB));
+}
+
+// ---- Assimp's output --------------------------------------------------------------------------------------
+
+// Assimp's warnings during one import: glTF faces with out-of-range indices are dropped with a warning only.
+// Assimp's logger is global: one import at a time (scenes are loaded on one thread).
+class WarningLog : public Assimp::LogStream {
+  public:
+    WarningLog() {
+        Assimp::DefaultLogger::create(nullptr, Assimp::Logger::NORMAL, 0);
+        Assimp::DefaultLogger::get()->attachStream(this, Assimp::Logger::Warn | Assimp::Logger::Err);
+    }
+    ~WarningLog() override {
+        Assimp::DefaultLogger::get()->detachStream(this, Assimp::Logger::Warn | Assimp::Logger::Err);
+        Assimp::DefaultLogger::kill();
+    }
+    WarningLog(const WarningLog&) = delete;
+    WarningLog& operator=(const WarningLog&) = delete;
+    void write(const char* message) override { messages.emplace_back(message); }
+    std::vector<std::string> messages;
+};
+
+// What post-processing relies on, checked on the importer's raw output (Assimp's ValidateDataStructure has
+// checked the indices already; this also covers what it does not: finite positions).
+// Meshes are named as loadMeshFile() names them.
+void validateRawScene(const aiScene& scene, const std::filesystem::path& file, const std::string& where,
+                      const std::string& baseName) {
+    const std::string name = file.filename().string();
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+        const aiMesh* mesh = scene.mMeshes[m];
+        if (mesh == nullptr || (mesh->mNumVertices > 0 && mesh->mVertices == nullptr) ||
+            (mesh->mNumFaces > 0 && mesh->mFaces == nullptr))
+            throw InputError(where, fmt::format("'{}': mesh {} has no vertex or face data", name, m));
+        const std::string meshName =
+            scene.mNumMeshes == 1
+                ? baseName
+                : baseName + "/" + (mesh->mName.length > 0 ? mesh->mName.C_Str() : std::to_string(m));
+        for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
+            const aiVector3D& p = mesh->mVertices[i];
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                throw InputError(where,
+                                 fmt::format("vertex {} of mesh '{}' is not finite: ({}, {}, {}) ('{}')", i,
+                                             meshName, p.x, p.y, p.z, name));
+        }
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+            const aiFace& face = mesh->mFaces[f];
+            if (face.mNumIndices > 0 && face.mIndices == nullptr)
+                throw InputError(where,
+                                 fmt::format("'{}': face {} of mesh '{}' has no indices", name, f, meshName));
+            for (unsigned k = 0; k < face.mNumIndices; ++k)
+                if (face.mIndices[k] >= mesh->mNumVertices)
+                    throw InputError(
+                        where, fmt::format("'{}': face {} of mesh '{}' refers to vertex {}, but the mesh "
+                                           "has {} vertices",
+                                           name, f, meshName, face.mIndices[k], mesh->mNumVertices));
+        }
+    }
+}
+
+// Assimp's message without its prefixes, e.g. "Validation failed: aiMesh::mFaces[0]::mIndices[1] is out of
+// range".
+std::string importError(const Assimp::Importer& importer) {
+    std::string error = importer.GetErrorString();
+    return error.empty() ? "unknown error" : error;
 }
 
 }  // namespace
 
 std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
                                    const std::string& baseName) {
+    checkClaimedSizes(file, where, physicalMemoryBytes());
     Assimp::Importer importer;
     importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, kCreaseAngleDeg);
     // Bake node transforms but keep one mesh per node: joining meshes of equal material would name, say, all
     // white walls of a Cornell box after the first of them.
     importer.SetPropertyBool(AI_CONFIG_PP_PTV_KEEP_HIERARCHY, true);
+    const std::string name = file.filename().string();
+
+    // First the import alone, validated (indices in range, counts consistent), and checked by us, so that
+    // post-processing never sees a broken scene; then the post-processing steps.
+    const aiScene* scene = nullptr;
+    {
+        WarningLog log;
+        scene = importer.ReadFile(file.string(), aiProcess_ValidateDataStructure);
+        if (scene == nullptr) {
+            // Validation fails a file of points alone ("Mesh contains no faces"): say what is wrong.
+            const std::string error = importError(importer);
+            Assimp::Importer plain;
+            if (const aiScene* raw = plain.ReadFile(file.string(), 0); raw != nullptr && !hasPolygons(*raw))
+                throw InputError(where, fmt::format("'{}' contains no triangles", name));
+            throw InputError(where, fmt::format("cannot load '{}': {}", file.string(), error));
+        }
+        for (const std::string& message : log.messages)
+            if (message.find("out-of-range indices") != std::string::npos)
+                throw InputError(where,
+                                 fmt::format("'{}': some triangles refer to vertices that do not exist "
+                                             "(index out of range)",
+                                             name));
+    }
+    validateRawScene(*scene, file, where, baseName);
+    if (!hasPolygons(*scene)) throw InputError(where, fmt::format("'{}' contains no triangles", name));
     constexpr unsigned kFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                 aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices |
                                 aiProcess_SortByPType;
-    const aiScene* scene = importer.ReadFile(file.string(), kFlags);
     // SortByPType splits meshes by primitive type; point and line meshes are skipped below.
-    if (scene == nullptr) {
-        // PreTransformVertices fails a file of points alone ("all meshes are orphaned"): say what is wrong.
-        std::string error = importer.GetErrorString();
-        Assimp::Importer plain;
-        if (const aiScene* raw = plain.ReadFile(file.string(), 0); raw != nullptr && !hasPolygons(*raw))
-            throw InputError(where, fmt::format("'{}' contains no triangles", file.filename().string()));
-        throw InputError(where, fmt::format("cannot load '{}': {}", file.string(), error));
-    }
+    scene = importer.ApplyPostProcessing(kFlags);
+    if (scene == nullptr)
+        throw InputError(where, fmt::format("cannot load '{}': {}", file.string(), importError(importer)));
 
     std::vector<FileMesh> meshes;
     std::map<std::string, int> timesSeen;
