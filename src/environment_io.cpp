@@ -1,5 +1,7 @@
 #include "environment_io.h"
 
+#include <algorithm>
+
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -117,7 +119,14 @@ void readEnvironment(const JsonNode& node, const fs::path& sceneFolder, Scene& s
     } else {
         environment.radiance = equirectFromMirrorBall(image, readMirrorBall(node.find("mirror_ball"), image));
     }
-    for (float& v : environment.radiance.data()) v *= intensity;
+    float brightest = 0.0f;
+    for (float& v : environment.radiance.data()) brightest = std::max(brightest, v *= intensity);
+    if (!(brightest <= kMaxRadiance))
+        throw InputError(
+            node.childWhere("intensity"),
+            fmt::format("the brightest pixel of '{}' times intensity is {:.3g}, more than {:.0e}, "
+                        "beyond which the render's 32-bit floats overflow",
+                        fileName, brightest, kMaxRadiance));
     setEnvironment(scene, std::move(environment));
 }
 

@@ -6,6 +6,9 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <regex>
+#include <unordered_set>
+#include <vector>
 
 #include <fmt/format.h>
 
@@ -21,6 +24,123 @@ std::string Interval::str() const {
         return std::isinf(v) ? std::string(v < 0 ? "-inf" : "inf") : fmt::format("{}", v);
     };
     return fmt::format("{}{}, {}{}", loOpen ? '(' : '[', bound(lo), bound(hi), hiOpen ? ')' : ']');
+}
+
+// ---- parsing ----------------------------------------------------------------------------------------------
+
+namespace {
+
+// nlohmann's DOM builder behind a SAX filter that tracks the JSON path of the value being read, so that
+// errors can name the key, and that refuses deep nesting and repeated keys.
+class StrictJsonSax {
+  public:
+    StrictJsonSax(json& result, const std::string& file)
+        : dom_(result, /*allow_exceptions=*/true), file_(file) {}
+
+    bool null() { return value(dom_.null()); }
+    bool boolean(bool v) { return value(dom_.boolean(v)); }
+    bool number_integer(json::number_integer_t v) { return value(dom_.number_integer(v)); }
+    bool number_unsigned(json::number_unsigned_t v) { return value(dom_.number_unsigned(v)); }
+    bool number_float(json::number_float_t v, const json::string_t& text) {
+        return value(dom_.number_float(v, text));
+    }
+    bool string(json::string_t& v) { return value(dom_.string(v)); }
+    bool binary(json::binary_t& v) { return value(dom_.binary(v)); }
+    bool start_object(std::size_t size) {
+        enter(false);
+        return dom_.start_object(size);
+    }
+    bool key(json::string_t& key) {
+        Frame& frame = frames_.back();
+        frame.key = key;
+        if (!frame.keys.insert(key).second)
+            throw InputError(where(), "duplicate key: each key may appear only once in an object");
+        return dom_.key(key);
+    }
+    bool end_object() {
+        frames_.pop_back();
+        return value(dom_.end_object());
+    }
+    bool start_array(std::size_t size) {
+        enter(true);
+        return dom_.start_array(size);
+    }
+    bool end_array() {
+        frames_.pop_back();
+        return value(dom_.end_array());
+    }
+    // `position` is the lexer's position_t (line and column) when called by the parser.
+    template <typename Position, typename Exception>
+    bool parse_error(const Position& position, const std::string& token, const Exception& error) {
+        std::string at;
+        if constexpr (requires { position.lines_read; })
+            at = fmt::format("{}: line {}, column {}", file_, position.lines_read + 1,
+                             position.chars_read_current_line);
+        else
+            at = fmt::format("{}: byte {}", file_, position);
+        if (error.id == 406) {  // a number that overflows a double, e.g. 1e999
+            std::string path = this->path();
+            throw InputError(path.empty() ? at : at + ": " + path,
+                             fmt::format("the number {} is out of range: expected a finite number",
+                                         token.substr(0, kMaxTokenChars)));
+        }
+        // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, column 5:
+        // <what>".
+        static const std::regex kPosition(R"(at line \d+, column \d+: (.*))");
+        std::smatch match;
+        std::string message = error.what();
+        if (std::regex_search(message, match, kPosition)) message = match[1].str();
+        throw InputError(at, message);
+    }
+
+  private:
+    static constexpr size_t kMaxTokenChars = 40;
+    struct Frame {
+        bool array;
+        size_t index = 0;  // arrays: the element being read
+        std::string key;   // objects: the key being read
+        std::unordered_set<std::string> keys;
+    };
+
+    void enter(bool array) {
+        if (frames_.size() >= kMaxJsonDepth)
+            throw InputError(where(), fmt::format("arrays and objects are nested more than {} levels deep",
+                                                  kMaxJsonDepth));
+        frames_.push_back(Frame{array, 0, {}, {}});
+    }
+    // A value is complete: the next element of an array has the next index.
+    bool value(bool keepGoing) {
+        if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+        return keepGoing;
+    }
+    std::string path() const {
+        std::string result;
+        for (const Frame& frame : frames_) {
+            if (frame.array)
+                result += fmt::format("[{}]", frame.index);
+            else if (!frame.keys.empty())
+                result += (result.empty() ? "" : ".") + frame.key;
+            if (result.size() > 60) return result.substr(0, 57) + "...";
+        }
+        return result;
+    }
+    std::string where() const {
+        std::string path = this->path();
+        return path.empty() ? file_ : file_ + ": " + path;
+    }
+
+    nlohmann::detail::json_sax_dom_parser<json> dom_;
+    const std::string& file_;
+    std::vector<Frame> frames_;
+};
+
+}  // namespace
+
+json parseJson(const std::string& text, const std::string& file) {
+    json result;
+    StrictJsonSax sax(result, file);
+    json::sax_parse(text, &sax);
+    return result;
 }
 
 std::string describeType(const json& value) {
@@ -375,10 +495,13 @@ json optionsToJson(const Options& o) {
 
 namespace {
 
-constexpr int kVolumeCount = 4;                  // two visibility and two light volumes
-constexpr double kBytesPerVoxel = 16.0;          // 4 floats
-constexpr double kMipChainFactor = 8.0 / 7.0;    // 1 + 1/8 + 1/64 + ...
-constexpr double kRsmFaces = 6.0;                // a cube map per light (the worst case: point lights)
+constexpr int kVolumeCount = 4;                // two visibility and two light volumes
+constexpr double kBytesPerVoxel = 16.0;        // 4 floats
+constexpr double kMipChainFactor = 8.0 / 7.0;  // 1 + 1/8 + 1/64 + ...
+constexpr double kRsmFaces = 6.0;              // a cube map per light (the worst case: point lights)
+// Per light, the map of the scene alone and the update of its texels that meet the objects (in the worst
+// case, all of them): about 155 MB per light at the default 512^2, as measured (issue 11).
+constexpr double kRsmMapsPerLight = 2.0;
 constexpr double kBytesPerRsmTexel = 48.0;       // position, normal, flux (3 floats each) and depth, padded
 constexpr double kBytesPerGBufferSample = 64.0;  // position, normal, albedo, specular, roughness, ids
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
@@ -391,7 +514,7 @@ struct MemoryParts {
 MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lightCount) {
     double r = options.volume.resolution, rsm = options.rsm.resolution;
     return {kVolumeCount * kBytesPerVoxel * r * r * r * kMipChainFactor,
-            rsm * rsm * kRsmFaces * kBytesPerRsmTexel * static_cast<double>(lightCount),
+            rsm * rsm * kRsmFaces * kRsmMapsPerLight * kBytesPerRsmTexel * static_cast<double>(lightCount),
             static_cast<double>(camera.width) * camera.height * options.render.samplesPerPixel *
                 kBytesPerGBufferSample};
 }
@@ -406,13 +529,21 @@ void checkRenderMemory(const Options& options, const Camera& camera, size_t ligh
                        uint64_t physicalMemoryBytes, const std::string& file) {
     MemoryParts parts = memoryParts(options, camera, lightCount);
     if (parts.total() <= static_cast<double>(physicalMemoryBytes)) return;
+    // Name what dominates: the G-buffer grows with the camera's resolution (and
+    // options.render.samples_per_pixel).
     std::string key = parts.rsms > parts.volumes ? "options.rsm.resolution" : "options.volume.resolution";
+    std::string what;
+    if (parts.gbuffer > std::max(parts.rsms, parts.volumes)) {
+        key = "camera";
+        what = fmt::format("{}x{} pixels at {} samples per pixel: ", camera.width, camera.height,
+                           options.render.samplesPerPixel);
+    }
     throw InputError(
         file + ": " + key,
-        fmt::format("the render needs about {:.1f} GiB (volumes {:.1f} GiB, reflective shadow maps "
-                    "{:.1f} GiB, G-buffer {:.1f} GiB), more than the {:.1f} GiB of physical memory",
-                    parts.total() / kGiB, parts.volumes / kGiB, parts.rsms / kGiB, parts.gbuffer / kGiB,
-                    static_cast<double>(physicalMemoryBytes) / kGiB));
+        what + fmt::format("the render needs about {:.1f} GiB (volumes {:.1f} GiB, reflective shadow maps "
+                           "{:.1f} GiB, G-buffer {:.1f} GiB), more than the {:.1f} GiB of physical memory",
+                           parts.total() / kGiB, parts.volumes / kGiB, parts.rsms / kGiB,
+                           parts.gbuffer / kGiB, static_cast<double>(physicalMemoryBytes) / kGiB));
 }
 
 uint64_t physicalMemoryBytes() {

@@ -31,6 +31,11 @@ inline constexpr Interval kAnyNumber{-kInf, kInf, true, true};
 inline constexpr Interval kNonNegative{0.0, kInf, false, true};
 inline constexpr Interval kPositive{0.0, kInf, true, true};
 inline constexpr Interval kUnit{0.0, 1.0};
+// The largest radiance or intensity a scene may give (a light's intensity times its colour, an emission, an
+// environment map's pixels times its intensity). The renderer computes in 32-bit floats (at most 3.4e38):
+// this leaves 18 orders of magnitude for the inverse square law, cosines and sums, where a light of 3e38
+// overflowed to a black image.
+inline constexpr double kMaxRadiance = 1e20;
 
 // A view of one JSON value together with where it is: the file (for messages) and its JSON path
 // ("scene[2].material.albedo"). The value is referenced, not copied: the document must outlive the node.
@@ -80,6 +85,12 @@ class JsonNode {
     std::string file_;
     std::string path_;
 };
+
+// Parses JSON text strictly, for scene files and --set values: at most kMaxJsonDepth levels of nested arrays
+// and objects, and no key twice in one object. Throws InputError naming `file` (and, for a syntax error or a
+// number out of range, the line and column) and the JSON path of the key where the problem is.
+inline constexpr size_t kMaxJsonDepth = 128;
+nlohmann::json parseJson(const std::string& text, const std::string& file);
 
 // Name of a JSON value's type for messages: "a string", "an array", "an integer", "a number", ...
 std::string describeType(const nlohmann::json& value);

@@ -2,15 +2,16 @@
 // raises InputError naming the file and the JSON path of the key ("scene.json: scene[2].material.albedo").
 #include "deltagi/scene_io.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iterator>
-#include <regex>
 
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/error.h"
+#include "deltagi/renderer.h"
 #include "deltagi/scene_info.h"
 #include "environment_io.h"
 #include "json_reader.h"
@@ -41,6 +42,7 @@ fs::path inputFile(const JsonNode& node, const fs::path& sceneFolder) {
     if (path.is_relative()) path = sceneFolder / path;
     path = path.lexically_normal();
     if (fs::is_regular_file(path)) return path;
+    if (fs::is_directory(path)) node.fail(fmt::format("'{}' is a folder, expected a file", path.string()));
     std::string hint;
     for (const fs::path& part : path.parent_path())
         if (part == "shared")
@@ -180,6 +182,13 @@ Light readLight(const JsonNode& node) {
     if (auto n = node.find("name")) n->string();  // only for the reader of the file
     if (auto n = node.find("color")) light.color = n->vec3(kNonNegative);
     if (auto n = node.find("intensity")) light.intensity = n->floatNumber(kNonNegative);
+    if (const double power =
+            static_cast<double>(light.intensity) * std::max({light.color.x, light.color.y, light.color.z});
+        power > kMaxRadiance)
+        throw InputError(node.childWhere("intensity"),
+                         fmt::format("intensity times color is {:.3g}, more than {:.0e}, beyond which the "
+                                     "render's 32-bit floats overflow",
+                                     power, kMaxRadiance));
     if (auto n = node.find("radius")) light.radius = n->floatNumber(kNonNegative);
     if (type != "directional") light.position = node.child("position").vec3();
     if (type != "point") light.direction = readDirection(node.child("direction"));
@@ -235,6 +244,12 @@ Material combineMaterial(const MaterialOverrides& json, const FileMaterial& file
                          fmt::format("mesh '{}': emission times emission_scale ({}) is not a "
                                      "finite number",
                                      meshName, json.emissionScale));
+    if (const float brightest = std::max({m.emission.x, m.emission.y, m.emission.z});
+        brightest > kMaxRadiance)
+        throw InputError(json.emissionWhere,
+                         fmt::format("mesh '{}': emission times emission_scale is {:.3g}, more than {:.0e}, "
+                                     "beyond which the render's 32-bit floats overflow",
+                                     meshName, brightest, kMaxRadiance));
     std::string origin = (!json.albedo && file.albedo) || (!json.specular && file.specular)
                              ? fmt::format(
                                    " (values not given in \"material\" come from material '{}' of the mesh "
@@ -433,6 +448,79 @@ bool holdsEntries(const JsonNode& root, std::string_view key) {
     return node->size() > 0;
 }
 
+// ---- warnings -------------------------------------------------------------------------------------------
+
+// Whether `point` is inside the closed surface of `mesh`: a ray from it crosses the surface an odd number of
+// times. Three rays vote, so that a ray through an edge (counted twice or not at all) cannot decide alone.
+bool encloses(const TriangleMesh& mesh, glm::vec3 point) {
+    if (!mesh.bounds().contains(point)) return false;
+    static const glm::dvec3 kDirections[] = {glm::normalize(glm::dvec3(0.5377, 0.8173, 0.2071)),
+                                             glm::normalize(glm::dvec3(-0.6713, 0.1543, -0.7249)),
+                                             glm::normalize(glm::dvec3(0.1139, -0.9023, 0.4157))};
+    int insideVotes = 0;
+    for (const glm::dvec3& direction : kDirections) {
+        size_t crossings = 0;
+        for (glm::uvec3 t : mesh.triangles) {
+            // Moller-Trumbore, in double.
+            const glm::dvec3 a = mesh.positions[t.x], b = mesh.positions[t.y], c = mesh.positions[t.z];
+            const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(direction, e2);
+            const double det = glm::dot(e1, p);
+            if (det == 0.0) continue;
+            const glm::dvec3 s = glm::dvec3(point) - a;
+            const double u = glm::dot(s, p) / det;
+            if (u < 0.0 || u > 1.0) continue;
+            const glm::dvec3 q = glm::cross(s, e1);
+            const double v = glm::dot(direction, q) / det;
+            if (v < 0.0 || u + v > 1.0) continue;
+            if (glm::dot(e2, q) / det > 0.0) ++crossings;
+        }
+        insideVotes += crossings % 2 == 1;
+    }
+    return insideVotes >= 2;
+}
+
+// What renders, but probably not as meant: no light at all, a virtual object around the camera, a virtual
+// object outside the voxel volume (no indirect light for it, none from it).
+std::vector<std::string> sceneWarnings(const Scene& scene) {
+    std::vector<std::string> warnings;
+    bool lit = scene.environment.has_value();
+    for (const Light& light : scene.lights) lit = lit || light.power() != glm::vec3(0.0f);
+    for (const auto* meshes : {&scene.real, &scene.virtuals})
+        for (const TriangleMesh& mesh : *meshes) lit = lit || mesh.material.emits();
+    if (!lit)
+        warnings.push_back(
+            "lights: the scene has no light (no \"lights\" with a non-zero intensity, no \"environment\", no "
+            "emitting surface): the virtual objects will be black");
+    const glm::vec3 camera = scene.camera.position();
+    for (const TriangleMesh& mesh : scene.virtuals)
+        if (encloses(mesh, camera))
+            warnings.push_back(
+                fmt::format("virtual: mesh '{}' encloses the camera (at ({:.4g}, {:.4g}, {:.4g})): the "
+                            "camera sees only its "
+                            "inside",
+                            mesh.name, camera.x, camera.y, camera.z));
+    if (scene.virtuals.empty()) return warnings;
+    const Bounds3f volume = volumeRegion(scene).bounds();
+    for (const TriangleMesh& mesh : scene.virtuals) {
+        const Bounds3f bounds = mesh.bounds();
+        bool inside = true, overlaps = true;
+        for (int a = 0; a < 3; ++a) {
+            inside = inside && bounds.min[a] >= volume.min[a] && bounds.max[a] <= volume.max[a];
+            overlaps = overlaps && bounds.max[a] >= volume.min[a] && bounds.min[a] <= volume.max[a];
+        }
+        if (inside) continue;
+        warnings.push_back(
+            fmt::format("virtual: mesh '{}' {} the voxel volume (from ({:.4g}, {:.4g}, {:.4g}) to ({:.4g}, "
+                        "{:.4g}, {:.4g}); "
+                        "options.volume): {}",
+                        mesh.name, overlaps ? "extends beyond" : "lies outside", volume.min.x, volume.min.y,
+                        volume.min.z, volume.max.x, volume.max.y, volume.max.z,
+                        overlaps ? "its part outside neither gets nor gives indirect light"
+                                 : "it neither gets nor gives indirect light"));
+    }
+    return warnings;
+}
+
 }  // namespace
 
 Scene loadScene(const json& document, const fs::path& file) {
@@ -465,6 +553,8 @@ Scene loadScene(const json& document, const fs::path& file) {
     if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles);
     for (const std::string& warning : lightPlacementWarnings(scene))
         scene.warnings.push_back(file.string() + ": " + warning);
+    for (const std::string& warning : sceneWarnings(scene))
+        scene.warnings.push_back(file.string() + ": " + warning);
     return scene;
 }
 
@@ -472,21 +562,7 @@ Scene loadScene(const fs::path& file, const std::vector<std::string>& overrides)
     std::ifstream in(file, std::ios::binary);
     if (!fs::is_regular_file(file) || !in) throw InputError(file.string(), "cannot open scene file");
     std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-    json document;
-    try {
-        document = json::parse(text);
-    } catch (const json::parse_error& e) {
-        // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, column 5:
-        // <what>".
-        static const std::regex kPosition(R"(at line (\d+), column (\d+): (.*))");
-        std::smatch match;
-        std::string message = e.what();
-        if (std::regex_search(message, match, kPosition))
-            throw InputError(
-                fmt::format("{}: line {}, column {}", file.string(), match[1].str(), match[2].str()),
-                match[3].str());
-        throw InputError(fmt::format("{}: byte {}", file.string(), e.byte), message);
-    }
+    json document = parseJson(text, file.string());
     for (const std::string& override : overrides) applyOverride(document, override);
     return loadScene(document, file);
 }
@@ -497,8 +573,12 @@ void applyOverride(json& document, const std::string& keyEqualsValue) {
         throw InputError("--set " + keyEqualsValue, "expected KEY=VALUE, e.g. options.volume.resolution=64");
     std::string key = keyEqualsValue.substr(0, equals), valueText = keyEqualsValue.substr(equals + 1);
     std::string where = "--set " + key;
-    json value = json::parse(valueText, nullptr, /*allow_exceptions=*/false);
-    if (value.is_discarded()) value = valueText;  // not JSON: a string
+    json value;
+    try {
+        value = parseJson(valueText, where);
+    } catch (const InputError&) {
+        value = valueText;  // not JSON (or too deep, or with a repeated key): a string
+    }
 
     json* node = &document;
     std::string walked;  // the path so far, for messages
