@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 #include <OpenImageIO/imageio.h>
@@ -74,9 +75,32 @@ std::string lowerExtension(const std::filesystem::path& path) {
     return ext;
 }
 
+// libpng's default error handler prints "libpng error: ..." on stderr before OpenImageIO reports the same
+// error, which our message then carries: the user would see two lines. glibc lets a program assign stderr
+// ("stdin, stdout, and stderr are normal variables", glibc manual 12.2), so while an image is read it points
+// at /dev/null. Only the FILE is swapped: file descriptor 2 stays, and sanitizer reports still reach it.
+// Images are read on one thread at a time.
+class QuietStderr {
+  public:
+    QuietStderr() : saved_(stderr), null_(std::fopen("/dev/null", "w")) {
+        if (null_ != nullptr) stderr = null_;
+    }
+    ~QuietStderr() {
+        stderr = saved_;
+        if (null_ != nullptr) std::fclose(null_);
+    }
+    QuietStderr(const QuietStderr&) = delete;
+    QuietStderr& operator=(const QuietStderr&) = delete;
+
+  private:
+    FILE* saved_;
+    FILE* null_;
+};
+
 }  // namespace
 
 ImageFile readImageFile(const std::filesystem::path& path) {
+    QuietStderr quiet;
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha",
                      1);  // keep colours as stored: alpha is dropped, not multiplied
