@@ -32,6 +32,7 @@
 #include "deltagi/renderer.h"
 #include "deltagi/scene_info.h"
 #include "deltagi/scene_io.h"
+#include "deltagi_version.h"
 #include "eval_suite.h"
 #include "outputs.h"
 
@@ -529,6 +530,9 @@ int main(int argc, char** argv) {
         "deltagi: Delta Global Illumination, virtual objects in real images (voxel cone tracing + "
         "differential rendering)"};
     app.require_subcommand(1);
+    app.set_version_flag("--version",
+                         fmt::format("deltagi {} (git {})", DELTAGI_VERSION, DELTAGI_GIT_REVISION),
+                         "Print the version and the git revision it was built from, and exit");
     app.footer(
         "Outputs are written to temporary files beside them and renamed into place together when all are "
         "complete; an output that is one of the run's inputs is refused.\nExit status: 0 done, 1 bad input "
