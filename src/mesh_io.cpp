@@ -176,49 +176,6 @@ std::vector<ClaimedElement> offElements(std::istream& in, uint64_t& headerBytes)
     return {{"vertex", vertices, 6}, {"face", faces, 2}};
 }
 
-// Checks the element counts a PLY or OFF header claims against the file's size (a truncated file, or a
-// header claiming 3.5e11 vertices in 300 bytes), and the memory the mesh needs against the machine's,
-// before Assimp allocates for them.
-void checkClaimedSizes(const std::filesystem::path& file, const std::string& where, uint64_t memoryBytes) {
-    std::error_code error;
-    const uint64_t fileBytes = std::filesystem::file_size(file, error);
-    if (error) return;  // Assimp reports the unreadable file
-    std::ifstream in(file, std::ios::binary);
-    char magic[4] = {};
-    in.read(magic, 4);
-    in.seekg(0);
-    std::vector<ClaimedElement> elements;
-    uint64_t headerBytes = 0;
-    if (std::string(magic, 4) == "ply\n" || std::string(magic, 4) == "ply\r")
-        elements = plyElements(in, headerBytes);
-    else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
-             std::string(magic, 4) == "STOF")
-        elements = offElements(in, headerBytes);
-
-    double neededMemory = 0.0, neededBytes = 0.0;
-    std::string claims;
-    for (const ClaimedElement& element : elements) {
-        neededBytes += static_cast<double>(element.count) * static_cast<double>(element.minBytes);
-        neededMemory +=
-            static_cast<double>(element.count) * (element.name == "vertex" ? kBytesPerVertex : kBytesPerFace);
-        claims += fmt::format("{}{} {} element{}", claims.empty() ? "" : ", ", element.count, element.name,
-                              element.count == 1 ? "" : "s");
-    }
-    const std::string name = file.filename().string();
-    const uint64_t dataBytes = fileBytes - std::min(fileBytes, headerBytes);
-    if (!elements.empty() && neededBytes > static_cast<double>(dataBytes))
-        throw InputError(where,
-                         fmt::format("'{}' is truncated or corrupt: its header claims {}, which take at "
-                                     "least {:.0f} bytes, but the file holds {} bytes after the header",
-                                     name, claims, neededBytes, dataBytes));
-    if (elements.empty()) neededMemory = kBytesPerFileByte * static_cast<double>(fileBytes);
-    if (neededMemory > static_cast<double>(memoryBytes))
-        throw InputError(where,
-                         fmt::format("loading '{}' needs about {:.1f} GiB, more than the {:.1f} GiB of "
-                                     "physical memory",
-                                     name, neededMemory / kGiB, static_cast<double>(memoryBytes) / kGiB));
-}
-
 // ---- Assimp's output --------------------------------------------------------------------------------------
 
 // Assimp's warnings during one import: glTF faces with out-of-range indices are dropped with a warning only.
@@ -285,9 +242,49 @@ std::string importError(const Assimp::Importer& importer) {
 
 }  // namespace
 
+void checkMeshFileClaims(const std::filesystem::path& file, const std::string& where, uint64_t memoryBytes) {
+    std::error_code error;
+    const uint64_t fileBytes = std::filesystem::file_size(file, error);
+    if (error) return;  // Assimp reports the unreadable file
+    std::ifstream in(file, std::ios::binary);
+    char magic[4] = {};
+    in.read(magic, 4);
+    in.seekg(0);
+    std::vector<ClaimedElement> elements;
+    uint64_t headerBytes = 0;
+    if (std::string(magic, 4) == "ply\n" || std::string(magic, 4) == "ply\r")
+        elements = plyElements(in, headerBytes);
+    else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
+             std::string(magic, 4) == "STOF")
+        elements = offElements(in, headerBytes);
+
+    double neededMemory = 0.0, neededBytes = 0.0;
+    std::string claims;
+    for (const ClaimedElement& element : elements) {
+        neededBytes += static_cast<double>(element.count) * static_cast<double>(element.minBytes);
+        neededMemory +=
+            static_cast<double>(element.count) * (element.name == "vertex" ? kBytesPerVertex : kBytesPerFace);
+        claims += fmt::format("{}{} {} element{}", claims.empty() ? "" : ", ", element.count, element.name,
+                              element.count == 1 ? "" : "s");
+    }
+    const std::string name = file.filename().string();
+    const uint64_t dataBytes = fileBytes - std::min(fileBytes, headerBytes);
+    if (!elements.empty() && neededBytes > static_cast<double>(dataBytes))
+        throw InputError(where,
+                         fmt::format("'{}' is truncated or corrupt: its header claims {}, which take at "
+                                     "least {:.0f} bytes, but the file holds {} bytes after the header",
+                                     name, claims, neededBytes, dataBytes));
+    if (elements.empty()) neededMemory = kBytesPerFileByte * static_cast<double>(fileBytes);
+    if (neededMemory > static_cast<double>(memoryBytes))
+        throw InputError(where,
+                         fmt::format("loading '{}' needs about {:.1f} GiB, more than the {:.1f} GiB of "
+                                     "physical memory",
+                                     name, neededMemory / kGiB, static_cast<double>(memoryBytes) / kGiB));
+}
+
 std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
                                    const std::string& baseName) {
-    checkClaimedSizes(file, where, physicalMemoryBytes());
+    checkMeshFileClaims(file, where, physicalMemoryBytes());
     Assimp::Importer importer;
     importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, kCreaseAngleDeg);
     // Bake node transforms but keep one mesh per node: joining meshes of equal material would name, say, all

@@ -2,6 +2,7 @@
 // before it reaches the renderer: transform to world space, validation, vertex normals (mesh.cpp).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -36,6 +37,13 @@ struct FileMesh {
 inline constexpr float kCreaseAngleDeg = 80.0f;
 std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
                                    const std::string& baseName);
+
+// Run by loadMeshFile before Assimp reads anything: checks the element counts a PLY or OFF header claims
+// against the file's size (a truncated file, or a header claiming 3.5e11 vertices in 300 bytes), and the
+// memory loading the file needs (from those counts, else in proportion to the file's size) against
+// `physicalMemoryBytes` (a parameter so that tests can lower it). Throws InputError(where, ...).
+void checkMeshFileClaims(const std::filesystem::path& file, const std::string& where,
+                         uint64_t physicalMemoryBytes);
 
 // Area-weighted average of the face normals around each vertex, unit length; (0, 1, 0) where it vanishes.
 void computeVertexNormals(TriangleMesh& mesh);
