@@ -121,7 +121,7 @@ void readEnvironment(const JsonNode& node, const fs::path& sceneFolder, Scene& s
     }
     float brightest = 0.0f;
     for (float& v : environment.radiance.data()) brightest = std::max(brightest, v *= intensity);
-    if (!(brightest <= kMaxRadiance))
+    if (!(brightest <= static_cast<float>(kMaxRadiance)))
         throw InputError(
             node.childWhere("intensity"),
             fmt::format("the brightest pixel of '{}' times intensity is {:.3g}, more than {:.0e}, "

@@ -34,7 +34,7 @@ inline constexpr Interval kUnit{0.0, 1.0};
 // The largest radiance or intensity a scene may give (a light's intensity times its colour, an emission, an
 // environment map's pixels times its intensity). The renderer computes in 32-bit floats (at most 3.4e38):
 // this leaves 18 orders of magnitude for the inverse square law, cosines and sums, where a light of 3e38
-// overflowed to a black image.
+// overflowed to a black image. Compared as a float, so that 1e20 itself is allowed.
 inline constexpr double kMaxRadiance = 1e20;
 
 // A view of one JSON value together with where it is: the file (for messages) and its JSON path

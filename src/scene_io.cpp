@@ -184,7 +184,7 @@ Light readLight(const JsonNode& node) {
     if (auto n = node.find("intensity")) light.intensity = n->floatNumber(kNonNegative);
     if (const double power =
             static_cast<double>(light.intensity) * std::max({light.color.x, light.color.y, light.color.z});
-        power > kMaxRadiance)
+        power > static_cast<float>(kMaxRadiance))
         throw InputError(node.childWhere("intensity"),
                          fmt::format("intensity times color is {:.3g}, more than {:.0e}, beyond which the "
                                      "render's 32-bit floats overflow",
@@ -245,7 +245,7 @@ Material combineMaterial(const MaterialOverrides& json, const FileMaterial& file
                                      "finite number",
                                      meshName, json.emissionScale));
     if (const float brightest = std::max({m.emission.x, m.emission.y, m.emission.z});
-        brightest > kMaxRadiance)
+        brightest > static_cast<float>(kMaxRadiance))
         throw InputError(json.emissionWhere,
                          fmt::format("mesh '{}': emission times emission_scale is {:.3g}, more than {:.0e}, "
                                      "beyond which the render's 32-bit floats overflow",
