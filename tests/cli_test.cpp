@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -143,6 +144,22 @@ void expectOneErrorLine(const CliResult& result, std::initializer_list<std::stri
     EXPECT_EQ(result.err.rfind("deltagi: error:", 0), 0u) << result.err;
     for (const std::string& name : mustName)
         EXPECT_NE(result.err.find(name), std::string::npos) << result.err;
+}
+
+TEST_F(CliTest, VersionNamesTheGitRevision) {
+    const CliResult result = run("--version");
+    EXPECT_EQ(result.exitCode, 0);
+    // "deltagi 0.1.0 (git 0123456789ab)", "-dirty" after it for a modified work tree, "unknown" without git.
+    EXPECT_TRUE(std::regex_match(
+        result.out, std::regex(R"(deltagi \d+\.\d+\.\d+ \(git ([0-9a-f]{7,}(-dirty)?|unknown)\)\n)")))
+        << result.out;
+}
+
+TEST_F(CliTest, HelpListsTheExitStatuses) {
+    const CliResult result = run("--help");
+    EXPECT_EQ(result.exitCode, 0);
+    for (const char* part : {"Exit status: 0 done, 1 bad input", "2 usage error", "130 or 143", "--version"})
+        EXPECT_NE(result.out.find(part), std::string::npos) << part;
 }
 
 TEST_F(CliTest, MissingSceneFile) {
