@@ -112,7 +112,9 @@ void note(fmt::format_string<Args...> format, Args&&... args) {
     std::fflush(stderr);
 }
 
-// One line, whatever the message holds: the lines of a multi-line message are joined with "; ".
+// One line, whatever the message holds: the lines of a multi-line message are joined with "; ", and a line
+// longer than kMaxMessageChars (a message that quotes a huge value from the input) is cut.
+constexpr size_t kMaxMessageChars = 1000;
 std::string oneLine(const std::string& message) {
     std::string out;
     bool lineBreak = false;
@@ -125,6 +127,7 @@ std::string oneLine(const std::string& message) {
         lineBreak = false;
         out += c;
     }
+    if (out.size() > kMaxMessageChars) out = out.substr(0, kMaxMessageChars - 3) + "...";
     return out;
 }
 

@@ -162,6 +162,14 @@ TEST_F(CliTest, HelpListsTheExitStatuses) {
         EXPECT_NE(result.out.find(part), std::string::npos) << part;
 }
 
+TEST_F(CliTest, HugeValuesInMessagesAreCut) {
+    json scene = tinyScene();
+    scene["lights"][0]["type"] = std::string(100000, 'x');
+    const CliResult result = run("info " + quote(writeScene(scene).string()));
+    expectOneErrorLine(result, {"scene.json: lights[0].type: expected \"point\""});
+    EXPECT_LE(result.err.size(), 1100u);  // "deltagi: error: " and at most 1000 characters
+}
+
 TEST_F(CliTest, MissingSceneFile) {
     expectOneErrorLine(run(renderArgs(dir_ / "no-such-scene.json")), {"no-such-scene.json"});
     expectOneErrorLine(run("info " + quote((dir_ / "no-such-scene.json").string())), {"no-such-scene.json"});
