@@ -121,8 +121,10 @@ uint64_t streamPosition(std::istream& in) {
 
 // The elements a PLY header declares, with the fewest bytes each can take (binary: the sizes of its scalar
 // properties and list counts; ASCII: 2 characters per property, a digit and a separator). The header's
-// length goes to `headerBytes`. Nothing when the header cannot be read (Assimp then says why).
-std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes) {
+// length goes to `headerBytes`. Nothing when the header has no end (Assimp then says why); a count that is
+// not a whole number of 64 bits is an InputError(where, ...).
+std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes, const std::string& name,
+                                        const std::string& where) {
     static const std::map<std::string, uint64_t> kTypeBytes = {
         {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
         {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
@@ -140,7 +142,11 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes)
             binary = format != "ascii";
         } else if (word == "element") {
             ClaimedElement element;
-            if (!(words >> element.name >> element.count)) return {};
+            // A count beyond 64 bits would slip past the size check: refused here, as Assimp cannot read it.
+            if (!(words >> element.name >> element.count))
+                throw InputError(where, fmt::format("'{}' is corrupt: expected \"element NAME COUNT\" with a "
+                                                    "whole number, got \"{}\"",
+                                                    name, line.substr(0, 80)));
             elements.push_back(element);
         } else if (word == "property" && !elements.empty()) {
             std::string type;
@@ -253,7 +259,7 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
     std::vector<ClaimedElement> elements;
     uint64_t headerBytes = 0;
     if (std::string(magic, 4) == "ply\n" || std::string(magic, 4) == "ply\r")
-        elements = plyElements(in, headerBytes);
+        elements = plyElements(in, headerBytes, file.filename().string(), where);
     else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
              std::string(magic, 4) == "STOF")
         elements = offElements(in, headerBytes);

@@ -147,6 +147,11 @@ TEST_F(MeshFileTest, HeaderCountsBeyondTheFileAreErrors) {
     // ASCII: at least 2 characters per property.
     const fs::path ascii = write("ascii.ply", plyHeader("ascii", 1000, 0) + "0 0 0\n");
     expectContains(errorOf([&] { checkMeshFileClaims(ascii, "where", kPlenty); }), {"1000 vertex elements"});
+    // A count beyond 64 bits.
+    const fs::path hugeCount =
+        write("count.ply", "ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\nend_header\n");
+    expectContains(errorOf([&] { checkMeshFileClaims(hugeCount, "where", kPlenty); }),
+                   {"where: 'count.ply' is corrupt: expected \"element NAME COUNT\" with a whole number"});
     // OFF, counts on the first line or on their own.
     const fs::path off = write("huge.off", "OFF\n353535235358 6 0\n0 0 0\n");
     expectContains(errorOf([&] { checkMeshFileClaims(off, "where", kPlenty); }),
