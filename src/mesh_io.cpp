@@ -113,6 +113,8 @@ struct ClaimedElement {
     uint64_t minBytes = 0;  // the fewest bytes one element takes in the file
 };
 
+constexpr int kMaxPlyHeaderLines = 10000;
+
 // Where the stream is; past the end when it has reached it.
 uint64_t streamPosition(std::istream& in) {
     const std::streamoff position = in.tellg();
@@ -121,8 +123,8 @@ uint64_t streamPosition(std::istream& in) {
 
 // The elements a PLY header declares, with the fewest bytes each can take (binary: the sizes of its scalar
 // properties and list counts; ASCII: 2 characters per property, a digit and a separator). The header's
-// length goes to `headerBytes`. Nothing when the header has no end (Assimp then says why); a count that is
-// not a whole number of 64 bits is an InputError(where, ...).
+// length goes to `headerBytes`. A header without a clean "end_header" line, or with a count that is not a
+// whole number of 64 bits, is an InputError(where, ...).
 std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes, const std::string& name,
                                         const std::string& where) {
     static const std::map<std::string, uint64_t> kTypeBytes = {
@@ -132,7 +134,7 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes,
     std::vector<ClaimedElement> elements;
     bool binary = false;
     std::string line;
-    for (int lines = 0; lines < 10000 && std::getline(in, line); ++lines) {
+    for (int lines = 0; lines < kMaxPlyHeaderLines && std::getline(in, line); ++lines) {
         std::istringstream words(line);
         std::string word;
         words >> word;
@@ -159,7 +161,10 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes,
             return elements;
         }
     }
-    return {};
+    // Assimp reads some such headers for minutes (found by scripts/fuzz.sh: "\0end_header").
+    throw InputError(where, fmt::format("'{}' is corrupt: its PLY header has no line \"end_header\" within "
+                                        "{} lines",
+                                        name, kMaxPlyHeaderLines));
 }
 
 // OFF: "OFF" (or COFF, NOFF, ...) then "vertices faces edges"; a vertex takes at least "0 0 0\n", a face
