@@ -15,9 +15,10 @@ namespace deltagi {
 struct RsmTexel {
     glm::vec3 position{0.0f};
     glm::vec3 normal{0.0f};  // facing the light
-    glm::vec3 flux{0.0f};    // diffusely reflected flux (W): albedo * flux arriving through the texel
-    float area = 0.0f;       // surface area the texel covers (world units^2)
-    uint32_t index = 0;      // face * resolution^2 + row * resolution + column: the texel's place in the map
+    glm::vec3 flux{
+        0.0f};          // reflected flux (W): Material::volumeReflectance() * flux arriving through the texel
+    float area = 0.0f;  // surface area the texel covers (world units^2)
+    uint32_t index = 0;  // face * resolution^2 + row * resolution + column: the texel's place in the map
 };
 
 struct ReflectiveShadowMap {

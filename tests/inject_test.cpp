@@ -55,6 +55,20 @@ TEST(Inject, DirectionalLightOnAFloorGivesAlbedoTimesIrradianceOverPi) {
     EXPECT_EQ(light.at(8, 9, 8), glm::vec4(0.0f));
 }
 
+// A glossy floor reflects its glossy share into the volume too, spread over the hemisphere: albedo 0.3 and
+// specular 0.2 light the voxels as a Lambertian 0.5 does.
+TEST(Inject, GlossySurfacesReflectTheirWholeReflectanceIntoTheVolume) {
+    Scene s = floorOnly(0.3f);
+    s.real[0].material.specular = glm::vec3(0.2f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const std::vector<ReflectiveShadowMap> rsm = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256)};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    const Grid3 light = injectLight(rsm, kRegion, geometry);
+    EXPECT_NEAR(light.at(8, 8, 8).x, 0.5f * 2.0f / std::numbers::pi_v<float>, 0.01f);
+}
+
 // Two lights that both light the whole floor: each voxel holds the sum of their radiances, albedo * (E1 cos1
 // + E2 cos2) / pi. (Summing the texels of both before dividing by their footprints gave the mean of the two:
 // an environment map's 16 lights lit the volume at a tenth of its light.)
