@@ -4,6 +4,7 @@
 #include "cone_trace.h"
 #include "mipmap.h"
 #include "parallel.h"
+#include "shadow_rays.h"
 
 namespace deltagi {
 
@@ -91,37 +92,14 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     return indirect;
 }
 
-std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeometry& objects,
-                                          const MipVolume& objectVisibility, const MipVolume& sceneVisibility,
-                                          const Options& options, const VoxelBox& box, int level) {
-    std::vector<glm::vec3> added(box.empty() ? 0 : box.count(), glm::vec3(0.0f));
-    if (box.empty() || objects.albedo.empty() || objectVisibility.levelCount() <= level) return added;
-    const VolumeRegion& region = light.region();
-    const Grid3& coarse = objectVisibility.level(level);
-    const int n = region.resolution, factor = n / coarse.resolution();
-    const float coarseSize = region.voxelSize() * static_cast<float>(factor);
-    const ConeTraceSettings settings = coneTraceSettings(options.trace);
-    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
-    const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
-    // The coarse voxels over the box, gathered once each.
-    const glm::ivec3 lo = box.lo / factor, hi = (box.hi + factor - 1) / factor;
-    const glm::ivec3 size = hi - lo;
-    std::vector<glm::vec3> gathered(static_cast<size_t>(size.x) * size.y * size.z, glm::vec3(0.0f));
-    parallelFor(0, static_cast<int64_t>(size.y) * size.z, 1, [&](int64_t row) {
-        const int z = lo.z + static_cast<int>(row / size.y), y = lo.y + static_cast<int>(row % size.y);
-        for (int x = lo.x; x < hi.x; ++x) {
-            const glm::vec4 v = coarse.at(x, y, z);
-            if (v.x <= 0.0f) continue;
-            const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / v.x;
-            const float coherence = glm::length(meanNormal);
-            if (coherence < kMinCoherence) continue;
-            const glm::vec3 normal = meanNormal / coherence;
-            const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
-            gathered[(static_cast<size_t>(z - lo.z) * size.y + (y - lo.y)) * size.x + (x - lo.x)] =
-                gatherAtVoxel(centre, normal, coarseSize, coarse.index(x, y, z), light, occluders, cones,
-                              settings);
-        }
-    });
+namespace {
+
+// Reflects the light `gathered` at each mip-`level` voxel over `box` (coarse voxels lo..hi, row by row) at
+// its level-0 voxels by their albedo: gatherObjectBounce's result.
+std::vector<glm::vec3> reflectAtObjectVoxels(const VoxelGeometry& objects, const VoxelBox& box, int factor,
+                                             glm::ivec3 lo, glm::ivec3 size,
+                                             const std::vector<glm::vec3>& gathered) {
+    std::vector<glm::vec3> added(box.count(), glm::vec3(0.0f));
     const glm::ivec3 extent = box.hi - box.lo;
     parallelFor(0, static_cast<int64_t>(extent.y) * extent.z, 4, [&](int64_t row) {
         const int z = box.lo.z + static_cast<int>(row / extent.y),
@@ -137,6 +115,94 @@ std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeo
         }
     });
     return added;
+}
+
+// Calls gather(x, y, z, centre, normal, size) for every coherent mip-`level` voxel of the objects over `box`,
+// in parallel, and returns reflectAtObjectVoxels of what it gives.
+template <typename Gather>
+std::vector<glm::vec3> gatherAtObjectVoxels(const VoxelGeometry& objects, const MipVolume& objectVisibility,
+                                            const VoxelBox& box, int level, Gather&& gather) {
+    if (box.empty() || objects.albedo.empty() || objectVisibility.levelCount() <= level)
+        return std::vector<glm::vec3>(box.empty() ? 0 : box.count(), glm::vec3(0.0f));
+    const VolumeRegion& region = objectVisibility.region();
+    const Grid3& coarse = objectVisibility.level(level);
+    const int factor = region.resolution / coarse.resolution();
+    const float coarseSize = region.voxelSize() * static_cast<float>(factor);
+    // The coarse voxels over the box, gathered once each.
+    const glm::ivec3 lo = box.lo / factor, hi = (box.hi + factor - 1) / factor;
+    const glm::ivec3 size = hi - lo;
+    std::vector<glm::vec3> gathered(static_cast<size_t>(size.x) * size.y * size.z, glm::vec3(0.0f));
+    parallelFor(0, static_cast<int64_t>(size.y) * size.z, 1, [&](int64_t row) {
+        const int z = lo.z + static_cast<int>(row / size.y), y = lo.y + static_cast<int>(row % size.y);
+        for (int x = lo.x; x < hi.x; ++x) {
+            const glm::vec4 v = coarse.at(x, y, z);
+            if (v.x <= 0.0f) continue;
+            const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / v.x;
+            const float coherence = glm::length(meanNormal);
+            if (coherence < kMinCoherence) continue;
+            const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+            gathered[(static_cast<size_t>(z - lo.z) * size.y + (y - lo.y)) * size.x + (x - lo.x)] =
+                gather(coarse.index(x, y, z), centre, meanNormal / coherence, coarseSize);
+        }
+    });
+    return reflectAtObjectVoxels(objects, box, factor, lo, size, gathered);
+}
+
+}  // namespace
+
+std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeometry& objects,
+                                          const MipVolume& objectVisibility, const MipVolume& sceneVisibility,
+                                          const Options& options, const VoxelBox& box, int level) {
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
+    return gatherAtObjectVoxels(objects, objectVisibility, box, level,
+                                [&](size_t index, glm::vec3 centre, glm::vec3 normal, float size) {
+                                    return gatherAtVoxel(centre, normal, size, index, light, occluders, cones,
+                                                         settings);
+                                });
+}
+
+std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const VoxelGeometry& objects,
+                                                const MipVolume& objectVisibility,
+                                                const MipVolume& sceneVisibility, const RayScene& scene,
+                                                const Options& options, const VoxelBox& box, int level) {
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
+    const VolumeRegion& region = light.region();
+    const float invVoxel = 1.0f / region.voxelSize();
+    const float offset = shadowRayOffset(scene);
+    const int count = squareSampleCount(std::max(options.diffuse.objectRays, 1));
+    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
+    return gatherAtObjectVoxels(
+        objects, objectVisibility, box, level,
+        [&](size_t index, glm::vec3 centre, glm::vec3 normal, float size) {
+            // The objects' outer surface in the voxel: the first one met coming in along the normal.
+            const RayHit surface =
+                scene.intersectTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
+            if (!surface.hit())
+                return gatherAtVoxel(centre, normal, size, index, light, occluders, cones, settings);
+            const glm::vec3 origin = surface.position + offset * normal;
+            const glm::mat3 frame = frameAround(normal);
+            const float jitterU = hashToUnit(index, kBounceStream + 100),
+                        jitterV = hashToUnit(index, kBounceStream + 101);
+            glm::vec3 sum(0.0f);
+            for (int k = 0; k < count; ++k) {
+                const float u1 = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
+                const float u2 = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+                const glm::vec3 wi = frame * sampleCosineHemisphere(u1, u2);
+                const RayHit hit = scene.intersect(origin, wi, offset);
+                if (!hit.hit()) continue;
+                // The light of the voxels where the ray ends, half a voxel out on its side of the surface.
+                const glm::vec4 l = light.sample(
+                    (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) *
+                        invVoxel,
+                    0.0f);
+                if (l.w > 1e-6f) sum += glm::vec3(l) / l.w;
+            }
+            return sum / static_cast<float>(count);
+        });
 }
 
 }  // namespace deltagi

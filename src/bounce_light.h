@@ -13,6 +13,7 @@
 #pragma once
 
 #include "deltagi/options.h"
+#include "ray_scene.h"
 #include "volume.h"
 #include "voxelize.h"
 
@@ -36,5 +37,17 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
 std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeometry& objects,
                                           const MipVolume& objectVisibility, const MipVolume& sceneVisibility,
                                           const Options& options, const VoxelBox& box, int level);
+
+// gatherObjectBounce by rays (options.diffuse.object_rays of them per coarse voxel): the cones of a coarse
+// voxel start half a voxel and more off its surfaces, so that under an object standing on the floor they
+// start below the floor and the object's underside gets none of the floor's light. Each coarse voxel finds
+// its objects' outer surface along its mean normal (a ray against `scene`'s top layer, the objects) and casts
+// cosine-distributed rays from there against the objects and the real scene (`scene` and its base); a ray's
+// light is that of `light`'s level-0 voxels where it ends. Voxels whose surface is not found gather through
+// the cones as gatherObjectBounce does. Same form of result.
+std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const VoxelGeometry& objects,
+                                                const MipVolume& objectVisibility,
+                                                const MipVolume& sceneVisibility, const RayScene& scene,
+                                                const Options& options, const VoxelBox& box, int level);
 
 }  // namespace deltagi

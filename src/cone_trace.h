@@ -22,6 +22,9 @@ struct ConeTraceSettings {
     float backfaceWeight = 1.0f;
     float jitter = 1.0f;
     bool paperAccumulation = false;
+    // traceLightChangeCone: the objects' own light is left out (the objects still occlude): it comes from
+    // rays instead (traceObjectBounceRays).
+    bool objectLightByRays = false;
 };
 ConeTraceSettings coneTraceSettings(const TraceOptions& options);
 

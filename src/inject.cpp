@@ -16,9 +16,46 @@ namespace {
 // lit; below it, the radiance is scaled by the covered fraction (partly shadowed voxels).
 constexpr float kFullCoverage = 0.75f;
 
-// Voxel i of the light volume from its texels' summed (reflected flux, footprint area) and the geometry in
+// The surface area of `geometry` in voxel i (world units^2).
+[[gnu::always_inline]] inline float geometryArea(std::span<const VoxelGeometry* const> geometry, size_t i) {
+    float area = 0.0f;
+    for (const VoxelGeometry* g : geometry) area += g->area[i];
+    return area;
+}
+
+// The radiance one light's texels give a voxel from their summed (reflected flux, footprint area) and the
+// geometry's `area` in it: the mean radiance of the lit texels (reflected flux / (pi * footprint area)),
+// times the lit fraction of the voxel's surface. Each light's is computed apart and the lights' are summed: a
+// voxel lit fully by two lights has the radiance of both, not their mean.
+[[gnu::always_inline]] inline glm::vec3 lightRadiance(glm::vec4 texelSum, float area) {
+    if (!(texelSum.w > 0.0f)) return glm::vec3(0.0f);
+    const float litFraction = area > 0.0f ? std::min(1.0f, texelSum.w / (kFullCoverage * area)) : 1.0f;
+    return glm::vec3(texelSum) * (litFraction / (std::numbers::pi_v<float> * texelSum.w));
+}
+
+// The texels of one voxel as they arrive in light and texel order: each light's sum is turned into its
+// radiance (lightRadiance) when the next light's texels start, and the lights' radiances are summed in light
+// order. injectLight and reinjectLight add the same numbers in the same order.
+struct VoxelTexels {
+    glm::vec3 radiance{0.0f};  // of the lights finished
+    glm::vec4 current{0.0f};   // the current light's (reflected flux, footprint area)
+    uint32_t light = 0;
+    bool lit = false;  // any texel at all
+    void add(uint32_t l, const RsmTexel& t, float area) {
+        if (lit && l != light) finishLight(area);
+        light = l;
+        lit = true;
+        current += glm::vec4(t.flux, t.area);
+    }
+    void finishLight(float area) {
+        radiance += lightRadiance(current, area);
+        current = glm::vec4(0.0f);
+    }
+};
+
+// Voxel i of the light volume from its texels' radiance (`lit`: any texel landed in it) and the geometry in
 // it.
-[[gnu::always_inline]] inline glm::vec4 voxelLight(glm::vec4 texelSum,
+[[gnu::always_inline]] inline glm::vec4 voxelLight(glm::vec3 reflected, bool lit,
                                                    std::span<const VoxelGeometry* const> geometry, size_t i) {
     float occupancy = 0.0f, area = 0.0f;
     glm::vec3 emitted(0.0f);  // radiance times area
@@ -27,13 +64,10 @@ constexpr float kFullCoverage = 0.75f;
         area += g->area[i];
         if (!g->emission.empty()) emitted += g->emission[i];
     }
-    const glm::vec4 a = texelSum;  // (reflected flux, footprint area)
     glm::vec3 radiance(0.0f);
-    if (a.w > 0.0f) {
+    if (lit) {
         occupancy = 1.0f;
-        // Mean radiance of the lit texels, times the lit fraction of the voxel's surface.
-        const float litFraction = area > 0.0f ? std::min(1.0f, a.w / (kFullCoverage * area)) : 1.0f;
-        radiance = glm::vec3(a) * (litFraction / (std::numbers::pi_v<float> * a.w));
+        radiance = reflected;
     }
     // Emissive surfaces add their own radiance, averaged over all the surface area in the voxel.
     if (area > 0.0f && emitted != glm::vec3(0.0f)) radiance += emitted / area;
@@ -50,39 +84,39 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
                   std::span<const VoxelGeometry* const> geometry) {
     const int n = region.resolution;
 
-    // All texels of all lights, in light and texel order, each with its voxel.
-    struct Splat {
-        const RsmTexel* texel;
-        uint32_t voxel;
-        int z;
-    };
-    std::vector<Splat> splats;
-    const TexelVoxels texelVoxel(region);
-    for (const ReflectiveShadowMap& rsm : rsms) {
-        for (const RsmTexel& t : rsm.texels) {
-            const glm::ivec3 v = texelVoxel(t.position);
-            splats.push_back(
-                {&t, static_cast<uint32_t>((static_cast<size_t>(v.z) * n + v.y) * n + v.x), v.z});
-        }
-    }
-    const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
-    const SlabBins bins = binBySlab(splats.size(), slabCount, [&](size_t i) {
-        int s = splats[i].z / kSlabThickness;
-        return std::pair{s, s};
-    });
-
-    // Per voxel: reflected flux (rgb) and the texels' footprint area.
+    // Per voxel: the lights' summed radiance, and (w) 1 where any texel landed.
+    Grid3 reflected(n);
+    // One light at a time: its texels' (reflected flux, footprint area) per voxel, then their radiance.
     Grid3 accum(n);
-    parallelFor(0, slabCount, 1, [&](int64_t s) {
-        for (uint32_t i : bins.slab(s)) {
-            const Splat& sp = splats[i];
-            accum[sp.voxel] += glm::vec4(sp.texel->flux, sp.texel->area);
-        }
-    });
+    const TexelVoxels texelVoxel(region);
+    const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
+    std::vector<uint32_t> voxels;
+    for (const ReflectiveShadowMap& rsm : rsms) {
+        voxels.resize(rsm.texels.size());
+        for (size_t t = 0; t < rsm.texels.size(); ++t) voxels[t] = texelVoxel.index(rsm.texels[t].position);
+        const SlabBins bins = binBySlab(voxels.size(), slabCount, [&](size_t t) {
+            const int s = static_cast<int>(voxels[t] / (static_cast<size_t>(n) * n)) / kSlabThickness;
+            return std::pair{s, s};
+        });
+        parallelFor(0, slabCount, 1, [&](int64_t s) {
+            for (uint32_t t : bins.slab(s))
+                accum[voxels[t]] += glm::vec4(rsm.texels[t].flux, rsm.texels[t].area);
+            // Each voxel of the slab once (at its first texel), in the slab's order.
+            for (uint32_t t : bins.slab(s)) {
+                glm::vec4& sum = accum[voxels[t]];
+                if (!(sum.w > 0.0f)) continue;
+                reflected[voxels[t]] +=
+                    glm::vec4(lightRadiance(sum, geometryArea(geometry, voxels[t])), 0.0f);
+                reflected[voxels[t]].w = 1.0f;
+                sum = glm::vec4(0.0f);
+            }
+        });
+    }
 
     Grid3 light(n);
-    parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14,
-                [&](int64_t i) { light[i] = voxelLight(accum[i], geometry, i); });
+    parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) {
+        light[i] = voxelLight(glm::vec3(reflected[i]), reflected[i].w > 0.0f, geometry, i);
+    });
     return light;
 }
 
@@ -209,12 +243,13 @@ std::vector<uint32_t> goneEntries(const TexelBins& bins, const RsmChanges& chang
     return gone;
 }
 
-// Per voxel x0 <= x < x1 of row (y, z), the sum of its texels' (reflected flux, footprint area) with the
-// objects: the scene's texels that are not gone and the added ones, merged into injectLight's order (map,
-// then texel) so that the sums add the same numbers in the same order, and round the same.
-std::vector<glm::vec4> rowTexelSums(int y, int z, int x0, int x1, const TexelBins& bins,
-                                    std::span<const ReflectiveShadowMap> sceneAlone,
-                                    std::span<const uint32_t> gone, const RsmChanges& changes) {
+// Per voxel x0 <= x < x1 of row (y, z), its texels with the objects (VoxelTexels, finished): the scene's
+// texels that are not gone and the added ones, merged into injectLight's order (map, then texel) so that the
+// sums add the same numbers in the same order, and round the same.
+std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelBins& bins,
+                                      std::span<const ReflectiveShadowMap> sceneAlone,
+                                      std::span<const uint32_t> gone, const RsmChanges& changes,
+                                      std::span<const VoxelGeometry* const> geometry) {
     const int n = bins.resolution;
     const size_t row = static_cast<size_t>(z) * n + y;
     const uint32_t rowVoxel = static_cast<uint32_t>(row * n);  // the index of voxel (0, y, z)
@@ -225,7 +260,8 @@ std::vector<glm::vec4> rowTexelSums(int y, int z, int x0, int x1, const TexelBin
     auto g = std::lower_bound(gone.begin(), gone.end(), static_cast<uint32_t>(e - entries.begin()));
     auto a = std::lower_bound(changes.added.begin(), changes.added.end(), rowVoxel + x0,
                               [](const RsmChanges::Texel& t, uint32_t v) { return t.voxel < v; });
-    std::vector<glm::vec4> sums(x1 - x0, glm::vec4(0.0f));
+    std::vector<VoxelTexels> sums(x1 - x0);
+    auto areaAt = [&](int x) { return geometryArea(geometry, rowVoxel + static_cast<uint32_t>(x)); };
     while (true) {
         const bool eIn = e != eEnd && e->x < x1;
         const bool aIn = a != changes.added.end() && a->voxel < rowVoxel + x1;
@@ -236,13 +272,16 @@ std::vector<glm::vec4> rowTexelSums(int y, int z, int x0, int x1, const TexelBin
             if (g != gone.end() && *g == static_cast<uint32_t>(e - entries.begin()))
                 ++g;  // removed or changed by the objects
             else
-                sums[e->x - x0] += glm::vec4(sceneTexel->flux, sceneTexel->area);
+                sums[e->x - x0].add(e->light, *sceneTexel, areaAt(e->x));
             ++e;
         } else {
-            sums[a->voxel - rowVoxel - x0] += glm::vec4(a->texel->flux, a->texel->area);
+            const int x = static_cast<int>(a->voxel - rowVoxel);
+            sums[x - x0].add(a->light, *a->texel, areaAt(x));
             ++a;
         }
     }
+    for (int x = x0; x < x1; ++x)
+        if (sums[x - x0].lit) sums[x - x0].finishLight(areaAt(x));
     return sums;
 }
 
@@ -254,11 +293,12 @@ void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
                    Grid3& deltaLight, const Grid3* bounce) {
     const std::vector<uint32_t> gone = goneEntries(sceneTexels, changes);
     forEachRow(box, [&](int y, int z) {
-        const std::vector<glm::vec4> sums =
-            rowTexelSums(y, z, box.lo.x, box.hi.x, sceneTexels, sceneAlone, gone, changes);
+        const std::vector<VoxelTexels> sums =
+            rowTexelSums(y, z, box.lo.x, box.hi.x, sceneTexels, sceneAlone, gone, changes, geometry);
         for (int x = box.lo.x; x < box.hi.x; ++x) {
             const size_t i = fullLight.index(x, y, z);
-            glm::vec4 light = voxelLight(sums[x - box.lo.x], geometry, i);
+            const VoxelTexels& texels = sums[x - box.lo.x];
+            glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, i);
             if (bounce) light += (*bounce)[i];
             fullLight[i] = light;
             deltaLight[i] = deltaVoxel(light, sceneLight[i]);

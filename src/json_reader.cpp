@@ -333,7 +333,7 @@ void readTrace(const JsonNode& node, TraceOptions& trace) {
 
 void readRender(const JsonNode& node, RenderOptions& render) {
     node.allowKeys({"samples_per_pixel", "indirect", "double_shadow_fix", "relight_indirect", "relight_cones",
-                    "light_bounces", "denoise_radius"});
+                    "light_bounces", "denoise_radius", "relight_object_light"});
     if (auto n = node.find("samples_per_pixel")) {
         int spp = n->integer(1, 16);
         if (spp != 1 && spp != 4 && spp != 9 && spp != 16)
@@ -350,6 +350,12 @@ void readRender(const JsonNode& node, RenderOptions& render) {
         if (mode != "differential" && mode != "delta_volume")
             n->fail("expected \"differential\" or \"delta_volume\", got \"" + mode + "\"");
         render.relightCones = mode;
+    }
+    if (auto n = node.find("relight_object_light")) {
+        std::string mode = n->string();
+        if (mode != "cones" && mode != "rays")
+            n->fail("expected \"cones\" or \"rays\", got \"" + mode + "\"");
+        render.relightObjectLight = mode;
     }
 }
 
@@ -391,8 +397,9 @@ Options readOptions(const JsonNode& node) {
         if (auto r = n->find("resolution")) options.rsm.resolution = r->integer(16, 8192);
     }
     if (auto n = node.find("diffuse")) {
-        n->allowKeys({"count", "aperture_deg", "pixel_stride", "relight_pixel_stride"});
+        n->allowKeys({"count", "aperture_deg", "pixel_stride", "relight_pixel_stride", "object_rays"});
         if (auto c = n->find("count")) options.diffuse.count = c->integer(1, 64);
+        if (auto r = n->find("object_rays")) options.diffuse.objectRays = r->integer(0, 256);
         if (auto st = n->find("pixel_stride")) options.diffuse.pixelStride = readPixelStride(*st);
         if (auto st = n->find("relight_pixel_stride"))
             options.diffuse.relightPixelStride = readPixelStride(*st);
@@ -455,7 +462,8 @@ json optionsToJson(const Options& o) {
          {{"count", o.diffuse.count},
           {"aperture_deg", o.diffuse.apertureDeg},
           {"pixel_stride", strideJson(o.diffuse.pixelStride)},
-          {"relight_pixel_stride", strideJson(o.diffuse.relightPixelStride)}}},
+          {"relight_pixel_stride", strideJson(o.diffuse.relightPixelStride)},
+          {"object_rays", o.diffuse.objectRays}}},
         {"specular",
          {{"min_aperture_deg", o.specular.minApertureDeg},
           {"max_aperture_deg", o.specular.maxApertureDeg},
@@ -481,6 +489,7 @@ json optionsToJson(const Options& o) {
           {"double_shadow_fix", o.render.doubleShadowFix},
           {"relight_indirect", o.render.relightIndirect},
           {"relight_cones", o.render.relightCones},
+          {"relight_object_light", o.render.relightObjectLight},
           {"light_bounces", o.render.lightBounces},
           {"denoise_radius", o.render.denoiseRadius}}},
         {"environment",

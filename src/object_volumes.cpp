@@ -89,7 +89,7 @@ void ObjectVolumes::updateObjectLight(const VoxelBox& box) {
     updateMipChain(objectLight_, box, nonZeroBounds(level0, box));
 }
 
-void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* options) {
+void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* options, const RayScene* rays) {
     buildLightMips();
     // The objects' light is non-zero only where they are and were: inside what this frame's injection
     // rewrote.
@@ -97,8 +97,12 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
     if (!sceneVisibility || !options || objects_.albedo.empty()) return;
     const VoxelBox& box = objects_.bounds;
     if (box.empty()) return;
-    const std::vector<glm::vec3> added = gatherObjectBounce(
-        fullLight_, objects_, objectVisibility_, *sceneVisibility, *options, box, kObjectBounceLevel);
+    const std::vector<glm::vec3> added =
+        rays && options->diffuse.objectRays > 0
+            ? gatherObjectBounceByRays(fullLight_, objects_, objectVisibility_, *sceneVisibility, *rays,
+                                       *options, box, kObjectBounceLevel)
+            : gatherObjectBounce(fullLight_, objects_, objectVisibility_, *sceneVisibility, *options, box,
+                                 kObjectBounceLevel);
     Grid3& full = fullLight_.levelForUpdate(0);
     Grid3& delta = deltaLight_.levelForUpdate(0);
     const glm::ivec3 extent = box.hi - box.lo;

@@ -18,6 +18,7 @@
 #include "deltagi/options.h"
 #include "inject.h"
 #include "mipmap.h"
+#include "ray_scene.h"
 #include "voxelize.h"
 
 namespace deltagi {
@@ -44,7 +45,10 @@ class ObjectVolumes {
     // Stage 4: the mip chains of the three volumes. With `sceneVisibility` and the objects voxelized with
     // albedo, the objects' own further bounce is added to the full and delta volumes (gatherObjectBounce):
     // they reflect the light of the room they receive, not only their direct light.
-    void mipmap(const MipVolume* sceneVisibility = nullptr, const Options* options = nullptr);
+    // With `rays` (the objects' layer over the real scene) and options.diffuse.object_rays > 0 the bounce is
+    // gathered by rays (gatherObjectBounceByRays).
+    void mipmap(const MipVolume* sceneVisibility = nullptr, const Options* options = nullptr,
+                const RayScene* rays = nullptr);
 
     const MipVolume& objectVisibility() const { return objectVisibility_; }
     const MipVolume& fullLight() const { return fullLight_; }

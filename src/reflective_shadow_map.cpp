@@ -153,13 +153,16 @@ class MapLayout {
     std::vector<Face> faces_;
 };
 
-// The texel `index` made from its ray's closest hit, if that hit is on a surface inside the region.
+// The texel `index` made from its ray's closest hit, if that hit is on a surface inside the region (and, with
+// a viewpoint, on the viewpoint's side of a real surface).
 std::optional<RsmTexel> texelFromHit(const RayHit& hit, const TexelRay& ray, const Bounds3f& regionBounds,
-                                     uint32_t index) {
+                                     uint32_t index, const std::optional<glm::vec3>& viewpoint) {
     if (!hit.hit() || !regionBounds.contains(hit.position)) return std::nullopt;
+    if (viewpoint && !hit.isVirtual && glm::dot(hit.geometricNormal, *viewpoint - hit.position) < 0.0f)
+        return std::nullopt;
     const float cosTheta = std::max(glm::dot(hit.normal, -ray.dir), kMinCos);
     const float area = (ray.areaConst + ray.areaPerT2 * hit.t * hit.t) / cosTheta;
-    return RsmTexel{hit.position, hit.normal, hit.material->albedo * ray.fluxIn, area, index};
+    return RsmTexel{hit.position, hit.normal, hit.material->volumeReflectance() * ray.fluxIn, area, index};
 }
 
 uint32_t texelIndex(int res, int face, int i, int j) {
@@ -172,10 +175,12 @@ bool carriesLight(const TexelRay& ray) {
 
 // The texel (face, i, j) if its ray hits a surface inside the region.
 std::optional<RsmTexel> traceTexel(const RayScene& scene, const MapLayout& layout,
-                                   const Bounds3f& regionBounds, int res, int face, int i, int j) {
+                                   const Bounds3f& regionBounds, int res, int face, int i, int j,
+                                   const std::optional<glm::vec3>& viewpoint) {
     const TexelRay ray = layout.ray(face, i, j);
     if (!carriesLight(ray)) return std::nullopt;
-    return texelFromHit(scene.intersect(ray.origin, ray.dir), ray, regionBounds, texelIndex(res, face, i, j));
+    return texelFromHit(scene.intersect(ray.origin, ray.dir), ray, regionBounds, texelIndex(res, face, i, j),
+                        viewpoint);
 }
 
 // traceTexel() over a layered `scene` whose base layer is the scene a map was rendered over, `baseTexel` the
@@ -183,15 +188,15 @@ std::optional<RsmTexel> traceTexel(const RayScene& scene, const MapLayout& layou
 // the map holds already: only the rays that meet the objects are traced again below them.
 std::optional<RsmTexel> retraceTexel(const RayScene& scene, const MapLayout& layout,
                                      const Bounds3f& regionBounds, int res, int face, int i, int j,
-                                     const RsmTexel* baseTexel) {
-    if (!scene.base()) return traceTexel(scene, layout, regionBounds, res, face, i, j);
+                                     const RsmTexel* baseTexel, const std::optional<glm::vec3>& viewpoint) {
+    if (!scene.base()) return traceTexel(scene, layout, regionBounds, res, face, i, j, viewpoint);
     const TexelRay ray = layout.ray(face, i, j);
     if (!carriesLight(ray)) return std::nullopt;
     RayHit hit = scene.intersectTopLayer(ray.origin, ray.dir);
     if (!hit.hit()) return baseTexel ? std::optional(*baseTexel) : std::nullopt;
     const RayHit below = scene.base()->intersect(ray.origin, ray.dir, 0.0f, hit.t);
     if (below.hit()) hit = below;
-    return texelFromHit(hit, ray, regionBounds, texelIndex(res, face, i, j));
+    return texelFromHit(hit, ray, regionBounds, texelIndex(res, face, i, j), viewpoint);
 }
 
 // Renders every face row by row (rows in parallel, then concatenated in order). `rowTexels(face, j, out)`
@@ -224,17 +229,20 @@ std::optional<FaceRects> retracedRects(const MapLayout& layout, const Reflective
 }  // namespace
 
 ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
-                                              const VolumeRegion& region, int resolution) {
+                                              const VolumeRegion& region, int resolution,
+                                              std::optional<glm::vec3> viewpoint) {
     const MapLayout layout(scene, light, region, resolution);
     const Bounds3f regionBounds = region.bounds();
     return renderRows(layout, resolution, [&](int face, int j, std::vector<RsmTexel>& row) {
         for (int i = 0; i < resolution; ++i)
-            if (auto t = traceTexel(scene, layout, regionBounds, resolution, face, i, j)) row.push_back(*t);
+            if (auto t = traceTexel(scene, layout, regionBounds, resolution, face, i, j, viewpoint))
+                row.push_back(*t);
     });
 }
 
 RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene, const Light& light,
-                         const VolumeRegion& region, const Bounds3f& changed) {
+                         const VolumeRegion& region, const Bounds3f& changed,
+                         std::optional<glm::vec3> viewpoint) {
     const int res = base.resolution;
     const MapLayout layout(scene, light, region, res);
     const std::optional<FaceRects> rects = retracedRects(layout, base, changed);
@@ -242,7 +250,7 @@ RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene,
     update.rayStart = layout.rayStart();
     if (!rects) {
         update.retraced = {{0, std::numeric_limits<uint32_t>::max()}};
-        update.texels = renderReflectiveShadowMap(scene, light, region, res).texels;
+        update.texels = renderReflectiveShadowMap(scene, light, region, res, viewpoint).texels;
         return update;
     }
     // One row of a face's rectangle per piece of work.
@@ -264,7 +272,7 @@ RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene,
             const uint32_t index = texelIndex(res, face, i, j);
             while (b != base.texels.end() && b->index < index) ++b;
             const RsmTexel* baseTexel = b != base.texels.end() && b->index == index ? &*b : nullptr;
-            if (auto t = retraceTexel(scene, layout, regionBounds, res, face, i, j, baseTexel))
+            if (auto t = retraceTexel(scene, layout, regionBounds, res, face, i, j, baseTexel, viewpoint))
                 traced[r].push_back(*t);
         }
     });

@@ -4,6 +4,7 @@
 // (§3.2). Only texels whose surface lies inside the volume region are kept, since only they are injected.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "deltagi/renderer.h"
@@ -14,9 +15,10 @@ namespace deltagi {
 struct RsmTexel {
     glm::vec3 position{0.0f};
     glm::vec3 normal{0.0f};  // facing the light
-    glm::vec3 flux{0.0f};    // diffusely reflected flux (W): albedo * flux arriving through the texel
-    float area = 0.0f;       // surface area the texel covers (world units^2)
-    uint32_t index = 0;      // face * resolution^2 + row * resolution + column: the texel's place in the map
+    glm::vec3 flux{
+        0.0f};          // reflected flux (W): Material::volumeReflectance() * flux arriving through the texel
+    float area = 0.0f;  // surface area the texel covers (world units^2)
+    uint32_t index = 0;  // face * resolution^2 + row * resolution + column: the texel's place in the map
 };
 
 struct ReflectiveShadowMap {
@@ -26,8 +28,14 @@ struct ReflectiveShadowMap {
     std::vector<RsmTexel> texels;  // the texels that hit a surface inside the region, in texel order
 };
 
+// With a `viewpoint` (the camera), a texel on a real surface is kept only where the surface's lit side faces
+// the viewpoint: a voxel stores one radiance for both sides of its surfaces, and the side the camera sees is
+// the real scene's (a reconstruction's other side is not modelled: the underside of a ground plane lit by an
+// environment map's lower half would light the ground's top in the volume). The rays still stop there.
+// Virtual objects are closed; their texels are all kept.
 ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
-                                              const VolumeRegion& region, int resolution);
+                                              const VolumeRegion& region, int resolution,
+                                              std::optional<glm::vec3> viewpoint = std::nullopt);
 
 // Texel indices [first, last).
 struct TexelRange {
@@ -50,7 +58,8 @@ struct RsmUpdate {
 // base map's texel without being traced below it. A directional light whose ray origins the objects move is
 // rendered afresh.
 RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene, const Light& light,
-                         const VolumeRegion& region, const Bounds3f& changed);
+                         const VolumeRegion& region, const Bounds3f& changed,
+                         std::optional<glm::vec3> viewpoint = std::nullopt);
 
 // `base` with `update`'s texels: renderReflectiveShadowMap() over the update's scene, texel for texel.
 ReflectiveShadowMap applyRsmUpdate(const ReflectiveShadowMap& base, const RsmUpdate& update);

@@ -14,6 +14,7 @@
 #include "gbuffer.h"
 #include "inject.h"
 #include "mipmap.h"
+#include "object_bounce_rays.h"
 #include "object_volumes.h"
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
@@ -69,10 +70,10 @@ Image toImage(std::span<const glm::vec3> pixels, int width, int height) {
 }
 
 std::vector<ReflectiveShadowMap> renderRsms(const RayScene& rays, std::span<const Light> lights,
-                                            const VolumeRegion& region, int resolution) {
+                                            const VolumeRegion& region, int resolution, glm::vec3 viewpoint) {
     std::vector<ReflectiveShadowMap> rsms;
     for (const Light& light : lights)
-        rsms.push_back(renderReflectiveShadowMap(rays, light, region, resolution));
+        rsms.push_back(renderReflectiveShadowMap(rays, light, region, resolution, viewpoint));
     return rsms;
 }
 
@@ -88,7 +89,7 @@ struct ConeJob {
     SceneOcclusionCache* sceneShadows = nullptr;  // relit with DeltaShadow: the scene's share, kept
     // Relit real surfaces: the filter's interpolation weights of the shadow, diffuse and specular passes,
     // kept (their surfaces are the real G-buffer's), and the pixels whose points differ from it (covered).
-    std::array<InterpolationPlan, 4>* plans = nullptr;
+    std::array<InterpolationPlan, 5>* plans = nullptr;
     PixelRect changed;
     ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
     // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
@@ -116,13 +117,19 @@ struct ConeJob {
     }
     // The edge-aware filter of its sparse cones; the real surfaces' change varies slowly, so its pixels
     // between samples are interpolated.
-    enum Pass { Shadow, Diffuse, Specular, AreaLight };
+    enum Pass { Shadow, Diffuse, Specular, AreaLight, ObjectBounce };
     DenoiseSettings filter(const Options& o, Pass pass) const {
         DenoiseSettings s{o.render.denoiseRadius};
         s.interpolate = relit();
         if (plans) s.plan = &(*plans)[pass];
         s.planChanged = changed;
         return s;
+    }
+    // The objects' light on relit real surfaces by rays (traceObjectBounceRays): only when the differential
+    // relit cones can leave it out.
+    bool objectBounceByRays(const Options& o) const {
+        return relit() && indirect && fullLight && objectLight && rays.scene && rays.objects &&
+               o.render.relightObjectLight == "rays";
     }
     int specularStride(const Options& o, const Camera& c) const {
         return pixelStrideFor(o.specular.relightPixelStride, kAutoRelightSpecularStride, c.width, c.height);
@@ -255,12 +262,19 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.indirect) continue;
-        results[j].diffuse =
-            traceSparse<glm::vec3>(job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera),
-                                   1, job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
-                                       return traceDiffuseCones(job.points, *job.light, job.visibility, o,
-                                                                pixels, job.fullLight, job.objectLight);
-                                   });
+        results[j].diffuse = traceSparse<glm::vec3>(
+            job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
+            job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
+                return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
+                                         job.objectLight, job.objectBounceByRays(o));
+            });
+        if (job.objectBounceByRays(o))
+            addInto(results[j].diffuse,
+                    traceSparse<glm::vec3>(
+                        job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
+                        job.filter(o, ConeJob::ObjectBounce), [&](std::span<const uint32_t> pixels) {
+                            return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels);
+                        }));
     }
     timer.lap("diffuse");
     for (size_t j = 0; j < jobs.size(); ++j) {
@@ -314,7 +328,7 @@ struct StaticWork {
     std::optional<VoxelGeometry> sceneGeometry;
     std::optional<MipVolume> sceneVisibility;
     SceneOcclusionCache relitShadows;             // the scene's share of the real surfaces' shadow cones
-    std::array<InterpolationPlan, 4> relitPlans;  // the relit passes' filter weights over realSurfaces
+    std::array<InterpolationPlan, 5> relitPlans;  // the relit passes' filter weights over realSurfaces
     GBuffer gbuffer;                              // the objects' half, redone where they were and are
     // realSurfaces without the pixels the objects cover (the last frame's `hidden`).
     std::vector<SurfacePoint> relitSurfaces;
@@ -416,11 +430,13 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
-    if (!kept.sceneRsms) kept.sceneRsms = renderRsms(realOnly, lights, region, rsmResolution);
+    if (!kept.sceneRsms)
+        kept.sceneRsms = renderRsms(realOnly, lights, region, rsmResolution, scene.camera.position());
     std::vector<RsmUpdate> updates;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
     for (size_t l = 0; l < lights.size(); ++l)
-        updates.push_back(traceRsmUpdate((*kept.sceneRsms)[l], all, lights[l], region, objectBounds));
+        updates.push_back(traceRsmUpdate((*kept.sceneRsms)[l], all, lights[l], region, objectBounds,
+                                         scene.camera.position()));
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
@@ -443,7 +459,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     if (!kept.sceneVisibility)
         kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
     // With further bounces the objects reflect the room's light they receive too.
-    objects.mipmap(bounces > 0 ? &*kept.sceneVisibility : nullptr, &scene.options);
+    objects.mipmap(bounces > 0 ? &*kept.sceneVisibility : nullptr, &scene.options, &all);
     timer.lap("mipmap");
     return {&*kept.sceneVisibility, &objects.objectVisibility(), &objects.fullLight(), &objects.deltaLight(),
             &objects.objectLight()};
@@ -460,7 +476,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const int bounces = o.render.lightBounces - 1;
     VoxelGeometry geometry = voxelize(scene.real, region, !areaRays, bounces > 0);
     const std::vector<ReflectiveShadowMap> rsms =
-        renderRsms(realOnly, rsmLights(scene, realOnly), region, o.rsm.resolution);
+        renderRsms(realOnly, rsmLights(scene, realOnly), region, o.rsm.resolution, scene.camera.position());
     const AreaLights emitters(scene, SceneContent::RealOnly);
     std::optional<EnvironmentSampler> environment;
     if (environmentByRays(scene)) environment.emplace(*scene.environment);

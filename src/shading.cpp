@@ -87,9 +87,10 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                          const VisibilityVolumes& visibility, const Options& options,
                                          std::span<const uint32_t> pixels, const MipVolume* fullLight,
-                                         const MipVolume* objectLight) {
+                                         const MipVolume* objectLight, bool objectLightByRays) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
-    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    ConeTraceSettings settings = coneTraceSettings(options.trace);
+    settings.objectLightByRays = objectLightByRays;
     const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];

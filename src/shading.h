@@ -40,12 +40,14 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
 
 // Diffuse cones: cosine-weighted incoming radiance sum_k w_k L_k (so that albedo times it is the reflected
 // radiance). Zero for invalid points. With `fullLight`, `light` is the delta volume and the cones give the
-// change of the incoming light (traceLightChangeCone): options.render.relight_cones "differential".
+// change of the incoming light (traceLightChangeCone): options.render.relight_cones "differential"; with
+// `objectLightByRays` too, without the objects' own light (traceObjectBounceRays adds it).
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                          const VisibilityVolumes& visibility, const Options& options,
                                          std::span<const uint32_t> pixels = {},
                                          const MipVolume* fullLight = nullptr,
-                                         const MipVolume* objectLight = nullptr);
+                                         const MipVolume* objectLight = nullptr,
+                                         bool objectLightByRays = false);
 
 // The specular cone along the mirrored view direction, aperture from the material's roughness. Zero for
 // invalid points and materials without a specular part. `fullLight` as for traceDiffuseCones.

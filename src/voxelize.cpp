@@ -17,7 +17,7 @@ struct VoxelTriangle {
     float area;          // voxel units^2
     bool oneVoxel;       // lies inside a single voxel of the grid
     glm::vec3 emission;  // the material's emitted radiance
-    glm::vec3 albedo;    // the material's diffuse albedo
+    glm::vec3 albedo;    // what the material reflects into the volumes (Material::volumeReflectance)
     glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
     bool touchesGrid() const { return hi.x >= lo.x; }
 };
@@ -132,7 +132,7 @@ std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
             vt.normal = cr / len;
             vt.area = 0.5f * len;
             vt.emission = mesh.material.emission;
-            vt.albedo = mesh.material.albedo;
+            vt.albedo = mesh.material.volumeReflectance();
             glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
             glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
             if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;

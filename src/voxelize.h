@@ -21,8 +21,9 @@ struct VoxelGeometry {
     // Emitted radiance times area of the emissive surfaces in each voxel, summed (same indexing); empty when
     // no mesh emits. Divided by `area` it is the voxel's mean emitted radiance (light injection).
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> emission;
-    // The area-weighted mean diffuse albedo of the surfaces in each voxel (same indexing); empty unless asked
-    // for (voxelize's `withAlbedo`: the multi-bounce light of bounceLight() reflects by it).
+    // The area-weighted mean reflectance (Material::volumeReflectance) of the surfaces in each voxel (same
+    // indexing); empty unless asked for (voxelize's `withAlbedo`: the multi-bounce light of bounceLight()
+    // reflects by it).
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> albedo;
     // Every voxel outside it is zero in all three: the voxels that the triangles' bounding boxes touch.
     VoxelBox bounds;

@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include "mipmap.h"
+#include "ray_scene.h"
+#include "shapes.h"
 #include "test_scenes.h"
 
 namespace deltagi {
@@ -73,6 +75,56 @@ TEST(BounceLight, BlackWallsReflectNothing) {
     const Furnace f = furnace(0.0f);
     Options options;
     EXPECT_EQ(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 2, kCentre)), 0.0f);
+}
+
+// A box standing on a floor whose voxels leave radiance 1: the box's bottom voxels see only the floor, so
+// their bounce is albedo * 1. The rays start on the box's surface and find it; the cones start half a coarse
+// voxel and more below it, under the floor, and find almost nothing.
+TEST(BounceLight, ObjectsOnAFloorGetItsLightUnderneathByRays) {
+    Scene s;
+    s.real.push_back(
+        test::placed(makeQuad({2.0f, 2.0f}), {0.5f, 0.2f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    s.virtuals.push_back(test::placed(makeBox(glm::vec3(0.3f)), {0.5f, 0.2f + 0.15f + 0.002f, 0.5f},
+                                      test::diffuse(glm::vec3(0.5f))));
+    const VolumeRegion region{glm::vec3(0.0f), 1.0f, 32};
+    const VoxelGeometry floor = voxelize(s.real, region, true, true);
+    const VoxelGeometry box = voxelize(s.virtuals, region, true, true);
+    Grid3 light(region.resolution);
+    for (size_t i = 0; i < light.size(); ++i) {
+        const float occupancy = floor.visibility[i].x;
+        light[i] = glm::vec4(glm::vec3(occupancy), occupancy);
+    }
+    const MipVolume lightMips = buildMipChain(region, std::move(light));
+    const MipVolume sceneVisibility = buildMipChain(region, floor.visibility.clone());
+    const MipVolume objectVisibility = buildMipChain(region, box.visibility.clone());
+    const RayScene realOnly(s, SceneContent::RealOnly);
+    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
+    Options options;
+    const VoxelBox& bounds = box.bounds;
+    const std::vector<glm::vec3> byRays =
+        gatherObjectBounceByRays(lightMips, box, objectVisibility, sceneVisibility, all, options, bounds, 2);
+    const std::vector<glm::vec3> byCones =
+        gatherObjectBounce(lightMips, box, objectVisibility, sceneVisibility, options, bounds, 2);
+    // The mean over the box's lowest layer of voxels (its bottom face), and its top layer.
+    auto layerMean = [&](const std::vector<glm::vec3>& added, int y) {
+        double sum = 0.0;
+        int count = 0;
+        const glm::ivec3 extent = bounds.hi - bounds.lo;
+        for (int z = bounds.lo.z; z < bounds.hi.z; ++z)
+            for (int x = bounds.lo.x; x < bounds.hi.x; ++x) {
+                if (box.visibility.at(x, y, z).x <= 0.0f) continue;
+                sum +=
+                    added[(static_cast<size_t>(z - bounds.lo.z) * extent.y + (y - bounds.lo.y)) * extent.x +
+                          (x - bounds.lo.x)]
+                        .x;
+                ++count;
+            }
+        return count ? sum / count : 0.0;
+    };
+    EXPECT_NEAR(layerMean(byRays, bounds.lo.y), 0.5, 0.1);
+    EXPECT_LT(layerMean(byCones, bounds.lo.y), 0.25);
+    // Its top sees no floor: nothing.
+    EXPECT_LT(layerMean(byRays, bounds.hi.y - 1), 0.02);
 }
 
 }  // namespace

@@ -55,6 +55,70 @@ TEST(Inject, DirectionalLightOnAFloorGivesAlbedoTimesIrradianceOverPi) {
     EXPECT_EQ(light.at(8, 9, 8), glm::vec4(0.0f));
 }
 
+// A glossy floor reflects its glossy share into the volume too, spread over the hemisphere: albedo 0.3 and
+// specular 0.2 light the voxels as a Lambertian 0.5 does.
+TEST(Inject, GlossySurfacesReflectTheirWholeReflectanceIntoTheVolume) {
+    Scene s = floorOnly(0.3f);
+    s.real[0].material.specular = glm::vec3(0.2f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const std::vector<ReflectiveShadowMap> rsm = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256)};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    const Grid3 light = injectLight(rsm, kRegion, geometry);
+    EXPECT_NEAR(light.at(8, 8, 8).x, 0.5f * 2.0f / std::numbers::pi_v<float>, 0.01f);
+}
+
+// Two lights that both light the whole floor: each voxel holds the sum of their radiances, albedo * (E1 cos1
+// + E2 cos2) / pi. (Summing the texels of both before dividing by their footprints gave the mean of the two:
+// an environment map's 16 lights lit the volume at a tenth of its light.)
+TEST(Inject, TwoLightsAddTheirRadiance) {
+    Scene s = floorOnly(0.5f);
+    RayScene rays(s, SceneContent::RealOnly);
+    Light slanted = directionalDown(1.0f);
+    slanted.direction = glm::normalize(glm::vec3(0.6f, -0.8f, 0.0f));
+    const std::vector<ReflectiveShadowMap> rsms = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256),
+        renderReflectiveShadowMap(rays, slanted, kRegion, 256)};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    const Grid3 light = injectLight(rsms, kRegion, geometry);
+    const float expected = 0.5f * (2.0f + 1.0f * 0.8f) / std::numbers::pi_v<float>;
+    for (int z = 1; z < 15; ++z)
+        for (int x = 1; x < 15; ++x)
+            EXPECT_NEAR(light.at(x, 8, z).x, expected, 0.03f * expected) << x << "," << z;
+}
+
+// With a viewpoint above the floor, a light from below lights the floor's underside, which the camera does
+// not see: its texels are not kept (the volume's voxel has one radiance for both sides). Without one, or for
+// a virtual object, they are.
+TEST(Inject, ShadowMapKeepsOnlyTheViewpointsSideOfRealSurfaces) {
+    Scene s = floorOnly(0.5f);
+    s.virtuals.push_back(
+        test::placed(makeBox(glm::vec3(0.5f)), {0, -0.5f, 0}, test::diffuse(glm::vec3(0.5f))));
+    RayScene rays(s, SceneContent::RealAndVirtual);
+    Light fromBelow = directionalDown(1.0f);
+    fromBelow.direction = glm::vec3(0, 1, 0);
+    const glm::vec3 above(0.0f, 2.0f, 0.5f);
+    const ReflectiveShadowMap seen = renderReflectiveShadowMap(rays, fromBelow, kRegion, 64, above);
+    const ReflectiveShadowMap all = renderReflectiveShadowMap(rays, fromBelow, kRegion, 64);
+    auto count = [](const ReflectiveShadowMap& m, bool onFloor) {
+        return std::count_if(m.texels.begin(), m.texels.end(), [&](const RsmTexel& t) {
+            return (std::abs(t.position.y - 0.0625f) < 1e-3f) == onFloor;
+        });
+    };
+    EXPECT_EQ(count(seen, true), 0);
+    EXPECT_GT(count(all, true), 1000);
+    // The box under the floor is lit from below in both.
+    EXPECT_GT(count(seen, false), 50);
+    EXPECT_EQ(count(seen, false), count(all, false));
+    // Lit from above, the floor faces the viewpoint: all of its texels are kept.
+    const ReflectiveShadowMap fromAbove =
+        renderReflectiveShadowMap(rays, directionalDown(1.0f), kRegion, 64, above);
+    EXPECT_EQ(count(fromAbove, true),
+              count(renderReflectiveShadowMap(rays, directionalDown(1.0f), kRegion, 64), true));
+}
+
 // A point light: the voxel under it holds albedo * I / (pi d^2).
 TEST(Inject, PointLightMatchesInverseSquareIrradiance) {
     Scene s = floorOnly(0.8f);

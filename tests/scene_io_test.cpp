@@ -479,8 +479,11 @@ TEST_F(SceneIoTest, WrongTypesNameThePathAndTheExpectedType) {
 TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
     json doc = baseScene();
     doc["options"] = json::parse(R"({"shadow": {"method": "cones", "ray_samples": 9, "area_ray_samples": 25},
-        "render": {"light_bounces": 3, "relight_cones": "differential"}, "volume": {"reach_scale": 0}})");
+        "render": {"light_bounces": 3, "relight_cones": "differential", "relight_object_light": "rays"},
+        "diffuse": {"object_rays": 4}, "volume": {"reach_scale": 0}})");
     const Options options = load(doc).options;
+    EXPECT_EQ(options.render.relightObjectLight, "rays");
+    EXPECT_EQ(options.diffuse.objectRays, 4);
     EXPECT_EQ(options.shadow.method, "cones");
     EXPECT_EQ(options.shadow.raySamples, 9);
     EXPECT_EQ(options.shadow.areaRaySamples, 25);
@@ -491,7 +494,11 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
     EXPECT_EQ(written["shadow"]["method"], "cones");
     EXPECT_EQ(written["render"]["light_bounces"], 3);
     EXPECT_EQ(written["volume"]["reach_scale"], 0.0);
+    EXPECT_EQ(written["render"]["relight_object_light"], "rays");
+    EXPECT_EQ(written["diffuse"]["object_rays"], 4);
     const Options defaults;
+    EXPECT_EQ(defaults.render.relightObjectLight, "cones");
+    EXPECT_EQ(defaults.diffuse.objectRays, 16);
     EXPECT_EQ(defaults.shadow.method, "rays");
     EXPECT_EQ(defaults.render.relightCones, "differential");
     struct Bad {
@@ -504,6 +511,8 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
           Bad{R"({"shadow": {"area_ray_samples": 1000}})", "options.shadow.area_ray_samples"},
           Bad{R"({"render": {"light_bounces": 0}})", "options.render.light_bounces"},
           Bad{R"({"render": {"relight_cones": true}})", "options.render.relight_cones"},
+          Bad{R"({"render": {"relight_object_light": "beams"}})", "options.render.relight_object_light"},
+          Bad{R"({"diffuse": {"object_rays": 257}})", "options.diffuse.object_rays"},
           Bad{R"({"volume": {"reach_scale": -1}})", "options.volume.reach_scale"}}) {
         doc["options"] = json::parse(bad.options);
         expectContains(loadError(doc), {std::string("scene.json: ") + bad.key});
