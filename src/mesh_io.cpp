@@ -122,9 +122,11 @@ uint64_t streamPosition(std::istream& in) {
 }
 
 // The elements a PLY header declares, with the fewest bytes each can take (binary: the sizes of its scalar
-// properties and list counts; ASCII: 2 characters per property, a digit and a separator). The header's
-// length goes to `headerBytes`. A header without a clean "end_header" line, or with a count that is not a
-// whole number of 64 bits, is an InputError(where, ...).
+// properties and list counts; ASCII: 2 characters per property, a digit and a separator); the header's length
+// goes to `headerBytes`. The header must be printable text, begin with "ply" and "format FORMAT 1.0", and
+// its "element NAME COUNT", "property TYPE NAME", "property list TYPE TYPE NAME" and "end_header" lines must
+// be well formed, else InputError(where, ...): Assimp's PLY reader crashed or spun on malformed headers
+// (found by scripts/fuzz.sh).
 std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes, const std::string& name,
                                         const std::string& where) {
     static const std::map<std::string, uint64_t> kTypeBytes = {
@@ -134,34 +136,55 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes,
     std::vector<ClaimedElement> elements;
     bool binary = false;
     std::string line;
-    for (int lines = 0; lines < kMaxPlyHeaderLines && std::getline(in, line); ++lines) {
+    auto corrupt = [&](int lineNumber, const std::string& expected) {
+        std::string shown;
+        for (char c : line.substr(0, 60)) shown += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+        return InputError(
+            where, fmt::format("'{}' is corrupt: line {} of its PLY header is \"{}\", expected {}", name,
+                               lineNumber, shown, expected));
+    };
+    for (int number = 1; number <= kMaxPlyHeaderLines && std::getline(in, line); ++number) {
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (std::any_of(line.begin(), line.end(),
+                        [](char c) { return !std::isprint(static_cast<unsigned char>(c)) && c != '\t'; }))
+            throw corrupt(number, "printable text");
         std::istringstream words(line);
-        std::string word;
+        std::string word, extra;
         words >> word;
-        if (word == "format") {
-            std::string format;
-            words >> format;
+        if (number == 1) {
+            if (line != "ply") throw corrupt(number, "\"ply\"");
+        } else if (number == 2) {
+            std::string format, version;
+            if (word != "format" || !(words >> format >> version) || (words >> extra) ||
+                (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian") ||
+                (version != "1.0" && version != "1"))
+                throw corrupt(number, "\"format ascii|binary_little_endian|binary_big_endian 1.0\"");
             binary = format != "ascii";
         } else if (word == "element") {
             ClaimedElement element;
-            // A count beyond 64 bits would slip past the size check: refused here, as Assimp cannot read it.
-            if (!(words >> element.name >> element.count))
-                throw InputError(where, fmt::format("'{}' is corrupt: expected \"element NAME COUNT\" with a "
-                                                    "whole number, got \"{}\"",
-                                                    name, line.substr(0, 80)));
+            // A count beyond 64 bits would slip past the size check.
+            if (!(words >> element.name >> element.count) || (words >> extra))
+                throw corrupt(number, "\"element NAME COUNT\" with a whole number of 64 bits");
             elements.push_back(element);
         } else if (word == "property" && !elements.empty()) {
-            std::string type;
+            std::string type, propertyName;
             words >> type;
-            if (type == "list") words >> type;  // the count's type; the list itself may be empty
+            const bool list = type == "list";
+            std::string itemType;
+            if (list) words >> type >> itemType;  // the count's type, then the items' (the list may be empty)
             auto size = kTypeBytes.find(type);
-            elements.back().minBytes += binary ? (size != kTypeBytes.end() ? size->second : 1) : 2;
-        } else if (word == "end_header") {
+            if (size == kTypeBytes.end() || (list && !kTypeBytes.contains(itemType)) ||
+                !(words >> propertyName) || (words >> extra))
+                throw corrupt(number,
+                              "\"property TYPE NAME\" or \"property list TYPE TYPE NAME\" with known types");
+            elements.back().minBytes += binary ? size->second : 2;
+        } else if (word == "end_header" && !(words >> extra)) {
             headerBytes = streamPosition(in);
             return elements;
         }
+        // Other printable lines are skipped, as Assimp skips them (Blender 2.47 wrote a comment without the
+        // "comment" keyword).
     }
-    // Assimp reads some such headers for minutes (found by scripts/fuzz.sh: "\0end_header").
     throw InputError(where, fmt::format("'{}' is corrupt: its PLY header has no line \"end_header\" within "
                                         "{} lines",
                                         name, kMaxPlyHeaderLines));
@@ -263,7 +286,11 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
     in.seekg(0);
     std::vector<ClaimedElement> elements;
     uint64_t headerBytes = 0;
-    if (std::string(magic, 4) == "ply\n" || std::string(magic, 4) == "ply\r")
+    std::string extension = file.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    // Assimp picks its PLY reader by the extension or by these 3 bytes.
+    if (extension == ".ply" || std::string(magic, 3) == "ply")
         elements = plyElements(in, headerBytes, file.filename().string(), where);
     else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
              std::string(magic, 4) == "STOF")

@@ -147,11 +147,27 @@ TEST_F(MeshFileTest, HeaderCountsBeyondTheFileAreErrors) {
     // ASCII: at least 2 characters per property.
     const fs::path ascii = write("ascii.ply", plyHeader("ascii", 1000, 0) + "0 0 0\n");
     expectContains(errorOf([&] { checkMeshFileClaims(ascii, "where", kPlenty); }), {"1000 vertex elements"});
+    // A malformed header: Assimp's PLY reader crashed or spun on such (fuzz findings); lines without a
+    // keyword are skipped, as Assimp skips them.
+    const fs::path badType =
+        write("type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flt x\nend_header\n0\n");
+    expectContains(errorOf([&] { checkMeshFileClaims(badType, "where", kPlenty); }),
+                   {"where: 'type.ply' is corrupt: line 4 of its PLY header is \"property flt x\""});
+    const fs::path binary = write("binary.ply", std::string("ply\nformat ascii 1\0\0\nend_header\n", 32));
+    expectContains(errorOf([&] { checkMeshFileClaims(binary, "where", kPlenty); }),
+                   {"line 2 of its PLY header", "expected printable text"});
+    const fs::path noKeyword = write("blender.ply",
+                                     "ply\nformat ascii 1.0\nCreated by Blender\nelement vertex 1\n"
+                                     "property float x\nend_header\n0\n");
+    EXPECT_NO_THROW(checkMeshFileClaims(noKeyword, "where", kPlenty));
+    const fs::path noEnd = write("noend.ply", "ply\nformat ascii 1.0\nelement vertex 1\n");
+    expectContains(errorOf([&] { checkMeshFileClaims(noEnd, "where", kPlenty); }),
+                   {"its PLY header has no line \"end_header\""});
     // A count beyond 64 bits.
     const fs::path hugeCount =
         write("count.ply", "ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\nend_header\n");
     expectContains(errorOf([&] { checkMeshFileClaims(hugeCount, "where", kPlenty); }),
-                   {"where: 'count.ply' is corrupt: expected \"element NAME COUNT\" with a whole number"});
+                   {"where: 'count.ply' is corrupt: line 3", "\"element NAME COUNT\" with a whole number"});
     // OFF, counts on the first line or on their own.
     const fs::path off = write("huge.off", "OFF\n353535235358 6 0\n0 0 0\n");
     expectContains(errorOf([&] { checkMeshFileClaims(off, "where", kPlenty); }),
