@@ -233,11 +233,13 @@ class WarningLog : public Assimp::LogStream {
 // What post-processing relies on, checked on the importer's raw output (Assimp's ValidateDataStructure has
 // checked the indices already; this also covers what it does not: finite positions).
 // Meshes are named as loadMeshFile() names them.
-void validateRawScene(const aiScene& scene, const std::filesystem::path& file, const std::string& where,
+// Also sets each mesh's primitive types to those its faces have, which Assimp's triangulation relies on (an
+// assertion aborts it otherwise).
+void validateRawScene(aiScene& scene, const std::filesystem::path& file, const std::string& where,
                       const std::string& baseName) {
     const std::string name = file.filename().string();
     for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
-        const aiMesh* mesh = scene.mMeshes[m];
+        aiMesh* mesh = scene.mMeshes[m];
         if (mesh == nullptr || (mesh->mNumVertices > 0 && mesh->mVertices == nullptr) ||
             (mesh->mNumFaces > 0 && mesh->mFaces == nullptr))
             throw InputError(where, fmt::format("'{}': mesh {} has no vertex or face data", name, m));
@@ -252,9 +254,18 @@ void validateRawScene(const aiScene& scene, const std::filesystem::path& file, c
                                  fmt::format("vertex {} of mesh '{}' is not finite: ({}, {}, {}) ('{}')", i,
                                              meshName, p.x, p.y, p.z, name));
         }
+        unsigned primitiveTypes = 0;
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const aiFace& face = mesh->mFaces[f];
-            if (face.mNumIndices > 0 && face.mIndices == nullptr)
+            primitiveTypes |= face.mNumIndices == 1   ? aiPrimitiveType_POINT
+                              : face.mNumIndices == 2 ? aiPrimitiveType_LINE
+                              : face.mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
+                                                      : aiPrimitiveType_POLYGON;
+            // A face of no vertices passes Assimp's validation but aborts its triangulation (fuzz finding).
+            if (face.mNumIndices == 0)
+                throw InputError(
+                    where, fmt::format("'{}': face {} of mesh '{}' has no vertices", name, f, meshName));
+            if (face.mIndices == nullptr)
                 throw InputError(where,
                                  fmt::format("'{}': face {} of mesh '{}' has no indices", name, f, meshName));
             for (unsigned k = 0; k < face.mNumIndices; ++k)
@@ -264,6 +275,7 @@ void validateRawScene(const aiScene& scene, const std::filesystem::path& file, c
                                            "has {} vertices",
                                            name, f, meshName, face.mIndices[k], mesh->mNumVertices));
         }
+        mesh->mPrimitiveTypes = primitiveTypes;
     }
 }
 
@@ -351,7 +363,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
                                              "(index out of range)",
                                              name));
     }
-    validateRawScene(*scene, file, where, baseName);
+    // The importer owns the scene; the post-processing below reads the primitive types validateRawScene sets.
+    validateRawScene(*const_cast<aiScene*>(scene), file, where, baseName);
     if (!hasPolygons(*scene)) throw InputError(where, fmt::format("'{}' contains no triangles", name));
     constexpr unsigned kFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
                                 aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices |
