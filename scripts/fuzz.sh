@@ -1,0 +1,83 @@
+#!/usr/bin/env bash
+# Fuzzes the scene reader and mesh loading with libFuzzer (clang 16 from Debian 12): builds build-fuzz/ with
+# -DDELTAGI_FUZZ=ON, seeds each target, runs each for a fixed budget and prints executions and findings.
+#   scripts/fuzz.sh [SECONDS_PER_TARGET]      (default 300)
+# Seeds: the scenes of examples/ and tests/bad-inputs/ (and ../shared/data/scenes when present) for the scene
+# reader; Debian's assimp-testmodels (OBJ, PLY, OFF, glTF 2, STL) and the meshes of tests/bad-inputs/ for
+# mesh loading. The corpus grows in build-fuzz/corpus-*/ from run to run; crashes, timeouts and running out of
+# memory (4 GB) are written to build-fuzz/findings/. Every crash found becomes a case of tests/bad-inputs/.
+# Exit status 1 when a target found something. Installs clang 16, libFuzzer and assimp-testmodels when missing
+# (as root). Clang 16, not Debian's default 14: the renderer captures structured bindings in lambdas (C++20),
+# which clang supports from version 16.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+budget="${1:-300}"
+
+packages=(clang-16 libclang-rt-16-dev assimp-testmodels)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  apt-get update
+  apt-get install -y --no-install-recommends "${missing[@]}"
+fi
+
+build=build-fuzz
+cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-16 \
+  -DDELTAGI_FUZZ=ON -DDELTAGI_BUILD_TESTS=OFF -DDELTAGI_BUILD_BENCHMARKS=OFF
+cmake --build "$build" -j2 --target fuzz_scene_reader fuzz_mesh_loader
+
+# Seeds, rebuilt each run (the corpus folders keep what the fuzzer found).
+seeds="$build/seeds"
+rm -rf "$seeds"
+mkdir -p "$seeds/scene" "$seeds/mesh" "$build/corpus-scene" "$build/corpus-mesh" "$build/findings"
+for f in examples/*.json tests/bad-inputs/*.json ../shared/data/scenes/*.json; do
+  [ -f "$f" ] && [ "$(stat -c %s "$f")" -le 65536 ] && cp "$f" "$seeds/scene/$(echo "$f" | tr / _)"
+done
+# fuzz_mesh_loader reads the first byte as the format: 0 obj, 1 ply, 2 off, 3 gltf, 4 glb, 5 stl.
+seed_mesh() {  # FILE
+  local ext="${1##*.}" byte
+  case "${ext,,}" in
+    obj) byte='\x00' ;; ply) byte='\x01' ;; off) byte='\x02' ;; gltf) byte='\x03' ;; glb) byte='\x04' ;;
+    stl) byte='\x05' ;; *) return 0 ;;
+  esac
+  [ "$(stat -c %s "$1")" -le 262144 ] || return 0
+  { printf "$byte"; cat "$1"; } > "$seeds/mesh/$(echo "$1" | tr / _)"
+}
+models=/usr/share/assimp/models
+for f in "$models"/OBJ/* "$models"/PLY/* "$models"/OFF/* "$models"/glTF2/*/*/* "$models"/STL/* \
+         "$models"/invalid/* tests/bad-inputs/mesh-*; do
+  [ -f "$f" ] && seed_mesh "$f"
+done
+
+status=0
+for target in scene mesh; do
+  binary="$build/fuzz/fuzz_${target}_$([ $target = scene ] && echo reader || echo loader)"
+  log="$build/fuzz-$target.log"
+  echo "== fuzz_$target: $budget s, $(ls "$seeds/$target" | wc -l) seeds"
+  # Inputs that are slow (20 s) or need more than 4 GB are findings too; TBB and Assimp keep caches alive
+  # at exit, so leaks are not reported.
+  dict=()
+  [ $target = scene ] && dict=(-dict=fuzz/scene.dict)  # the format's keys and values
+  set +e
+  # One child process at a time (-fork=1) that is restarted after a finding, so that one run collects all.
+  ASAN_OPTIONS=detect_leaks=0 "$binary" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 \
+    -max_total_time="$budget" -timeout=20 -rss_limit_mb=4096 -max_len=262144 \
+    -artifact_prefix="$build/findings/$target-" "${dict[@]}" \
+    "$build/corpus-$target" "$seeds/$target" > "$log" 2>&1
+  result=$?
+  set -e
+  # The fork parent's last status line: "#RUNS: cov: N ft: N corp: N exec/s N oom/timeout/crash: A/B/C ...".
+  last=$(grep -E '^#[0-9]+: cov:' "$log" | tail -1)
+  runs=$(echo "$last" | grep -oE '^#[0-9]+' | tr -d '#')
+  failures=$(echo "$last" | grep -oE 'oom/timeout/crash: [0-9/]+' || true)
+  echo "   executions: ${runs:-?}, $(echo "$last" | grep -oE 'cov: [0-9]+'), ${failures:-no status line}," \
+    "exit status $result; findings: $(ls "$build/findings" | grep -c "^$target-" || true) in $build/findings"
+  if [ "$result" -ne 0 ] || [ -n "$(ls "$build/findings" | grep "^$target-")" ]; then
+    status=1
+    grep -E "ERROR: |SUMMARY: |Test unit written" "$log" | sort | uniq -c | head -20 || true
+  fi
+done
+exit $status
