@@ -468,6 +468,8 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
 // The background without a photo takes this many times the shadow rays of options.shadow.ray_samples and
 // area_ray_samples (at most 256).
 constexpr int kBackgroundRayFactor = 16;
+// ... and traces its diffuse cones at options.diffuse.pixel_stride divided by this (at least 1).
+constexpr int kBackgroundStrideDivisor = 4;
 
 // The real scene alone, rendered with regular voxel cone tracing over its own bounds: the background when the
 // scene has no photo (the "already lit virtual scene" of the paper's Fig. 3). Its stages are timed together.
@@ -514,6 +516,10 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     Options backgroundOptions = o;
     backgroundOptions.shadow.raySamples = std::min(kBackgroundRayFactor * o.shadow.raySamples, 256);
     backgroundOptions.shadow.areaRaySamples = std::min(kBackgroundRayFactor * o.shadow.areaRaySamples, 256);
+    backgroundOptions.diffuse.pixelStride = std::max(
+        1,
+        pixelStrideFor(o.diffuse.pixelStride, kAutoDiffuseStride, scene.camera.width, scene.camera.height) /
+            kBackgroundStrideDivisor);
     ConeResults cones = std::move(traceCones({&job, 1}, scene, backgroundOptions, shaded, quiet)[0]);
     std::vector<glm::vec3> radiance =
         combineLighting(points, shaded, cones.shadows, ShadowMode::SceneOnly, cones.diffuse, cones.specular);
