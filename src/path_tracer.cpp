@@ -130,27 +130,42 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
     RayHit hit = firstHit;
     glm::vec3 previousPosition(0.0f);
     float previousPdf = 0.0f;  // of the BRDF sample that led to `hit`
+    // An emitter reached by a BRDF sample from `previousPosition`: its MIS share against emittedLight().
+    auto emitterWeight = [&](const RayHit& at, glm::vec3 dir) {
+        const glm::vec3 step = at.position - previousPosition;
+        const float cosLight = std::abs(glm::dot(at.geometricNormal, dir));
+        const float pdfLight =
+            cosLight > 0.0f ? areaLights_.pdfArea(at.material->emission) * glm::dot(step, step) / cosLight
+                            : std::numeric_limits<float>::infinity();
+        return powerHeuristic(previousPdf, pdfLight);
+    };
     for (int bounce = 0; hit.hit(); ++bounce) {
         const glm::vec3 wo = -direction;
-        if (hit.material->emits()) {
-            // Seen by the camera: all of it. Reached by a BRDF sample: its MIS share against emittedLight().
-            float weight = 1.0f;
-            if (bounce > 0) {
-                const glm::vec3 step = hit.position - previousPosition;
-                const float cosLight = std::abs(glm::dot(hit.geometricNormal, direction));
-                const float pdfLight = cosLight > 0.0f ? areaLights_.pdfArea(hit.material->emission) *
-                                                             glm::dot(step, step) / cosLight
-                                                       : std::numeric_limits<float>::infinity();
-                weight = powerHeuristic(previousPdf, pdfLight);
-            }
-            radiance += throughput * hit.material->emission * weight;
-        }
+        // Seen by the camera: all of it.
+        if (hit.material->emits())
+            radiance +=
+                throughput * hit.material->emission * (bounce > 0 ? emitterWeight(hit, direction) : 1.0f);
         radiance += throughput * (directLight(hit, wo, rng) + emittedLight(hit, wo, rng));
-        if (bounce + 1 >= settings_.maxBounces) break;
+        const bool lastBounce = bounce + 1 >= settings_.maxBounces;
         // Always four numbers per bounce, whatever happens, to keep the two correlated paths in step.
         const float uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), uRoulette = rng.uniform();
         const BrdfSample s = sampleBrdf(*hit.material, hit.normal, wo, uLobe, u1, u2);
         if (!s.valid()) break;
+        if (lastBounce) {
+            // The bounce limit (a direct-light-only reference: maxBounces 1): the BRDF sample still brings
+            // its MIS share of the direct light, the environment or an emitter it meets, and nothing beyond.
+            // Without it the light sample's share alone fell short of the map's direct light.
+            const RayHit next = rays_.intersect(offsetOrigin(hit, s.wi), s.wi);
+            if (!next.hit() && environment_)
+                radiance += throughput * s.weight * environment_->radiance(s.wi) *
+                            powerHeuristic(s.pdf, environment_->pdf(s.wi));
+            if (next.hit() && next.material->emits()) {
+                previousPosition = hit.position;
+                previousPdf = s.pdf;
+                radiance += throughput * s.weight * next.material->emission * emitterWeight(next, s.wi);
+            }
+            break;
+        }
         throughput *= s.weight;
         if (bounce + 1 >= settings_.rouletteStartBounce) {
             const float survive = std::min(maxComponent(throughput), kMaxSurvivalProbability);

@@ -91,8 +91,15 @@ void hashReferencedFiles(const nlohmann::json& value, const fs::path& folder, Ha
             }
 }
 
+// A reference's limited-bounce version: references whose paths roulette ends long before their bounce limit
+// (the default 256) are the same in every version.
+int limitedVersion(const ReferenceOptions& options) {
+    return options.maxBounces < ReferenceOptions{}.maxBounces ? kLimitedReferenceCacheVersion : 1;
+}
+
 bool sameSettings(const nlohmann::json& meta, const ReferenceOptions& options) {
     return meta.value("version", -1) == kReferenceCacheVersion &&
+           meta.value("limited_version", 1) == limitedVersion(options) &&
            meta.value("spp", -1) == options.samplesPerPixel &&
            meta.value("seed", uint64_t{0}) == options.seed &&
            meta.value("max_bounces", -1) == options.maxBounces &&
@@ -172,6 +179,7 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     writeImage(cached.output.objectMask, folder / kObjectMaskFile);
     nlohmann::ordered_json meta;
     meta["version"] = kReferenceCacheVersion;
+    meta["limited_version"] = limitedVersion(options);
     meta["scene"] = scene.file.string();
     meta["spp"] = options.samplesPerPixel;
     meta["seed"] = options.seed;

@@ -220,11 +220,11 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect
 }
 
 // Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs, then the
-// sky light through the cones. Shadow and diffuse cones are traced at options.shadow/diffuse.pixel_stride
-// (relight_pixel_stride for real surfaces relit) and filtered (traceSparse).
-std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene,
+// sky light through the cones, with options `o` (the scene's, or the background's). Shadow and diffuse cones
+// are traced at options.shadow/diffuse.pixel_stride (relight_pixel_stride for real surfaces relit) and
+// filtered (traceSparse).
+std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, const Options& o,
                                     std::span<const Light> directLights, StageTimer& timer) {
-    const Options& o = scene.options;
     const int lights = static_cast<int>(directLights.size());
     std::vector<ConeResults> results(jobs.size());
     for (size_t j = 0; j < jobs.size(); ++j) {
@@ -465,6 +465,12 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
             &objects.objectLight()};
 }
 
+// The background without a photo takes this many times the shadow rays of options.shadow.ray_samples and
+// area_ray_samples (at most 256).
+constexpr int kBackgroundRayFactor = 16;
+// ... and traces its diffuse cones at options.diffuse.pixel_stride divided by this (at least 1).
+constexpr int kBackgroundStrideDivisor = 4;
+
 // The real scene alone, rendered with regular voxel cone tracing over its own bounds: the background when the
 // scene has no photo (the "already lit virtual scene" of the paper's Fig. 3). Its stages are timed together.
 Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<const SurfacePoint> points) {
@@ -505,7 +511,16 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
                       environment ? &*environment : nullptr};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
-    ConeResults cones = std::move(traceCones({&job, 1}, scene, shaded, quiet)[0]);
+    // Rendered once per real scene: 16 times the shadow rays (the penumbrae of 4 were blotchy where the
+    // filter spreads them over the whole image, with no photo to hide them).
+    Options backgroundOptions = o;
+    backgroundOptions.shadow.raySamples = std::min(kBackgroundRayFactor * o.shadow.raySamples, 256);
+    backgroundOptions.shadow.areaRaySamples = std::min(kBackgroundRayFactor * o.shadow.areaRaySamples, 256);
+    backgroundOptions.diffuse.pixelStride = std::max(
+        1,
+        pixelStrideFor(o.diffuse.pixelStride, kAutoDiffuseStride, scene.camera.width, scene.camera.height) /
+            kBackgroundStrideDivisor);
+    ConeResults cones = std::move(traceCones({&job, 1}, scene, backgroundOptions, shaded, quiet)[0]);
     std::vector<glm::vec3> radiance =
         combineLighting(points, shaded, cones.shadows, ShadowMode::SceneOnly, cones.diffuse, cones.specular);
     addInto(radiance, std::move(cones.areaLight));
@@ -618,7 +633,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          volumes.objectLight,
          &emitters,
          environment}};
-    std::vector<ConeResults> cones = traceCones(jobs, scene, direct, timer);
+    std::vector<ConeResults> cones = traceCones(jobs, scene, o, direct, timer);
     ConeResults& object = cones[0];
     ConeResults& real = cones[1];
 

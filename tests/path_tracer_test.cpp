@@ -211,6 +211,28 @@ TEST(PathTracer, EmittingSquareOverAPlaneMatchesLambertsFormula) {
     EXPECT_NEAR(renderedSum, expectedSum, 0.015 * expectedSum);
 }
 
+// A direct-light-only reference (maxBounces 1, the quality suite's shadow/indirect split) keeps the BRDF
+// sample's MIS share of the direct light: a plane under a uniform sky of radiance L reflects albedo L, and
+// under an emitting square it matches Lambert's formula (interreflection is zero in both). Without that share
+// the light samples' share alone fell short (the field photo's direct-only reference lacked part of its
+// shadow).
+TEST(PathTracer, ADirectOnlyReferenceKeepsAllOfTheDirectLight) {
+    const float albedo = 0.6f, sky = 0.7f;
+    Scene s;
+    s.real.push_back(placed(makeQuad({20.0f, 20.0f}), {0, 0, 0}, diffuse(glm::vec3(albedo)), "plane"));
+    s.camera = test::lookAtCamera({0, 2, 2}, {0, 0, 0}, 16, 12, 50.0f);
+    Environment environment;
+    environment.radiance = Image(64, 32, 3, 0);
+    for (int y = 0; y < 16; ++y)  // the upper half: the sky
+        for (int x = 0; x < 64; ++x) environment.radiance.setRgb(x, y, glm::vec3(sky));
+    s.environment = std::move(environment);
+    ReferenceOptions o;
+    o.samplesPerPixel = 256;
+    o.maxBounces = 1;
+    const ReferenceOutput out = renderReference(s, o);
+    EXPECT_NEAR(meanRgb(out.with).x, albedo * sky, 0.01 * albedo * sky);
+}
+
 // ---- The BRDF sampler ----
 
 struct SphereQuadrature {

@@ -57,6 +57,9 @@ QualitySuite loadSuite(const std::filesystem::path& fileOrFolder);
 
 // Bump when the path tracer changes what it renders: every cached reference is then rendered again.
 constexpr int kReferenceCacheVersion = 1;
+// The same for the references with a bounce limit (the direct-light-only ones) alone. 2: the last bounce
+// keeps the BRDF sample's MIS share of the direct light (the references with all bounces did not change).
+constexpr int kLimitedReferenceCacheVersion = 2;
 
 // 16 hex digits identifying what a path-traced reference of the scene depends on: the scene file after
 // `overrides`, without "options" and "description" (the path tracer reads neither: DGI's options may change
