@@ -27,7 +27,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         std::filesystem::create_directories(folder);
         return folder;
     }();
-    const std::filesystem::path file = kFolder / (std::string("mesh") + kExtensions[data[0] % kExtensions.size()]);
+    const std::filesystem::path file =
+        kFolder / (std::string("mesh") + kExtensions[data[0] % kExtensions.size()]);
     {
         std::ofstream out(file, std::ios::binary | std::ios::trunc);
         out.write(reinterpret_cast<const char*>(data + 1), static_cast<std::streamsize>(size - 1));

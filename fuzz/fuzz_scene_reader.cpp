@@ -1,7 +1,7 @@
-// libFuzzer target: the scene reader, from the JSON text to a Scene (parseJson + loadScene), as `deltagi info`
-// reads a scene file. Bad input must end in InputError; anything else (a crash, a sanitizer finding, another
-// exception) is a finding. Mesh and image files named by an input are looked up in an empty folder, so the
-// reader itself is what runs.
+// libFuzzer target: the scene reader, from the JSON text to a Scene (parseJson + loadScene), as `deltagi
+// info` reads a scene file. Bad input must end in InputError; anything else (a crash, a sanitizer finding,
+// another exception) is a finding. Mesh and image files named by an input are looked up in an empty folder,
+// so the reader itself is what runs.
 #include <unistd.h>
 
 #include <cstddef>
