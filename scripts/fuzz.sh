@@ -13,16 +13,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 budget="${1:-300}"
 
-packages=(clang-16 libclang-rt-16-dev assimp-testmodels)
-missing=()
-for p in "${packages[@]}"; do
-  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  export DEBIAN_FRONTEND=noninteractive
-  apt-get update
-  apt-get install -y --no-install-recommends "${missing[@]}"
-fi
+scripts/install-deps.sh clang-16 libclang-rt-16-dev assimp-testmodels
 
 build=build-fuzz
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-16 \

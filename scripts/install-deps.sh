@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Installs every build and test dependency of deltagi from Debian 12 packages (run as root).
+# Installs every build and test dependency of deltagi from Debian 12 packages (run as root), and the packages
+# named as arguments (scripts/fuzz.sh adds its own); apt-get runs only when one of them is missing.
+#   scripts/install-deps.sh [PACKAGE ...]
 set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
@@ -7,6 +9,7 @@ packages=(
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   jq
+  "$@"
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -54,8 +54,7 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
         glm::vec3 sum(0.0f);
         for (int k = 0; k < count; ++k) {
             // A jittered grid over the point on the triangle, and a stratified (permuted) triangle choice.
-            const float u1 = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
-            const float u2 = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
             const float uTriangle =
                 (static_cast<float>((k * 5 + 3) % count) + jitterT) / static_cast<float>(count);
             const AreaLightSample s = emitters.sample(uTriangle, u1, u2);
@@ -130,8 +129,7 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
         if (mode == ShadowMode::DeltaShadow && (!objects || objectsBelowHorizon)) return;
         glm::vec3 sum(0.0f);
         for (int k = 0; k < count; ++k) {
-            const float u1 = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
-            const float u2 = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
             const EnvironmentSampler::Sample s = sampler.sample(u1, u2);
             const float cosSurface = glm::dot(s.wi, p.normal);
             if (!(s.pdf > 0.0f) || cosSurface <= 0.0f || s.radiance == glm::vec3(0.0f)) continue;

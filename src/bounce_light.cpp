@@ -3,6 +3,7 @@
 #include "brdf_sampling.h"
 #include "cone_trace.h"
 #include "mipmap.h"
+#include "object_bounce_rays.h"
 #include "parallel.h"
 #include "shadow_rays.h"
 
@@ -170,8 +171,6 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
     const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
-    const VolumeRegion& region = light.region();
-    const float invVoxel = 1.0f / region.voxelSize();
     const float offset = shadowRayOffset(scene);
     const int count = squareSampleCount(std::max(options.diffuse.objectRays, 1));
     const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
@@ -189,17 +188,11 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
                         jitterV = hashToUnit(index, kBounceStream + 101);
             glm::vec3 sum(0.0f);
             for (int k = 0; k < count; ++k) {
-                const float u1 = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
-                const float u2 = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+                const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
                 const glm::vec3 wi = frame * sampleCosineHemisphere(u1, u2);
                 const RayHit hit = scene.intersect(origin, wi, offset);
                 if (!hit.hit()) continue;
-                // The light of the voxels where the ray ends, half a voxel out on its side of the surface.
-                const glm::vec4 l = light.sample(
-                    (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) *
-                        invVoxel,
-                    0.0f);
-                if (l.w > 1e-6f) sum += glm::vec3(l) / l.w;
+                sum += volumeRadianceAt(light, hit);
             }
             return sum / static_cast<float>(count);
         });

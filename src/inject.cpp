@@ -37,17 +37,18 @@ constexpr float kFullCoverage = 0.75f;
 // radiance (lightRadiance) when the next light's texels start, and the lights' radiances are summed in light
 // order. injectLight and reinjectLight add the same numbers in the same order.
 struct VoxelTexels {
+    float area = 0.0f;         // of the geometry in the voxel
     glm::vec3 radiance{0.0f};  // of the lights finished
     glm::vec4 current{0.0f};   // the current light's (reflected flux, footprint area)
     uint32_t light = 0;
     bool lit = false;  // any texel at all
-    void add(uint32_t l, const RsmTexel& t, float area) {
-        if (lit && l != light) finishLight(area);
+    void add(uint32_t l, const RsmTexel& t) {
+        if (lit && l != light) finishLight();
         light = l;
         lit = true;
         current += glm::vec4(t.flux, t.area);
     }
-    void finishLight(float area) {
+    void finishLight() {
         radiance += lightRadiance(current, area);
         current = glm::vec4(0.0f);
     }
@@ -261,7 +262,8 @@ std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelB
     auto a = std::lower_bound(changes.added.begin(), changes.added.end(), rowVoxel + x0,
                               [](const RsmChanges::Texel& t, uint32_t v) { return t.voxel < v; });
     std::vector<VoxelTexels> sums(x1 - x0);
-    auto areaAt = [&](int x) { return geometryArea(geometry, rowVoxel + static_cast<uint32_t>(x)); };
+    for (int x = x0; x < x1; ++x)
+        sums[x - x0].area = geometryArea(geometry, rowVoxel + static_cast<uint32_t>(x));
     while (true) {
         const bool eIn = e != eEnd && e->x < x1;
         const bool aIn = a != changes.added.end() && a->voxel < rowVoxel + x1;
@@ -272,16 +274,15 @@ std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelB
             if (g != gone.end() && *g == static_cast<uint32_t>(e - entries.begin()))
                 ++g;  // removed or changed by the objects
             else
-                sums[e->x - x0].add(e->light, *sceneTexel, areaAt(e->x));
+                sums[e->x - x0].add(e->light, *sceneTexel);
             ++e;
         } else {
-            const int x = static_cast<int>(a->voxel - rowVoxel);
-            sums[x - x0].add(a->light, *a->texel, areaAt(x));
+            sums[a->voxel - rowVoxel - x0].add(a->light, *a->texel);
             ++a;
         }
     }
-    for (int x = x0; x < x1; ++x)
-        if (sums[x - x0].lit) sums[x - x0].finishLight(areaAt(x));
+    for (VoxelTexels& texels : sums)
+        if (texels.lit) texels.finishLight();
     return sums;
 }
 

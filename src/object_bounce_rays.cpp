@@ -13,6 +13,14 @@ constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kBounceStream = 7200;
 }  // namespace
 
+glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit) {
+    const VolumeRegion& region = light.region();
+    const float invVoxel = 1.0f / region.voxelSize();
+    const glm::vec4 l = light.sample(
+        (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) * invVoxel, 0.0f);
+    return l.w > 1e-6f ? glm::vec3(l) / l.w : glm::vec3(0.0f);
+}
+
 std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> points,
                                              const MipVolume& objectLight, const ShadowRayScenes& rays,
                                              const Options& options, std::span<const uint32_t> pixels) {
@@ -23,8 +31,6 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
     const float radius = 0.5f * glm::length(rays.objectBounds.diagonal());
     const int count = squareSampleCount(options.diffuse.objectRays);
     const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
-    const VolumeRegion& region = objectLight.region();
-    const float invVoxel = 1.0f / region.voxelSize();
     constexpr float kPi = std::numbers::pi_v<float>;
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
@@ -43,8 +49,7 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
         const float jitterU = hashToUnit(i, kBounceStream), jitterV = hashToUnit(i, kBounceStream + 1);
         glm::vec3 sum(0.0f);
         for (int k = 0; k < count; ++k) {
-            const float u1 = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
-            const float u2 = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
             glm::vec3 wi;
             float weight;  // cos / (pi pdf)
             if (inside) {
@@ -62,12 +67,7 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
             const RayHit hit = rays.objects->intersectTopLayer(origin, wi);
             if (!hit.hit()) continue;
             if (rays.scene->occluded(origin, wi, 0.0f, hit.t)) continue;
-            // The object's voxels at the hit, half a voxel out on the ray's side.
-            const glm::vec3 at =
-                (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) * invVoxel;
-            const glm::vec4 light = objectLight.sample(at, 0.0f);
-            if (!(light.w > 1e-6f)) continue;
-            sum += glm::vec3(light) / light.w * weight;
+            sum += volumeRadianceAt(objectLight, hit) * weight;
         }
         out[i] = sum / static_cast<float>(count);
     });

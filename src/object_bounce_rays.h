@@ -28,4 +28,8 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
                                              const MipVolume& objectLight, const ShadowRayScenes& rays,
                                              const Options& options, std::span<const uint32_t> pixels = {});
 
+// The radiance of `light`'s level-0 voxels where a ray meets a surface, half a voxel out on the ray's side of
+// it (the volume's values over their occupancy); zero where no voxel there is occupied.
+glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit);
+
 }  // namespace deltagi

@@ -142,8 +142,7 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
             // Per sample: blocked by the objects, by the scene; the scene is tested only where needed.
             int byObjects = 0, byScene = 0, byEither = 0;
             for (int k = 0; k < count; ++k) {
-                const float u = (static_cast<float>(k % side) + jitterU) / static_cast<float>(side);
-                const float v = (static_cast<float>(k / side) + jitterV) / static_cast<float>(side);
+                const auto [u, v] = jitteredGridPoint(k, side, jitterU, jitterV);
                 const ShadowRaySample s = sampleShadowRay(light, p.position, u, v);
                 const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
                 const bool horizon = glm::dot(s.wi, p.normal) <= 0.0f || !(tMax > 0.0f);

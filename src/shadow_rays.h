@@ -50,6 +50,13 @@ float shadowRayOffset(const RayScene& scene);
 // A sample count rounded down to a square (a jittered side x side grid), at least 1.
 int squareSampleCount(int samples);
 
+// Sample k of a side x side grid over [0, 1)^2, each cell's point offset by (jitterU, jitterV) in [0, 1)
+// (the same for every cell of one point: a stratified pattern that differs from point to point).
+inline glm::vec2 jitteredGridPoint(int k, int side, float jitterU, float jitterV) {
+    return {(static_cast<float>(k % side) + jitterU) / static_cast<float>(side),
+            (static_cast<float>(k / side) + jitterV) / static_cast<float>(side)};
+}
+
 // Shadow rays per point and light for options.shadow.ray_samples: a square number, 1 for a light without a
 // size.
 int shadowRayCount(const Light& light, int raySamples);

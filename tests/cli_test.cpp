@@ -25,6 +25,7 @@
 #include "deltagi/image.h"
 #include "deltagi/scene_info.h"
 #include "test_files.h"
+#include "test_scene_json.h"
 
 namespace fs = std::filesystem;
 using deltagi::test::readText;
@@ -50,30 +51,9 @@ size_t lineCount(const std::string& text) {
     return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
 }
 
-// A floor quad (explicit triangles), a small box on it as the virtual object and one point light; small
-// enough to render in well under a second.
+// The tiny test scene at 64x48 with a blue box.
 json tinyScene() {
-    json floorShape = {{"type", "triangles"},
-                       {"positions", {{-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}}},
-                       {"indices", {{0, 2, 1}, {0, 3, 2}}}};
-    return {
-        {"camera",
-         {{"width", 64},
-          {"height", 48},
-          {"fov_y_deg", 45},
-          {"position", {0, 0.8, 2}},
-          {"look_at", {0, 0.1, 0}},
-          {"up", {0, 1, 0}}}},
-        {"scene", {{{"name", "floor"}, {"shape", floorShape}, {"material", {{"albedo", {0.7, 0.7, 0.7}}}}}}},
-        {"virtual",
-         {{{"name", "box"},
-           {"shape", {{"type", "box"}, {"size", {0.3, 0.3, 0.3}}}},
-           {"transform", {{"translate", {0, 0.15, 0}}}},
-           {"material", {{"albedo", {0.1, 0.2, 0.8}}}}}}},
-        {"lights",
-         {{{"type", "point"}, {"position", {0.5, 1.5, 0.5}}, {"color", {1, 1, 1}}, {"intensity", 3}}}},
-        {"options", {{"volume", {{"resolution", 16}}}, {"rsm", {{"resolution", 64}}}}},
-    };
+    return deltagi::test::tinySceneJson(64, 48, {0.1, 0.2, 0.8});
 }
 
 class CliTest : public ::testing::Test {

@@ -15,6 +15,7 @@
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
 #include "environment.h"
+#include "test_errors.h"
 
 namespace deltagi {
 namespace {
@@ -64,10 +65,7 @@ class EnvironmentIoTest : public ::testing::Test {
     fs::path dir_;
 };
 
-void expectContains(const std::string& message, std::initializer_list<std::string> parts) {
-    for (const std::string& part : parts)
-        EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
-}
+using test::expectContains;
 
 TEST_F(EnvironmentIoTest, AnEquirectangularMapLoadsItsLightsRotatedAndScaled) {
     const Scene plain = load({{"file", "sky.hdr"}});

@@ -12,9 +12,13 @@
 
 #include "deltagi/error.h"
 #include "deltagi/image.h"
+#include "test_errors.h"
 
 namespace deltagi {
 namespace {
+
+using test::expectContains;
+using test::inputErrorOf;
 
 namespace fs = std::filesystem;
 
@@ -30,20 +34,6 @@ class ImageIoTest : public ::testing::Test {
     void TearDown() override { fs::remove_all(dir_); }
     fs::path dir_;
 };
-
-std::string errorOf(const std::function<void()>& action) {
-    try {
-        action();
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    ADD_FAILURE() << "expected an InputError";
-    return {};
-}
-
-void expectContains(const std::string& message, const std::string& part) {
-    EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
-}
 
 // The sRGB encoding (IEC 61966-2-1), written out independently of the implementation.
 double encodeSrgb(double linear) {
@@ -159,21 +149,21 @@ TEST_F(ImageIoTest, ReadingNonFinitePixelsIsAnError) {
     pixels[1] = NAN;  // the same pixel: counted once
     pixels[7] = INFINITY;
     writePfm(dir_ / "bad.pfm", 4, 2, pixels);
-    std::string message = errorOf([&] { readImage(dir_ / "bad.pfm"); });
+    std::string message = inputErrorOf([&] { readImage(dir_ / "bad.pfm"); });
     expectContains(message, "bad.pfm");
     expectContains(message, "2 of 8 pixels are NaN or infinite");
 }
 
 TEST_F(ImageIoTest, MissingAndUnwritableFilesAreErrors) {
-    std::string message = errorOf([&] { readImage(dir_ / "missing.png"); });
+    std::string message = inputErrorOf([&] { readImage(dir_ / "missing.png"); });
     expectContains(message, "missing.png");
     expectContains(message, "cannot read image");
 
-    message = errorOf([&] { writeImage(Image(2, 2, 3), dir_ / "x.tiff"); });
+    message = inputErrorOf([&] { writeImage(Image(2, 2, 3), dir_ / "x.tiff"); });
     expectContains(message, "x.tiff");
     expectContains(message, ".png, .exr or .hdr");
 
-    message = errorOf([&] { writeImage(Image(2, 2, 3), dir_ / "no-such-folder" / "x.png"); });
+    message = inputErrorOf([&] { writeImage(Image(2, 2, 3), dir_ / "no-such-folder" / "x.png"); });
     expectContains(message, "no-such-folder");
     expectContains(message, "does not exist");
     EXPECT_FALSE(fs::exists(dir_ / "no-such-folder"));

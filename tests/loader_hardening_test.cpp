@@ -16,28 +16,16 @@
 #include "deltagi/scene_io.h"
 #include "json_reader.h"
 #include "mesh_io.h"
+#include "test_errors.h"
 
 namespace deltagi {
 namespace {
 
+using test::expectContains;
+using test::inputErrorOf;
+
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-void expectContains(const std::string& message, std::initializer_list<std::string> parts) {
-    for (const std::string& part : parts)
-        EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
-}
-
-template <typename Action>
-std::string errorOf(Action action) {
-    try {
-        action();
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    ADD_FAILURE() << "expected an InputError";
-    return {};
-}
 
 std::string nested(size_t depth) {
     return std::string(depth, '[') + std::string(depth, ']');
@@ -51,7 +39,7 @@ TEST(ParseJsonTest, ReadsWhatNlohmannReads) {
 }
 
 TEST(ParseJsonTest, RepeatedKeysAreErrorsNamingThePath) {
-    expectContains(errorOf([] { parseJson(R"({"a": [1, {"b": 1, "b": 2}]})", "f.json"); }),
+    expectContains(inputErrorOf([] { parseJson(R"({"a": [1, {"b": 1, "b": 2}]})", "f.json"); }),
                    {"f.json: a[1].b: duplicate key"});
     // The same key in different objects is fine.
     EXPECT_NO_THROW(parseJson(R"({"a": {"b": 1}, "c": {"b": 2}})", "f.json"));
@@ -59,20 +47,20 @@ TEST(ParseJsonTest, RepeatedKeysAreErrorsNamingThePath) {
 
 TEST(ParseJsonTest, NestingIsBoundedAndTheMessageStaysShort) {
     EXPECT_NO_THROW(parseJson(nested(kMaxJsonDepth), "f.json"));
-    const std::string message = errorOf([] { parseJson(nested(kMaxJsonDepth + 1), "f.json"); });
+    const std::string message = inputErrorOf([] { parseJson(nested(kMaxJsonDepth + 1), "f.json"); });
     expectContains(message, {"f.json: ", "nested more than 128 levels deep"});
     // 100,000 levels overflowed the stack when a message printed the value; the path in the message is cut.
-    const std::string deep = errorOf([] { parseJson(nested(100000), "f.json"); });
+    const std::string deep = inputErrorOf([] { parseJson(nested(100000), "f.json"); });
     EXPECT_LT(deep.size(), 200u) << deep;
 }
 
 TEST(ParseJsonTest, NumbersBeyondADoubleNameTheLineAndTheKey) {
-    expectContains(errorOf([] { parseJson("{\"a\": {\"b\": [0,\n 1, 1e999]}}", "f.json"); }),
+    expectContains(inputErrorOf([] { parseJson("{\"a\": {\"b\": [0,\n 1, 1e999]}}", "f.json"); }),
                    {"f.json: line 2, column ", "a.b[2]: the number 1e999 is out of range"});
 }
 
 TEST(ParseJsonTest, SyntaxErrorsNameTheLineAndColumn) {
-    expectContains(errorOf([] { parseJson("{\"a\": 1,\n ,}", "f.json"); }),
+    expectContains(inputErrorOf([] { parseJson("{\"a\": 1,\n ,}", "f.json"); }),
                    {"f.json: line 2, column 2: syntax error"});
 }
 
@@ -102,7 +90,7 @@ TEST(RenderMemoryTest, ALargeCameraNamesTheCameraAndTheGBuffer) {
     Camera camera;
     camera.width = camera.height = 16384;
     constexpr uint64_t kGiB = uint64_t{1} << 30;
-    expectContains(errorOf([&] { checkRenderMemory(options, camera, 1, 16 * kGiB, "s.json"); }),
+    expectContains(inputErrorOf([&] { checkRenderMemory(options, camera, 1, 16 * kGiB, "s.json"); }),
                    {"s.json: camera: 16384x16384 pixels at 4 samples per pixel", "G-buffer 64.0 GiB"});
 }
 
@@ -138,7 +126,7 @@ TEST_F(MeshFileTest, HeaderCountsBeyondTheFileAreErrors) {
     // Binary: 3 vertices of 12 bytes and 1 face of at least 1 byte need 37 bytes; 36 are there.
     const fs::path shortPly =
         write("short.ply", plyHeader("binary_little_endian", 3, 1) + std::string(36, '\0'));
-    expectContains(errorOf([&] { checkMeshFileClaims(shortPly, "where", kPlenty); }),
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(shortPly, "where", kPlenty); }),
                    {"where: 'short.ply' is truncated or corrupt", "3 vertex elements, 1 face element",
                     "at least 37 bytes", "36 bytes after the header"});
     const fs::path fullPly =
@@ -146,31 +134,32 @@ TEST_F(MeshFileTest, HeaderCountsBeyondTheFileAreErrors) {
     EXPECT_NO_THROW(checkMeshFileClaims(fullPly, "where", kPlenty));
     // ASCII: at least 2 characters per property.
     const fs::path ascii = write("ascii.ply", plyHeader("ascii", 1000, 0) + "0 0 0\n");
-    expectContains(errorOf([&] { checkMeshFileClaims(ascii, "where", kPlenty); }), {"1000 vertex elements"});
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(ascii, "where", kPlenty); }),
+                   {"1000 vertex elements"});
     // A malformed header: Assimp's PLY reader crashed or spun on such (fuzz findings); lines without a
     // keyword are skipped, as Assimp skips them.
     const fs::path badType =
         write("type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty flt x\nend_header\n0\n");
-    expectContains(errorOf([&] { checkMeshFileClaims(badType, "where", kPlenty); }),
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(badType, "where", kPlenty); }),
                    {"where: 'type.ply' is corrupt: line 4 of its PLY header is \"property flt x\""});
     const fs::path binary = write("binary.ply", std::string("ply\nformat ascii 1\0\0\nend_header\n", 32));
-    expectContains(errorOf([&] { checkMeshFileClaims(binary, "where", kPlenty); }),
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(binary, "where", kPlenty); }),
                    {"line 2 of its PLY header", "expected printable text"});
     const fs::path noKeyword = write("blender.ply",
                                      "ply\nformat ascii 1.0\nCreated by Blender\nelement vertex 1\n"
                                      "property float x\nend_header\n0\n");
     EXPECT_NO_THROW(checkMeshFileClaims(noKeyword, "where", kPlenty));
     const fs::path noEnd = write("noend.ply", "ply\nformat ascii 1.0\nelement vertex 1\n");
-    expectContains(errorOf([&] { checkMeshFileClaims(noEnd, "where", kPlenty); }),
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(noEnd, "where", kPlenty); }),
                    {"its PLY header has no line \"end_header\""});
     // A count beyond 64 bits.
     const fs::path hugeCount =
         write("count.ply", "ply\nformat ascii 1.0\nelement vertex 99999999999999999999999\nend_header\n");
-    expectContains(errorOf([&] { checkMeshFileClaims(hugeCount, "where", kPlenty); }),
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(hugeCount, "where", kPlenty); }),
                    {"where: 'count.ply' is corrupt: line 3", "\"element NAME COUNT\" with a whole number"});
     // OFF, counts on the first line or on their own.
     const fs::path off = write("huge.off", "OFF\n353535235358 6 0\n0 0 0\n");
-    expectContains(errorOf([&] { checkMeshFileClaims(off, "where", kPlenty); }),
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(off, "where", kPlenty); }),
                    {"353535235358 vertex elements"});
     const fs::path offInline = write("inline.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
     EXPECT_NO_THROW(checkMeshFileClaims(offInline, "where", kPlenty));
@@ -179,12 +168,12 @@ TEST_F(MeshFileTest, HeaderCountsBeyondTheFileAreErrors) {
 TEST_F(MeshFileTest, MeshesLargerThanMemoryAreRefusedBeforeLoading) {
     const fs::path ply = write("ok.ply", plyHeader("ascii", 3, 1) + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
     EXPECT_NO_THROW(checkMeshFileClaims(ply, "where", kPlenty));
-    expectContains(errorOf([&] { checkMeshFileClaims(ply, "where", 100); }),
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(ply, "where", 100); }),
                    {"where: loading 'ok.ply' needs about", "GiB of physical memory"});
     // Formats without counts: in proportion to the file's size.
     const fs::path obj = write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     EXPECT_NO_THROW(checkMeshFileClaims(obj, "where", kPlenty));
-    expectContains(errorOf([&] { checkMeshFileClaims(obj, "where", 100); }),
+    expectContains(inputErrorOf([&] { checkMeshFileClaims(obj, "where", 100); }),
                    {"loading 'tri.obj' needs about"});
 }
 
@@ -192,10 +181,10 @@ TEST_F(MeshFileTest, BrokenIndicesAndNonFiniteVerticesAreErrorsNotCrashes) {
     const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n";
     for (const char* face : {"3 0 1 7\n", "3 0 -1 2\n"}) {
         const fs::path ply = write("bad.ply", plyHeader("ascii", 3, 1) + vertices + face);
-        expectContains(errorOf([&] { loadMeshFile(ply, "where", "bad"); }), {"where: ", "out of range"});
+        expectContains(inputErrorOf([&] { loadMeshFile(ply, "where", "bad"); }), {"where: ", "out of range"});
     }
     const fs::path obj = write("nan.obj", "v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n");
-    expectContains(errorOf([&] { loadMeshFile(obj, "where", "nan"); }),
+    expectContains(inputErrorOf([&] { loadMeshFile(obj, "where", "nan"); }),
                    {"where: vertex 2 of mesh 'nan' is not finite: (nan, 1, 0)"});
     // A good file still loads, with the names the scene reader gives.
     const fs::path good = write("good.ply", plyHeader("ascii", 3, 1) + vertices + "3 0 1 2\n");
@@ -227,11 +216,11 @@ TEST(SceneOverflowTest, IntensitiesThatWouldOverflowAreRefused) {
     EXPECT_NO_THROW(loadFromJson(scene));
     scene["lights"][0]["intensity"] = 6e19;
     scene["lights"][0]["color"] = {2, 1, 1};  // the product counts
-    expectContains(errorOf([&] { loadFromJson(scene); }),
+    expectContains(inputErrorOf([&] { loadFromJson(scene); }),
                    {"s.json: lights[0].intensity: intensity times color is 1.2e+20, more than 1e+20"});
     scene = smallScene();
     scene["virtual"][0]["material"] = {{"emission", 1e10}, {"emission_scale", 1e11}};
-    expectContains(errorOf([&] { loadFromJson(scene); }),
+    expectContains(inputErrorOf([&] { loadFromJson(scene); }),
                    {"s.json: virtual[0].material.emission_scale: mesh 'box': emission times emission_scale"});
 }
 

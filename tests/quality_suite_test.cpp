@@ -17,6 +17,8 @@
 #include <gtest/gtest.h>
 
 #include "deltagi/error.h"
+#include "test_files.h"
+#include "test_scene_json.h"
 
 namespace deltagi {
 namespace {
@@ -112,36 +114,12 @@ TEST(DeltaSplit, AReferenceMovesOntoAnotherBackgroundByItsRealShare) {
 
 // ---- Suites of tiny scenes ----
 
-// A floor, a box on it as the virtual object (its albedo given) and a point light, 32x24.
+// The tiny test scene at 32x24 with a grey box of `boxAlbedo`.
 json tinyScene(double boxAlbedo) {
-    const json floorShape = {{"type", "triangles"},
-                             {"positions", {{-1, 0, -1}, {1, 0, -1}, {1, 0, 1}, {-1, 0, 1}}},
-                             {"indices", {{0, 2, 1}, {0, 3, 2}}}};
-    return {
-        {"camera",
-         {{"width", 32},
-          {"height", 24},
-          {"fov_y_deg", 45},
-          {"position", {0, 0.8, 2}},
-          {"look_at", {0, 0.1, 0}},
-          {"up", {0, 1, 0}}}},
-        {"scene", {{{"name", "floor"}, {"shape", floorShape}, {"material", {{"albedo", {0.7, 0.7, 0.7}}}}}}},
-        {"virtual",
-         {{{"name", "box"},
-           {"shape", {{"type", "box"}, {"size", {0.3, 0.3, 0.3}}}},
-           {"transform", {{"translate", {0, 0.15, 0}}}},
-           {"material", {{"albedo", {boxAlbedo, boxAlbedo, boxAlbedo}}}}}}},
-        {"lights", {{{"type", "point"}, {"position", {0.5, 1.5, 0.5}}, {"intensity", 3}}}},
-        {"options", {{"volume", {{"resolution", 16}}}, {"rsm", {{"resolution", 64}}}}},
-    };
+    return test::tinySceneJson(32, 24, {boxAlbedo, boxAlbedo, boxAlbedo});
 }
 
-std::string readText(const fs::path& path) {
-    std::ifstream in(path);
-    std::stringstream text;
-    text << in.rdbuf();
-    return text.str();
-}
+using test::readText;
 
 class QualitySuiteTest : public ::testing::Test {
   protected:

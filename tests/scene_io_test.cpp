@@ -14,6 +14,7 @@
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
 #include "json_reader.h"
+#include "test_errors.h"
 
 namespace deltagi {
 namespace {
@@ -63,10 +64,7 @@ class SceneIoTest : public ::testing::Test {
     fs::path dir_;
 };
 
-void expectContains(const std::string& message, std::initializer_list<std::string> parts) {
-    for (const std::string& part : parts)
-        EXPECT_NE(message.find(part), std::string::npos) << "'" << part << "' not in: " << message;
-}
+using test::expectContains;
 
 // A small valid scene: a floor quad (real), a unit box (virtual), one point light.
 json baseScene() {
