@@ -2,8 +2,10 @@
 
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include "brdf.h"
+#include "brdf_sampling.h"
 #include "cone_trace.h"
 #include "path_tracer.h"
 
@@ -29,11 +31,28 @@ struct RaySetup {
           count(squareSampleCount(options.shadow.areaRaySamples)) {
         if (objects) {
             objectCentre = rays.objectBounds.center();
-            objectRadius = 0.5f * glm::length(rays.objectBounds.diagonal());
+            objectRadius = rays.boundingRadius();
         }
         side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
     }
 };
+
+// The cone of directions from a point towards a sphere (the objects' bounding sphere), for sampling it
+// uniformly; invalid from inside the sphere.
+struct ObjectCone {
+    glm::vec3 axis{0.0f};
+    float cosHalfAngle = 1.0f;
+    bool valid() const { return cosHalfAngle < 1.0f; }
+    float pdf() const { return 1.0f / (2.0f * std::numbers::pi_v<float> * (1.0f - cosHalfAngle)); }
+};
+ObjectCone objectCone(glm::vec3 origin, glm::vec3 centre, float radius) {
+    const glm::vec3 toCentre = centre - origin;
+    const float distance = glm::length(toCentre);
+    // From inside (or at the surface of) the sphere every direction may meet the objects: no cone.
+    if (!(radius > 0.0f) || !(distance > 1.001f * radius)) return {};
+    const float sinHalfAngle = radius / distance;
+    return {toCentre / distance, std::sqrt(1.0f - sinHalfAngle * sinHalfAngle)};
+}
 
 }  // namespace
 
@@ -127,7 +146,40 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
         const bool objectsBelowHorizon = glm::length(objectCentre - origin) > objectRadius &&
                                          glm::dot(objectCentre - origin, p.normal) < -objectRadius;
         if (mode == ShadowMode::DeltaShadow && (!objects || objectsBelowHorizon)) return;
+        // Relit: only directions towards the objects change, so a second set of samples is drawn uniformly
+        // over the cone of directions of their bounding sphere, and both sets are combined by multiple
+        // importance sampling (balance heuristic). The map's samples alone left most points near the objects
+        // with one or two rays that meet them: a speckled shadow.
+        const ObjectCone cone = mode == ShadowMode::DeltaShadow ? objectCone(origin, objectCentre, objectRadius)
+                                                                : ObjectCone{};
+        // The cone's pdf per solid angle (0 outside it): the other term of the map's samples' balance
+        // heuristic (both sets have `count` samples).
+        auto conePdf = [&](glm::vec3 wi) {
+            return cone.valid() && glm::dot(wi, cone.axis) >= cone.cosHalfAngle ? cone.pdf() : 0.0f;
+        };
         glm::vec3 sum(0.0f);
+        if (cone.valid()) {
+            const float jitterS = hashToUnit(i, kEnvironmentStream + 2),
+                        jitterT = hashToUnit(i, kEnvironmentStream + 3);
+            const glm::mat3 frame = frameAround(cone.axis);
+            for (int k = 0; k < count; ++k) {
+                const auto [u1, u2] = jitteredGridPoint(k, side, jitterS, jitterT);
+                const float cosTheta = 1.0f - u1 * (1.0f - cone.cosHalfAngle);
+                const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
+                const float phi = 2.0f * std::numbers::pi_v<float> * u2;
+                const glm::vec3 wi = glm::normalize(
+                    frame * glm::vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta));
+                const float cosSurface = glm::dot(wi, p.normal);
+                if (cosSurface <= 0.0f) continue;
+                const glm::vec3 radiance = sampler.radiance(wi);
+                if (radiance == glm::vec3(0.0f)) continue;
+                if (!objects->occludedTopLayer(origin, wi, 0.0f, kInfinity)) continue;
+                if (rays.scene->occluded(origin, wi, 0.0f, kInfinity)) continue;
+                const float pdf = cone.pdf();
+                const float weight = pdf / (pdf + sampler.pdf(wi));
+                sum -= evalBrdf(m, p.normal, p.toEye, wi) * radiance * (cosSurface * weight / pdf);
+            }
+        }
         for (int k = 0; k < count; ++k) {
             const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
             const EnvironmentSampler::Sample s = sampler.sample(u1, u2);
@@ -154,7 +206,8 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
                     break;
             }
             if (visibility == 0.0f) continue;
-            sum += evalBrdf(m, p.normal, p.toEye, s.wi) * s.radiance * (visibility * cosSurface / s.pdf);
+            const float weight = cone.valid() ? s.pdf / (s.pdf + conePdf(s.wi)) : 1.0f;
+            sum += evalBrdf(m, p.normal, p.toEye, s.wi) * s.radiance * (visibility * cosSurface * weight / s.pdf);
         }
         out[i] = sum / static_cast<float>(count);
     });

@@ -95,6 +95,8 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
             g.coverage[i] = g.object[i].valid() ? 1.0f : 0.0f;
         }
     });
+    g.objectSamples.perPixel = 0;
+    g.objectSamples.points.clear();
     if (k == 1) return;
 
     // Then the sub-samples of silhouette pixels (decided from the centres alone, so the pass is
@@ -112,12 +114,24 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                 }
         }
     });
+    // Every pixel that shows an object or lies on a silhouette takes k x k sub-samples: the coverage, and
+    // the surfaces its direct light is shaded over.
+    PixelSamples& samples = g.objectSamples;
+    samples.perPixel = k * k;
+    samples.rect = g.written;
+    const int rectWidth = samples.rect.x1 - samples.rect.x0;
+    samples.points.assign(
+        static_cast<size_t>(std::max(rectWidth, 0)) * std::max(samples.rect.y1 - samples.rect.y0, 0) * k * k,
+        SurfacePoint{});
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
-            if (!silhouette[i]) continue;
+            if (!silhouette[i] && !g.object[i].valid()) continue;
+            SurfacePoint* out = samples.points.data() +
+                                (static_cast<size_t>(y - samples.rect.y0) * rectWidth + (x - x0)) * k * k;
             int virtualCount = 0;
             float bestOffset = g.object[i].valid() ? 0.0f : INFINITY;
+            SurfacePoint nearest = g.object[i];
             for (int sy = 0; sy < k; ++sy)
                 for (int sx = 0; sx < k; ++sx) {
                     const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
@@ -125,14 +139,16 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                     const RayHit hit = visibleObjectHit(all, eye, dir);
                     if (!hit.hit()) continue;
                     ++virtualCount;
+                    out[sy * k + sx] = toSurfacePoint(hit, dir);
                     const float offset = ox * ox + oy * oy;
                     if (offset < bestOffset) {
                         bestOffset = offset;
-                        g.object[i] = toSurfacePoint(hit, dir);
+                        nearest = out[sy * k + sx];
                     }
                 }
+            if (!silhouette[i]) continue;  // inside an object: the centre stays, coverage 1
+            g.object[i] = virtualCount > 0 ? nearest : SurfacePoint{};
             g.coverage[i] = static_cast<float>(virtualCount) / static_cast<float>(k * k);
-            if (virtualCount == 0) g.object[i] = {};
         }
     });
 }

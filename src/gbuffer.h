@@ -4,6 +4,7 @@
 // pixels are virtual (§3.3).
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include "deltagi/scene.h"
@@ -42,6 +43,23 @@ void forEachValidPoint(std::span<const SurfacePoint> points, std::span<const uin
     });
 }
 
+// The surfaces seen through a k x k grid of sub-pixel positions in every pixel of a rectangle: what the
+// objects' direct light is shaded over, so that a pixel shows the mean of its area as the path tracer's
+// does (a shadow edge or a fold inside a pixel), not the light at its centre alone.
+struct PixelSamples {
+    int perPixel = 0;  // k * k; 0: none
+    PixelRect rect;    // the pixels that have them
+    std::vector<SurfacePoint> points;  // perPixel per pixel of `rect`, row by row; invalid: no object there
+    // The samples of image pixel `i` (of an image `width` wide), empty outside the rectangle.
+    std::span<const SurfacePoint> of(size_t i, int width) const {
+        if (perPixel == 0) return {};
+        const int x = static_cast<int>(i % static_cast<size_t>(width)), y = static_cast<int>(i / width);
+        if (x < rect.x0 || x >= rect.x1 || y < rect.y0 || y >= rect.y1) return {};
+        const size_t k = static_cast<size_t>(y - rect.y0) * (rect.x1 - rect.x0) + (x - rect.x0);
+        return std::span<const SurfacePoint>(points).subspan(k * perPixel, perPixel);
+    }
+};
+
 // The virtual half of the G-buffer; the real half (renderRealSurfaces) is kept apart, since it does not
 // change while only the objects move.
 struct GBuffer {
@@ -51,6 +69,8 @@ struct GBuffer {
     // The pixels that renderObjectSurfaces wrote: outside them object and coverage are empty, so they hold
     // every virtual point, and a G-buffer kept from frame to frame is cleared there only.
     PixelRect written;
+    // The virtual surfaces at the sub-samples of every pixel that shows an object (samplesPerPixel > 1).
+    PixelSamples objectSamples;
 };
 
 // The real surfaces behind the pixel centres (what the photo shows): rays against the real scene alone. They
@@ -62,6 +82,7 @@ std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScen
 // pixels near the bounds' projection can see them. One ray per pixel centre decides which pixels are virtual;
 // pixels on a silhouette (whose 3x3 neighbourhood has both kinds) take `samplesPerPixel` sub-samples on a
 // regular k x k grid for their coverage. The virtual surface nearest the pixel centre represents the pixel.
+// Every pixel with a virtual point keeps the virtual surfaces of its k x k sub-samples (g.objectSamples).
 // `g` may hold an earlier frame's (of the same camera): only its written pixels are cleared.
 void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
                           int samplesPerPixel, GBuffer& g);

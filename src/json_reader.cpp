@@ -397,7 +397,8 @@ Options readOptions(const JsonNode& node) {
         if (auto r = n->find("resolution")) options.rsm.resolution = r->integer(16, 8192);
     }
     if (auto n = node.find("diffuse")) {
-        n->allowKeys({"count", "aperture_deg", "pixel_stride", "relight_pixel_stride", "object_rays"});
+        n->allowKeys({"count", "aperture_deg", "object_aperture_deg", "pixel_stride", "relight_pixel_stride",
+                      "object_rays"});
         if (auto c = n->find("count")) options.diffuse.count = c->integer(1, 64);
         if (auto r = n->find("object_rays")) options.diffuse.objectRays = r->integer(0, 256);
         if (auto st = n->find("pixel_stride")) options.diffuse.pixelStride = readPixelStride(*st);
@@ -405,6 +406,8 @@ Options readOptions(const JsonNode& node) {
             options.diffuse.relightPixelStride = readPixelStride(*st);
         if (auto a = n->find("aperture_deg"))
             options.diffuse.apertureDeg = a->floatNumber({0.0, 180.0, false, true});
+        if (auto a = n->find("object_aperture_deg"))
+            options.diffuse.objectApertureDeg = a->floatNumber({0.0, 180.0, false, true});
     }
     if (auto n = node.find("specular")) {
         n->allowKeys({"min_aperture_deg", "max_aperture_deg", "relight_pixel_stride"});
@@ -461,6 +464,7 @@ json optionsToJson(const Options& o) {
         {"diffuse",
          {{"count", o.diffuse.count},
           {"aperture_deg", o.diffuse.apertureDeg},
+          {"object_aperture_deg", o.diffuse.objectApertureDeg},
           {"pixel_stride", strideJson(o.diffuse.pixelStride)},
           {"relight_pixel_stride", strideJson(o.diffuse.relightPixelStride)},
           {"object_rays", o.diffuse.objectRays}}},

@@ -28,7 +28,7 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
     if (!rays.scene || !rays.objects || rays.objectBounds.empty()) return out;
     const float offset = shadowRayOffset(*rays.scene);
     const glm::vec3 centre = rays.objectBounds.center();
-    const float radius = 0.5f * glm::length(rays.objectBounds.diagonal());
+    const float radius = rays.boundingRadius();
     const int count = squareSampleCount(options.diffuse.objectRays);
     const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
     constexpr float kPi = std::numbers::pi_v<float>;

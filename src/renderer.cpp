@@ -99,6 +99,8 @@ struct ConeJob {
     const AreaLights* emitters = nullptr;
     // The environment map lighting the points through shadow rays (options.shadow.method "rays"), or none.
     const EnvironmentSampler* environment = nullptr;
+    // Rendered objects: the sub-samples of their pixels, whose area the shadow rays sample; or none.
+    const PixelSamples* pixelSamples = nullptr;
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -130,6 +132,11 @@ struct ConeJob {
     bool objectBounceByRays(const Options& o) const {
         return relit() && indirect && fullLight && objectLight && rays.scene && rays.objects &&
                o.render.relightObjectLight == "rays";
+    }
+    // The virtual objects' diffuse cones have their own aperture; the others options.diffuse.aperture_deg.
+    std::optional<float> diffuseAperture(const Options& o) const {
+        if (mode == ShadowMode::Shaded) return o.diffuse.objectApertureDeg;
+        return std::nullopt;
     }
     int specularStride(const Options& o, const Camera& c) const {
         return pixelStrideFor(o.specular.relightPixelStride, kAutoRelightSpecularStride, c.width, c.height);
@@ -233,7 +240,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
             job.filter(o, ConeJob::Shadow), [&](std::span<const uint32_t> pixels) {
                 if (o.shadow.method == "rays")
-                    return traceShadowRays(job.points, directLights, job.rays, o, job.mode, pixels);
+                    return traceShadowRays(job.points, directLights, job.rays, o, job.mode, pixels,
+                                           job.pixelSamples, scene.camera.width);
                 return traceShadowCones(job.points, directLights, job.visibility, o,
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
@@ -266,7 +274,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
             job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
                 return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
-                                         job.objectLight, job.objectBounceByRays(o));
+                                         job.objectLight, job.objectBounceByRays(o), job.diffuseAperture(o));
             });
         if (job.objectBounceByRays(o))
             addInto(results[j].diffuse,
@@ -594,7 +602,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // from the kept real surfaces only there, where the objects cover them.
     const PixelRect& objectPixels = gbuffer.written;
     for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
-    const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals)};
+    const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals), objectSphereRadius(scene.virtuals)};
     // Emitting surfaces light the scene through shadow rays (with options.shadow.method "rays").
     const AreaLights emitters = o.shadow.method == "rays" ? AreaLights(scene, SceneContent::RealAndVirtual)
                                                           : AreaLights(Scene{}, SceneContent::RealOnly);
@@ -618,7 +626,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          nullptr,
          nullptr,
          &emitters,
-         environment},
+         environment,
+         &gbuffer.objectSamples},
         {realPoints,
          volumes.deltaLight,
          {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
@@ -638,8 +647,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     ConeResults& real = cones[1];
 
     // 7. Shading of virtual surfaces vs relighting of real ones (§3.3).
-    auto objectRadiance = combineLighting(gbuffer.object, direct, object.shadows, ShadowMode::Shaded,
-                                          object.diffuse, object.specular, &objectPixels, camera.width);
+    auto objectRadiance =
+        combineLighting(gbuffer.object, direct, object.shadows, ShadowMode::Shaded, object.diffuse,
+                        object.specular, &objectPixels, camera.width, &gbuffer.objectSamples);
     auto realChange =
         combineLighting(realPoints, direct, real.shadows, relightMode, real.diffuse, real.specular);
     addInto(objectRadiance, std::move(object.areaLight));

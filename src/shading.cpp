@@ -87,11 +87,13 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                          const VisibilityVolumes& visibility, const Options& options,
                                          std::span<const uint32_t> pixels, const MipVolume* fullLight,
-                                         const MipVolume* objectLight, bool objectLightByRays) {
+                                         const MipVolume* objectLight, bool objectLightByRays,
+                                         std::optional<float> apertureDeg) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     ConeTraceSettings settings = coneTraceSettings(options.trace);
     settings.objectLightByRays = objectLightByRays;
-    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const DiffuseConeSet cones =
+        makeDiffuseCones(options.diffuse.count, apertureDeg.value_or(options.diffuse.apertureDeg));
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
         if (p.material->albedo == glm::vec3(0.0f)) return;
@@ -145,11 +147,27 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
     return evalBrdf(*point.material, point.normal, point.toEye, s.wi, lightAngle) * s.irradiance * cosTheta;
 }
 
+namespace {
+
+// The direct light of `light` at `p`, or its mean over the valid points of `area` when there are any.
+glm::vec3 directRadianceOver(const SurfacePoint& p, std::span<const SurfacePoint> area, const Light& light) {
+    glm::vec3 sum(0.0f);
+    int n = 0;
+    for (const SurfacePoint& q : area) {
+        if (!q.valid()) continue;
+        sum += directRadiance(q, light);
+        ++n;
+    }
+    return n > 0 ? sum / static_cast<float>(n) : directRadiance(p, light);
+}
+
+}  // namespace
+
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
                                        std::span<const glm::vec3> diffuse,
                                        std::span<const glm::vec3> specular, const PixelRect* bounds,
-                                       int width) {
+                                       int width, const PixelSamples* samples) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     // A rendered surface shows what it emits; a relit one only changes, and its emission is in the photo.
     const bool emits = mode == ShadowMode::Shaded || mode == ShadowMode::SceneOnly;
@@ -157,10 +175,12 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
         const SurfacePoint& p = points[i];
         if (!p.valid()) return;
         glm::vec3 radiance = emits ? p.material->emission : glm::vec3(0.0f);
+        const std::span<const SurfacePoint> area =
+            samples && mode == ShadowMode::Shaded ? samples->of(i, width) : std::span<const SurfacePoint>{};
         for (size_t l = 0; l < lights.size(); ++l) {
             // Relit surfaces mostly do not change: skip the BRDF where the factor is zero.
             const float factor = shadowFactor(shadows[i * lights.size() + l], mode);
-            if (factor != 0.0f) radiance += directRadiance(p, lights[l]) * factor;
+            if (factor != 0.0f) radiance += directRadianceOver(p, area, lights[l]) * factor;
         }
         if (!diffuse.empty()) radiance += p.material->albedo * diffuse[i];
         if (!specular.empty()) radiance += p.material->specular * specular[i];

@@ -6,6 +6,7 @@
 // object's soft shadow only where the real scene does not shadow the surface already (§3.2).
 #pragma once
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -41,13 +42,16 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
 // Diffuse cones: cosine-weighted incoming radiance sum_k w_k L_k (so that albedo times it is the reflected
 // radiance). Zero for invalid points. With `fullLight`, `light` is the delta volume and the cones give the
 // change of the incoming light (traceLightChangeCone): options.render.relight_cones "differential"; with
-// `objectLightByRays` too, without the objects' own light (traceObjectBounceRays adds it).
+// `objectLightByRays` too, without the objects' own light (traceObjectBounceRays adds it). `apertureDeg`,
+// when given, replaces options.diffuse.aperture_deg (the virtual objects' cones take
+// options.diffuse.object_aperture_deg).
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                          const VisibilityVolumes& visibility, const Options& options,
                                          std::span<const uint32_t> pixels = {},
                                          const MipVolume* fullLight = nullptr,
                                          const MipVolume* objectLight = nullptr,
-                                         bool objectLightByRays = false);
+                                         bool objectLightByRays = false,
+                                         std::optional<float> apertureDeg = std::nullopt);
 
 // The specular cone along the mirrored view direction, aperture from the material's roughness. Zero for
 // invalid points and materials without a specular part. `fullLight` as for traceDiffuseCones.
@@ -76,10 +80,12 @@ float shadowFactor(const ShadowOcclusion& occlusion, ShadowMode mode);
 // plus specular colour * specular (either span may be empty: no indirect light), plus the material's emission
 // in the modes that render a surface (Shaded, SceneOnly), not in those that relight it.
 // With `bounds` (of a `width`-wide image), only the points inside it are valid: the others are skipped.
+// With `samples` (Shaded mode), a point's direct light before its shadow is the mean over its pixel's
+// sub-samples (the valid ones), not the light at the point alone.
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
                                        std::span<const glm::vec3> diffuse,
                                        std::span<const glm::vec3> specular, const PixelRect* bounds = nullptr,
-                                       int width = 0);
+                                       int width = 0, const PixelSamples* samples = nullptr);
 
 }  // namespace deltagi

@@ -1,5 +1,7 @@
 #include "shadow_rays.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -30,6 +32,11 @@ glm::vec2 concentricDisk(float u, float v) {
     }
     return r * glm::vec2(std::cos(phi), std::sin(phi));
 }
+
+// The largest k x k grid of G-buffer sub-samples (options.render.samples_per_pixel 16).
+constexpr int kMaxPixelSamples = 16;
+// The random stream that rotates which sub-sample each of a pixel's rays starts from (one per light).
+constexpr uint32_t kPixelSampleStream = 5500;
 
 }  // namespace
 
@@ -89,6 +96,21 @@ bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::v
     return angle <= halfAngle + std::asin(sphereRadius / distance);
 }
 
+float objectSphereRadius(std::span<const TriangleMesh> meshes) {
+    Bounds3f bounds;
+    for (const TriangleMesh& m : meshes) bounds.extend(m.bounds());
+    if (bounds.empty()) return 0.0f;
+    const glm::vec3 centre = bounds.center();
+    float radius2 = 0.0f;
+    for (const TriangleMesh& m : meshes)
+        for (const glm::vec3& v : m.positions) {
+            const glm::vec3 d = v - centre;
+            radius2 = std::max(radius2, glm::dot(d, d));
+        }
+    // A hair wider, so that rounding does not leave a vertex outside.
+    return std::sqrt(radius2) * (1.0f + 1e-5f);
+}
+
 float shadowRayOffset(const RayScene& scene) {
     const Bounds3f bounds = scene.bounds();
     return kRayOffsetScale * std::max(bounds.empty() ? 1.0f : bounds.maxExtent(), 1e-3f);
@@ -105,10 +127,55 @@ int shadowRayCount(const Light& light, int raySamples) {
     return sized ? squareSampleCount(raySamples) : 1;
 }
 
+namespace {
+
+// The occlusion of `light` over a pixel's area, `points` its valid sub-samples (ShadowMode::Shaded): the
+// light's jittered grid of samples, at least one per sub-sample, each ray from the next sub-sample in turn
+// (starting at `rotation`, and shifted by the grid's row so that no sub-sample sees one column of the light
+// only); each ray counts by its cosine at its sub-sample, and rays below a sub-sample's horizon not at all.
+ShadowOcclusion pixelAreaOcclusion(std::span<const SurfacePoint* const> points, const Light& light,
+                                   const ShadowRayScenes& rays, const Options& options, float offset,
+                                   float jitterU, float jitterV, float rotation) {
+    ShadowOcclusion o;
+    // Out of a spot's cone (or of any light's reach) at every sub-sample: nothing to shadow.
+    if (std::none_of(points.begin(), points.end(), [&](const SurfacePoint* q) {
+            return sampleLight(light, q->position).irradiance != glm::vec3(0.0f);
+        }))
+        return o;
+    const int n = static_cast<int>(points.size());
+    const int lightCount = shadowRayCount(light, options.shadow.raySamples);
+    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(lightCount))));
+    const int count = std::max(lightCount, n);
+    const int first = std::min(static_cast<int>(rotation * static_cast<float>(n)), n - 1);
+    const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
+    float total = 0.0f, byObjects = 0.0f, byScene = 0.0f, byEither = 0.0f;
+    for (int k = 0; k < count; ++k) {
+        const int stratum = k % lightCount;
+        const SurfacePoint& q = *points[(first + k + stratum / side) % n];
+        const auto [u, v] = jitteredGridPoint(stratum, side, jitterU, jitterV);
+        const ShadowRaySample s = sampleShadowRay(light, q.position, u, v);
+        const float weight = glm::dot(s.wi, q.normal);
+        const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
+        if (!(weight > 0.0f) || !(tMax > 0.0f)) continue;
+        const glm::vec3 origin = q.position + offset * q.normal;
+        const bool object = objects && objects->occludedTopLayer(origin, s.wi, 0.0f, tMax);
+        const bool scene = rays.scene->occluded(origin, s.wi, 0.0f, tMax);
+        total += weight;
+        byObjects += object ? weight : 0.0f;
+        byScene += scene ? weight : 0.0f;
+        byEither += object || scene ? weight : 0.0f;
+    }
+    if (total > 0.0f) o = {byScene / total, byObjects / total, byEither / total};
+    return o;
+}
+
+}  // namespace
+
 std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> points,
                                              std::span<const Light> lights, const ShadowRayScenes& rays,
                                              const Options& options, ShadowMode mode,
-                                             std::span<const uint32_t> pixels) {
+                                             std::span<const uint32_t> pixels, const PixelSamples* samples,
+                                             int width) {
     std::vector<ShadowOcclusion> out(points.size() * lights.size());
     if (lights.empty() || !rays.scene) return out;
     const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
@@ -116,13 +183,27 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
     const bool sceneOnly = mode == ShadowMode::SceneOnly;
     const float offset = shadowRayOffset(*rays.scene);
     const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
-    const float objectRadius = objects ? 0.5f * glm::length(rays.objectBounds.diagonal()) : 0.0f;
+    const float objectRadius = objects ? rays.boundingRadius() : 0.0f;
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
         const glm::vec3 origin = p.position + offset * p.normal;
+        const std::span<const SurfacePoint> area =
+            samples && mode == ShadowMode::Shaded ? samples->of(i, width) : std::span<const SurfacePoint>{};
+        std::array<const SurfacePoint*, kMaxPixelSamples> valid{};
+        int validCount = 0;
+        for (const SurfacePoint& q : area)
+            if (q.valid() && validCount < kMaxPixelSamples) valid[validCount++] = &q;
         for (size_t l = 0; l < lights.size(); ++l) {
             const Light& light = lights[l];
+            if (validCount > 0) {
+                out[i * lights.size() + l] =
+                    pixelAreaOcclusion(std::span(valid.data(), validCount), light, rays, options, offset,
+                                       hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l)),
+                                       hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l) + 1),
+                                       hashToUnit(i, kPixelSampleStream + static_cast<uint32_t>(l)));
+                continue;
+            }
             const LightSample centre = sampleLight(light, p.position);
             if (glm::dot(centre.wi, p.normal) <= 0.0f || centre.irradiance == glm::vec3(0.0f)) continue;
             // Relit points whose rays cannot reach the objects do not change: no rays at all.

@@ -23,7 +23,17 @@ struct ShadowRayScenes {
     const RayScene* scene = nullptr;    // the real scene alone
     const RayScene* objects = nullptr;  // the virtual objects (only this layer of it is tested); may be null
     Bounds3f objectBounds;              // of the virtual objects: rays that cannot reach it skip `objects`
+    // The radius of a sphere about objectBounds' centre that holds the objects (objectSphereRadius); 0: half
+    // the box's diagonal. Rays aimed at the objects aim into it.
+    float objectRadius = 0.0f;
+    float boundingRadius() const {
+        return objectRadius > 0.0f ? objectRadius : 0.5f * glm::length(objectBounds.diagonal());
+    }
 };
+
+// The radius of the smallest sphere about the centre of the meshes' bounding box that holds all their
+// vertices: tighter than half the box's diagonal (a ball's is sqrt(3) times smaller).
+float objectSphereRadius(std::span<const TriangleMesh> meshes);
 
 // One point on a light for shadow sample (u, v) in [0,1)^2 seen from `p`: the direction towards it and how
 // far it is. A sphere light (radius > 0) is sampled uniformly over its disk facing `p` (as the path tracer
@@ -68,9 +78,14 @@ int shadowRayCount(const Light& light, int raySamples);
 // point whose rays cannot meet the objects, or meet none, gets zeros: its change is zero either way.
 // Samples lie on a jittered grid offset per pixel (seeded by the point's index: the same with any number of
 // threads). Traces the points listed in `pixels` (indices into `points`), or all of them when it is empty.
+// With `samples` (ShadowMode::Shaded; `points` are the pixels of an image `width` wide), a pixel's rays start
+// from its sub-samples in turn (at least one ray each) and each ray counts by its cosine there: the fractions
+// are those of the light over the pixel's area, which combineLighting multiplies with the mean of the
+// sub-samples' unshadowed light.
 std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> points,
                                              std::span<const Light> lights, const ShadowRayScenes& rays,
                                              const Options& options, ShadowMode mode,
-                                             std::span<const uint32_t> pixels = {});
+                                             std::span<const uint32_t> pixels = {},
+                                             const PixelSamples* samples = nullptr, int width = 0);
 
 }  // namespace deltagi

@@ -1,6 +1,7 @@
 // End-to-end properties of the Delta Global Illumination pipeline on small scenes built in code.
 #include "deltagi/renderer.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <gtest/gtest.h>
@@ -210,6 +211,35 @@ TEST(Render, ABrightObjectNextToAWhiteWallBleedsItsColourOntoIt) {
     EXPECT_GT(d.x, 0.0f);
     EXPECT_GT(d.x, d.y + 0.002f);
     EXPECT_GT(d.x, d.z + 0.002f);
+}
+
+// The virtual objects' diffuse cones have an aperture of their own (options.diffuse.object_aperture_deg):
+// it changes the objects' light and nothing of the real surfaces' change, which options.diffuse.aperture_deg
+// does.
+TEST(Render, TheObjectsConesHaveTheirOwnAperture) {
+    Scene s = test::floorScene();
+    s.virtuals.push_back(placed(makeBox(glm::vec3(0.4f)), {0.0f, 0.2f, 0.0f}, diffuse(glm::vec3(0.8f)), "box"));
+    s.background = Image(64, 48, 3, 0.3f);
+    auto differs = [](const Image& a, const Image& b) {
+        const auto x = a.data(), y = b.data();
+        return !std::equal(x.begin(), x.end(), y.begin(), y.end());
+    };
+    // The real surfaces' change: the delta where no object covers the pixel.
+    auto realChange = [](const RenderOutput& out) {
+        Image change = out.delta;
+        for (int y = 0; y < change.height(); ++y)
+            for (int x = 0; x < change.width(); ++x)
+                if (out.objectMask.at(x, y, 0) > 0.0f) change.setRgb(x, y, glm::vec3(0.0f));
+        return change;
+    };
+    s.options.diffuse.objectApertureDeg = 20.0f;
+    const RenderOutput narrow = render(s);
+    s.options.diffuse.objectApertureDeg = 70.0f;
+    const RenderOutput wide = render(s);
+    EXPECT_TRUE(differs(narrow.composite, wide.composite));
+    EXPECT_FALSE(differs(realChange(narrow), realChange(wide)));
+    s.options.diffuse.apertureDeg = 20.0f;
+    EXPECT_TRUE(differs(realChange(render(s)), realChange(wide)));
 }
 
 // The light an object blocks between two real surfaces: a red wall lights the floor in front of it; a

@@ -539,7 +539,7 @@ TEST_F(SceneIoTest, PixelStridesAreAutoOrPowersOfTwo) {
     EXPECT_EQ(pixelStrideFor(0, kAutoRelightDiffuseStride, 640, 480), 16);
     EXPECT_EQ(pixelStrideFor(0, kAutoShadowStride, 640, 480), 1);
     EXPECT_EQ(pixelStrideFor(0, kAutoRelightShadowStride, 640, 480), 2);
-    EXPECT_EQ(pixelStrideFor(0, kAutoRelightAreaLightStride, 640, 480), 4);
+    EXPECT_EQ(pixelStrideFor(0, kAutoRelightAreaLightStride, 640, 480), 2);
     EXPECT_EQ(pixelStrideFor(0, kAutoRelightDiffuseStride, 1920, 1080), 32);  // 16 * 1080/480 = 36 -> 32
     EXPECT_EQ(pixelStrideFor(0, kAutoDiffuseStride, 320, 240), 4);
     EXPECT_EQ(pixelStrideFor(0, kAutoShadowStride, 64, 48), 1);

@@ -119,6 +119,46 @@ TEST(ShadowRays, RelightingCountsOnlySamplesTheSceneLeavesOpen) {
     EXPECT_EQ(shaded[2].combined, 0.0f);
 }
 
+// A pixel's shadow is the light's over the pixel's area: with the pixel's sub-samples (PixelSamples), two of
+// them under the plate's edge and two in the open give half the light blocked, whichever the centre is
+// (the centre alone gave 0 or 1). A sub-sample facing away from the light takes no part.
+TEST(ShadowRays, APixelsSubSamplesShareItsShadow) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(placed(makeQuad({2.0f, 2.0f}), {-1.0f, 0.5f, 0}, diffuse(glm::vec3(0.5f)), "plate"));
+    scene.lights.push_back(test::pointLight({0.0f, 1.0f, 0.0f}, 1.0f));  // no size: one ray per sample
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    const Material& m = scene.real[0].material;
+    Options options;
+    PixelSamples samples;
+    samples.perPixel = 4;
+    samples.rect = {0, 0, 1, 1};
+    samples.points = {floorPoint({-0.01f, 0, 0}, m), floorPoint({0.01f, 0, 0}, m),
+                      floorPoint({-0.01f, 0, 0.01f}, m), floorPoint({0.01f, 0, 0.01f}, m)};
+    for (const glm::vec3 centre : {glm::vec3(-0.005f, 0, 0.005f), glm::vec3(0.005f, 0, 0.005f)}) {
+        const std::vector<SurfacePoint> points = {floorPoint(centre, m)};
+        const auto alone = traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options,
+                                           ShadowMode::Shaded);
+        EXPECT_EQ(alone[0].combined, centre.x < 0.0f ? 1.0f : 0.0f);
+        const auto area = traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options,
+                                          ShadowMode::Shaded, {}, &samples, 1);
+        EXPECT_FLOAT_EQ(area[0].combined, 0.5f) << "centre x = " << centre.x;
+        EXPECT_FLOAT_EQ(area[0].scene, 0.5f);
+    }
+    // The two open sub-samples turned away from the light: only the shadowed ones count.
+    samples.points[1].normal = samples.points[3].normal = glm::vec3(0, -1, 0);
+    const std::vector<SurfacePoint> points = {floorPoint({0.005f, 0, 0.005f}, m)};
+    const auto area = traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options,
+                                      ShadowMode::Shaded, {}, &samples, 1);
+    EXPECT_FLOAT_EQ(area[0].combined, 1.0f);
+    // And the light before the shadow is their mean: half of the facing points' (combineLighting).
+    const std::vector<ShadowOcclusion> open(1);
+    const auto shadedAlone = combineLighting(points, scene.lights, open, ShadowMode::Shaded, {}, {});
+    const auto shadedArea =
+        combineLighting(points, scene.lights, open, ShadowMode::Shaded, {}, {}, nullptr, 1, &samples);
+    EXPECT_NEAR(shadedArea[0].x, 0.5f * shadedAlone[0].x, 1e-3f * shadedAlone[0].x);
+}
+
 // Sample points on a sphere light lie on its disk facing the point; a light without a size is one ray.
 TEST(ShadowRays, SamplesLieOnTheLightsDiskFacingThePoint) {
     Light light = test::pointLight({0.0f, 2.0f, 0.0f}, 1.0f);

@@ -38,6 +38,13 @@ struct DiffuseConeOptions {
     // "aperture_deg": full apex angle of each cone in degrees; 0 derives it from the count so that the cones'
     // solid angles add up to the hemisphere (half-angle = acos(1 - 1/count)).
     float apertureDeg = 0.0f;
+    // "object_aperture_deg": the same for the virtual objects' own diffuse cones (0: derived from the count).
+    // Narrower than the 9 cones' 54 degrees that tile the hemisphere: a wide cone reads coarse voxels a few
+    // steps from the surface and blurs the objects' self-occlusion and the colours of the walls they see. On
+    // the quality suite, 54 -> 35 degrees: object_rel_rmse 0.258 -> 0.241 (Happy Buddha), 0.103 -> 0.085
+    // (ball and ring), 0.106 -> 0.080 (field photo), the others within 0.001; narrower for the real surfaces'
+    // relit cones too made the glossy box's delta worse (0.232 -> 0.241), so they keep aperture_deg.
+    float objectApertureDeg = 35.0f;
     // "pixel_stride": the diffuse cones of rendered surfaces (the virtual objects, the real scene rendered
     // without a photo) are traced at every pixel_stride-th pixel of every pixel_stride-th row (1, 2, 4, 8, 16
     // or 32); the edge-aware filter fills the pixels between from traced neighbours on the same surface, and
@@ -91,14 +98,12 @@ struct ShadowConeOptions {
     // "aperture_deg": full apex angle in degrees of the shadow cone of a light without a "radius".
     // A light with a radius r at distance d uses 2*atan(r/d) instead.
     float apertureDeg = 4.0f;
-    // "pixel_stride": shadow cones of rendered surfaces at every pixel_stride-th pixel of every
-    // pixel_stride-th row, interpolated like options.diffuse.pixel_stride ("auto", 0 here, the default). At
-    // 128^3 a voxel covers several pixels of a 640x480 view, and shadow detail is voxel-sized: 2 traces a
-    // quarter of the cones for the same shadows.
+    // "pixel_stride": shadows (rays or cones) of rendered surfaces at every pixel_stride-th pixel of every
+    // pixel_stride-th row, interpolated like options.diffuse.pixel_stride ("auto", 0 here, the default:
+    // kAutoShadowStride, kAutoAreaLightStride at 640x480; docs/scene-format.md has the figures).
     int pixelStride = 0;
-    // "relight_pixel_stride": the same for the shadows the objects cast on real surfaces, which are softer
-    // than the objects' own detail: 4 against 2 at 640x480 gives delta_rel_error 0.703 vs 0.710 (Cornell box
-    // + Happy Buddha), while 4 for the objects themselves costs 8% of object_rel_rmse.
+    // "relight_pixel_stride": the same for the shadows the objects cast on real surfaces ("auto":
+    // kAutoRelightShadowStride, kAutoRelightAreaLightStride at 640x480).
     int relightPixelStride = 0;
 };
 
@@ -130,7 +135,8 @@ struct TraceOptions {
 // options.render: the camera pass.
 struct RenderOptions {
     // "samples_per_pixel": sub-pixel samples for the G-buffer; the object mask is their coverage, which
-    // anti-aliases the silhouette. 1, 4, 9 or 16 (a square grid).
+    // anti-aliases the silhouette, and the objects' direct light is shaded over them (GBuffer::objectSamples).
+    // 1, 4, 9 or 16 (a square grid).
     int samplesPerPixel = 4;
     // "indirect": trace the diffuse and specular cones (false: direct light and shadow cones only).
     bool indirect = true;
@@ -187,10 +193,12 @@ struct EnvironmentOptions {
 // The "auto" pixel strides: these at a 640x480 image, scaled with its smaller side (so that an image samples
 // its surfaces alike at any size) and rounded down to a power of two, at least 1.
 inline constexpr int kAutoDiffuseStride = 8, kAutoRelightDiffuseStride = 16;
-// Shadows of point, spot and directional lights; the area lights' and the environment's direct light by rays
+// Shadows of point, spot and directional lights; the area lights' direct light by rays on rendered surfaces
 // (noisier: many directions, few rays each) at twice their stride, so that the filter averages more samples.
+// Relit, the environment's rays sample the objects' cone of directions too (traceEnvironmentRays), and the
+// contact shadow under an object is sharper than the filter's reach at 4: 2 like the shadows.
 inline constexpr int kAutoShadowStride = 1, kAutoRelightShadowStride = 2;
-inline constexpr int kAutoAreaLightStride = 2, kAutoRelightAreaLightStride = 4;
+inline constexpr int kAutoAreaLightStride = 2, kAutoRelightAreaLightStride = 2;
 inline constexpr int kAutoRelightSpecularStride = 4;
 // The stride an option (0: "auto", with `autoStride` at 640x480) gives for a width x height image.
 inline int pixelStrideFor(int option, int autoStride, int width, int height) {
