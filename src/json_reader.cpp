@@ -394,7 +394,16 @@ Options readOptions(const JsonNode& node) {
     if (auto n = node.find("volume")) readVolume(*n, options.volume);
     if (auto n = node.find("rsm")) {
         n->allowKeys({"resolution"});
-        if (auto r = n->find("resolution")) options.rsm.resolution = r->integer(16, 8192);
+        if (auto r = n->find("resolution")) {
+            if (r->value().is_string()) {
+                if (r->string() != "auto")
+                    r->fail(fmt::format("expected \"auto\" or an integer in [16, 8192], got {}",
+                                        describeValue(r->value())));
+                options.rsm.resolution = 0;
+            } else {
+                options.rsm.resolution = r->integer(16, 8192);
+            }
+        }
     }
     if (auto n = node.find("diffuse")) {
         n->allowKeys({"count", "aperture_deg", "object_aperture_deg", "pixel_stride", "relight_pixel_stride",
@@ -460,7 +469,7 @@ json optionsToJson(const Options& o) {
     if (o.volume.size) volume["size"] = *o.volume.size;
     return {
         {"volume", volume},
-        {"rsm", {{"resolution", o.rsm.resolution}}},
+        {"rsm", {{"resolution", o.rsm.resolution > 0 ? json(o.rsm.resolution) : json("auto")}}},
         {"diffuse",
          {{"count", o.diffuse.count},
           {"aperture_deg", o.diffuse.apertureDeg},
@@ -524,23 +533,31 @@ struct MemoryParts {
     double total() const { return volumes + rsms + gbuffer; }
 };
 
-MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lightCount) {
-    double r = options.volume.resolution, rsm = options.rsm.resolution;
+MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lightCount,
+                        size_t directionalCount) {
+    const double r = options.volume.resolution;
+    // Each light's largest map: the importance of "auto" only makes some smaller.
+    auto texels = [&](bool directional) {
+        const double side = rsmResolutionCeiling(options.rsm.resolution, options.volume.resolution, directional);
+        return side * side * kRsmFaces * kRsmMapsPerLight;
+    };
     return {kVolumeCount * kBytesPerVoxel * r * r * r * kMipChainFactor,
-            rsm * rsm * kRsmFaces * kRsmMapsPerLight * kBytesPerRsmTexel * static_cast<double>(lightCount),
+            kBytesPerRsmTexel * (texels(false) * static_cast<double>(lightCount) +
+                                 texels(true) * static_cast<double>(directionalCount)),
             static_cast<double>(camera.width) * camera.height * options.render.samplesPerPixel *
                 kBytesPerGBufferSample};
 }
 
 }  // namespace
 
-uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount) {
-    return static_cast<uint64_t>(memoryParts(options, camera, lightCount).total());
+uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
+                              size_t directionalCount) {
+    return static_cast<uint64_t>(memoryParts(options, camera, lightCount, directionalCount).total());
 }
 
 void checkRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
-                       uint64_t physicalMemoryBytes, const std::string& file) {
-    MemoryParts parts = memoryParts(options, camera, lightCount);
+                       uint64_t physicalMemoryBytes, const std::string& file, size_t directionalCount) {
+    MemoryParts parts = memoryParts(options, camera, lightCount, directionalCount);
     if (parts.total() <= static_cast<double>(physicalMemoryBytes)) return;
     // Name what dominates: the G-buffer grows with the camera's resolution (and
     // options.render.samples_per_pixel).

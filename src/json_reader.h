@@ -104,12 +104,16 @@ std::filesystem::path inputFile(const JsonNode& node, const std::filesystem::pat
 // Reads the "options" object into Options, checking every range; unknown keys are errors.
 Options readOptions(const JsonNode& node);
 
-// Estimated memory of a render: the four volumes with their mip chains, one cube RSM per light and the
-// G-buffer. checkRenderMemory fails, naming `file` and the options key that dominates (volume or RSM
-// resolution), when the estimate exceeds `physicalMemoryBytes` (a parameter so that tests can lower it).
-uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount);
+// Estimated memory of a render: the four volumes with their mip chains, two cube RSMs per light (the scene's
+// and the update with the objects) at the largest resolution options.rsm.resolution gives it
+// (rsmResolutionCeiling: `lightCount` point and spot lights, `directionalCount` directional ones, the
+// environment's included) and the G-buffer. checkRenderMemory fails, naming `file` and the options key that
+// dominates (volume or RSM resolution, or the camera), when the estimate exceeds `physicalMemoryBytes` (a
+// parameter so that tests can lower it).
+uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
+                              size_t directionalCount = 0);
 void checkRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
-                       uint64_t physicalMemoryBytes, const std::string& file);
+                       uint64_t physicalMemoryBytes, const std::string& file, size_t directionalCount = 0);
 // sysconf(_SC_PHYS_PAGES) * sysconf(_SC_PAGE_SIZE).
 uint64_t physicalMemoryBytes();
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <optional>
 
 #include "lights.h"
@@ -305,6 +306,38 @@ ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, c
                                               const Light& light, const VolumeRegion& region,
                                               const Bounds3f& changed) {
     return applyRsmUpdate(base, traceRsmUpdate(base, scene, light, region, changed));
+}
+
+std::vector<int> rsmResolutions(const Options& options, std::span<const Light> lights,
+                                const VolumeRegion& region) {
+    std::vector<int> out(lights.size());
+    for (size_t l = 0; l < lights.size(); ++l)
+        out[l] = rsmResolutionCeiling(options.rsm.resolution, options.volume.resolution,
+                                      lights[l].type == Light::Type::Directional);
+    if (options.rsm.resolution > 0 || lights.size() < 2) return out;
+    // A light's largest irradiance (luminance) over the region's centre and corners, on a surface facing it.
+    std::vector<float> irradiance(lights.size(), 0.0f);
+    float brightest = 0.0f;
+    for (size_t l = 0; l < lights.size(); ++l) {
+        for (int c = 0; c < 9; ++c) {
+            const glm::vec3 corner(c & 1 ? 1.0f : 0.0f, c & 2 ? 1.0f : 0.0f, c & 4 ? 1.0f : 0.0f);
+            const glm::vec3 p = region.origin + region.size * (c == 8 ? glm::vec3(0.5f) : corner);
+            const glm::vec3 e = sampleLight(lights[l], p).irradiance;
+            irradiance[l] = std::max(irradiance[l], 0.2126f * e.x + 0.7152f * e.y + 0.0722f * e.z);
+        }
+        brightest = std::max(brightest, irradiance[l]);
+    }
+    if (!(brightest > 0.0f) || !std::isfinite(brightest)) return out;
+    for (size_t l = 0; l < lights.size(); ++l) {
+        const int ceiling = out[l];
+        const float wanted = static_cast<float>(ceiling) * std::sqrt(irradiance[l] / brightest);
+        // The nearest power of two times the floor (in octaves), between the floor and the ceiling.
+        int resolution = std::max(ceiling / kAutoRsmMinShare, 1);
+        while (resolution * 2 <= ceiling && static_cast<float>(resolution) * std::numbers::sqrt2_v<float> <= wanted)
+            resolution *= 2;
+        out[l] = resolution;
+    }
+    return out;
 }
 
 }  // namespace deltagi

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <optional>
+#include <span>
 #include <vector>
 
 #include "deltagi/renderer.h"
@@ -27,6 +28,13 @@ struct ReflectiveShadowMap {
     float rayStart = 0.0f;         // directional lights: how far behind the region's centre the rays start
     std::vector<RsmTexel> texels;  // the texels that hit a surface inside the region, in texel order
 };
+
+// The face resolution of each light's map (options.rsm.resolution): the given one for all, or "auto": the
+// ceiling (rsmResolutionCeiling) for the light that brings the most light into `region`, and for each other
+// light the ceiling times sqrt(E / E_max), rounded down to a power of two and at least the ceiling /
+// kAutoRsmMinShare, where E is a light's largest irradiance at the region's centre and corners (facing it).
+std::vector<int> rsmResolutions(const Options& options, std::span<const Light> lights,
+                                const VolumeRegion& region);
 
 // With a `viewpoint` (the camera), a texel on a real surface is kept only where the surface's lit side faces
 // the viewpoint: a voxel stores one radiance for both sides of its surfaces, and the side the camera sees is

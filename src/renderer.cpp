@@ -69,11 +69,14 @@ Image toImage(std::span<const glm::vec3> pixels, int width, int height) {
     return image;
 }
 
+// One map per light, each at its resolution (rsmResolutions).
 std::vector<ReflectiveShadowMap> renderRsms(const RayScene& rays, std::span<const Light> lights,
-                                            const VolumeRegion& region, int resolution, glm::vec3 viewpoint) {
+                                            const VolumeRegion& region, const Options& options,
+                                            glm::vec3 viewpoint) {
+    const std::vector<int> resolutions = rsmResolutions(options, lights, region);
     std::vector<ReflectiveShadowMap> rsms;
-    for (const Light& light : lights)
-        rsms.push_back(renderReflectiveShadowMap(rays, light, region, resolution, viewpoint));
+    for (size_t l = 0; l < lights.size(); ++l)
+        rsms.push_back(renderReflectiveShadowMap(rays, lights[l], region, resolutions[l], viewpoint));
     return rsms;
 }
 
@@ -429,7 +432,6 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
                         const RayScene& realOnly, const RayScene& all, StaticWork& kept, StageTimer& timer) {
     // With area lights by rays, emitting surfaces light the volumes through their stand-ins' RSMs instead.
     const bool withEmission = scene.options.shadow.method != "rays";
-    const int rsmResolution = scene.options.rsm.resolution;
     ObjectVolumes& objects = kept.objectVolumes ? *kept.objectVolumes : kept.objectVolumes.emplace();
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
     const int bounces = scene.options.render.lightBounces - 1;
@@ -439,7 +441,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
     if (!kept.sceneRsms)
-        kept.sceneRsms = renderRsms(realOnly, lights, region, rsmResolution, scene.camera.position());
+        kept.sceneRsms = renderRsms(realOnly, lights, region, scene.options, scene.camera.position());
     std::vector<RsmUpdate> updates;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
     for (size_t l = 0; l < lights.size(); ++l)
@@ -490,7 +492,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const int bounces = o.render.lightBounces - 1;
     VoxelGeometry geometry = voxelize(scene.real, region, !areaRays, bounces > 0);
     const std::vector<ReflectiveShadowMap> rsms =
-        renderRsms(realOnly, rsmLights(scene, realOnly), region, o.rsm.resolution, scene.camera.position());
+        renderRsms(realOnly, rsmLights(scene, realOnly), region, o, scene.camera.position());
     const AreaLights emitters(scene, SceneContent::RealOnly);
     std::optional<EnvironmentSampler> environment;
     if (environmentByRays(scene)) environment.emplace(*scene.environment);

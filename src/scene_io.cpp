@@ -542,8 +542,10 @@ Scene loadScene(const json& document, const fs::path& file) {
         for (size_t i = 0; i < n->size(); ++i) scene.lights.push_back(readLight(n->element(i)));
     }
     const size_t environmentLights = root.has("environment") ? scene.options.environment.lightCount : 0;
-    checkRenderMemory(scene.options, scene.camera, scene.lights.size() + environmentLights,
-                      physicalMemoryBytes(), file.string());
+    const size_t directional = static_cast<size_t>(std::count_if(
+        scene.lights.begin(), scene.lights.end(), [](const Light& l) { return l.type == Light::Type::Directional; }));
+    checkRenderMemory(scene.options, scene.camera, scene.lights.size() - directional, physicalMemoryBytes(),
+                      file.string(), directional + environmentLights);
     if (!holdsEntries(root, "scene") && !holdsEntries(root, "virtual"))
         root.fail("no meshes: at least one of \"scene\" (the real scene) and \"virtual\" must hold a mesh");
 

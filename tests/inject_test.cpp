@@ -1,5 +1,6 @@
 // Reflective shadow maps and light injection against closed-form irradiance.
 #include "inject.h"
+#include "reflective_shadow_map.h"
 #include "mipmap.h"
 #include "shading.h"
 #include "shapes.h"
@@ -84,6 +85,47 @@ TEST(Inject, TwoLightsAddTheirRadiance) {
     const VoxelGeometry* geometry[] = {&g};
     const Grid3 light = injectLight(rsms, kRegion, geometry);
     const float expected = 0.5f * (2.0f + 1.0f * 0.8f) / std::numbers::pi_v<float>;
+    for (int z = 1; z < 15; ++z)
+        for (int x = 1; x < 15; ++x)
+            EXPECT_NEAR(light.at(x, 8, z).x, expected, 0.03f * expected) << x << "," << z;
+}
+
+// options.rsm.resolution "auto": a point light's map has 4 texels per voxel (128 at 32^3, 512 at 128^3 and
+// above), a directional light's 512 (its orthographic map spreads over the whole region); among several
+// lights each takes the square root of its share of the brightest one's irradiance (1/4 and 1/16 of it: a
+// half and a quarter of the side), at least a quarter. A given resolution is every light's.
+TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
+    Options options;
+    options.volume.resolution = 32;
+    const Light bright = test::pointLight({0.0f, 0.9f, 0.0f}, 1.0f);
+    Light quarter = bright, sixteenth = bright, dim = bright;
+    quarter.intensity = 0.25f;
+    sixteenth.intensity = 1.0f / 16.0f;
+    dim.intensity = 1e-4f;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, quarter, sixteenth, dim}, kRegion),
+              (std::vector<int>{128, 64, 32, 32}));
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion), std::vector<int>{512});
+    options.volume.resolution = 256;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright}, kRegion), std::vector<int>{512});
+    options.rsm.resolution = 200;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, dim}, kRegion), (std::vector<int>{200, 200}));
+}
+
+// Lights whose maps differ in resolution still add their radiance: each light's texels are turned into
+// radiance with their own footprints.
+TEST(Inject, LightsWithMapsOfDifferentResolutionsAddTheirRadiance) {
+    Scene s = floorOnly(0.5f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const std::vector<Light> lights = {directionalDown(2.0f), directionalDown(2.0f / 16.0f)};
+    const std::vector<int> resolutions = rsmResolutions(Options{}, lights, kRegion);
+    ASSERT_EQ(resolutions, (std::vector<int>{512, 128}));
+    const std::vector<ReflectiveShadowMap> rsms = {
+        renderReflectiveShadowMap(rays, lights[0], kRegion, resolutions[0]),
+        renderReflectiveShadowMap(rays, lights[1], kRegion, resolutions[1])};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    const Grid3 light = injectLight(rsms, kRegion, geometry);
+    const float expected = 0.5f * (2.0f + 2.0f / 16.0f) / std::numbers::pi_v<float>;
     for (int z = 1; z < 15; ++z)
         for (int x = 1; x < 15; ++x)
             EXPECT_NEAR(light.at(x, 8, z).x, expected, 0.03f * expected) << x << "," << z;

@@ -519,6 +519,20 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
 
 // Pixel strides: "auto" (the default, 0) scales the 640x480 strides with the image; explicit ones are powers
 // of two up to 32 and are used as given.
+TEST_F(SceneIoTest, RsmResolutionIsAutoOrAnInteger) {
+    json doc = baseScene();
+    EXPECT_EQ(load(doc).options.rsm.resolution, 0);
+    EXPECT_EQ(optionsToJson(Options{})["rsm"]["resolution"], "auto");
+    doc["options"] = json::parse(R"({"rsm": {"resolution": 300}})");
+    EXPECT_EQ(load(doc).options.rsm.resolution, 300);
+    doc["options"] = json::parse(R"({"rsm": {"resolution": "auto"}})");
+    EXPECT_EQ(load(doc).options.rsm.resolution, 0);
+    for (const char* bad : {"8", "9000", "\"fine\"", "true"}) {
+        doc["options"] = json::parse(std::string(R"({"rsm": {"resolution": )") + bad + "}}");
+        expectContains(loadError(doc), {"scene.json: options.rsm.resolution"});
+    }
+}
+
 TEST_F(SceneIoTest, PixelStridesAreAutoOrPowersOfTwo) {
     json doc = baseScene();
     doc["options"] = json::parse(R"({"diffuse": {"pixel_stride": 2, "relight_pixel_stride": "auto"},
