@@ -3,6 +3,7 @@
 #include "deltagi/atomic_file.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -81,6 +82,36 @@ fs::path nearestExistingFolder(const fs::path& path, const fs::path& shown) {
     }
 }
 
+// Removes the temporary files `.NAME.tmp-<pid>-<n>EXT` of `destination` left beside it by processes that no
+// longer run (killed with SIGKILL, or by a power cut, before they could clean up): only this exact pattern,
+// and only where kill(pid, 0) says there is no such process on this machine. Errors are ignored: a leftover
+// that stays is harmless.
+void removeLeftoverTemporaries(const fs::path& destination) {
+    const std::string prefix = "." + destination.filename().string() + ".tmp-";
+    const std::string extension = destination.extension().string();
+    const fs::path folder = destination.parent_path().empty() ? fs::path(".") : destination.parent_path();
+    std::error_code error;
+    for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
+        const std::string name = it->path().filename().string();
+        if (name.size() <= prefix.size() + extension.size() || name.compare(0, prefix.size(), prefix) != 0 ||
+            name.compare(name.size() - extension.size(), extension.size(), extension) != 0)
+            continue;
+        // <pid>-<n> between the prefix and the extension, digits only.
+        const std::string middle = name.substr(prefix.size(), name.size() - prefix.size() - extension.size());
+        const size_t dash = middle.find('-');
+        if (dash == 0 || dash == std::string::npos || dash + 1 == middle.size() ||
+            middle.find_first_not_of("0123456789-") != std::string::npos || middle.find('-', dash + 1) != std::string::npos)
+            continue;
+        const std::string pidText = middle.substr(0, dash);
+        if (pidText.size() > 9) continue;
+        const pid_t pid = static_cast<pid_t>(std::stol(pidText));
+        if (pid <= 0 || pid == getpid()) continue;
+        if (::kill(pid, 0) == 0 || errno != ESRCH) continue;  // alive, or not ours to know
+        std::error_code ignored;
+        if (fs::is_regular_file(it->symlink_status(ignored))) fs::remove(it->path(), ignored);
+    }
+}
+
 // Writing through a symbolic link replaces the file it points to, as an in-place write would.
 fs::path resolveLink(const fs::path& path) {
     std::error_code error;
@@ -98,6 +129,7 @@ AtomicFile::AtomicFile(const fs::path& destination) : destination_(resolveLink(d
     const fs::path folder = destination_.parent_path();
     const std::string name = destination_.filename().string();
     const std::string extension = destination_.extension().string();
+    removeLeftoverTemporaries(destination_);
     constexpr int kAttempts = 100;  // names taken by leftovers of killed processes with the same pid
     int error = EEXIST;
     for (int attempt = 0; attempt < kAttempts && fd_ < 0; ++attempt) {

@@ -143,6 +143,15 @@ TEST_F(AtomicFileTest, KillBeforeRenameLeavesTheOldImage) {
     const std::vector<fs::path> left = temporaries();
     ASSERT_EQ(left.size(), 1u);
     EXPECT_TRUE(samePixels(readImage(left[0]), asPng(newImage, dir_ / "expected.png")));
+    // The next write of the same file removes it (its process is gone), and leaves alone a temporary of a
+    // process that runs (the test's parent), another file's and a name of another pattern.
+    const fs::path alive = dir_ / (".out.png.tmp-" + std::to_string(getppid()) + "-0.png");
+    const fs::path otherFile = dir_ / (".other.png.tmp-" + left[0].filename().string().substr(13));
+    const fs::path notOurs = dir_ / ".out.png.tmp-12x-0.png";
+    for (const fs::path& p : {alive, otherFile, notOurs}) std::ofstream(p) << "keep";
+    writeImage(newImage, path);
+    EXPECT_FALSE(fs::exists(left[0]));
+    for (const fs::path& p : {alive, otherFile, notOurs}) EXPECT_TRUE(fs::exists(p)) << p;
 }
 
 // SIGTERM at the same point, with a handler like the CLI's: the old file stays and no temporary is left.

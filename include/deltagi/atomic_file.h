@@ -17,7 +17,9 @@ class AtomicFile {
     // Creates the temporary file `.NAME.tmp-<pid>-<counter>EXT` beside `destination` (the destination's
     // extension kept last, for writers that choose the format by it). When the destination exists, the new
     // file takes its permissions; a symbolic link is followed, so the file it points to is replaced. Throws
-    // InputError naming the destination when the temporary cannot be created.
+    // InputError naming the destination when the temporary cannot be created. First removes the temporaries
+    // of the same destination that processes which no longer run left behind (a SIGKILL gives no chance to
+    // clean up): only that name pattern, only for process ids that kill(pid, 0) finds gone.
     explicit AtomicFile(const std::filesystem::path& destination);
     ~AtomicFile();  // removes the temporary file unless committed
     AtomicFile(const AtomicFile&) = delete;
