@@ -53,6 +53,7 @@ struct RenderArgs {
     fs::path scene;
     fs::path output;
     fs::path aovDir;
+    fs::path layers;  // a multi-layer EXR; empty: none
     std::vector<std::string> overrides;
     int threads = 0;  // 0: not given, TBB's default (all cores)
     bool quiet = false;
@@ -217,7 +218,12 @@ int runRender(const RenderArgs& args) {
 
     // Bad paths fail before the render, not after it; so does an output that is one of the inputs.
     checkOutputPath(args.output);
-    const std::vector<fs::path> outputs = outputFiles(args.output, args.aovDir, kRenderAovFiles);
+    std::vector<fs::path> outputs = outputFiles(args.output, args.aovDir, kRenderAovFiles);
+    if (!args.layers.empty()) {
+        if (lowerExtension(args.layers) != ".exr")
+            throw InputError(args.layers.string(), "--layers writes an OpenEXR file: expected .exr");
+        outputs.push_back(args.layers);
+    }
     checkOutputs(outputs, {{args.scene, "the scene file"}});
 
     const auto loadStart = std::chrono::steady_clock::now();
@@ -234,6 +240,7 @@ int runRender(const RenderArgs& args) {
     OutputFiles out;
     out.image(output.composite, args.output);
     if (!args.aovDir.empty()) writeAovs(output, scene, threads, loadMs, args.aovDir, out);
+    if (!args.layers.empty()) out.layers(compositingLayers(output), args.layers);
     out.commit();
 
     if (progress) printStep("total", output.totalMs);
@@ -555,6 +562,9 @@ int main(int argc, char** argv) {
     renderCommand->add_option(
         "--aov", renderArgs.aovDir,
         "Also write background, composite, object_mask, delta (.exr) and timings.json here");
+    renderCommand->add_option("--layers", renderArgs.layers,
+                              "Also write the compositing layers into one EXR: composite, background, object "
+                              "(RGBA, premultiplied), shadow, indirect, delta, depth (see README)");
     renderCommand->add_option("--set", renderArgs.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     renderCommand->add_option("--threads", renderArgs.threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, kMaxThreads));

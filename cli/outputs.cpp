@@ -88,6 +88,10 @@ void OutputFiles::image(const Image& image, const fs::path& path) {
     writeImage(image, add(path));
 }
 
+void OutputFiles::layers(std::span<const ImageLayer> layers, const fs::path& path) {
+    writeLayers(layers, add(path));
+}
+
 void OutputFiles::json(const nlohmann::ordered_json& json, const fs::path& path) {
     AtomicFile& file = add(path);
     file.write(json.dump(2) + '\n');

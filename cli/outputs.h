@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -53,6 +54,7 @@ void writeJson(const nlohmann::ordered_json& json, const std::filesystem::path& 
 class OutputFiles {
   public:
     void image(const Image& image, const std::filesystem::path& path);
+    void layers(std::span<const ImageLayer> layers, const std::filesystem::path& path);
     void json(const nlohmann::ordered_json& json, const std::filesystem::path& path);
     void commit();
 

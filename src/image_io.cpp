@@ -226,4 +226,86 @@ void writeImage(const Image& image, AtomicFile& file) {
     file.close();
 }
 
+void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file) {
+    const std::filesystem::path& path = file.destination();
+    if (lowerExtension(path) != ".exr")
+        throw InputError(path.string(), "cannot write layers: they are written to OpenEXR files (.exr) only");
+    if (layers.empty() || !layers[0].image || layers[0].image->empty())
+        throw InputError(path.string(), "cannot write layers: there are none");
+    const int width = layers[0].image->width(), height = layers[0].image->height();
+    std::vector<std::string> names;
+    for (const ImageLayer& layer : layers) {
+        if (!layer.image || layer.image->width() != width || layer.image->height() != height ||
+            static_cast<int>(layer.channels.size()) != layer.image->channels())
+            throw InputError(path.string(), fmt::format("cannot write layers: layer '{}' is {}x{} with {} "
+                                                        "channels, not {}x{} with {}",
+                                                        layer.name, layer.image ? layer.image->width() : 0,
+                                                        layer.image ? layer.image->height() : 0,
+                                                        layer.image ? layer.image->channels() : 0, width,
+                                                        height, layer.channels.size()));
+        for (const std::string& channel : layer.channels) names.push_back(layer.name + "." + channel);
+    }
+    const int channels = static_cast<int>(names.size());
+    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.attribute("compression", "zip");
+    // Interleaved, layer after layer within each pixel.
+    std::vector<float> pixels(static_cast<size_t>(width) * height * channels);
+    for (size_t p = 0, c0 = 0; p < static_cast<size_t>(width) * height; ++p) {
+        c0 = p * channels;
+        for (const ImageLayer& layer : layers) {
+            const int n = layer.image->channels();
+            for (int k = 0; k < n; ++k) {
+                const float v = layer.image->data()[p * n + k];
+                pixels[c0++] = std::isnan(v) ? 0.0f : v;
+            }
+        }
+    }
+    const std::string temporary = file.temporaryPath().string();
+    auto output = OIIO::ImageOutput::create(temporary);
+    if (!output || !output->open(temporary, spec))
+        throw InputError(path.string(),
+                         "cannot write layers: " + (output ? output->geterror() : OIIO::geterror()));
+    bool ok = output->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
+    ok = output->close() && ok;
+    if (!ok) throw InputError(path.string(), "cannot write layers: " + output->geterror());
+    file.close();
+}
+
+std::vector<NamedImage> readLayers(const std::filesystem::path& path) {
+    QuietStderr quiet;
+    auto input = OIIO::ImageInput::open(path.string());
+    if (!input) throw InputError(path.string(), "cannot read image: " + OIIO::geterror());
+    const OIIO::ImageSpec spec = input->spec();
+    const int width = spec.width, height = spec.height, channels = spec.nchannels;
+    if (width <= 0 || height <= 0 || channels <= 0)
+        throw InputError(path.string(), "cannot read image: it has no pixels");
+    std::vector<float> pixels(static_cast<size_t>(width) * height * channels);
+    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
+        throw InputError(path.string(), "cannot read image: " + input->geterror());
+    input->close();
+    // Channel c's layer and name.
+    std::vector<NamedImage> layers;
+    std::vector<std::pair<size_t, int>> where(channels);  // (layer, channel within it)
+    for (int c = 0; c < channels; ++c) {
+        const std::string full = c < static_cast<int>(spec.channelnames.size()) ? spec.channelnames[c]
+                                                                                   : fmt::format("{}", c);
+        const size_t dot = full.rfind('.');
+        const std::string layer = dot == std::string::npos ? full : full.substr(0, dot);
+        const std::string channel = dot == std::string::npos ? full : full.substr(dot + 1);
+        auto it = std::find_if(layers.begin(), layers.end(), [&](const NamedImage& l) { return l.name == layer; });
+        if (it == layers.end()) it = layers.insert(layers.end(), NamedImage{layer, Image(), {}});
+        where[c] = {static_cast<size_t>(it - layers.begin()), static_cast<int>(it->channels.size())};
+        it->channels.push_back(channel);
+    }
+    for (NamedImage& layer : layers)
+        layer.image = Image(width, height, static_cast<int>(layer.channels.size()));
+    for (size_t p = 0; p < static_cast<size_t>(width) * height; ++p)
+        for (int c = 0; c < channels; ++c) {
+            NamedImage& layer = layers[where[c].first];
+            layer.image.data()[p * layer.channels.size() + where[c].second] = pixels[p * channels + c];
+        }
+    return layers;
+}
+
 }  // namespace deltagi

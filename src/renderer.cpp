@@ -3,6 +3,7 @@
 #include "deltagi/renderer.h"
 
 #include <chrono>
+#include <limits>
 #include <optional>
 
 #include "area_light_rays.h"
@@ -78,6 +79,24 @@ std::vector<ReflectiveShadowMap> renderRsms(const RayScene& rays, std::span<cons
     for (size_t l = 0; l < lights.size(); ++l)
         rsms.push_back(renderReflectiveShadowMap(rays, lights[l], region, resolutions[l], viewpoint));
     return rsms;
+}
+
+// The z depth (along the camera's axis) of the surface at each pixel's centre: the object's where it covers
+// the pixel, else the real one's; infinity where there is none.
+Image depthImage(const Camera& camera, const GBuffer& gbuffer, std::span<const SurfacePoint> real) {
+    Image depth(camera.width, camera.height, 1, std::numeric_limits<float>::infinity());
+    const glm::vec3 eye = camera.position();
+    const glm::vec3 axis = glm::normalize(camera.rayDirection(camera.cx, camera.cy));
+    parallelFor(0, camera.height, 8, [&](int64_t y) {
+        for (int x = 0; x < camera.width; ++x) {
+            const size_t i = static_cast<size_t>(y) * camera.width + x;
+            const bool object =
+                i < gbuffer.coverage.size() && gbuffer.coverage[i] > 0.0f && gbuffer.object[i].valid();
+            const SurfacePoint& p = object ? gbuffer.object[i] : real[i];
+            if (p.valid()) depth.at(x, static_cast<int>(y), 0) = glm::dot(p.position - eye, axis);
+        }
+    });
+    return depth;
 }
 
 // One set of surfaces to trace cones from, against a light volume and visibility volumes.
@@ -581,6 +600,10 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         out.composite = out.background;
         out.objectMask = Image(camera.width, camera.height, 1);
         out.delta = Image(camera.width, camera.height, 3);
+        out.object = Image(camera.width, camera.height, 4);
+        out.shadow = Image(camera.width, camera.height, 3);
+        out.indirect = Image(camera.width, camera.height, 3);
+        out.depth = depthImage(camera, GBuffer{}, realSurfaces());
         out.totalMs =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
         return out;
@@ -652,21 +675,29 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     auto objectRadiance =
         combineLighting(gbuffer.object, direct, object.shadows, ShadowMode::Shaded, object.diffuse,
                         object.specular, &objectPixels, camera.width, &gbuffer.objectSamples);
-    auto realChange =
-        combineLighting(realPoints, direct, real.shadows, relightMode, real.diffuse, real.specular);
+    // The real surfaces' change in its two parts, the direct light's (shadows) and the indirect light's: the
+    // composite's layers.
+    std::vector<glm::vec3> realIndirect;
+    auto realShadow = combineLighting(realPoints, direct, real.shadows, relightMode, real.diffuse, real.specular,
+                                      nullptr, 0, nullptr, &realIndirect);
     addInto(objectRadiance, std::move(object.areaLight));
-    addInto(realChange, std::move(real.areaLight));
+    addInto(realShadow, std::move(real.areaLight));
     timer.lap("shading");
 
     // The background: the photo, or the real scene rendered alone.
     out.background = background();
     timer.lap("background");
 
-    // 8. Differential composite.
-    CompositeImages images = differentialComposite(out.background, gbuffer, objectRadiance, realChange);
+    // 8. Differential composite, and its layers.
+    CompositeImages images =
+        differentialComposite(out.background, gbuffer, objectRadiance, realShadow, realIndirect);
     out.composite = std::move(images.composite);
     out.objectMask = std::move(images.objectMask);
     out.delta = std::move(images.delta);
+    out.object = std::move(images.object);
+    out.shadow = std::move(images.shadow);
+    out.indirect = std::move(images.indirect);
+    out.depth = depthImage(camera, gbuffer, realSurfaces());
     timer.lap("composite");
     out.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return out;
@@ -705,6 +736,17 @@ VolumeRegion volumeRegion(const Scene& scene) {
         return region;
     }
     return cubeAround(boundsOf(scene.real), 1.0f + 2.0f / static_cast<float>(v.resolution), v.resolution);
+}
+
+std::vector<ImageLayer> compositingLayers(const RenderOutput& output) {
+    const std::vector<std::string> rgb = {"R", "G", "B"};
+    return {{"composite", &output.composite, rgb},
+            {"background", &output.background, rgb},
+            {"object", &output.object, {"R", "G", "B", "A"}},
+            {"shadow", &output.shadow, rgb},
+            {"indirect", &output.indirect, rgb},
+            {"delta", &output.delta, rgb},
+            {"depth", &output.depth, {"Z"}}};
 }
 
 RenderOutput render(const Scene& scene, const StageCallback& onStage) {

@@ -167,8 +167,10 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
                                        std::span<const glm::vec3> diffuse,
                                        std::span<const glm::vec3> specular, const PixelRect* bounds,
-                                       int width, const PixelSamples* samples) {
+                                       int width, const PixelSamples* samples,
+                                       std::vector<glm::vec3>* indirect) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    if (indirect) indirect->assign(points.size(), glm::vec3(0.0f));
     // A rendered surface shows what it emits; a relit one only changes, and its emission is in the photo.
     const bool emits = mode == ShadowMode::Shaded || mode == ShadowMode::SceneOnly;
     auto shade = [&](size_t i) {
@@ -182,8 +184,9 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
             const float factor = shadowFactor(shadows[i * lights.size() + l], mode);
             if (factor != 0.0f) radiance += directRadianceOver(p, area, lights[l]) * factor;
         }
-        if (!diffuse.empty()) radiance += p.material->albedo * diffuse[i];
-        if (!specular.empty()) radiance += p.material->specular * specular[i];
+        glm::vec3& reflected = indirect ? (*indirect)[i] : radiance;
+        if (!diffuse.empty()) reflected += p.material->albedo * diffuse[i];
+        if (!specular.empty()) reflected += p.material->specular * specular[i];
         out[i] = radiance;
     };
     if (!bounds) {

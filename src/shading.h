@@ -81,11 +81,13 @@ float shadowFactor(const ShadowOcclusion& occlusion, ShadowMode mode);
 // in the modes that render a surface (Shaded, SceneOnly), not in those that relight it.
 // With `bounds` (of a `width`-wide image), only the points inside it are valid: the others are skipped.
 // With `samples` (Shaded mode), a point's direct light before its shadow is the mean over its pixel's
-// sub-samples (the valid ones), not the light at the point alone.
+// sub-samples (the valid ones), not the light at the point alone. With `indirect`, the diffuse and specular
+// parts go there (one value per point) instead of into the result, which then holds the direct light alone.
 std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
                                        std::span<const ShadowOcclusion> shadows, ShadowMode mode,
                                        std::span<const glm::vec3> diffuse,
                                        std::span<const glm::vec3> specular, const PixelRect* bounds = nullptr,
-                                       int width = 0, const PixelSamples* samples = nullptr);
+                                       int width = 0, const PixelSamples* samples = nullptr,
+                                       std::vector<glm::vec3>* indirect = nullptr);
 
 }  // namespace deltagi

@@ -207,6 +207,21 @@ TEST_F(CliTest, UnknownOutputType) {
     expectOneErrorLine(run(args), {"out.tif"});
 }
 
+// --layers writes one EXR with the compositing layers; its composite is the image's, and it must be .exr.
+TEST_F(CliTest, LayersGoIntoOneExr) {
+    const fs::path scene = writeScene(tinyScene());
+    const fs::path layers = dir_ / "layers.exr";
+    const CliResult result = run(renderArgs(scene) + " --layers " + quote(layers.string()));
+    ASSERT_EQ(result.exitCode, 0) << result.err;
+    std::vector<std::string> names;
+    for (const deltagi::NamedImage& layer : deltagi::readLayers(layers)) names.push_back(layer.name);
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"background", "composite", "delta", "depth", "indirect", "object",
+                                               "shadow"}));
+    expectOneErrorLine(run(renderArgs(scene) + " --layers " + quote((dir_ / "layers.png").string())),
+                       {"layers.png", ".exr"});
+}
+
 TEST_F(CliTest, UsageErrorExitsWithTwo) {
     const CliResult result = run("render");  // no scene, no -o
     EXPECT_EQ(result.exitCode, 2);

@@ -2,16 +2,21 @@
 #include "deltagi/renderer.h"
 
 #include <algorithm>
+#include <unistd.h>
+#include <map>
 #include <cmath>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "deltagi/atomic_file.h"
 #include "shapes.h"
 #include "test_scenes.h"
 
 namespace deltagi {
 namespace {
+
+namespace fs = std::filesystem;
 
 using test::diffuse;
 using test::placed;
@@ -240,6 +245,52 @@ TEST(Render, TheObjectsConesHaveTheirOwnAperture) {
     EXPECT_FALSE(differs(realChange(narrow), realChange(wide)));
     s.options.diffuse.apertureDeg = 20.0f;
     EXPECT_TRUE(differs(realChange(render(s)), realChange(wide)));
+}
+
+// The compositing layers rebuild the composite, composite = object + (1 - alpha) max(background + shadow +
+// indirect, 0), through a multi-layer EXR and back; the shadow layer is negative under the ball and zero
+// where the ball covers the pixel; the depth is the floor's distance along the camera's axis.
+TEST(Render, TheLayersRebuildTheComposite) {
+    Scene s = test::floorScene();
+    s.virtuals.push_back(placed(makeSphere(0.2f, 48), {0.0f, 0.3f, 0.0f}, diffuse({0.8f, 0.2f, 0.1f}), "ball"));
+    s.background = Image(64, 48, 3, 0.3f);
+    const RenderOutput out = render(s);
+    const fs::path file = fs::temp_directory_path() / ("deltagi_layers_" + std::to_string(getpid()) + ".exr");
+    {
+        AtomicFile atomic(file);
+        writeLayers(compositingLayers(out), atomic);
+        atomic.commit();
+    }
+    std::map<std::string, Image> layers;
+    for (NamedImage& layer : readLayers(file)) layers[layer.name] = std::move(layer.image);
+    fs::remove(file);
+    ASSERT_EQ(layers.size(), 7u);
+    const glm::vec3 eye = s.camera.position();
+    const glm::vec3 axis = glm::normalize(s.camera.rayDirection(s.camera.cx, s.camera.cy));
+    int shadowed = 0;
+    for (int y = 0; y < 48; ++y)
+        for (int x = 0; x < 64; ++x) {
+            const float alpha = layers["object"].at(x, y, 3);
+            for (int k = 0; k < 3; ++k) {
+                const float real = std::max(layers["background"].at(x, y, k) + layers["shadow"].at(x, y, k) +
+                                                layers["indirect"].at(x, y, k),
+                                            0.0f);
+                EXPECT_NEAR(layers["object"].at(x, y, k) + (1.0f - alpha) * real, out.composite.at(x, y, k), 1e-5f)
+                    << x << ", " << y;
+            }
+            EXPECT_EQ(alpha, out.objectMask.at(x, y, 0));
+            if (alpha == 1.0f) EXPECT_EQ(layers["shadow"].rgb(x, y), glm::vec3(0.0f));
+            if (alpha == 0.0f && layers["shadow"].at(x, y, 0) < -0.01f) ++shadowed;
+            if (alpha == 0.0f) {  // the floor at y = 0
+                const glm::vec3 dir = glm::normalize(s.camera.rayDirection(x + 0.5f, y + 0.5f));
+                if (dir.y < 0.0f) {
+                    const glm::vec3 p = eye + dir * (-eye.y / dir.y);
+                    if (std::abs(p.x) < 0.99f && std::abs(p.z) < 0.99f)
+                        EXPECT_NEAR(layers["depth"].at(x, y, 0), glm::dot(p - eye, axis), 1e-4f);
+                }
+            }
+        }
+    EXPECT_GT(shadowed, 20);
 }
 
 // The light an object blocks between two real surfaces: a red wall lights the floor in front of it; a

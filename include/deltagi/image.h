@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 #include <span>
 #include <vector>
 
@@ -67,5 +68,26 @@ void writeImage(const Image& image, const std::filesystem::path& path);
 // outputs together (a failure before then replaces none of them).
 class AtomicFile;
 void writeImage(const Image& image, AtomicFile& file);
+
+// One layer of a multi-layer OpenEXR file: its channels are named `name`.`channel` ("object.A",
+// "depth.Z"), as compositors (Nuke, Blender, Natron) read them; `channels` names the image's channels in
+// order.
+struct ImageLayer {
+    std::string name;
+    const Image* image = nullptr;
+    std::vector<std::string> channels;
+};
+// Writes the layers, all of one size, into one 32-bit float EXR (zip compressed) in `file`'s temporary
+// (closed, not renamed: see writeImage). NaN pixels are written as 0; infinities are kept (a depth with no
+// surface). Throws InputError when the file is not .exr, the layers differ in size or the write fails.
+void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file);
+// Every layer of an EXR file, in file order: the channels named `layer`.`channel` grouped by `layer` (a
+// channel without a dot makes a layer of its own name), with their channel names. Throws InputError.
+struct NamedImage {
+    std::string name;
+    Image image;
+    std::vector<std::string> channels;
+};
+std::vector<NamedImage> readLayers(const std::filesystem::path& path);
 
 }  // namespace deltagi

@@ -23,9 +23,26 @@ struct RenderOutput {
     Image background;  // the camera image used (given or rendered), linear RGB
     Image objectMask;  // 1 channel: coverage of virtual objects per pixel, in [0,1]
     Image delta;       // composite - background, linear RGB (negative where light was removed)
+    // The layers a compositor grades over the plate (render --layers):
+    //   composite = object.rgb + (1 - object.a) * max(background + shadow + indirect, 0)
+    // (every pixel, to float rounding; max per channel). Of the real surfaces' change, `shadow` is the
+    // change of their direct light — the objects' shadows, and the light of virtual emitters — and
+    // `indirect` that of their indirect light — colour bleeding, reflections, the bounce light the objects
+    // block; both are 0 where no real surface shows (coverage 1).
+    Image object;    // RGBA, premultiplied: the objects' radiance times their coverage, alpha = coverage
+    Image shadow;    // linear RGB, mostly <= 0
+    Image indirect;  // linear RGB
+    // 1 channel: the distance along the camera's axis (z depth, world units) of the surface at the pixel's
+    // centre, the object's where it covers the pixel; infinity where no surface is seen.
+    Image depth;
     std::vector<StageTiming> timings;  // in pipeline order
     double totalMs = 0.0;
 };
+
+// The compositing layers of a render, in the order of a multi-layer EXR (writeLayers, `render --layers`):
+// composite, background, object (RGBA), shadow, indirect, delta (RGB each) and depth (Z). They point into
+// `output`, which must outlive them.
+std::vector<ImageLayer> compositingLayers(const RenderOutput& output);
 
 // Called after each stage, for progress output: the stage's name and its time.
 using StageCallback = std::function<void(const StageTiming&)>;
