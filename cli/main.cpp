@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <regex>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -53,7 +54,8 @@ struct RenderArgs {
     fs::path scene;
     fs::path output;
     fs::path aovDir;
-    fs::path layers;  // a multi-layer EXR; empty: none
+    fs::path layers;     // a multi-layer EXR; empty: none
+    std::string frames;  // a sequence's frame range "A:B"; empty: the scene's
     std::vector<std::string> overrides;
     int threads = 0;  // 0: not given, TBB's default (all cores)
     bool quiet = false;
@@ -205,6 +207,72 @@ void writeAovs(const RenderOutput& output, const Scene& scene, int threads, doub
     out.json(timingsJson(output, scene, threads, loadMs), folder / "timings.json");
 }
 
+// The file of frame `index` for an output pattern: a run of '#' (frame_####.png) or a printf-style %d / %0Nd
+// (frame_%04d.png) is replaced by the number, zero-padded to its width. Throws InputError when `pattern` has
+// neither.
+fs::path framePath(const fs::path& pattern, int index) {
+    const std::string text = pattern.string();
+    const size_t hash = text.find('#');
+    if (hash != std::string::npos) {
+        size_t end = hash;
+        while (end < text.size() && text[end] == '#') ++end;
+        return text.substr(0, hash) + fmt::format("{:0{}d}", index, static_cast<int>(end - hash)) + text.substr(end);
+    }
+    static const std::regex printfNumber("%(0?)([0-9]?)d");
+    std::smatch match;
+    if (std::regex_search(text, match, printfNumber)) {
+        const int width = match[2].length() > 0 ? std::stoi(match[2].str()) : 0;
+        const std::string number =
+            match[1].length() > 0 ? fmt::format("{:0{}d}", index, width) : fmt::format("{:{}d}", index, width);
+        return match.prefix().str() + number + match.suffix().str();
+    }
+    throw InputError(text, "a sequence writes one file per frame: give the frame number's place, "
+                           "e.g. frame_####.png or frame_%04d.png");
+}
+
+// A sequence ("sequence" in the scene): every frame with its camera and photo through one FrameRenderer, each
+// frame's files written and renamed into place when it is done (an interrupted run keeps the finished
+// frames).
+int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
+    if (!args.aovDir.empty())
+        throw InputError("--aov", "not with a sequence: use --layers FRAME_####.exr for each frame's layers");
+    std::vector<fs::path> outputs;
+    for (const SequenceFrame& frame : scene.sequence) {
+        outputs.push_back(framePath(args.output, frame.index));
+        if (!args.layers.empty()) outputs.push_back(framePath(args.layers, frame.index));
+    }
+    refuseInputs(outputs, sceneInputs(scene));
+    const bool progress = !args.quiet && isatty(STDERR_FILENO);
+    const auto start = std::chrono::steady_clock::now();
+    FrameRenderer renderer;
+    const std::vector<SequenceFrame> frames = scene.sequence;
+    for (size_t i = 0; i < frames.size(); ++i) {
+        const SequenceFrame& frame = frames[i];
+        scene.camera = frame.camera;
+        if (i > 0) scene.background = readFramePhoto(frame, scene.sequenceFile);
+        scene.backgroundFile = frame.photo;
+        const RenderOutput output = renderer.render(scene);
+        OutputFiles out;
+        out.image(output.composite, framePath(args.output, frame.index));
+        if (!args.layers.empty()) out.layers(compositingLayers(output), framePath(args.layers, frame.index));
+        out.commit();
+        if (progress) {
+            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double rate = static_cast<double>(i + 1) / seconds;
+            note("\rframe {}/{} (index {}): {:.2f} frames/s, {:.0f} s left   ", i + 1, frames.size(), frame.index,
+                 rate, static_cast<double>(frames.size() - i - 1) / rate);
+        }
+    }
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (progress) note("\n");
+    if (!args.quiet)
+        note("deltagi: wrote {} frames {} to {} ({}x{}, {:.2f} s, {:.2f} frames/s, {})\n", frames.size(),
+             fmt::format("{}:{}", frames.front().index, frames.back().index + 1), args.output.string(),
+             scene.camera.width, scene.camera.height, seconds, static_cast<double>(frames.size()) / seconds,
+             plural(threads, "thread", "threads"));
+    return 0;
+}
+
 int runRender(const RenderArgs& args) {
     // Limits TBB for as long as it lives, i.e. for the whole render.
     std::optional<tbb::global_control> threadLimit;
@@ -227,9 +295,17 @@ int runRender(const RenderArgs& args) {
     checkOutputs(outputs, {{args.scene, "the scene file"}});
 
     const auto loadStart = std::chrono::steady_clock::now();
-    const Scene scene = loadAndWarn(args.scene, args.overrides);
+    Scene scene = loadAndWarn(args.scene, args.overrides);
     const double loadMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - loadStart).count();
+    if (!args.frames.empty()) {
+        if (scene.sequence.empty())
+            throw InputError("--frames", "the scene has no \"sequence\" to take frames from");
+        scene.sequence = readTransforms(scene.sequenceFile, parseFrameRange(args.frames, "--frames"));
+        scene.camera = scene.sequence.front().camera;
+        scene.background = readFramePhoto(scene.sequence.front(), scene.sequenceFile);
+    }
+    if (!scene.sequence.empty()) return runRenderSequence(args, scene, threads);
     if (progress) printStep("load", loadMs);
     refuseInputs(outputs, sceneInputs(scene));
 
@@ -565,6 +641,9 @@ int main(int argc, char** argv) {
     renderCommand->add_option("--layers", renderArgs.layers,
                               "Also write the compositing layers into one EXR: composite, background, object "
                               "(RGBA, premultiplied), shadow, indirect, delta, depth (see README)");
+    renderCommand->add_option("--frames", renderArgs.frames,
+                              "With a \"sequence\": the frames A:B to render (A included, B not; e.g. 0:120, "
+                              "40:, :10); -o and --layers then name each frame's file with #### or %04d");
     renderCommand->add_option("--set", renderArgs.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     renderCommand->add_option("--threads", renderArgs.threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, kMaxThreads));

@@ -29,6 +29,9 @@ RayHit visibleObjectHit(const RayScene& all, glm::vec3 eye, glm::vec3 dir) {
 std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
     const std::array<int, 4> all = {0, camera.width - 1, 0, camera.height - 1};
     if (b.empty()) return {0, -1, 0, -1};
+    // Through a lens' distortion the box's corners do not bound its image (a polynomial model may even fold
+    // back outside the image): every pixel may see it.
+    if (!camera.distortion.none()) return all;
     const glm::mat4 cameraFromWorld = glm::inverse(camera.worldFromCamera);
     float xMin = INFINITY, xMax = -INFINITY, yMin = INFINITY, yMax = -INFINITY;
     for (int c = 0; c < 8; ++c) {

@@ -441,6 +441,19 @@ void readBackground(const JsonNode& node, const fs::path& sceneFolder, Scene& sc
             sizeText(scene.background->width(), scene.background->height()), scene.backgroundFile.string()));
 }
 
+// "sequence": {"transforms": FILE, "frames": "A:B"}: the frames' cameras and photos; the first frame's camera
+// and photo are the scene's.
+void readSequence(const JsonNode& node, const fs::path& sceneFolder, Scene& scene) {
+    node.allowKeys({"transforms", "frames"});
+    scene.sequenceFile = inputFile(node.child("transforms"), sceneFolder);
+    FrameRange range;
+    if (auto n = node.find("frames")) range = parseFrameRange(n->string(), n->where());
+    scene.sequence = readTransforms(scene.sequenceFile, range);
+    scene.camera = scene.sequence.front().camera;
+    scene.backgroundFile = scene.sequence.front().photo;
+    scene.background = readFramePhoto(scene.sequence.front(), scene.sequenceFile);
+}
+
 bool holdsEntries(const JsonNode& root, std::string_view key) {
     auto node = root.find(key);
     if (!node) return false;
@@ -527,15 +540,21 @@ Scene loadScene(const json& document, const fs::path& file) {
     JsonNode root(document, file.string());
     if (!document.is_object())
         root.fail("expected a JSON object {...} at the top level, got " + describeValue(document));
-    root.allowKeys(
-        {"description", "camera", "background", "environment", "scene", "virtual", "lights", "options"});
+    root.allowKeys({"description", "camera", "sequence", "background", "environment", "scene", "virtual",
+                    "lights", "options"});
     if (auto n = root.find("description")) n->string();
     fs::path sceneFolder = file.parent_path();
 
     // Cheap checks first, so that a typo in the options does not wait for a large mesh to load.
     Scene scene;
     scene.file = file;
-    scene.camera = readCamera(root.child("camera"));
+    if (auto n = root.find("sequence")) {
+        if (root.has("camera")) n->fail("give either \"camera\" or \"sequence\" (whose frames have cameras)");
+        if (root.has("background")) n->fail("give either \"background\" or \"sequence\" (whose frames have photos)");
+        readSequence(*n, sceneFolder, scene);
+    } else {
+        scene.camera = readCamera(root.child("camera"));
+    }
     if (auto n = root.find("options")) scene.options = readOptions(*n);
     if (auto n = root.find("lights")) {
         n->requireArray();

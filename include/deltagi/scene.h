@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include <glm/vec2.hpp>
 #include <glm/glm.hpp>
 
 #include "deltagi/environment.h"
@@ -57,17 +58,33 @@ struct TriangleMesh {
 
 // A pinhole camera. Pixel (i, j) has its centre at (i + 0.5, j + 0.5), origin top-left, +y down. Camera space
 // follows OpenGL: +x right, +y up, looking down -z.
+// Lens distortion as calibration tools (OpenCV, COLMAP, nerfstudio) give it, on normalized image coordinates
+// (x right, y down, z = 1 in front): "opencv" (Brown-Conrady: radial k1 k2 k3, tangential p1 p2) and
+// "fisheye" (OpenCV's equidistant fisheye model: k1..k4 on the angle from the axis).
+struct LensDistortion {
+    enum class Model { None, OpenCV, Fisheye };
+    Model model = Model::None;
+    float k1 = 0, k2 = 0, k3 = 0, k4 = 0, p1 = 0, p2 = 0;
+    bool none() const { return model == Model::None; }
+    // Where an undistorted point lands in the image (the model's forward direction).
+    glm::vec2 distort(glm::vec2 undistorted) const;
+    // The undistorted point that distort() takes to `distorted` (Newton's method; to about 1e-6).
+    glm::vec2 undistort(glm::vec2 distorted) const;
+};
+
 struct Camera {
     int width = 640;
     int height = 480;
     float fx = 0, fy = 0, cx = 0, cy = 0;  // pixels
     glm::mat4 worldFromCamera{1.0f};
+    LensDistortion distortion;  // of the photo: rays go through it, so the layers line up with the photo
 
     glm::vec3 position() const { return glm::vec3(worldFromCamera[3]); }
     // Unnormalized world-space direction through image point (px, py) in pixels.
     glm::vec3 rayDirection(float px, float py) const {
-        glm::vec3 cameraDir((px - cx) / fx, -(py - cy) / fy, -1.0f);
-        return glm::mat3(worldFromCamera) * cameraDir;
+        glm::vec2 n((px - cx) / fx, (py - cy) / fy);
+        if (!distortion.none()) n = distortion.undistort(n);
+        return glm::mat3(worldFromCamera) * glm::vec3(n.x, -n.y, -1.0f);
     }
 };
 
@@ -96,9 +113,20 @@ struct Light {
     glm::vec3 power() const { return color * intensity; }
 };
 
+// One frame of a tracked camera sequence ("sequence": a transforms.json): its camera and its photo.
+struct SequenceFrame {
+    int index = 0;  // its place in the transforms file's "frames" (output files are numbered by it)
+    Camera camera;
+    std::filesystem::path photo;
+};
+
 struct Scene {
     std::filesystem::path file;  // the scene file, for messages; relative paths were resolved against it
-    Camera camera;
+    Camera camera;  // with a sequence: its first frame's
+    // "sequence": the frames to render, in order (empty: a single image from `camera`); `background` is the
+    // first frame's photo, and each frame's is read when it is rendered.
+    std::vector<SequenceFrame> sequence;
+    std::filesystem::path sequenceFile;  // the transforms file
     std::optional<Image> background;  // the real camera image, linear RGB, camera-sized; absent: rendered
     std::filesystem::path backgroundFile;
     // The mesh files read ("file" keys), in the scene's order.

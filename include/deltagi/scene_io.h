@@ -29,4 +29,30 @@ Scene loadScene(const nlohmann::json& document, const std::filesystem::path& fil
 // The options as JSON, every key with its value (the defaults where the scene did not set one).
 nlohmann::json optionsToJson(const Options& options);
 
+// ---- tracked camera sequences (src/sequence_io.cpp) -------------------------------------------------------
+// As capture tools write them: the nerfstudio / instant-ngp `transforms.json` that COLMAP, Polycam, Record3D,
+// Metashape and others are converted into. Intrinsics (fl_x fl_y cx cy w h, or camera_angle_x), the camera
+// model (PINHOLE, OPENCV with k1 k2 (k3) p1 p2, OPENCV_FISHEYE with k1..k4) globally or per frame; per frame
+// `file_path` (the photo, relative to the file) and `transform_matrix` (camera to world, OpenGL axes: the
+// camera looks down -z with +y up, as deltagi's cameras do). Keys deltagi does not use (aabb_scale,
+// depth_file_path, ...) are ignored.
+
+// A range of frames "A:B" (A included, B not; either may be left out: "A:", ":B", ":").
+struct FrameRange {
+    int first = 0;
+    int last = -1;  // -1: to the end
+};
+// Throws InputError naming `where` when `text` is not such a range.
+FrameRange parseFrameRange(const std::string& text, const std::string& where);
+
+// The frames of `file` in `range`, in order: camera (with its distortion) and photo path (which must exist;
+// a file_path without an extension may name a .png or .jpg). Throws InputError naming the file and the frame
+// (frames[3].transform_matrix) for a missing or malformed key, a NaN or singular matrix, an unknown camera
+// model, a missing photo, or a range outside the frames.
+std::vector<SequenceFrame> readTransforms(const std::filesystem::path& file, FrameRange range);
+
+// The frame's photo, which must be of its camera's size: InputError naming the transforms file and the frame
+// otherwise.
+Image readFramePhoto(const SequenceFrame& frame, const std::filesystem::path& transformsFile);
+
 }  // namespace deltagi

@@ -1,0 +1,184 @@
+// Tracked camera sequences: lens distortion, the transforms.json reader (nerfstudio / instant-ngp) and
+// `deltagi render` over a sequence, at once and in chunks.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "deltagi/error.h"
+#include "deltagi/image.h"
+#include "deltagi/scene_io.h"
+#include "test_errors.h"
+#include "test_files.h"
+#include "test_scene_json.h"
+
+namespace deltagi {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using test::expectContains;
+using test::inputErrorOf;
+
+// distort() and undistort() invert each other over the image of a wide lens, for both models.
+TEST(LensDistortion, UndistortInvertsDistort) {
+    LensDistortion opencv{LensDistortion::Model::OpenCV, -0.28f, 0.09f, -0.01f, 0.0f, 0.001f, -0.0005f};
+    LensDistortion fisheye{LensDistortion::Model::Fisheye, 0.05f, -0.01f, 0.002f, -0.0003f, 0.0f, 0.0f};
+    for (const LensDistortion& d : {opencv, fisheye})
+        for (float x = -0.8f; x <= 0.81f; x += 0.2f)
+            for (float y = -0.6f; y <= 0.61f; y += 0.2f) {
+                const glm::vec2 u(x, y);
+                const glm::vec2 back = d.undistort(d.distort(u));
+                EXPECT_NEAR(back.x, x, 1e-5f);
+                EXPECT_NEAR(back.y, y, 1e-5f);
+            }
+    // Barrel distortion pulls a corner in.
+    EXPECT_LT(glm::length(opencv.distort({0.6f, 0.45f})), glm::length(glm::vec2(0.6f, 0.45f)));
+}
+
+// A camera ray through a pixel of the distorted photo meets the world point that the calibration's forward
+// model (pinhole projection, then distortion) images at that pixel: rendered layers line up with the photo.
+TEST(LensDistortion, CameraRaysGoThroughTheDistortion) {
+    Camera camera;
+    camera.width = 640, camera.height = 480, camera.fx = 500, camera.fy = 505, camera.cx = 322, camera.cy = 238;
+    camera.distortion = {LensDistortion::Model::OpenCV, -0.3f, 0.1f, 0.0f, 0.0f, 0.002f, 0.001f};
+    for (const glm::vec3 p : {glm::vec3(0.4f, 0.2f, -2.0f), glm::vec3(-0.9f, -0.6f, -1.5f), glm::vec3(0, 0, -3)}) {
+        // OpenCV's frame: x right, y down, z forward.
+        const glm::vec2 normalized(p.x / -p.z, -p.y / -p.z);
+        const glm::vec2 d = camera.distortion.distort(normalized);
+        const float px = camera.cx + camera.fx * d.x, py = camera.cy + camera.fy * d.y;
+        const glm::vec3 ray = glm::normalize(camera.rayDirection(px, py));
+        EXPECT_NEAR(glm::dot(ray, glm::normalize(p)), 1.0f, 1e-6f) << p.x << ", " << p.y;
+    }
+}
+
+class SequenceTest : public ::testing::Test {
+  protected:
+    void SetUp() override {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        dir_ = fs::temp_directory_path() / ("deltagi_sequence_" + std::to_string(getpid()) + "_" + info->name());
+        fs::remove_all(dir_);
+        fs::create_directories(dir_ / "images");
+    }
+    void TearDown() override {
+        std::error_code ignored;
+        fs::remove_all(dir_, ignored);
+    }
+
+    // A transforms.json of `count` frames of a camera moving along x at height 0.8, looking down -z at the
+    // tiny scene, with grey photos of w x h; OPENCV distortion globally.
+    json transforms(int count, int w = 32, int h = 24) const {
+        json frames = json::array();
+        for (int i = 0; i < count; ++i) {
+            const std::string name = "images/frame_" + std::to_string(i) + ".png";
+            writeImage(Image(w, h, 3, 0.2f + 0.1f * i), dir_ / name);
+            const double x = 0.1 * i;
+            frames.push_back({{"file_path", name},
+                              {"transform_matrix", {{1, 0, 0, x}, {0, 1, 0, 0.8}, {0, 0, 1, 2}, {0, 0, 0, 1}}}});
+        }
+        return {{"camera_model", "OPENCV"}, {"fl_x", 30.0}, {"fl_y", 30.0}, {"cx", w / 2.0}, {"cy", h / 2.0},
+                {"w", w},  {"h", h}, {"k1", -0.1}, {"k2", 0.01}, {"p1", 0.0}, {"p2", 0.0},
+                {"aabb_scale", 16}, {"frames", frames}};
+    }
+    fs::path write(const json& document, const std::string& name = "transforms.json") const {
+        test::writeText(dir_ / name, document.dump(1));
+        return dir_ / name;
+    }
+
+    fs::path dir_;
+};
+
+TEST_F(SequenceTest, ReadsCamerasPhotosAndDistortion) {
+    const fs::path file = write(transforms(3));
+    const std::vector<SequenceFrame> all = readTransforms(file, {});
+    ASSERT_EQ(all.size(), 3u);
+    EXPECT_EQ(all[2].index, 2);
+    EXPECT_FLOAT_EQ(all[2].camera.position().x, 0.2f);
+    EXPECT_FLOAT_EQ(all[2].camera.position().y, 0.8f);
+    EXPECT_EQ(all[1].camera.width, 32);
+    EXPECT_FLOAT_EQ(all[1].camera.fx, 30.0f);
+    EXPECT_EQ(all[1].camera.distortion.model, LensDistortion::Model::OpenCV);
+    EXPECT_FLOAT_EQ(all[1].camera.distortion.k1, -0.1f);
+    EXPECT_EQ(all[0].photo, dir_ / "images/frame_0.png");
+    const std::vector<SequenceFrame> chunk = readTransforms(file, parseFrameRange("1:3", "--frames"));
+    ASSERT_EQ(chunk.size(), 2u);
+    EXPECT_EQ(chunk[0].index, 1);
+    // A file_path without its extension finds the photo (instant-ngp writes them so).
+    json doc = transforms(1);
+    doc["frames"][0]["file_path"] = "images/frame_0";
+    EXPECT_EQ(readTransforms(write(doc), {})[0].photo, dir_ / "images/frame_0.png");
+}
+
+TEST_F(SequenceTest, BadTransformsNameTheFileAndTheFrame) {
+    auto errorOf = [&](const json& doc, FrameRange range = {}) {
+        return inputErrorOf([&] { readTransforms(write(doc), range); });
+    };
+    json doc = transforms(2);
+    doc["frames"][1]["camera_model"] = "EQUIRECTANGULAR";
+    expectContains(errorOf(doc), {"transforms.json", "frames[1].camera_model", "EQUIRECTANGULAR"});
+    doc = transforms(2);
+    doc["frames"][1]["transform_matrix"] = {{1, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    expectContains(errorOf(doc), {"frames[1].transform_matrix", "singular"});
+    doc = transforms(2);
+    doc["frames"][0]["file_path"] = "images/missing.png";
+    expectContains(errorOf(doc), {"frames[0].file_path", "photo not found"});
+    doc = transforms(2);
+    doc.erase("w");
+    expectContains(errorOf(doc), {"frames[0]", "\"w\""});
+    expectContains(errorOf(transforms(2), {3, 5}), {"transforms.json: frames", "outside the file's 2 frames"});
+    expectContains(errorOf(json{{"fl_x", 3}}), {"transforms.json", "frames"});
+    test::writeText(dir_ / "nan.json", R"({"frames": [{"transform_matrix": [[NaN]]}]})");
+    expectContains(inputErrorOf([&] { readTransforms(dir_ / "nan.json", {}); }), {"nan.json"});
+    expectContains(inputErrorOf([] { parseFrameRange("3:1", "--frames"); }), {"--frames", "empty"});
+    expectContains(inputErrorOf([] { parseFrameRange("a:b", "--frames"); }), {"--frames", "A:B"});
+    // A photo of another size than the camera's.
+    doc = transforms(2);
+    const std::vector<SequenceFrame> frames = readTransforms(write(doc), {});
+    writeImage(Image(8, 8, 3), dir_ / "images/frame_1.png");
+    expectContains(inputErrorOf([&] { readFramePhoto(frames[1], dir_ / "transforms.json"); }),
+                   {"frames[1].file_path", "32x24", "8x8"});
+}
+
+// deltagi render over a sequence writes one file per frame; 0:3 at once and 1:3 alone give the same frames.
+TEST_F(SequenceTest, RenderingInChunksGivesTheSameFrames) {
+    write(transforms(3));
+    json scene = test::tinySceneJson(32, 24, {0.8, 0.2, 0.1});
+    scene.erase("camera");
+    scene["sequence"] = {{"transforms", "transforms.json"}};
+    const fs::path sceneFile = write(scene, "scene.json");
+    auto run = [&](const std::string& args) {
+        const std::string command = std::string(DELTAGI_CLI) + " render " + sceneFile.string() + " " + args +
+                                    " -q 2>" + (dir_ / "err.txt").string();
+        const int status = std::system(command.c_str());
+        return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    };
+    ASSERT_EQ(run("-o " + (dir_ / "all_####.png").string()), 0) << test::readText(dir_ / "err.txt");
+    ASSERT_EQ(run("-o " + (dir_ / "part_%04d.exr").string() + " --frames 1:3 --layers " +
+                  (dir_ / "layers_##.exr").string()),
+              0)
+        << test::readText(dir_ / "err.txt");
+    for (int i : {0, 1, 2}) EXPECT_TRUE(fs::exists(dir_ / ("all_000" + std::to_string(i) + ".png")));
+    EXPECT_FALSE(fs::exists(dir_ / "part_0000.exr"));
+    ASSERT_EQ(run("-o " + (dir_ / "all_####.exr").string()), 0);
+    for (int i : {1, 2}) {
+        const Image a = readImage(dir_ / ("all_000" + std::to_string(i) + ".exr"));
+        const Image b = readImage(dir_ / ("part_000" + std::to_string(i) + ".exr"));
+        ASSERT_EQ(a.data().size(), b.data().size());
+        for (size_t k = 0; k < a.data().size(); ++k) ASSERT_NEAR(a.data()[k], b.data()[k], 1e-4f) << i;
+        EXPECT_TRUE(fs::exists(dir_ / ("layers_0" + std::to_string(i) + ".exr")));
+    }
+    // Each frame has its photo: the background differs from frame to frame.
+    const Image first = readImage(dir_ / "all_0000.exr"), second = readImage(dir_ / "all_0001.exr");
+    EXPECT_NE(first.at(0, 0, 0), second.at(0, 0, 0));
+    // Without a frame number in the output's name: one clear error.
+    EXPECT_EQ(run("-o " + (dir_ / "one.png").string()), 1);
+    EXPECT_NE(test::readText(dir_ / "err.txt").find("frame_####.png"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace deltagi
