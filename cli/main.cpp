@@ -305,6 +305,7 @@ int runRender(const RenderArgs& args) {
         scene.camera = scene.sequence.front().camera;
         scene.background = readFramePhoto(scene.sequence.front(), scene.sequenceFile);
     }
+    if (!args.layers.empty()) scene.options.render.layers = true;
     if (!scene.sequence.empty()) return runRenderSequence(args, scene, threads);
     if (progress) printStep("load", loadMs);
     refuseInputs(outputs, sceneInputs(scene));

@@ -333,7 +333,7 @@ void readTrace(const JsonNode& node, TraceOptions& trace) {
 
 void readRender(const JsonNode& node, RenderOptions& render) {
     node.allowKeys({"samples_per_pixel", "indirect", "double_shadow_fix", "relight_indirect", "relight_cones",
-                    "light_bounces", "denoise_radius", "relight_object_light"});
+                    "light_bounces", "denoise_radius", "relight_object_light", "layers"});
     if (auto n = node.find("samples_per_pixel")) {
         int spp = n->integer(1, 16);
         if (spp != 1 && spp != 4 && spp != 9 && spp != 16)
@@ -343,6 +343,7 @@ void readRender(const JsonNode& node, RenderOptions& render) {
     if (auto n = node.find("indirect")) render.indirect = n->boolean();
     if (auto n = node.find("double_shadow_fix")) render.doubleShadowFix = n->boolean();
     if (auto n = node.find("relight_indirect")) render.relightIndirect = n->boolean();
+    if (auto n = node.find("layers")) render.layers = n->boolean();
     if (auto n = node.find("denoise_radius")) render.denoiseRadius = n->integer(0, 8);
     if (auto n = node.find("light_bounces")) render.lightBounces = n->integer(1, 8);
     if (auto n = node.find("relight_cones")) {
@@ -504,7 +505,8 @@ json optionsToJson(const Options& o) {
           {"relight_cones", o.render.relightCones},
           {"relight_object_light", o.render.relightObjectLight},
           {"light_bounces", o.render.lightBounces},
-          {"denoise_radius", o.render.denoiseRadius}}},
+          {"denoise_radius", o.render.denoiseRadius},
+          {"layers", o.render.layers}}},
         {"environment",
          {{"light_count", o.environment.lightCount},
           {"extraction", o.environment.extraction},

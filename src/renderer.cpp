@@ -600,10 +600,12 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
         out.composite = out.background;
         out.objectMask = Image(camera.width, camera.height, 1);
         out.delta = Image(camera.width, camera.height, 3);
-        out.object = Image(camera.width, camera.height, 4);
-        out.shadow = Image(camera.width, camera.height, 3);
-        out.indirect = Image(camera.width, camera.height, 3);
-        out.depth = depthImage(camera, GBuffer{}, realSurfaces());
+        if (o.render.layers) {
+            out.object = Image(camera.width, camera.height, 4);
+            out.shadow = Image(camera.width, camera.height, 3);
+            out.indirect = Image(camera.width, camera.height, 3);
+            out.depth = depthImage(camera, GBuffer{}, realSurfaces());
+        }
         out.totalMs =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
         return out;
@@ -689,15 +691,18 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     timer.lap("background");
 
     // 8. Differential composite, and its layers.
+    if (!o.render.layers) addInto(realShadow, std::move(realIndirect));
     CompositeImages images =
-        differentialComposite(out.background, gbuffer, objectRadiance, realShadow, realIndirect);
+        o.render.layers
+            ? differentialComposite(out.background, gbuffer, objectRadiance, realShadow, realIndirect)
+            : differentialComposite(out.background, gbuffer, objectRadiance, realShadow);
     out.composite = std::move(images.composite);
     out.objectMask = std::move(images.objectMask);
     out.delta = std::move(images.delta);
     out.object = std::move(images.object);
     out.shadow = std::move(images.shadow);
     out.indirect = std::move(images.indirect);
-    out.depth = depthImage(camera, gbuffer, realSurfaces());
+    if (o.render.layers) out.depth = depthImage(camera, gbuffer, realSurfaces());
     timer.lap("composite");
     out.totalMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return out;

@@ -254,7 +254,15 @@ TEST(Render, TheLayersRebuildTheComposite) {
     Scene s = test::floorScene();
     s.virtuals.push_back(placed(makeSphere(0.2f, 48), {0.0f, 0.3f, 0.0f}, diffuse({0.8f, 0.2f, 0.1f}), "ball"));
     s.background = Image(64, 48, 3, 0.3f);
+    s.options.render.layers = true;
     const RenderOutput out = render(s);
+    // Without the option, the same composite and no layers.
+    Scene without = s;
+    without.options.render.layers = false;
+    const RenderOutput plain = render(without);
+    EXPECT_TRUE(plain.object.empty() && plain.shadow.empty() && plain.depth.empty());
+    for (size_t k = 0; k < out.composite.data().size(); ++k)
+        ASSERT_NEAR(plain.composite.data()[k], out.composite.data()[k], 1e-6f);
     const fs::path file = fs::temp_directory_path() / ("deltagi_layers_" + std::to_string(getpid()) + ".exr");
     {
         AtomicFile atomic(file);

@@ -167,6 +167,9 @@ struct RenderOptions {
     // it far and wide (field photo delta_rel_error 0.954 -> 0.365), but fall short on the Cornell scenes
     // (0.154 -> 0.169, Buddha 0.210 -> 0.261, glossy 0.232 -> 0.248, area 0.213 -> 0.227).
     std::string relightObjectLight = "cones";
+    // "layers": also make the compositing layers of RenderOutput (object, shadow, indirect, depth); `deltagi
+    // render --layers` sets it. Off by default: four more images a frame.
+    bool layers = false;
     // "light_bounces": bounces of indirect light the light volumes carry (1 to 8). 1 is the paper: the
     // reflective shadow maps inject the directly lit surfaces, and the cones gather one bounce. Each more
     // gathers the volume at every surface voxel of the real scene and adds what it reflects (bounceLight,

@@ -23,7 +23,7 @@ struct RenderOutput {
     Image background;  // the camera image used (given or rendered), linear RGB
     Image objectMask;  // 1 channel: coverage of virtual objects per pixel, in [0,1]
     Image delta;       // composite - background, linear RGB (negative where light was removed)
-    // The layers a compositor grades over the plate (render --layers):
+    // The layers a compositor grades over the plate (with options.render.layers; empty otherwise):
     //   composite = object.rgb + (1 - object.a) * max(background + shadow + indirect, 0)
     // (every pixel, to float rounding; max per channel). Of the real surfaces' change, `shadow` is the
     // change of their direct light — the objects' shadows, and the light of virtual emitters — and
