@@ -85,6 +85,31 @@ void readIntrinsics(const JsonNode& node, Camera& camera) {
     camera.cy = node.has("cy") ? node.child("cy").floatNumber() : 0.5f * static_cast<float>(camera.height);
 }
 
+// "distortion": {"model": "opencv", "k1", "k2", "k3", "p1", "p2"} or {"model": "fisheye", "k1".."k4"}, each
+// coefficient 0 unless given.
+LensDistortion readDistortion(const JsonNode& node) {
+    LensDistortion d;
+    const JsonNode modelNode = node.child("model");
+    const std::string model = modelNode.string();
+    auto coefficient = [&](std::string_view key) {
+        auto n = node.find(key);
+        return n ? n->floatNumber({-1e3, 1e3, false, false}) : 0.0f;
+    };
+    if (model == "opencv") {
+        node.allowKeys({"model", "k1", "k2", "k3", "p1", "p2"});
+        d.model = LensDistortion::Model::OpenCV;
+        d.k1 = coefficient("k1"), d.k2 = coefficient("k2"), d.k3 = coefficient("k3");
+        d.p1 = coefficient("p1"), d.p2 = coefficient("p2");
+    } else if (model == "fisheye") {
+        node.allowKeys({"model", "k1", "k2", "k3", "k4"});
+        d.model = LensDistortion::Model::Fisheye;
+        d.k1 = coefficient("k1"), d.k2 = coefficient("k2"), d.k3 = coefficient("k3"), d.k4 = coefficient("k4");
+    } else if (model != "none") {
+        modelNode.fail("expected \"opencv\", \"fisheye\" or \"none\", got \"" + model + "\"");
+    }
+    return d;
+}
+
 // OpenGL camera frame: the camera looks down -z with +y up, so -z maps to the view direction.
 glm::mat4 lookAtPose(const JsonNode& node) {
     glm::vec3 position = node.child("position").vec3();
@@ -133,11 +158,12 @@ glm::mat4 matrixPose(const JsonNode& node) {
 
 Camera readCamera(const JsonNode& node) {
     node.allowKeys({"width", "height", "fx", "fy", "cx", "cy", "fov_y_deg", "position", "look_at", "up",
-                    "world_from_camera"});
+                    "world_from_camera", "distortion"});
     Camera camera;
     camera.width = node.child("width").integer(1, kMaxImageSide);
     camera.height = node.child("height").integer(1, kMaxImageSide);
     readIntrinsics(node, camera);
+    if (auto n = node.find("distortion")) camera.distortion = readDistortion(*n);
     bool lookAt = node.has("position") || node.has("look_at") || node.has("up");
     if (auto matrix = node.find("world_from_camera")) {
         if (lookAt) matrix->fail("give either world_from_camera or position, look_at (up), not both");

@@ -57,6 +57,21 @@ TEST(LensDistortion, CameraRaysGoThroughTheDistortion) {
     }
 }
 
+// A single camera takes its distortion from the scene file too.
+TEST(LensDistortion, TheSceneFilesCameraReadsIt) {
+    json doc = test::tinySceneJson(32, 24, {0.5, 0.5, 0.5});
+    doc["camera"]["distortion"] = {{"model", "opencv"}, {"k1", -0.2}, {"p2", 0.001}};
+    const Scene scene = loadScene(doc, "scene.json");
+    EXPECT_EQ(scene.camera.distortion.model, LensDistortion::Model::OpenCV);
+    EXPECT_FLOAT_EQ(scene.camera.distortion.k1, -0.2f);
+    EXPECT_FLOAT_EQ(scene.camera.distortion.p2, 0.001f);
+    doc["camera"]["distortion"] = {{"model", "division"}};
+    expectContains(inputErrorOf([&] { loadScene(doc, "scene.json"); }),
+                   {"scene.json: camera.distortion.model", "division"});
+    doc["camera"]["distortion"] = {{"model", "fisheye"}, {"p1", 0.1}};
+    expectContains(inputErrorOf([&] { loadScene(doc, "scene.json"); }), {"camera.distortion", "p1"});
+}
+
 class SequenceTest : public ::testing::Test {
   protected:
     void SetUp() override {
