@@ -708,6 +708,7 @@ VolumeRegion volumeRegion(const Scene& scene) {
 }
 
 RenderOutput render(const Scene& scene, const StageCallback& onStage) {
+    checkFrame(scene);
     StaticWork fresh;
     return renderFrame(scene, fresh, onStage);
 }
@@ -724,6 +725,7 @@ void FrameRenderer::clear() {
 }
 
 RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onStage) {
+    checkFrame(scene);
     const uint64_t signature = staticSignature(scene);
     if (signature != state_->kept.signature) {
         state_->kept = StaticWork{};
