@@ -108,6 +108,7 @@ PYBIND11_MODULE(deltagi, m) {
             "load",
             [](const std::filesystem::path& path, const std::vector<std::string>& overrides) {
                 auto s = std::make_unique<PyScene>();
+                py::gil_scoped_release released;  // meshes and photos can take a while to read
                 s->scene = loadScene(path, overrides);
                 return s;
             },

@@ -3,8 +3,8 @@
 
     python3 examples/python/animate.py [OUT_FOLDER] [FRAMES]      (default: out/animation, 12 frames)
 
-Small on purpose (160x120, 32^3 volumes): about a tenth of a second a frame on 2 cores. The real scene's work
-(its voxels, shadow maps and light) is done in the first frame and kept while only the ball moves.
+Small on purpose (160x120, 32^3 volumes): 2.3 s in all on 2 cores. The real scene's work (its voxels, shadow
+maps and light) is done in the first frame (0.5 s) and kept while only the ball moves (25-55 ms a frame).
 """
 import math
 import pathlib
