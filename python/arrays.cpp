@@ -51,7 +51,8 @@ py::array_t<float> fromMat4(const glm::mat4& m) {
 
 glm::vec3 toVec3(const py::handle& object, const std::string& where) {
     auto a = floats(object, where);
-    if (a.ndim() != 1 || a.shape(0) != 3) throw InputError(where, "expected 3 numbers, got shape " + shapeText(a));
+    if (a.ndim() != 1 || a.shape(0) != 3)
+        throw InputError(where, "expected 3 numbers, got shape " + shapeText(a));
     glm::vec3 v(a.at(0), a.at(1), a.at(2));
     if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
         throw InputError(where, "expected finite numbers");
@@ -61,7 +62,8 @@ glm::vec3 toVec3(const py::handle& object, const std::string& where) {
 Image toImage(const py::handle& object, const std::string& where) {
     auto a = floats(object, where);
     if (a.ndim() != 3 || a.shape(2) != 3)
-        throw InputError(where, "expected an RGB image, an array of shape (height, width, 3), got " + shapeText(a));
+        throw InputError(where,
+                         "expected an RGB image, an array of shape (height, width, 3), got " + shapeText(a));
     Image image(static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)), 3);
     std::copy_n(a.data(), image.data().size(), image.data().begin());
     return image;

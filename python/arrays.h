@@ -4,8 +4,8 @@
 
 #include <string>
 
-#include <glm/glm.hpp>
 #include <pybind11/numpy.h>
+#include <glm/glm.hpp>
 
 #include "deltagi/image.h"
 
@@ -20,8 +20,8 @@ py::array_t<float> fromMat4(const glm::mat4& m);
 // A 3-vector (any sequence of 3 finite numbers).
 glm::vec3 toVec3(const py::handle& sequence, const std::string& where);
 
-// An H x W x 3 array of floats (any dtype NumPy converts to float32) to an Image: one copy, the Image owns its
-// pixels.
+// An H x W x 3 array of floats (any dtype NumPy converts to float32) to an Image: one copy, the Image owns
+// its pixels.
 Image toImage(const py::handle& array, const std::string& where);
 
 // The image as an H x W x C array (H x W when C = 1) that owns it: no copy; the array keeps the pixels alive.

@@ -1,6 +1,6 @@
 // The Python module `deltagi`: load a scene, set the camera pose, the objects' transforms and the photo, and
-// render frames into NumPy arrays. A thin layer over the public C++ API (include/deltagi/): every check is the
-// library's, and its InputError becomes deltagi.InputError (a ValueError) with the same one-line message.
+// render frames into NumPy arrays. A thin layer over the public C++ API (include/deltagi/): every check is
+// the library's, and its InputError becomes deltagi.InputError (a ValueError) with the same one-line message.
 #include <mutex>
 #include <string>
 #include <vector>
@@ -44,8 +44,9 @@ std::vector<size_t> objectMeshes(const Scene& scene, const py::handle& key) {
     if (py::isinstance<py::int_>(key)) {
         const auto index = key.cast<long long>();
         if (index < 0 || static_cast<size_t>(index) >= meshes.size())
-            throw InputError("object " + std::to_string(index),
-                             "out of range: the scene has " + std::to_string(meshes.size()) + " virtual objects");
+            throw InputError(
+                "object " + std::to_string(index),
+                "out of range: the scene has " + std::to_string(meshes.size()) + " virtual objects");
         return {static_cast<size_t>(index)};
     }
     if (!py::isinstance<py::str>(key)) throw InputError("object", "expected an index or a name");
@@ -56,8 +57,8 @@ std::vector<size_t> objectMeshes(const Scene& scene, const py::handle& key) {
     if (found.empty()) {
         std::string names;
         for (const TriangleMesh& m : meshes) names += (names.empty() ? "'" : ", '") + m.name + "'";
-        throw InputError("object '" + name + "'",
-                         "no virtual object of that name (there are: " + (names.empty() ? "none" : names) + ")");
+        throw InputError("object '" + name + "'", "no virtual object of that name (there are: " +
+                                                      (names.empty() ? "none" : names) + ")");
     }
     return found;
 }
@@ -164,7 +165,8 @@ PYBIND11_MODULE(deltagi, m) {
                         placed.push_back(scene.virtuals[i]);
                         setTransform(placed.back(), worldFromObject);
                     }
-                    for (size_t k = 0; k < meshes.size(); ++k) scene.virtuals[meshes[k]] = std::move(placed[k]);
+                    for (size_t k = 0; k < meshes.size(); ++k)
+                        scene.virtuals[meshes[k]] = std::move(placed[k]);
                 });
             },
             py::arg("object"), py::arg("world_from_object"),
@@ -208,10 +210,12 @@ PYBIND11_MODULE(deltagi, m) {
         [](PyScene& s) { return renderLocked(s, [](const Scene& scene) { return render(scene); }); },
         py::arg("scene"), "One frame from scratch (FrameRenderer.render's result).");
     m.def(
-        "read_image", [](const std::filesystem::path& path) { return toArray(readImage(path)); }, py::arg("path"),
-        "Reads PNG/JPEG (to linear), EXR, HDR as H x W x 3 float32.");
+        "read_image", [](const std::filesystem::path& path) { return toArray(readImage(path)); },
+        py::arg("path"), "Reads PNG/JPEG (to linear), EXR, HDR as H x W x 3 float32.");
     m.def(
         "write_image",
-        [](const std::filesystem::path& path, const py::handle& array) { writeImage(toImage(array, "image"), path); },
+        [](const std::filesystem::path& path, const py::handle& array) {
+            writeImage(toImage(array, "image"), path);
+        },
         py::arg("path"), py::arg("image"), "Writes .png (8-bit sRGB), .exr or .hdr (linear float).");
 }

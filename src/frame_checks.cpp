@@ -13,13 +13,14 @@ namespace deltagi {
 void checkFrame(const Scene& scene) {
     const Camera& c = scene.camera;
     if (c.width < 1 || c.height < 1)
-        throw InputError("camera", fmt::format("expected a positive width and height, got {}x{}", c.width,
-                                               c.height));
+        throw InputError("camera",
+                         fmt::format("expected a positive width and height, got {}x{}", c.width, c.height));
     if (!(c.fx > 0.0f && c.fy > 0.0f && std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) &&
           std::isfinite(c.cy)))
-        throw InputError("camera", fmt::format("expected finite intrinsics with fx, fy > 0, got fx {}, fy {}, "
-                                               "cx {}, cy {}",
-                                               c.fx, c.fy, c.cx, c.cy));
+        throw InputError("camera",
+                         fmt::format("expected finite intrinsics with fx, fy > 0, got fx {}, fy {}, "
+                                     "cx {}, cy {}",
+                                     c.fx, c.fy, c.cx, c.cy));
     try {
         checkCameraPose(c.worldFromCamera);
     } catch (const InputError& e) {
@@ -28,10 +29,10 @@ void checkFrame(const Scene& scene) {
     if (!scene.background) return;
     const Image& photo = *scene.background;
     if (photo.width() != c.width || photo.height() != c.height || photo.channels() != 3)
-        throw InputError("background", fmt::format("expected an RGB image of the camera's size {}x{}, got {}x{} "
-                                                   "with {} channels",
-                                                   c.width, c.height, photo.width(), photo.height(),
-                                                   photo.channels()));
+        throw InputError("background",
+                         fmt::format("expected an RGB image of the camera's size {}x{}, got {}x{} "
+                                     "with {} channels",
+                                     c.width, c.height, photo.width(), photo.height(), photo.channels()));
     const std::span<const float> pixels = photo.data();
     for (size_t i = 0; i < pixels.size(); ++i)
         if (!std::isfinite(pixels[i]))

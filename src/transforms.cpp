@@ -58,13 +58,14 @@ void checkCameraPose(const glm::mat4& worldFromCamera) {
 glm::mat4 lookAtPose(glm::vec3 position, glm::vec3 lookAt, glm::vec3 up) {
     glm::vec3 forward = lookAt - position;
     if (!(glm::length(forward) > kParallelTolerance * std::max(1.0f, glm::length(position))))
-        throw InputError("look_at",
-                         "expected a point different from camera.position (the camera needs a view direction)");
+        throw InputError(
+            "look_at", "expected a point different from camera.position (the camera needs a view direction)");
     forward = glm::normalize(forward);
     if (!(glm::length(up) > 0.0f)) throw InputError("up", "expected a non-zero vector");
     glm::vec3 right = glm::cross(forward, glm::normalize(up));
     if (!(glm::length(right) >= kParallelTolerance))
-        throw InputError("up", "expected a direction not parallel to the view direction (look_at - position)");
+        throw InputError("up",
+                         "expected a direction not parallel to the view direction (look_at - position)");
     right = glm::normalize(right);
     glm::vec3 trueUp = glm::cross(right, forward);
     glm::mat4 worldFromCamera(1.0f);

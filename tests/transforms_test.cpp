@@ -3,8 +3,8 @@
 #include <cmath>
 #include <limits>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
@@ -83,14 +83,22 @@ TEST(CameraPose, LookAtPoseIsTheSceneReadersPose) {
     nlohmann::json document = test::tinySceneJson(32, 24, {0.2, 0.3, 0.8});
     const Scene loaded = loadScene(document, "tiny.json");
     EXPECT_EQ(lookAtPose({0, 0.8f, 2}, {0, 0.1f, 0}, {0, 1, 0}), loaded.camera.worldFromCamera);
-    expectContains(inputErrorOf([] { lookAtPose({1, 2, 3}, {1, 2, 3}); }), "look_at: expected a point different");
-    expectContains(inputErrorOf([] { lookAtPose({0, 0, 0}, {0, 1, 0}, {0, 2, 0}); }), "up: expected a direction");
+    expectContains(inputErrorOf([] {
+                       lookAtPose({1, 2, 3}, {1, 2, 3});
+                   }),
+                   "look_at: expected a point different");
+    expectContains(inputErrorOf([] {
+                       lookAtPose({0, 0, 0}, {0, 1, 0}, {0, 2, 0});
+                   }),
+                   "up: expected a direction");
 }
 
 TEST(CameraPose, RefusesScaleAndReflection) {
     expectContains(inputErrorOf([] { checkCameraPose(glm::scale(glm::mat4(1.0f), glm::vec3(2.0f))); }),
                    "world_from_camera: expected an orthonormal rotation");
-    expectContains(inputErrorOf([] { checkCameraPose(glm::scale(glm::mat4(1.0f), {-1.0f, 1.0f, 1.0f})); }),
+    expectContains(inputErrorOf([] {
+                       checkCameraPose(glm::scale(glm::mat4(1.0f), {-1.0f, 1.0f, 1.0f}));
+                   }),
                    "reflection");
     checkCameraPose(lookAtPose({0, 1, 2}, {0, 0, 0}));  // no throw
 }

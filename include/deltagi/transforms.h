@@ -26,8 +26,8 @@ glm::mat4 lookAtPose(glm::vec3 position, glm::vec3 lookAt, glm::vec3 up = {0.0f,
 // transpose) and cleaned up as the scene reader does (degenerate triangles dropped, normals repaired), so
 // that an object moved to the scene file's transform is the loaded one bit for bit. The object-space mesh is
 // mesh.objectSpace; a mesh without one (built in code) is taken as it is, and keeps itself as its
-// object-space mesh for the next call. Its name and material are kept. Throws InputError naming the mesh for a
-// bad transform (checkTransform) or a mesh the reader would refuse (no triangles, non-finite vertices).
+// object-space mesh for the next call. Its name and material are kept. Throws InputError naming the mesh for
+// a bad transform (checkTransform) or a mesh the reader would refuse (no triangles, non-finite vertices).
 void setTransform(TriangleMesh& mesh, const glm::mat4& worldFromObject);
 
 }  // namespace deltagi
