@@ -22,7 +22,7 @@ target_link_libraries(deltagi_shared PRIVATE "$<LINK_LIBRARY:WHOLE_ARCHIVE,delta
 target_link_libraries(deltagi_shared PUBLIC glm::glm nlohmann_json::nlohmann_json)
 # Every symbol resolved when the library is linked, not when a consumer is (but under the sanitizers, whose
 # runtime only executables link).
-if(NOT DELTAGI_SANITIZE AND NOT DELTAGI_FUZZ)
+if(NOT DELTAGI_SANITIZE)
   target_link_options(deltagi_shared PRIVATE -Wl,--no-undefined)
 endif()
 target_include_directories(deltagi_shared PUBLIC
