@@ -8,6 +8,7 @@ packages=(
   libembree-dev libtbb-dev libassimp-dev libopenimageio-dev openimageio-tools
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  pybind11-dev python3-dev python3-numpy python3-pytest
   jq
   "$@"
 )

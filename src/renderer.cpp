@@ -755,6 +755,7 @@ std::vector<ImageLayer> compositingLayers(const RenderOutput& output) {
 }
 
 RenderOutput render(const Scene& scene, const StageCallback& onStage) {
+    checkFrame(scene);
     StaticWork fresh;
     return renderFrame(scene, fresh, onStage);
 }
@@ -771,6 +772,7 @@ void FrameRenderer::clear() {
 }
 
 RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onStage) {
+    checkFrame(scene);
     const uint64_t signature = staticSignature(scene);
     if (signature != state_->kept.signature) {
         state_->kept = StaticWork{};

@@ -13,6 +13,7 @@
 #include "deltagi/error.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_info.h"
+#include "deltagi/transforms.h"
 #include "environment_io.h"
 #include "json_reader.h"
 #include "mesh_io.h"
@@ -27,9 +28,6 @@ namespace {
 
 constexpr int kMaxImageSide = 16384;            // camera width and height
 constexpr int kMaxShapeSegments = 4096;         // sphere and torus tessellation
-constexpr float kOrthonormalTolerance = 1e-3f;  // world_from_camera rotation: max |R^T R - I|
-constexpr float kAffineTolerance = 1e-6f;       // last row of 4x4 matrices: [0, 0, 0, 1]
-constexpr float kParallelTolerance = 1e-6f;     // camera up vs view direction: |cross| of unit vectors
 constexpr float kEnergyTolerance = 1e-6f;       // albedo + specular <= 1 up to rounding
 
 }  // namespace
@@ -58,22 +56,11 @@ std::string sizeText(int width, int height) {
 
 // ---- camera -----------------------------------------------------------------------------------------------
 
-void checkAffine(const JsonNode& node, const glm::mat4& m) {
-    glm::vec4 lastRow(m[0][3], m[1][3], m[2][3], m[3][3]);
-    if (glm::length(lastRow - glm::vec4(0, 0, 0, 1)) > kAffineTolerance)
-        node.fail(fmt::format("expected the last row to be [0, 0, 0, 1], got [{}, {}, {}, {}]", lastRow.x,
-                              lastRow.y, lastRow.z, lastRow.w));
-}
-
 void readIntrinsics(const JsonNode& node, Camera& camera) {
     bool pinhole = node.has("fx") || node.has("fy") || node.has("cx") || node.has("cy");
     if (auto fov = node.find("fov_y_deg")) {
         if (pinhole) fov->fail("give either fov_y_deg or fx, fy (cx, cy), not both");
-        double fovRad = glm::radians(fov->number({0.0, 180.0, true, true}));
-        camera.fy = static_cast<float>(0.5 * camera.height / std::tan(0.5 * fovRad));
-        camera.fx = camera.fy;  // square pixels
-        camera.cx = 0.5f * static_cast<float>(camera.width);
-        camera.cy = 0.5f * static_cast<float>(camera.height);
+        camera.setFieldOfView(fov->number({0.0, 180.0, true, true}));
         return;
     }
     if (!pinhole)
@@ -110,49 +97,25 @@ LensDistortion readDistortion(const JsonNode& node) {
     return d;
 }
 
-// OpenGL camera frame: the camera looks down -z with +y up, so -z maps to the view direction.
+// The camera's pose: the checks are deltagi/transforms.h's, which name the key; here under the JSON path.
 glm::mat4 lookAtPose(const JsonNode& node) {
     glm::vec3 position = node.child("position").vec3();
-    JsonNode lookAtNode = node.child("look_at");
-    glm::vec3 forward = lookAtNode.vec3() - position;
-    if (glm::length(forward) <= kParallelTolerance * std::max(1.0f, glm::length(position)))
-        lookAtNode.fail(
-            "expected a point different from camera.position (the camera needs a view direction)");
-    forward = glm::normalize(forward);
-    glm::vec3 up(0.0f, 1.0f, 0.0f);
-    if (auto upNode = node.find("up")) {
-        up = upNode->vec3();
-        if (glm::length(up) == 0.0f) upNode->fail("expected a non-zero vector");
+    glm::vec3 lookAt = node.child("look_at").vec3();
+    glm::vec3 up = node.has("up") ? node.child("up").vec3() : glm::vec3(0.0f, 1.0f, 0.0f);
+    try {
+        return deltagi::lookAtPose(position, lookAt, up);
+    } catch (const InputError& e) {
+        throw InputError(node.childWhere(e.where()), e.message());
     }
-    glm::vec3 right = glm::cross(forward, glm::normalize(up));
-    if (glm::length(right) < kParallelTolerance)
-        throw InputError(node.childWhere("up"),
-                         "expected a direction not parallel to the view direction (look_at - position)");
-    right = glm::normalize(right);
-    glm::vec3 trueUp = glm::cross(right, forward);
-    glm::mat4 worldFromCamera(1.0f);
-    worldFromCamera[0] = glm::vec4(right, 0.0f);
-    worldFromCamera[1] = glm::vec4(trueUp, 0.0f);
-    worldFromCamera[2] = glm::vec4(-forward, 0.0f);
-    worldFromCamera[3] = glm::vec4(position, 1.0f);
-    return worldFromCamera;
 }
 
 glm::mat4 matrixPose(const JsonNode& node) {
     glm::mat4 m = node.matrix4();
-    checkAffine(node, m);
-    glm::mat3 rotation(m);
-    glm::mat3 error = glm::transpose(rotation) * rotation - glm::mat3(1.0f);
-    float maxError = 0.0f;
-    for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) maxError = std::max(maxError, std::abs(error[c][r]));
-    if (maxError > kOrthonormalTolerance)
-        node.fail(fmt::format(
-            "expected an orthonormal rotation part (no scale or shear), but |R^T R - I| reaches {:.3g}",
-            maxError));
-    if (glm::determinant(rotation) < 0.0f)
-        node.fail(
-            "expected a rotation, got a reflection (determinant -1): the camera frame must be right-handed");
+    try {
+        checkCameraPose(m);
+    } catch (const InputError& e) {
+        node.fail(e.message());
+    }
     return m;
 }
 
@@ -310,10 +273,11 @@ glm::vec3 readScale(const JsonNode& node) {
 glm::mat4 readTransform(const JsonNode& node) {
     if (node.value().is_array()) {
         glm::mat4 m = node.matrix4();
-        checkAffine(node, m);
-        float det = glm::determinant(glm::mat3(m));
-        if (det == 0.0f || !std::isfinite(det))
-            node.fail("expected an invertible matrix, got a singular one");
+        try {
+            checkTransform(m);
+        } catch (const InputError& e) {
+            node.fail(e.message());
+        }
         return m;
     }
     node.allowKeys({"translate", "rotate_deg", "scale"});
@@ -405,8 +369,9 @@ TriangleMesh readShape(const JsonNode& node) {
     typeNode.fail("expected \"box\", \"sphere\", \"quad\", \"torus\" or \"triangles\", got \"" + type + "\"");
 }
 
+// Keeps each mesh's object-space copy when `movable` (the virtual objects, which setTransform() moves).
 std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& sceneFolder,
-                                        std::vector<fs::path>& files) {
+                                        std::vector<fs::path>& files, bool movable) {
     entry.allowKeys({"name", "file", "shape", "transform", "material"});
     auto fileNode = entry.find("file"), shapeNode = entry.find("shape");
     if (fileNode && shapeNode) shapeNode->fail("give either \"file\" or \"shape\", not both");
@@ -432,6 +397,10 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
     for (FileMesh& fileMesh : meshes) {
         TriangleMesh& mesh = fileMesh.mesh;
         mesh.material = combineMaterial(overrides, fileMesh.material, mesh.name, materialWhere);
+        if (movable) {
+            mesh.objectSpace = std::make_shared<const TriangleMesh>(mesh);
+            mesh.worldFromObject = worldFromObject;
+        }
         transformMesh(mesh, worldFromObject);
         cleanMesh(mesh, entry.where());
         result.push_back(std::move(mesh));
@@ -441,11 +410,11 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
 
 // Appends the mesh files it reads to `files`.
 std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sceneFolder,
-                                       std::vector<fs::path>& files) {
+                                       std::vector<fs::path>& files, bool movable) {
     list.requireArray();
     std::vector<TriangleMesh> meshes;
     for (size_t i = 0; i < list.size(); ++i) {
-        std::vector<TriangleMesh> entry = readMeshEntry(list.element(i), sceneFolder, files);
+        std::vector<TriangleMesh> entry = readMeshEntry(list.element(i), sceneFolder, files, movable);
         std::move(entry.begin(), entry.end(), std::back_inserter(meshes));
     }
     return meshes;
@@ -596,8 +565,8 @@ Scene loadScene(const json& document, const fs::path& file) {
 
     if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
-    if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder, scene.meshFiles);
-    if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles);
+    if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder, scene.meshFiles, false);
+    if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles, true);
     for (const std::string& warning : lightPlacementWarnings(scene))
         scene.warnings.push_back(file.string() + ": " + warning);
     for (const std::string& warning : sceneWarnings(scene))

@@ -14,11 +14,16 @@ class InputError : public std::runtime_error {
 public:
     // `where` names the file and/or key, e.g. "scenes/box.json: options.volume.resolution".
     InputError(std::string where, const std::string& what)
-        : std::runtime_error(where.empty() ? what : where + ": " + what), where_(std::move(where)) {}
+        : std::runtime_error(where.empty() ? what : where + ": " + what),
+          where_(std::move(where)),
+          message_(what) {}
     const std::string& where() const { return where_; }
+    // What was expected, without `where` (for callers that name the place again, further out).
+    const std::string& message() const { return message_; }
 
 private:
     std::string where_;
+    std::string message_;
 };
 
 }  // namespace deltagi

@@ -47,6 +47,12 @@ std::vector<ImageLayer> compositingLayers(const RenderOutput& output);
 // Called after each stage, for progress output: the stage's name and its time.
 using StageCallback = std::function<void(const StageTiming&)>;
 
+// Checks what an application may set in code between frames: the camera's size, intrinsics and pose
+// (checkCameraPose) and the photo (camera-sized, 3 channels, finite). Throws InputError naming the field
+// ("camera.world_from_camera", "background"). render() and FrameRenderer::render() call it first; the
+// scene's meshes are checked where they are made (loadScene, setTransform).
+void checkFrame(const Scene& scene);
+
 // Renders one frame from scratch.
 RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 

@@ -2,7 +2,9 @@
 // Everything is in world space (right-handed; any unit, used consistently), already transformed.
 #pragma once
 
+#include <cmath>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -51,6 +53,11 @@ struct TriangleMesh {
     std::vector<glm::vec3> normals;     // world space, unit length, one per position
     std::vector<glm::uvec3> triangles;  // indices into positions
     Material material;
+    // The virtual objects' meshes as read, in object space, and the transform that placed them (the scene
+    // file's "transform"): setTransform() (deltagi/transforms.h) places them again as the objects move.
+    // Shared and never changed (copies of a scene share it); null for the real scene's meshes.
+    std::shared_ptr<const TriangleMesh> objectSpace;
+    glm::mat4 worldFromObject{1.0f};
 
     Bounds3f bounds() const;
     size_t triangleCount() const { return triangles.size(); }
@@ -80,6 +87,14 @@ struct Camera {
     LensDistortion distortion;  // of the photo: rays go through it, so the layers line up with the photo
 
     glm::vec3 position() const { return glm::vec3(worldFromCamera[3]); }
+    // Square pixels, the principal point at the centre and a vertical field of view of `fovYDeg` degrees in
+    // (0, 180) (the scene file's "fov_y_deg"), for the current width and height.
+    void setFieldOfView(double fovYDeg) {
+        fy = static_cast<float>(0.5 * height / std::tan(0.5 * glm::radians(fovYDeg)));
+        fx = fy;
+        cx = 0.5f * static_cast<float>(width);
+        cy = 0.5f * static_cast<float>(height);
+    }
     // Unnormalized world-space direction through image point (px, py) in pixels.
     glm::vec3 rayDirection(float px, float py) const {
         glm::vec2 n((px - cx) / fx, (py - cy) / fy);
