@@ -241,7 +241,12 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
         outputs.push_back(framePath(args.output, frame.index));
         if (!args.layers.empty()) outputs.push_back(framePath(args.layers, frame.index));
     }
-    refuseInputs(outputs, sceneInputs(scene));
+    // Every frame's photo and the transforms file are inputs too, not only the first frame's photo.
+    std::vector<cli::RunInput> inputs = sceneInputs(scene);
+    inputs.push_back({scene.sequenceFile, "the sequence's transforms file"});
+    for (const SequenceFrame& frame : scene.sequence)
+        inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
+    refuseInputs(outputs, inputs);
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const auto start = std::chrono::steady_clock::now();
     FrameRenderer renderer;

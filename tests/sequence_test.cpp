@@ -190,6 +190,12 @@ TEST_F(SequenceTest, RenderingInChunksGivesTheSameFrames) {
     // Each frame has its photo: the background differs from frame to frame.
     const Image first = readImage(dir_ / "all_0000.exr"), second = readImage(dir_ / "all_0001.exr");
     EXPECT_NE(first.at(0, 0, 0), second.at(0, 0, 0));
+    // An output pattern that names a frame's photo is refused before anything is written.
+    EXPECT_EQ(run("-o " + (dir_ / "images/frame_#.png").string()), 1);
+    EXPECT_NE(test::readText(dir_ / "err.txt").find("is an input of this run"), std::string::npos);
+    // ... with a range of frames too.
+    EXPECT_EQ(run("-o " + (dir_ / "images/frame_#.png").string() + " --frames 1:3"), 1);
+    EXPECT_NE(test::readText(dir_ / "err.txt").find("frame_1.png"), std::string::npos);
     // Without a frame number in the output's name: one clear error.
     EXPECT_EQ(run("-o " + (dir_ / "one.png").string()), 1);
     EXPECT_NE(test::readText(dir_ / "err.txt").find("frame_####.png"), std::string::npos);
