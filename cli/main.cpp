@@ -250,7 +250,7 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const auto start = std::chrono::steady_clock::now();
     FrameRenderer renderer;
-    const std::vector<SequenceFrame> frames = scene.sequence;
+    const std::vector<SequenceFrame>& frames = scene.sequence;  // the loop changes the camera and photo only
     for (size_t i = 0; i < frames.size(); ++i) {
         const SequenceFrame& frame = frames[i];
         scene.camera = frame.camera;

@@ -117,4 +117,17 @@ void checkRenderMemory(const Options& options, const Camera& camera, size_t ligh
 // sysconf(_SC_PHYS_PAGES) * sysconf(_SC_PAGE_SIZE).
 uint64_t physicalMemoryBytes();
 
+// A lens distortion of `model` whose coefficients (k1..k4, p1, p2; 0 when absent) `coefficient(key)` reads:
+// the scene file's camera.distortion and a transforms file's (globally or per frame) read them alike.
+template <typename Coefficient>
+LensDistortion lensDistortion(LensDistortion::Model model, Coefficient&& coefficient) {
+    LensDistortion d;
+    d.model = model;
+    if (model == LensDistortion::Model::None) return d;
+    d.k1 = coefficient("k1"), d.k2 = coefficient("k2"), d.k3 = coefficient("k3");
+    if (model == LensDistortion::Model::OpenCV) d.p1 = coefficient("p1"), d.p2 = coefficient("p2");
+    if (model == LensDistortion::Model::Fisheye) d.k4 = coefficient("k4");
+    return d;
+}
+
 }  // namespace deltagi

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <optional>
 
+#include "environment.h"
 #include "lights.h"
 #include "parallel.h"
 
@@ -323,7 +324,7 @@ std::vector<int> rsmResolutions(const Options& options, std::span<const Light> l
             const glm::vec3 corner(c & 1 ? 1.0f : 0.0f, c & 2 ? 1.0f : 0.0f, c & 4 ? 1.0f : 0.0f);
             const glm::vec3 p = region.origin + region.size * (c == 8 ? glm::vec3(0.5f) : corner);
             const glm::vec3 e = sampleLight(lights[l], p).irradiance;
-            irradiance[l] = std::max(irradiance[l], 0.2126f * e.x + 0.7152f * e.y + 0.0722f * e.z);
+            irradiance[l] = std::max(irradiance[l], luminance(e));
         }
         brightest = std::max(brightest, irradiance[l]);
     }

@@ -75,7 +75,6 @@ void readIntrinsics(const JsonNode& node, Camera& camera) {
 // "distortion": {"model": "opencv", "k1", "k2", "k3", "p1", "p2"} or {"model": "fisheye", "k1".."k4"}, each
 // coefficient 0 unless given.
 LensDistortion readDistortion(const JsonNode& node) {
-    LensDistortion d;
     const JsonNode modelNode = node.child("model");
     const std::string model = modelNode.string();
     auto coefficient = [&](std::string_view key) {
@@ -84,17 +83,14 @@ LensDistortion readDistortion(const JsonNode& node) {
     };
     if (model == "opencv") {
         node.allowKeys({"model", "k1", "k2", "k3", "p1", "p2"});
-        d.model = LensDistortion::Model::OpenCV;
-        d.k1 = coefficient("k1"), d.k2 = coefficient("k2"), d.k3 = coefficient("k3");
-        d.p1 = coefficient("p1"), d.p2 = coefficient("p2");
-    } else if (model == "fisheye") {
-        node.allowKeys({"model", "k1", "k2", "k3", "k4"});
-        d.model = LensDistortion::Model::Fisheye;
-        d.k1 = coefficient("k1"), d.k2 = coefficient("k2"), d.k3 = coefficient("k3"), d.k4 = coefficient("k4");
-    } else if (model != "none") {
-        modelNode.fail("expected \"opencv\", \"fisheye\" or \"none\", got \"" + model + "\"");
+        return lensDistortion(LensDistortion::Model::OpenCV, coefficient);
     }
-    return d;
+    if (model == "fisheye") {
+        node.allowKeys({"model", "k1", "k2", "k3", "k4"});
+        return lensDistortion(LensDistortion::Model::Fisheye, coefficient);
+    }
+    if (model != "none") modelNode.fail("expected \"opencv\", \"fisheye\" or \"none\", got \"" + model + "\"");
+    return {};
 }
 
 // The camera's pose: the checks are deltagi/transforms.h's, which name the key; here under the JSON path.

@@ -49,22 +49,18 @@ Camera readFrameCamera(const JsonNode& frame, const JsonNode& root) {
         auto n = intrinsic(frame, root, key);
         return n ? n->floatNumber({-1e3, 1e3, false, false}) : 0.0f;
     };
-    LensDistortion& d = camera.distortion;
     auto modelNode = intrinsic(frame, root, "camera_model");
     const std::string model = modelNode ? modelNode->string() : "";
-    if (model == "OPENCV" || (model.empty() && (intrinsic(frame, root, "k1") || intrinsic(frame, root, "p1")))) {
-        d.model = LensDistortion::Model::OpenCV;
-        d.k1 = coefficient("k1"), d.k2 = coefficient("k2"), d.k3 = coefficient("k3");
-        d.p1 = coefficient("p1"), d.p2 = coefficient("p2");
-    } else if (model == "OPENCV_FISHEYE") {
-        d.model = LensDistortion::Model::Fisheye;
-        d.k1 = coefficient("k1"), d.k2 = coefficient("k2"), d.k3 = coefficient("k3"), d.k4 = coefficient("k4");
-    } else if (!model.empty() && model != "PINHOLE" && model != "SIMPLE_PINHOLE") {
+    if (model == "OPENCV" || (model.empty() && (intrinsic(frame, root, "k1") || intrinsic(frame, root, "p1"))))
+        camera.distortion = lensDistortion(LensDistortion::Model::OpenCV, coefficient);
+    else if (model == "OPENCV_FISHEYE")
+        camera.distortion = lensDistortion(LensDistortion::Model::Fisheye, coefficient);
+    else if (!model.empty() && model != "PINHOLE" && model != "SIMPLE_PINHOLE")
         modelNode->fail("unknown camera model \"" + model + "\": expected PINHOLE, OPENCV or OPENCV_FISHEYE");
-    }
+    const LensDistortion& d = camera.distortion;
     if (d.model == LensDistortion::Model::OpenCV && d.k1 == 0 && d.k2 == 0 && d.k3 == 0 && d.p1 == 0 &&
         d.p2 == 0)
-        d.model = LensDistortion::Model::None;
+        camera.distortion.model = LensDistortion::Model::None;
 
     const JsonNode matrix = frame.child("transform_matrix");
     camera.worldFromCamera = matrix.matrix4();
