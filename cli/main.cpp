@@ -216,18 +216,20 @@ fs::path framePath(const fs::path& pattern, int index) {
     if (hash != std::string::npos) {
         size_t end = hash;
         while (end < text.size() && text[end] == '#') ++end;
-        return text.substr(0, hash) + fmt::format("{:0{}d}", index, static_cast<int>(end - hash)) + text.substr(end);
+        return text.substr(0, hash) + fmt::format("{:0{}d}", index, static_cast<int>(end - hash)) +
+               text.substr(end);
     }
     static const std::regex printfNumber("%(0?)([0-9]?)d");
     std::smatch match;
     if (std::regex_search(text, match, printfNumber)) {
         const int width = match[2].length() > 0 ? std::stoi(match[2].str()) : 0;
-        const std::string number =
-            match[1].length() > 0 ? fmt::format("{:0{}d}", index, width) : fmt::format("{:{}d}", index, width);
+        const std::string number = match[1].length() > 0 ? fmt::format("{:0{}d}", index, width)
+                                                         : fmt::format("{:{}d}", index, width);
         return match.prefix().str() + number + match.suffix().str();
     }
-    throw InputError(text, "a sequence writes one file per frame: give the frame number's place, "
-                           "e.g. frame_####.png or frame_%04d.png");
+    throw InputError(text,
+                     "a sequence writes one file per frame: give the frame number's place, "
+                     "e.g. frame_####.png or frame_%04d.png");
 }
 
 // A sequence ("sequence" in the scene): every frame with its camera and photo through one FrameRenderer, each
@@ -262,10 +264,11 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
         if (!args.layers.empty()) out.layers(compositingLayers(output), framePath(args.layers, frame.index));
         out.commit();
         if (progress) {
-            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double seconds =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             const double rate = static_cast<double>(i + 1) / seconds;
-            note("\rframe {}/{} (index {}): {:.2f} frames/s, {:.0f} s left   ", i + 1, frames.size(), frame.index,
-                 rate, static_cast<double>(frames.size() - i - 1) / rate);
+            note("\rframe {}/{} (index {}): {:.2f} frames/s, {:.0f} s left   ", i + 1, frames.size(),
+                 frame.index, rate, static_cast<double>(frames.size() - i - 1) / rate);
         }
     }
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -150,8 +150,8 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
         // over the cone of directions of their bounding sphere, and both sets are combined by multiple
         // importance sampling (balance heuristic). The map's samples alone left most points near the objects
         // with one or two rays that meet them: a speckled shadow.
-        const ObjectCone cone = mode == ShadowMode::DeltaShadow ? objectCone(origin, objectCentre, objectRadius)
-                                                                : ObjectCone{};
+        const ObjectCone cone =
+            mode == ShadowMode::DeltaShadow ? objectCone(origin, objectCentre, objectRadius) : ObjectCone{};
         // The cone's pdf per solid angle (0 outside it): the other term of the map's samples' balance
         // heuristic (both sets have `count` samples).
         auto conePdf = [&](glm::vec3 wi) {
@@ -207,7 +207,8 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
             }
             if (visibility == 0.0f) continue;
             const float weight = cone.valid() ? s.pdf / (s.pdf + conePdf(s.wi)) : 1.0f;
-            sum += evalBrdf(m, p.normal, p.toEye, s.wi) * s.radiance * (visibility * cosSurface * weight / s.pdf);
+            sum += evalBrdf(m, p.normal, p.toEye, s.wi) * s.radiance *
+                   (visibility * cosSurface * weight / s.pdf);
         }
         out[i] = sum / static_cast<float>(count);
     });

@@ -100,7 +100,8 @@ void removeLeftoverTemporaries(const fs::path& destination) {
         const std::string middle = name.substr(prefix.size(), name.size() - prefix.size() - extension.size());
         const size_t dash = middle.find('-');
         if (dash == 0 || dash == std::string::npos || dash + 1 == middle.size() ||
-            middle.find_first_not_of("0123456789-") != std::string::npos || middle.find('-', dash + 1) != std::string::npos)
+            middle.find_first_not_of("0123456789-") != std::string::npos ||
+            middle.find('-', dash + 1) != std::string::npos)
             continue;
         const std::string pidText = middle.substr(0, dash);
         if (pidText.size() > 9) continue;

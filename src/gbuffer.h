@@ -47,8 +47,8 @@ void forEachValidPoint(std::span<const SurfacePoint> points, std::span<const uin
 // objects' direct light is shaded over, so that a pixel shows the mean of its area as the path tracer's
 // does (a shadow edge or a fold inside a pixel), not the light at its centre alone.
 struct PixelSamples {
-    int perPixel = 0;  // k * k; 0: none
-    PixelRect rect;    // the pixels that have them
+    int perPixel = 0;                  // k * k; 0: none
+    PixelRect rect;                    // the pixels that have them
     std::vector<SurfacePoint> points;  // perPixel per pixel of `rect`, row by row; invalid: no object there
     // The samples of image pixel `i` (of an image `width` wide), empty outside the rectangle.
     std::span<const SurfacePoint> of(size_t i, int width) const {

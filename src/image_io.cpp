@@ -288,12 +288,13 @@ std::vector<NamedImage> readLayers(const std::filesystem::path& path) {
     std::vector<NamedImage> layers;
     std::vector<std::pair<size_t, int>> where(channels);  // (layer, channel within it)
     for (int c = 0; c < channels; ++c) {
-        const std::string full = c < static_cast<int>(spec.channelnames.size()) ? spec.channelnames[c]
-                                                                                   : fmt::format("{}", c);
+        const std::string full =
+            c < static_cast<int>(spec.channelnames.size()) ? spec.channelnames[c] : fmt::format("{}", c);
         const size_t dot = full.rfind('.');
         const std::string layer = dot == std::string::npos ? full : full.substr(0, dot);
         const std::string channel = dot == std::string::npos ? full : full.substr(dot + 1);
-        auto it = std::find_if(layers.begin(), layers.end(), [&](const NamedImage& l) { return l.name == layer; });
+        auto it =
+            std::find_if(layers.begin(), layers.end(), [&](const NamedImage& l) { return l.name == layer; });
         if (it == layers.end()) it = layers.insert(layers.end(), NamedImage{layer, Image(), {}});
         where[c] = {static_cast<size_t>(it - layers.begin()), static_cast<int>(it->channels.size())};
         it->channels.push_back(channel);

@@ -540,7 +540,8 @@ MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lig
     const double r = options.volume.resolution;
     // Each light's largest map: the importance of "auto" only makes some smaller.
     auto texels = [&](bool directional) {
-        const double side = rsmResolutionCeiling(options.rsm.resolution, options.volume.resolution, directional);
+        const double side =
+            rsmResolutionCeiling(options.rsm.resolution, options.volume.resolution, directional);
         return side * side * kRsmFaces * kRsmMapsPerLight;
     };
     return {kVolumeCount * kBytesPerVoxel * r * r * r * kMipChainFactor,

@@ -334,7 +334,8 @@ std::vector<int> rsmResolutions(const Options& options, std::span<const Light> l
         const float wanted = static_cast<float>(ceiling) * std::sqrt(irradiance[l] / brightest);
         // The nearest power of two times the floor (in octaves), between the floor and the ceiling.
         int resolution = std::max(ceiling / kAutoRsmMinShare, 1);
-        while (resolution * 2 <= ceiling && static_cast<float>(resolution) * std::numbers::sqrt2_v<float> <= wanted)
+        while (resolution * 2 <= ceiling &&
+               static_cast<float>(resolution) * std::numbers::sqrt2_v<float> <= wanted)
             resolution *= 2;
         out[l] = resolution;
     }

@@ -629,7 +629,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // from the kept real surfaces only there, where the objects cover them.
     const PixelRect& objectPixels = gbuffer.written;
     for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
-    const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals), objectSphereRadius(scene.virtuals)};
+    const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals),
+                                     objectSphereRadius(scene.virtuals)};
     // Emitting surfaces light the scene through shadow rays (with options.shadow.method "rays").
     const AreaLights emitters = o.shadow.method == "rays" ? AreaLights(scene, SceneContent::RealAndVirtual)
                                                           : AreaLights(Scene{}, SceneContent::RealOnly);
@@ -680,8 +681,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // The real surfaces' change in its two parts, the direct light's (shadows) and the indirect light's: the
     // composite's layers.
     std::vector<glm::vec3> realIndirect;
-    auto realShadow = combineLighting(realPoints, direct, real.shadows, relightMode, real.diffuse, real.specular,
-                                      nullptr, 0, nullptr, &realIndirect);
+    auto realShadow = combineLighting(realPoints, direct, real.shadows, relightMode, real.diffuse,
+                                      real.specular, nullptr, 0, nullptr, &realIndirect);
     addInto(objectRadiance, std::move(object.areaLight));
     addInto(realShadow, std::move(real.areaLight));
     timer.lap("shading");

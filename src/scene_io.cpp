@@ -89,7 +89,8 @@ LensDistortion readDistortion(const JsonNode& node) {
         node.allowKeys({"model", "k1", "k2", "k3", "k4"});
         return lensDistortion(LensDistortion::Model::Fisheye, coefficient);
     }
-    if (model != "none") modelNode.fail("expected \"opencv\", \"fisheye\" or \"none\", got \"" + model + "\"");
+    if (model != "none")
+        modelNode.fail("expected \"opencv\", \"fisheye\" or \"none\", got \"" + model + "\"");
     return {};
 }
 
@@ -541,7 +542,8 @@ Scene loadScene(const json& document, const fs::path& file) {
     scene.file = file;
     if (auto n = root.find("sequence")) {
         if (root.has("camera")) n->fail("give either \"camera\" or \"sequence\" (whose frames have cameras)");
-        if (root.has("background")) n->fail("give either \"background\" or \"sequence\" (whose frames have photos)");
+        if (root.has("background"))
+            n->fail("give either \"background\" or \"sequence\" (whose frames have photos)");
         readSequence(*n, sceneFolder, scene);
     } else {
         scene.camera = readCamera(root.child("camera"));
@@ -552,8 +554,9 @@ Scene loadScene(const json& document, const fs::path& file) {
         for (size_t i = 0; i < n->size(); ++i) scene.lights.push_back(readLight(n->element(i)));
     }
     const size_t environmentLights = root.has("environment") ? scene.options.environment.lightCount : 0;
-    const size_t directional = static_cast<size_t>(std::count_if(
-        scene.lights.begin(), scene.lights.end(), [](const Light& l) { return l.type == Light::Type::Directional; }));
+    const size_t directional =
+        static_cast<size_t>(std::count_if(scene.lights.begin(), scene.lights.end(),
+                                          [](const Light& l) { return l.type == Light::Type::Directional; }));
     checkRenderMemory(scene.options, scene.camera, scene.lights.size() - directional, physicalMemoryBytes(),
                       file.string(), directional + environmentLights);
     if (!holdsEntries(root, "scene") && !holdsEntries(root, "virtual"))

@@ -51,7 +51,8 @@ Camera readFrameCamera(const JsonNode& frame, const JsonNode& root) {
     };
     auto modelNode = intrinsic(frame, root, "camera_model");
     const std::string model = modelNode ? modelNode->string() : "";
-    if (model == "OPENCV" || (model.empty() && (intrinsic(frame, root, "k1") || intrinsic(frame, root, "p1"))))
+    if (model == "OPENCV" ||
+        (model.empty() && (intrinsic(frame, root, "k1") || intrinsic(frame, root, "p1"))))
         camera.distortion = lensDistortion(LensDistortion::Model::OpenCV, coefficient);
     else if (model == "OPENCV_FISHEYE")
         camera.distortion = lensDistortion(LensDistortion::Model::Fisheye, coefficient);
@@ -94,11 +95,13 @@ FrameRange parseFrameRange(const std::string& text, const std::string& where) {
     auto number = [&](const std::string& part, int fallback) {
         if (part.empty()) return fallback;
         if (part.size() > 9 || part.find_first_not_of("0123456789") != std::string::npos)
-            throw InputError(where, fmt::format("expected a frame range A:B (A included, B not), got '{}'", text));
+            throw InputError(where,
+                             fmt::format("expected a frame range A:B (A included, B not), got '{}'", text));
         return std::stoi(part);
     };
     if (colon == std::string::npos)
-        throw InputError(where, fmt::format("expected a frame range A:B (A included, B not), got '{}'", text));
+        throw InputError(where,
+                         fmt::format("expected a frame range A:B (A included, B not), got '{}'", text));
     FrameRange range{number(text.substr(0, colon), 0), number(text.substr(colon + 1), -1)};
     if (range.last >= 0 && range.last <= range.first)
         throw InputError(where, fmt::format("the frame range '{}' is empty", text));

@@ -163,8 +163,9 @@ TEST(EnvironmentRays, ARelitPointSamplesTheObjectsConeOfDirections) {
     const Options options;  // 16 rays
     std::vector<SurfacePoint> points;
     for (int i = 0; i < 256; ++i)
-        points.push_back(floorPoint({0.001f * static_cast<float>(i % 16), 0, 0.001f * static_cast<float>(i / 16)},
-                                    scene.real[0].material));
+        points.push_back(
+            floorPoint({0.001f * static_cast<float>(i % 16), 0, 0.001f * static_cast<float>(i / 16)},
+                       scene.real[0].material));
     const auto change = traceEnvironmentRays(points, sampler, rays, options, ShadowMode::DeltaShadow);
     double sum = 0.0, expectedSum = 0.0;
     for (size_t i = 0; i < points.size(); ++i) {

@@ -216,8 +216,8 @@ TEST_F(CliTest, LayersGoIntoOneExr) {
     std::vector<std::string> names;
     for (const deltagi::NamedImage& layer : deltagi::readLayers(layers)) names.push_back(layer.name);
     std::sort(names.begin(), names.end());
-    EXPECT_EQ(names, (std::vector<std::string>{"background", "composite", "delta", "depth", "indirect", "object",
-                                               "shadow"}));
+    EXPECT_EQ(names, (std::vector<std::string>{"background", "composite", "delta", "depth", "indirect",
+                                               "object", "shadow"}));
     expectOneErrorLine(run(renderArgs(scene) + " --layers " + quote((dir_ / "layers.png").string())),
                        {"layers.png", ".exr"});
 }

@@ -16,7 +16,8 @@ using test::placed;
 // sub-samples' surfaces, as many valid ones as its coverage says, each the surface its own ray meets.
 TEST(GBuffer, PixelsThatShowAnObjectKeepTheirSubSamplesSurfaces) {
     Scene scene = test::floorScene();
-    scene.virtuals.push_back(placed(makeBox({0.6f, 0.2f, 0.6f}), {0, 0.1f, 0}, diffuse(glm::vec3(0.5f)), "box"));
+    scene.virtuals.push_back(
+        placed(makeBox({0.6f, 0.2f, 0.6f}), {0, 0.1f, 0}, diffuse(glm::vec3(0.5f)), "box"));
     scene.camera = test::lookAtCamera({0.0f, 2.0f, 0.5f}, {0, 0, 0}, 32, 24, 60.0f);
     const RayScene realOnly(scene, SceneContent::RealOnly);
     const RayScene all(scene, SceneContent::VirtualOnly, &realOnly);

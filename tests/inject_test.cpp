@@ -1,7 +1,7 @@
 // Reflective shadow maps and light injection against closed-form irradiance.
 #include "inject.h"
-#include "reflective_shadow_map.h"
 #include "mipmap.h"
+#include "reflective_shadow_map.h"
 #include "shading.h"
 #include "shapes.h"
 
@@ -104,11 +104,13 @@ TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
     dim.intensity = 1e-4f;
     EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, quarter, sixteenth, dim}, kRegion),
               (std::vector<int>{128, 64, 32, 32}));
-    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion), std::vector<int>{512});
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion),
+              std::vector<int>{512});
     options.volume.resolution = 256;
     EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright}, kRegion), std::vector<int>{512});
     options.rsm.resolution = 200;
-    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, dim}, kRegion), (std::vector<int>{200, 200}));
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, dim}, kRegion),
+              (std::vector<int>{200, 200}));
 }
 
 // Lights whose maps differ in resolution still add their radiance: each light's texels are turned into

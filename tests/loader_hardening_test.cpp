@@ -91,7 +91,8 @@ TEST(RenderMemoryTest, AutoResolutionCountsEachLightsOwnMaps) {
     Options options;
     options.volume.resolution = 32;
     Camera camera;
-    const uint64_t point = estimateRenderMemory(options, camera, 2) - estimateRenderMemory(options, camera, 1);
+    const uint64_t point =
+        estimateRenderMemory(options, camera, 2) - estimateRenderMemory(options, camera, 1);
     EXPECT_EQ(point, uint64_t{2} * 6 * 128 * 128 * 48);
     const uint64_t directional =
         estimateRenderMemory(options, camera, 1, 1) - estimateRenderMemory(options, camera, 1, 0);

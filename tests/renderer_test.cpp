@@ -1,10 +1,10 @@
 // End-to-end properties of the Delta Global Illumination pipeline on small scenes built in code.
 #include "deltagi/renderer.h"
 
-#include <algorithm>
 #include <unistd.h>
-#include <map>
+#include <algorithm>
 #include <cmath>
+#include <map>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -223,7 +223,8 @@ TEST(Render, ABrightObjectNextToAWhiteWallBleedsItsColourOntoIt) {
 // does.
 TEST(Render, TheObjectsConesHaveTheirOwnAperture) {
     Scene s = test::floorScene();
-    s.virtuals.push_back(placed(makeBox(glm::vec3(0.4f)), {0.0f, 0.2f, 0.0f}, diffuse(glm::vec3(0.8f)), "box"));
+    s.virtuals.push_back(
+        placed(makeBox(glm::vec3(0.4f)), {0.0f, 0.2f, 0.0f}, diffuse(glm::vec3(0.8f)), "box"));
     s.background = Image(64, 48, 3, 0.3f);
     auto differs = [](const Image& a, const Image& b) {
         const auto x = a.data(), y = b.data();
@@ -252,7 +253,8 @@ TEST(Render, TheObjectsConesHaveTheirOwnAperture) {
 // where the ball covers the pixel; the depth is the floor's distance along the camera's axis.
 TEST(Render, TheLayersRebuildTheComposite) {
     Scene s = test::floorScene();
-    s.virtuals.push_back(placed(makeSphere(0.2f, 48), {0.0f, 0.3f, 0.0f}, diffuse({0.8f, 0.2f, 0.1f}), "ball"));
+    s.virtuals.push_back(
+        placed(makeSphere(0.2f, 48), {0.0f, 0.3f, 0.0f}, diffuse({0.8f, 0.2f, 0.1f}), "ball"));
     s.background = Image(64, 48, 3, 0.3f);
     s.options.render.layers = true;
     const RenderOutput out = render(s);
@@ -283,7 +285,8 @@ TEST(Render, TheLayersRebuildTheComposite) {
                 const float real = std::max(layers["background"].at(x, y, k) + layers["shadow"].at(x, y, k) +
                                                 layers["indirect"].at(x, y, k),
                                             0.0f);
-                EXPECT_NEAR(layers["object"].at(x, y, k) + (1.0f - alpha) * real, out.composite.at(x, y, k), 1e-5f)
+                EXPECT_NEAR(layers["object"].at(x, y, k) + (1.0f - alpha) * real, out.composite.at(x, y, k),
+                            1e-5f)
                     << x << ", " << y;
             }
             EXPECT_EQ(alpha, out.objectMask.at(x, y, 0));

@@ -45,9 +45,11 @@ TEST(LensDistortion, UndistortInvertsDistort) {
 // model (pinhole projection, then distortion) images at that pixel: rendered layers line up with the photo.
 TEST(LensDistortion, CameraRaysGoThroughTheDistortion) {
     Camera camera;
-    camera.width = 640, camera.height = 480, camera.fx = 500, camera.fy = 505, camera.cx = 322, camera.cy = 238;
+    camera.width = 640, camera.height = 480, camera.fx = 500, camera.fy = 505, camera.cx = 322,
+    camera.cy = 238;
     camera.distortion = {LensDistortion::Model::OpenCV, -0.3f, 0.1f, 0.0f, 0.0f, 0.002f, 0.001f};
-    for (const glm::vec3 p : {glm::vec3(0.4f, 0.2f, -2.0f), glm::vec3(-0.9f, -0.6f, -1.5f), glm::vec3(0, 0, -3)}) {
+    for (const glm::vec3 p :
+         {glm::vec3(0.4f, 0.2f, -2.0f), glm::vec3(-0.9f, -0.6f, -1.5f), glm::vec3(0, 0, -3)}) {
         // OpenCV's frame: x right, y down, z forward.
         const glm::vec2 normalized(p.x / -p.z, -p.y / -p.z);
         const glm::vec2 d = camera.distortion.distort(normalized);
@@ -76,7 +78,8 @@ class SequenceTest : public ::testing::Test {
   protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::temp_directory_path() / ("deltagi_sequence_" + std::to_string(getpid()) + "_" + info->name());
+        dir_ =
+            fs::temp_directory_path() / ("deltagi_sequence_" + std::to_string(getpid()) + "_" + info->name());
         fs::remove_all(dir_);
         fs::create_directories(dir_ / "images");
     }
@@ -93,12 +96,23 @@ class SequenceTest : public ::testing::Test {
             const std::string name = "images/frame_" + std::to_string(i) + ".png";
             writeImage(Image(w, h, 3, 0.2f + 0.1f * i), dir_ / name);
             const double x = 0.1 * i;
-            frames.push_back({{"file_path", name},
-                              {"transform_matrix", {{1, 0, 0, x}, {0, 1, 0, 0.8}, {0, 0, 1, 2}, {0, 0, 0, 1}}}});
+            frames.push_back(
+                {{"file_path", name},
+                 {"transform_matrix", {{1, 0, 0, x}, {0, 1, 0, 0.8}, {0, 0, 1, 2}, {0, 0, 0, 1}}}});
         }
-        return {{"camera_model", "OPENCV"}, {"fl_x", 30.0}, {"fl_y", 30.0}, {"cx", w / 2.0}, {"cy", h / 2.0},
-                {"w", w},  {"h", h}, {"k1", -0.1}, {"k2", 0.01}, {"p1", 0.0}, {"p2", 0.0},
-                {"aabb_scale", 16}, {"frames", frames}};
+        return {{"camera_model", "OPENCV"},
+                {"fl_x", 30.0},
+                {"fl_y", 30.0},
+                {"cx", w / 2.0},
+                {"cy", h / 2.0},
+                {"w", w},
+                {"h", h},
+                {"k1", -0.1},
+                {"k2", 0.01},
+                {"p1", 0.0},
+                {"p2", 0.0},
+                {"aabb_scale", 16},
+                {"frames", frames}};
     }
     fs::path write(const json& document, const std::string& name = "transforms.json") const {
         test::writeText(dir_ / name, document.dump(1));
@@ -145,7 +159,8 @@ TEST_F(SequenceTest, BadTransformsNameTheFileAndTheFrame) {
     doc = transforms(2);
     doc.erase("w");
     expectContains(errorOf(doc), {"frames[0]", "\"w\""});
-    expectContains(errorOf(transforms(2), {3, 5}), {"transforms.json: frames", "outside the file's 2 frames"});
+    expectContains(errorOf(transforms(2), {3, 5}),
+                   {"transforms.json: frames", "outside the file's 2 frames"});
     expectContains(errorOf(json{{"fl_x", 3}}), {"transforms.json", "frames"});
     test::writeText(dir_ / "nan.json", R"({"frames": [{"transform_matrix": [[NaN]]}]})");
     expectContains(inputErrorOf([&] { readTransforms(dir_ / "nan.json", {}); }), {"nan.json"});

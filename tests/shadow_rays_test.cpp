@@ -137,8 +137,8 @@ TEST(ShadowRays, APixelsSubSamplesShareItsShadow) {
                       floorPoint({-0.01f, 0, 0.01f}, m), floorPoint({0.01f, 0, 0.01f}, m)};
     for (const glm::vec3 centre : {glm::vec3(-0.005f, 0, 0.005f), glm::vec3(0.005f, 0, 0.005f)}) {
         const std::vector<SurfacePoint> points = {floorPoint(centre, m)};
-        const auto alone = traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options,
-                                           ShadowMode::Shaded);
+        const auto alone =
+            traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options, ShadowMode::Shaded);
         EXPECT_EQ(alone[0].combined, centre.x < 0.0f ? 1.0f : 0.0f);
         const auto area = traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options,
                                           ShadowMode::Shaded, {}, &samples, 1);

@@ -139,8 +139,8 @@ struct TraceOptions {
 // options.render: the camera pass.
 struct RenderOptions {
     // "samples_per_pixel": sub-pixel samples for the G-buffer; the object mask is their coverage, which
-    // anti-aliases the silhouette, and the objects' direct light is shaded over them (GBuffer::objectSamples).
-    // 1, 4, 9 or 16 (a square grid).
+    // anti-aliases the silhouette, and the objects' direct light is shaded over them
+    // (GBuffer::objectSamples). 1, 4, 9 or 16 (a square grid).
     int samplesPerPixel = 4;
     // "indirect": trace the diffuse and specular cones (false: direct light and shadow cones only).
     bool indirect = true;
@@ -209,9 +209,9 @@ inline constexpr int kAutoAreaLightStride = 2, kAutoRelightAreaLightStride = 2;
 inline constexpr int kAutoRelightSpecularStride = 4;
 // The stride an option (0: "auto", with `autoStride` at 640x480) gives for a width x height image.
 // The "auto" RSM resolution. A point or spot light's map: kAutoRsmTexelsPerVoxel texels per voxel along the
-// volume's side, a power of two in [kAutoRsmMinResolution, kAutoRsmMaxResolution] (512 at 128^3 and above, 128
-// at 32^3). A directional light's map is orthographic over the whole region, with fewer texels per voxel, and
-// the injection is short of light with fewer still (field photo at 32^3: delta_rel_error 0.250 at 512,
+// volume's side, a power of two in [kAutoRsmMinResolution, kAutoRsmMaxResolution] (512 at 128^3 and above,
+// 128 at 32^3). A directional light's map is orthographic over the whole region, with fewer texels per voxel,
+// and the injection is short of light with fewer still (field photo at 32^3: delta_rel_error 0.250 at 512,
 // 0.363 at 128): kAutoRsmMaxResolution. Among several lights, each takes its ceiling times the square root of
 // its share of the brightest light's irradiance in the volume (the split of a texel budget that minimizes
 // the sum of the lights' injection noise), rounded to the nearest power of two, at least the ceiling /

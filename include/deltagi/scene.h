@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include <glm/vec2.hpp>
 #include <glm/glm.hpp>
+#include <glm/vec2.hpp>
 
 #include "deltagi/environment.h"
 #include "deltagi/image.h"
@@ -137,7 +137,7 @@ struct SequenceFrame {
 
 struct Scene {
     std::filesystem::path file;  // the scene file, for messages; relative paths were resolved against it
-    Camera camera;  // with a sequence: its first frame's
+    Camera camera;               // with a sequence: its first frame's
     // "sequence": the frames to render, in order (empty: a single image from `camera`); `background` is the
     // first frame's photo, and each frame's is read when it is rendered.
     std::vector<SequenceFrame> sequence;

@@ -1,5 +1,5 @@
-// Procedural meshes, in object space, counter-clockwise (outward) winding, with unit vertex normals: the scene
-// file's "shape" entries, and the parts of a scene built in code (place them with setTransform(),
+// Procedural meshes, in object space, counter-clockwise (outward) winding, with unit vertex normals: the
+// scene file's "shape" entries, and the parts of a scene built in code (place them with setTransform(),
 // deltagi/transforms.h). The scene reader checks their parameters; these functions expect valid ones
 // (positive sizes, enough segments, indices in range).
 #pragma once
