@@ -25,6 +25,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_command.h"
+#include "stability_command.h"
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/evaluation.h"
@@ -722,6 +723,8 @@ int main(int argc, char** argv) {
 
     cli::BenchArgs benchArgs;
     CLI::App* benchCommand = cli::addBenchCommand(app, benchArgs, kMaxThreads);
+    cli::StabilityArgs stabilityArgs;
+    CLI::App* stabilityCommand = cli::addStabilityCommand(app, stabilityArgs, kMaxThreads);
 
     try {
         app.parse(argc, argv);
@@ -731,9 +734,8 @@ int main(int argc, char** argv) {
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-')
             return reportError(
                 fmt::format(
-                    "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval' or "
-                    "'bench' "
-                    "(see deltagi --help)",
+                    "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
+                    "'bench' or 'stability' (see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);
@@ -750,6 +752,7 @@ int main(int argc, char** argv) {
                 kExitUsageError);
         if (*evalCommand) return runEval(evalArgs);
         if (*benchCommand) return cli::runBench(benchArgs);
+        if (*stabilityCommand) return cli::runStability(stabilityArgs);
         return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         removeTemporaryOutputs();            // output folders made for nothing

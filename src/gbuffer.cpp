@@ -58,11 +58,14 @@ std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScen
     std::vector<SurfacePoint> real(static_cast<size_t>(camera.width) * camera.height);
     const glm::vec3 eye = camera.position();
     parallelFor(0, camera.height, 2, [&](int64_t y) {
-        for (int x = 0; x < camera.width; ++x) {
-            const glm::vec3 dir = glm::normalize(camera.rayDirection(x + 0.5f, y + 0.5f));
-            real[static_cast<size_t>(y) * camera.width + x] =
-                toSurfacePoint(realOnly.intersect(eye, dir), dir);
-        }
+        // A row's rays in packets.
+        std::vector<glm::vec3> directions(static_cast<size_t>(camera.width));
+        std::vector<RayHit> hits(directions.size());
+        for (int x = 0; x < camera.width; ++x)
+            directions[x] = glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f));
+        realOnly.intersectCoherent(eye, directions, hits);
+        for (int x = 0; x < camera.width; ++x)
+            real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(hits[x], directions[x]);
     });
     return real;
 }

@@ -51,6 +51,10 @@ FrameRange parseFrameRange(const std::string& text, const std::string& where);
 // model, a missing photo, or a range outside the frames.
 std::vector<SequenceFrame> readTransforms(const std::filesystem::path& file, FrameRange range);
 
+// The position of the camera of the first frame of `file` (whatever range is rendered): a sequence's
+// options.volume.viewpoint unless the scene gives one.
+glm::vec3 sequenceViewpoint(const std::filesystem::path& file);
+
 // The frame's photo, which must be of its camera's size: InputError naming the transforms file and the frame
 // otherwise.
 Image readFramePhoto(const SequenceFrame& frame, const std::filesystem::path& transformsFile);
