@@ -151,9 +151,10 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
 }
 
 void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
-                                 std::span<RayHit> hits) const {
-    if (base_ || meshes_.empty()) {  // layers: one ray at a time
-        for (size_t i = 0; i < directions.size(); ++i) hits[i] = intersect(origin, directions[i]);
+                                 std::span<RayHit> hits, bool topLayerOnly) const {
+    if (meshes_.empty() || (base_ && !topLayerOnly)) {  // layers: one ray at a time
+        for (size_t i = 0; i < directions.size(); ++i)
+            hits[i] = topLayerOnly ? RayHit{} : intersect(origin, directions[i]);
         return;
     }
     RTCIntersectContext context;
