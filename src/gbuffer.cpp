@@ -67,7 +67,13 @@ std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
 }  // namespace
 
 std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly) {
-    std::vector<SurfacePoint> real(static_cast<size_t>(camera.width) * camera.height);
+    std::vector<SurfacePoint> real;
+    renderRealSurfaces(camera, realOnly, real);
+    return real;
+}
+
+void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vector<SurfacePoint>& real) {
+    real.resize(static_cast<size_t>(camera.width) * camera.height);
     const glm::vec3 eye = camera.position();
     parallelFor(0, camera.height, 2, [&](int64_t y) {
         // A row's rays in packets.
@@ -79,7 +85,6 @@ std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScen
         for (int x = 0; x < camera.width; ++x)
             real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(hits[x], directions[x]);
     });
-    return real;
 }
 
 void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,

@@ -362,9 +362,13 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
 struct StaticWork {
     uint64_t signature = 0;        // of the world: everything but the camera (worldSignature)
     uint64_t cameraSignature = 0;  // of the camera
+    // The camera is the last frame's: the filter's weights over the real surfaces are worth keeping (a
+    // camera that moves every frame would build them for one use; its passes compute only those they need).
+    bool cameraSteady = false;
     std::unique_ptr<RayScene> realOnly;
     std::unique_ptr<RayScene> objects;  // the virtual objects' layer over realOnly, refit as they move
-    std::optional<std::vector<SurfacePoint>> realSurfaces;  // the G-buffer's real half
+    std::vector<SurfacePoint> realSurfaces;  // the G-buffer's real half, when realSurfacesMade
+    bool realSurfacesMade = false;
     std::optional<Image> background;                        // the real scene rendered alone (no photo)
     // Over `region`:
     std::optional<VolumeRegion> region;
@@ -397,12 +401,18 @@ glm::vec3 viewpointOf(const Scene& scene) {
 }
 
 // Forgets what depends on the camera: the real G-buffer and what is made over its pixels.
+// The large buffers keep their memory for the next camera's (14 MiB each at 640 x 480: allocated afresh, their
+// pages would be faulted in every frame).
 void forgetCameraWork(StaticWork& kept) {
-    kept.realSurfaces.reset();
+    kept.realSurfacesMade = false;
     kept.background.reset();
     kept.relitShadows = {};
-    kept.relitPlans = {};
-    kept.gbuffer = {};
+    for (InterpolationPlan& plan : kept.relitPlans) {
+        plan.stride = 0;
+        plan.weights.clear();
+    }
+    kept.gbuffer.object.clear();  // renderObjectSurfaces starts afresh
+    kept.gbuffer.coverage.clear();
     kept.relitSurfaces.clear();
     kept.hidden.clear();
 }
@@ -659,8 +669,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     timer.lap("bvh");
 
     auto realSurfaces = [&]() -> const std::vector<SurfacePoint>& {
-        if (!kept.realSurfaces) kept.realSurfaces = renderRealSurfaces(camera, realOnly);
-        return *kept.realSurfaces;
+        if (!kept.realSurfacesMade) renderRealSurfaces(camera, realOnly, kept.realSurfaces);
+        kept.realSurfacesMade = true;
+        return kept.realSurfaces;
     };
     auto background = [&]() -> const Image& {
         if (scene.background) return *scene.background;
@@ -738,7 +749,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          relightMode,
          {0, 0, camera.width, camera.height},
          &kept.relitShadows,
-         &kept.relitPlans,
+         kept.cameraSteady ? &kept.relitPlans : nullptr,
          objectPixels,
          shadowRays,
          o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
@@ -862,6 +873,7 @@ RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onSt
     }
     const uint64_t camera = cameraSignature(scene.camera);
     state_->lastKept.camera = camera == kept.cameraSignature;
+    kept.cameraSteady = state_->lastKept.camera;
     if (!state_->lastKept.camera) {
         forgetCameraWork(kept);
         kept.cameraSignature = camera;
