@@ -98,9 +98,14 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
             std::fill(g.object.begin() + row + w.x0, g.object.begin() + row + w.x1, SurfacePoint{});
             std::fill(g.coverage.begin() + row + w.x0, g.coverage.begin() + row + w.x1, 0.0f);
         }
-    } else {
-        g.object.assign(count, {});
-        g.coverage.assign(count, 0.0f);
+    } else {  // a new camera: 15 MiB at 640 x 480, cleared in parallel
+        g.object.resize(count);
+        g.coverage.resize(count);
+        parallelFor(0, height, 16, [&](int64_t y) {
+            const size_t row = static_cast<size_t>(y) * width;
+            std::fill(g.object.begin() + row, g.object.begin() + row + width, SurfacePoint{});
+            std::fill(g.coverage.begin() + row, g.coverage.begin() + row + width, 0.0f);
+        });
     }
     g.width = width;
     g.height = height;

@@ -18,6 +18,7 @@
 #include "mipmap.h"
 #include "object_bounce_rays.h"
 #include "object_volumes.h"
+#include "parallel.h"
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
 #include "shading.h"
@@ -505,8 +506,14 @@ uint64_t worldSignature(const Scene& scene) {
 const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePoint>& real,
                                                      const GBuffer& gbuffer, StaticWork& kept) {
     std::vector<SurfacePoint>& points = kept.relitSurfaces;
-    if (points.size() != real.size()) {
-        points = real;
+    if (points.size() != real.size()) {  // a new camera: 14 MiB at 640 x 480, copied in parallel
+        points.resize(real.size());
+        constexpr int64_t kChunk = 1 << 14;
+        parallelFor(0, (static_cast<int64_t>(real.size()) + kChunk - 1) / kChunk, 1, [&](int64_t c) {
+            const size_t begin = static_cast<size_t>(c * kChunk);
+            const size_t end = std::min(real.size(), begin + static_cast<size_t>(kChunk));
+            std::copy(real.begin() + begin, real.begin() + end, points.begin() + begin);
+        });
         kept.hidden.clear();
     }
     for (uint32_t i : kept.hidden) points[i] = real[i];
