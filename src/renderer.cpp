@@ -529,6 +529,25 @@ const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePo
     return points;
 }
 
+// hideCoveredSurfaces for a camera that moved: the real surfaces rendered straight into the relit ones (the
+// whole real G-buffer is needed only by a steady camera's kept filter weights, the depth layer and a rendered
+// background; a camera that stays computes it next frame, and the relit surfaces stay valid).
+const std::vector<SurfacePoint>& renderRelitSurfaces(const Camera& camera, const RayScene& realOnly,
+                                                     const GBuffer& gbuffer, StaticWork& kept) {
+    std::vector<SurfacePoint>& points = kept.relitSurfaces;
+    renderRealSurfaces(camera, realOnly, points);
+    kept.hidden.clear();
+    const PixelRect& w = gbuffer.written;
+    for (int y = w.y0; y < w.y1; ++y)
+        for (int x = w.x0; x < w.x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * gbuffer.width + x;
+            if (gbuffer.coverage[i] < 1.0f) continue;
+            points[i] = {};
+            kept.hidden.push_back(static_cast<uint32_t>(i));
+        }
+    return points;
+}
+
 // Stages 1-4 (§3.2): the two visibility volumes, the full light volume and the delta volume, mip-mapped. The
 // scene's share comes from `kept` when it is there; the objects' volumes are kept there too and updated
 // where the objects changed them since the last frame (ObjectVolumes).
@@ -710,7 +729,10 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // 5. G-buffer. Real surfaces are relit only where they show through (coverage < 1).
     GBuffer& gbuffer = kept.gbuffer;
     renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer);
-    const std::vector<SurfacePoint>& realPoints = hideCoveredSurfaces(realSurfaces(), gbuffer, kept);
+    const bool wholeRealSurfaces = kept.cameraSteady || !scene.background || o.render.layers;
+    const std::vector<SurfacePoint>& realPoints =
+        wholeRealSurfaces ? hideCoveredSurfaces(realSurfaces(), gbuffer, kept)
+                          : renderRelitSurfaces(camera, realOnly, gbuffer, kept);
     timer.lap("gbuffer");
 
     // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both
@@ -721,7 +743,8 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // The pixels the objects' G-buffer was rendered over hold every virtual point; the real points differ
     // from the kept real surfaces only there, where the objects cover them.
     const PixelRect& objectPixels = gbuffer.written;
-    for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
+    if (kept.cameraSteady)
+        for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
     const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals),
                                      objectSphereRadius(scene.virtuals)};
     // Emitting surfaces light the scene through shadow rays (with options.shadow.method "rays").

@@ -153,6 +153,25 @@ TEST(FrameRenderer, FramesOfAMovingCameraAreExactlyRendersFromScratchAndKeepTheW
     EXPECT_TRUE(frames.lastFrameKept().camera);
 }
 
+// The same with a photo, as a session has: a moving camera's real surfaces are rendered straight into the
+// relit ones, and a camera that stops makes the whole real G-buffer again.
+TEST(FrameRenderer, FramesOfAMovingCameraOverAPhotoAreExactlyRendersFromScratch) {
+    Scene s = ballOverFloor();
+    s.background = Image(s.camera.width, s.camera.height, 3, 0.3f);
+    FrameRenderer frames;
+    expectSameImages(frames.render(s), render(s));
+    for (int f = 1; f <= 4; ++f) {
+        SCOPED_TRACE(testing::Message() << "frame " << f);
+        if (f != 3) {  // frame 3: the camera stays where it was
+            const float angle = 0.05f * static_cast<float>(f);
+            s.camera = test::lookAtCamera({1.6f * std::sin(angle), 1.6f, 1.6f * std::cos(angle)},
+                                          {0.1f, 0.3f, 0.0f}, 64, 48, 60.0f);
+        }
+        moveVirtuals(s, {0.02f, 0.0f, 0.0f});
+        expectSameImages(frames.render(s), render(s));
+    }
+}
+
 // A camera that crosses the plane of a real surface sees its other side: the RSMs and the bounces, which keep
 // the camera's side of the real surfaces, are redone.
 TEST(FrameRenderer, ACameraThatCrossesARealSurfacesPlaneRedoesTheWorldSpaceWork) {
