@@ -5,10 +5,11 @@
 #include <numbers>
 #include <optional>
 
-#include <glm/gtc/matrix_transform.hpp>
 
 #include <fmt/core.h>
 #include <tbb/global_control.h>
+
+#include "deltagi/transforms.h"
 
 namespace deltagi {
 
@@ -64,12 +65,9 @@ std::vector<CameraPose> cameraPoses(const Scene& scene, float degrees, int frame
     real.options = scene.options;
     std::vector<CameraPose> poses;
     for (int k = 0; k < std::min(frames, 16); ++k) {
-        const float angle = glm::radians(degrees) *
-                            std::sin(2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / 16.0f);
-        const glm::mat4 turn = glm::translate(glm::mat4(1.0f), centre) *
-                               glm::rotate(glm::mat4(1.0f), angle, glm::vec3(0.0f, 1.0f, 0.0f)) *
-                               glm::translate(glm::mat4(1.0f), -centre);
-        real.camera.worldFromCamera = turn * scene.camera.worldFromCamera;
+        const float angle =
+            degrees * std::sin(2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / 16.0f);
+        real.camera = turnedCamera(scene.camera, centre, angle);
         poses.push_back({real.camera, render(real).background});
     }
     return poses;

@@ -501,6 +501,18 @@ uint64_t worldSignature(const Scene& scene) {
     return h.value();
 }
 
+// Makes the pixels the objects cover fully invalid in `points`, listing them in `hidden`.
+void hideCovered(const GBuffer& gbuffer, std::vector<SurfacePoint>& points, std::vector<uint32_t>& hidden) {
+    const PixelRect& w = gbuffer.written;
+    for (int y = w.y0; y < w.y1; ++y)
+        for (int x = w.x0; x < w.x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * gbuffer.width + x;
+            if (gbuffer.coverage[i] < 1.0f) continue;
+            points[i] = {};
+            hidden.push_back(static_cast<uint32_t>(i));
+        }
+}
+
 // The real surfaces that show through (coverage < 1), to be relit: `real` without the pixels the objects
 // cover, kept in `kept` and changed only where the covered pixels were or are.
 const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePoint>& real,
@@ -518,14 +530,7 @@ const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePo
     }
     for (uint32_t i : kept.hidden) points[i] = real[i];
     kept.hidden.clear();
-    const PixelRect& w = gbuffer.written;
-    for (int y = w.y0; y < w.y1; ++y)
-        for (int x = w.x0; x < w.x1; ++x) {
-            const size_t i = static_cast<size_t>(y) * gbuffer.width + x;
-            if (gbuffer.coverage[i] < 1.0f) continue;
-            points[i] = {};
-            kept.hidden.push_back(static_cast<uint32_t>(i));
-        }
+    hideCovered(gbuffer, points, kept.hidden);
     return points;
 }
 
@@ -537,14 +542,7 @@ const std::vector<SurfacePoint>& renderRelitSurfaces(const Camera& camera, const
     std::vector<SurfacePoint>& points = kept.relitSurfaces;
     renderRealSurfaces(camera, realOnly, points);
     kept.hidden.clear();
-    const PixelRect& w = gbuffer.written;
-    for (int y = w.y0; y < w.y1; ++y)
-        for (int x = w.x0; x < w.x1; ++x) {
-            const size_t i = static_cast<size_t>(y) * gbuffer.width + x;
-            if (gbuffer.coverage[i] < 1.0f) continue;
-            points[i] = {};
-            kept.hidden.push_back(static_cast<uint32_t>(i));
-        }
+    hideCovered(gbuffer, points, kept.hidden);
     return points;
 }
 

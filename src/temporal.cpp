@@ -2,20 +2,10 @@
 
 #include <cmath>
 
-#include <glm/gtc/matrix_transform.hpp>
-
 #include "deltagi/error.h"
+#include "deltagi/transforms.h"
 
 namespace deltagi {
-
-Camera turnedCamera(const Camera& camera, glm::vec3 centre, float degrees) {
-    const glm::mat4 turn = glm::translate(glm::mat4(1.0f), centre) *
-                           glm::rotate(glm::mat4(1.0f), glm::radians(degrees), glm::vec3(0.0f, 1.0f, 0.0f)) *
-                           glm::translate(glm::mat4(1.0f), -centre);
-    Camera turned = camera;
-    turned.worldFromCamera = turn * camera.worldFromCamera;
-    return turned;
-}
 
 std::vector<RenderOutput> renderMotion(Scene& scene, const MotionOptions& options) {
     if (options.frames < 3) throw InputError("--frames", "at least 3 frames are needed");

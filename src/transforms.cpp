@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <fmt/format.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/error.h"
 #include "mesh_io.h"
@@ -101,6 +102,15 @@ void setTransform(TriangleMesh& mesh, const glm::mat4& worldFromObject) {
     placed.objectSpace = std::move(objectSpace);
     placed.worldFromObject = worldFromObject;
     mesh = std::move(placed);
+}
+
+Camera turnedCamera(const Camera& camera, glm::vec3 centre, float degrees) {
+    const glm::mat4 turn = glm::translate(glm::mat4(1.0f), centre) *
+                           glm::rotate(glm::mat4(1.0f), glm::radians(degrees), glm::vec3(0.0f, 1.0f, 0.0f)) *
+                           glm::translate(glm::mat4(1.0f), -centre);
+    Camera turned = camera;
+    turned.worldFromCamera = turn * camera.worldFromCamera;
+    return turned;
 }
 
 }  // namespace deltagi

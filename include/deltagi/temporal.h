@@ -50,7 +50,4 @@ TemporalFigures temporalInstability(std::span<const RenderOutput> frames);
 // {"frames", "real_instability", "object_instability", "real_samples", "object_samples", "mean_delta": [...]}.
 nlohmann::ordered_json temporalToJson(const TemporalFigures& figures);
 
-// The camera turned by `degrees` about the vertical axis through `centre`: a camera walking round the objects.
-Camera turnedCamera(const Camera& camera, glm::vec3 centre, float degrees);
-
 }  // namespace deltagi

@@ -22,6 +22,10 @@ void checkCameraPose(const glm::mat4& worldFromCamera);
 // Throws InputError("look_at" or "up", ...) when there is no view direction or `up` is parallel to it.
 glm::mat4 lookAtPose(glm::vec3 position, glm::vec3 lookAt, glm::vec3 up = {0.0f, 1.0f, 0.0f});
 
+// The camera turned by `degrees` about the vertical axis through `centre`: a camera walking round the objects
+// (`deltagi bench --camera-motion`, `deltagi stability --camera-step`).
+Camera turnedCamera(const Camera& camera, glm::vec3 centre, float degrees);
+
 // Places `mesh` in the world by `worldFromObject`: its object-space mesh transformed (normals by the inverse
 // transpose) and cleaned up as the scene reader does (degenerate triangles dropped, normals repaired), so
 // that an object moved to the scene file's transform is the loaded one bit for bit. The object-space mesh is
