@@ -149,6 +149,8 @@ float finiteOrZero(float v) {
     return std::isfinite(v) ? v : 0.0f;
 }
 
+}  // namespace
+
 std::vector<uint8_t> encodeSrgb8(const Image& image) {
     std::vector<uint8_t> bytes(image.data().size());
     for (size_t i = 0; i < bytes.size(); ++i) {
@@ -159,8 +161,6 @@ std::vector<uint8_t> encodeSrgb8(const Image& image) {
     }
     return bytes;
 }
-
-}  // namespace
 
 namespace {
 

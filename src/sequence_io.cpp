@@ -132,6 +132,17 @@ std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range
     return out;
 }
 
+std::optional<double> transformsFrameRate(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!fs::is_regular_file(file) || !in) throw InputError(file.string(), "cannot open the transforms file");
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const json document = parseJson(text, file.string());
+    const JsonNode root(document, file.string());
+    root.requireObject();
+    if (auto n = root.find("fps")) return n->number({0.0, kMaxFrameRate, true, false});
+    return std::nullopt;
+}
+
 Image readFramePhoto(const SequenceFrame& frame, const fs::path& transformsFile) {
     const std::string where = fmt::format("{}: frames[{}].file_path", transformsFile.string(), frame.index);
     Image photo;

@@ -1,6 +1,7 @@
 // Images: linear float pixels, row-major, top row first, channels interleaved.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <span>
 #include <string>
@@ -63,6 +64,10 @@ ImageFile readImageFile(const std::filesystem::path& path);
 // or a failure never sees it half written. Throws InputError when the file cannot be written (its folder
 // must exist).
 void writeImage(const Image& image, const std::filesystem::path& path);
+
+// The 8-bit sRGB bytes a PNG of `image` holds: each channel clamped to [0, 1] (NaN and infinities as 0),
+// encoded with the sRGB transfer function (a 4th channel, alpha, stays linear), rounded.
+std::vector<uint8_t> encodeSrgb8(const Image& image);
 
 // The same into `file`'s temporary, closed but not renamed into place: for callers that commit several
 // outputs together (a failure before then replaces none of them).

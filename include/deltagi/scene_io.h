@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,11 @@ FrameRange parseFrameRange(const std::string& text, const std::string& where);
 // (frames[3].transform_matrix) for a missing or malformed key, a NaN or singular matrix, an unknown camera
 // model, a missing photo, or a range outside the frames.
 std::vector<SequenceFrame> readTransforms(const std::filesystem::path& file, FrameRange range);
+
+// The frame rate a transforms file gives in a top-level "fps" (a number > 0; some capture tools write one),
+// or nothing. Throws InputError naming the file and the key when it is not such a number.
+inline constexpr double kMaxFrameRate = 1000.0;
+std::optional<double> transformsFrameRate(const std::filesystem::path& file);
 
 // The frame's photo, which must be of its camera's size: InputError naming the transforms file and the frame
 // otherwise.
