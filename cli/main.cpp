@@ -1,5 +1,6 @@
 // The `deltagi` command: `render` a scene file to an image (and its AOVs), print `info` about a scene, render
-// the path-traced `reference`, `compare` two images, or `eval` DGI against the reference.
+// the path-traced `reference`, `compare` two images, `eval` DGI against the reference, `bench` the pipeline,
+// or `encode` frames into an H.264 MP4.
 //
 // Errors: bad input (InputError) and any other exception become one line `deltagi: error: <message>` on
 // stderr and exit code 1; command-line usage errors exit with code 2; SIGINT and SIGTERM exit with 130 and
@@ -25,6 +26,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_command.h"
+#include "encode_command.h"
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/evaluation.h"
@@ -753,6 +755,9 @@ int main(int argc, char** argv) {
     cli::BenchArgs benchArgs;
     CLI::App* benchCommand = cli::addBenchCommand(app, benchArgs, kMaxThreads);
 
+    cli::EncodeArgs encodeArgs;
+    CLI::App* encodeCommand = cli::addEncodeCommand(app, encodeArgs);
+
     try {
         app.parse(argc, argv);
         renderArgs.fpsGiven = renderCommand->count("--fps") > 0;
@@ -762,8 +767,8 @@ int main(int argc, char** argv) {
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-')
             return reportError(
                 fmt::format(
-                    "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval' or "
-                    "'bench' "
+                    "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
+                    "'bench' or 'encode' "
                     "(see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
@@ -781,6 +786,7 @@ int main(int argc, char** argv) {
                 kExitUsageError);
         if (*evalCommand) return runEval(evalArgs);
         if (*benchCommand) return cli::runBench(benchArgs);
+        if (*encodeCommand) return cli::runEncode(encodeArgs);
         return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         removeTemporaryOutputs();            // output folders made for nothing

@@ -138,6 +138,10 @@ VideoWriter::VideoWriter(const fs::path& destination, int width, int height, Vid
     if (x264) {
         av_opt_set(c.priv_data, "preset", "medium", 0);
         av_opt_set_double(c.priv_data, "crf", settings.crf, 0);
+        // Macroblock-tree rate control off: with it, Debian 12's libx264 (0.164) reads memory it did not
+        // initialise, and the file changes from run to run with whatever the heap held (MALLOC_PERTURB_
+        // shows it); without it, the same frames give the same file.
+        av_opt_set_int(c.priv_data, "mbtree", 0, 0);
     } else {
         // Another H.264 encoder: a bit rate of about what x264 gives at CRF 18 for rendered frames.
         c.bit_rate = static_cast<int64_t>(0.2 * c.width * c.height * settings.fps);
@@ -168,16 +172,8 @@ VideoWriter::VideoWriter(const fs::path& destination, int width, int height, Vid
     // Source: full-range RGB; destination: limited-range ("TV") BT.709 YUV, as players expect.
     sws_setColorspaceDetails(ff.sws, bt709, 1, bt709, 0, 0, 1 << 16, 1 << 16);
 
-    ff.frame = av_frame_alloc();
     ff.packet = av_packet_alloc();
-    if (!ff.frame || !ff.packet) fail("cannot start the H.264 encoder", AVERROR(ENOMEM));
-    ff.frame->format = c.pix_fmt;
-    ff.frame->width = c.width;
-    ff.frame->height = c.height;
-    ff.frame->color_range = c.color_range;
-    ff.frame->colorspace = c.colorspace;
-    error = av_frame_get_buffer(ff.frame, 0);
-    if (error < 0) fail("cannot start the H.264 encoder", error);
+    if (!ff.packet) fail("cannot start the H.264 encoder", AVERROR(ENOMEM));
     ff.padded.resize(static_cast<size_t>(ff.encodedWidth) * ff.encodedHeight * 3);
 }
 
@@ -206,8 +202,20 @@ void VideoWriter::addSrgb8(std::span<const uint8_t> rgb) {
         std::copy(from, from + row, to);
         if (ff.encodedWidth > width_) std::copy(from + row - 3, from + row, to + row);
     }
-    int error = av_frame_make_writable(ff.frame);
+    // A new frame each time (the encoder may still hold the last one), zeroed: the planes' alignment padding
+    // holds no stale heap bytes.
+    av_frame_free(&ff.frame);
+    ff.frame = av_frame_alloc();
+    if (!ff.frame) fail("cannot encode a frame", AVERROR(ENOMEM));
+    ff.frame->format = ff.codec->pix_fmt;
+    ff.frame->width = ff.codec->width;
+    ff.frame->height = ff.codec->height;
+    ff.frame->color_range = ff.codec->color_range;
+    ff.frame->colorspace = ff.codec->colorspace;
+    int error = av_frame_get_buffer(ff.frame, 0);
     if (error < 0) fail("cannot encode a frame", error);
+    for (AVBufferRef* buffer : ff.frame->buf)
+        if (buffer) std::fill_n(buffer->data, buffer->size, uint8_t{0});
     const uint8_t* planes[1] = {ff.padded.data()};
     const int strides[1] = {static_cast<int>(paddedRow)};
     sws_scale(ff.sws, planes, strides, 0, ff.encodedHeight, ff.frame->data, ff.frame->linesize);

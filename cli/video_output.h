@@ -29,7 +29,8 @@ void checkVideoEncoder(const std::string& option);
 // Frames go in one by one as 8-bit sRGB (the pixels a PNG of the frame holds; a linear image is encoded as
 // the PNG writer does: clamped to [0, 1], sRGB transfer function); they are converted to BT.709 YUV 4:2:0
 // (limited range; an odd width or height is padded by repeating the last column or row) and encoded with
-// libx264 at `settings.crf` (preset medium, one thread, bit-exact: the same frames give the same file).
+// libx264 at `settings.crf` (preset medium, no macroblock-tree rate control, one thread, bit-exact: the same frames give the same
+// file, byte for byte).
 // The file is written to a temporary beside `destination` and renamed into place by commit(); a failure or an
 // interruption before then leaves the previous file, if any, as it was.
 class VideoWriter {
