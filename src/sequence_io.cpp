@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "deltagi/error.h"
+#include "deltagi/transforms.h"
 #include "json_reader.h"
 
 namespace fs = std::filesystem;
@@ -71,6 +72,12 @@ Camera readFrameCamera(const JsonNode& frame, const JsonNode& root) {
     const glm::mat4& m = camera.worldFromCamera;  // column-major: m[column][row]
     if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
         matrix.fail("expected the last row [0, 0, 0, 1]");
+    // A scaled, sheared or mirrored pose would fail only when the frame is rendered, without the file's name.
+    try {
+        checkCameraPose(camera.worldFromCamera);
+    } catch (const InputError& e) {
+        matrix.fail(e.message());
+    }
     return camera;
 }
 

@@ -108,6 +108,20 @@ TEST_F(SequenceTest, BadTransformsNameTheFileAndTheFrame) {
     doc = transforms(2);
     doc["frames"][1]["transform_matrix"] = {{1, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
     expectContains(errorOf(doc), {"frames[1].transform_matrix", "singular"});
+    // A pose with a scale (or a mirror) is no camera pose: refused when the file is read, not at its frame.
+    doc = transforms(2);
+    doc["frames"][1]["transform_matrix"] = {{2, 0, 0, 0}, {0, 2, 0, 0}, {0, 0, 2, 0}, {0, 0, 0, 1}};
+    expectContains(errorOf(doc), {"transforms.json: frames[1].transform_matrix", "orthonormal"});
+    doc["frames"][1]["transform_matrix"] = {{-1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    expectContains(errorOf(doc), {"frames[1].transform_matrix", "reflection"});
+    doc["frames"][1]["transform_matrix"] = {{1, 0, 0, 1e39}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    expectContains(errorOf(doc), {"frames[1].transform_matrix", "finite"});
+    doc = transforms(2);
+    doc["frames"] = json::array();
+    expectContains(errorOf(doc), {"transforms.json: frames", "no frames"});
+    doc = transforms(2);
+    doc["frames"][1].erase("file_path");
+    expectContains(errorOf(doc), {"frames[1]", "file_path"});
     doc = transforms(2);
     doc["frames"][0]["file_path"] = "images/missing.png";
     expectContains(errorOf(doc), {"frames[0].file_path", "photo not found"});
