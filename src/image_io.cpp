@@ -99,6 +99,16 @@ class QuietStderr {
 
 }  // namespace
 
+std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& path) {
+    QuietStderr quiet;
+    auto input = OIIO::ImageInput::open(path.string());
+    if (!input) {
+        OIIO::geterror();  // cleared, not to show up in a later message
+        return std::nullopt;
+    }
+    return std::pair{input->spec().width, input->spec().height};
+}
+
 ImageFile readImageFile(const std::filesystem::path& path) {
     QuietStderr quiet;
     OIIO::ImageSpec config;

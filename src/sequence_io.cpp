@@ -135,6 +135,13 @@ std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range
         const JsonNode frame = frames.element(static_cast<size_t>(i));
         frame.requireObject();
         out.push_back({i, readFrameCamera(frame, root), framePhoto(frame, file.parent_path())});
+        // A photo of the wrong size fails now, from its header, not after the frames before it are rendered.
+        const Camera& camera = out.back().camera;
+        if (const auto size = imageFileSize(out.back().photo);
+            size && (size->first != camera.width || size->second != camera.height))
+            frame.child("file_path")
+                .fail(fmt::format("expected a photo of the camera's size {}x{}, got {}x{} ('{}')", camera.width,
+                                  camera.height, size->first, size->second, out.back().photo.string()));
     }
     return out;
 }

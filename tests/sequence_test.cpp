@@ -135,7 +135,14 @@ TEST_F(SequenceTest, BadTransformsNameTheFileAndTheFrame) {
     expectContains(inputErrorOf([&] { readTransforms(dir_ / "nan.json", {}); }), {"nan.json"});
     expectContains(inputErrorOf([] { parseFrameRange("3:1", "--frames"); }), {"--frames", "empty"});
     expectContains(inputErrorOf([] { parseFrameRange("a:b", "--frames"); }), {"--frames", "A:B"});
-    // A photo of another size than the camera's.
+    // A photo of another size than the camera's: found from its header when the file is read ...
+    doc = transforms(3);
+    write(doc);
+    writeImage(Image(8, 8, 3), dir_ / "images/frame_2.png");
+    expectContains(inputErrorOf([&] { readTransforms(dir_ / "transforms.json", {}); }),
+                   {"transforms.json: frames[2].file_path", "32x24", "8x8"});
+    EXPECT_EQ(readTransforms(dir_ / "transforms.json", {0, 2}).size(), 2u);  // not in the range: not read
+    // ... and when it is read for its frame (it may have changed since).
     doc = transforms(2);
     const std::vector<SequenceFrame> frames = readTransforms(write(doc), {});
     writeImage(Image(8, 8, 3), dir_ / "images/frame_1.png");

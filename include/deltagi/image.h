@@ -3,8 +3,10 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -50,6 +52,10 @@ class Image {
 // expanded, alpha is dropped). Throws InputError naming the file when it is missing or unreadable, and when a
 // pixel is NaN or infinite.
 Image readImage(const std::filesystem::path& path);
+
+// The width and height an image file's header gives, without reading its pixels; nothing when it cannot be
+// read (readImage() then says why).
+std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& path);
 
 // readImage() without the check for NaN and infinite pixels, which it leaves as they are (for callers that
 // repair them), and whether the file held float (linear) pixels rather than sRGB-encoded integers.
