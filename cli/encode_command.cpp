@@ -31,7 +31,8 @@ std::vector<int> framesFound(const FramePattern& pattern, const fs::path& shown)
     const fs::path folder = prefix.parent_path().empty() ? fs::path(".") : prefix.parent_path();
     std::error_code error;
     if (!fs::is_directory(folder, error))
-        throw InputError(shown.string(), fmt::format("no folder '{}' to take the frames from", folder.string()));
+        throw InputError(shown.string(),
+                         fmt::format("no folder '{}' to take the frames from", folder.string()));
     std::vector<int> found;
     for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
         const std::string name = it->path().filename().string();
@@ -68,7 +69,9 @@ CLI::App* addEncodeCommand(CLI::App& app, EncodeArgs& args) {
                         "consecutive");
     command->add_option("--fps", args.settings.fps, "Frames per second (default 30)")
         ->check(CLI::Range(1e-3, kMaxFrameRate));
-    command->add_option("--crf", args.settings.crf, "x264's constant rate factor, 0 (lossless) to 51 (default 18)")
+    command
+        ->add_option("--crf", args.settings.crf,
+                     "x264's constant rate factor, 0 (lossless) to 51 (default 18)")
         ->check(CLI::Range(0, kMaxCrf));
     command->add_flag("-q,--quiet", args.quiet, "Print nothing but errors");
     return command;

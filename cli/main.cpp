@@ -26,7 +26,6 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_command.h"
-#include "encode_command.h"
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/evaluation.h"
@@ -37,6 +36,7 @@
 #include "deltagi/scene_info.h"
 #include "deltagi/scene_io.h"
 #include "deltagi_version.h"
+#include "encode_command.h"
 #include "eval_suite.h"
 #include "outputs.h"
 #include "video_output.h"
@@ -241,11 +241,12 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
         for (const SequenceFrame& frame : frames)
             if (frame.camera.width != frames.front().camera.width ||
                 frame.camera.height != frames.front().camera.height)
-                throw InputError(fmt::format("{}: frames[{}]", scene.sequenceFile.string(), frame.index),
-                                 fmt::format("a {}x{} frame after {}x{} ones: the frames of a video (--video) "
-                                             "have one size",
-                                             frame.camera.width, frame.camera.height,
-                                             frames.front().camera.width, frames.front().camera.height));
+                throw InputError(
+                    fmt::format("{}: frames[{}]", scene.sequenceFile.string(), frame.index),
+                    fmt::format(
+                        "a {}x{} frame after {}x{} ones: the frames of a video (--video) have one size",
+                        frame.camera.width, frame.camera.height, frames.front().camera.width,
+                        frames.front().camera.height));
         createOutputFolder(args.video.parent_path());
         video.emplace(args.video, frames.front().camera.width, frames.front().camera.height, settings);
     }
@@ -332,7 +333,8 @@ int runRender(const RenderArgs& args) {
     if (!args.layers.empty()) scene.options.render.layers = true;
     if (!scene.sequence.empty()) return runRenderSequence(args, scene, threads);
     if (!args.video.empty())
-        throw InputError("--video", "needs a scene with a \"sequence\" (the video's frames): a still is written with -o");
+        throw InputError(
+            "--video", "needs a scene with a \"sequence\" (the video's frames): a still is written with -o");
     if (progress) printStep("load", loadMs);
     refuseInputs(outputs, sceneInputs(scene));
 
@@ -670,10 +672,10 @@ int main(int argc, char** argv) {
     renderCommand->add_option("--frames", renderArgs.frames,
                               "With a \"sequence\": the frames A:B to render (A included, B not; e.g. 0:120, "
                               "40:, :10); -o and --layers then name each frame's file with #### or %04d");
-    CLI::Option* videoOption = renderCommand->add_option(
-        "--video", renderArgs.video,
-        "With a \"sequence\": also (or, without -o, only) write the composites as an H.264 MP4 (8-bit sRGB as "
-        "the PNGs, yuv420p)");
+    CLI::Option* videoOption =
+        renderCommand->add_option("--video", renderArgs.video,
+                                  "With a \"sequence\": also (or, without -o, only) write the composites as "
+                                  "an H.264 MP4 (8-bit sRGB as the PNGs, yuv420p)");
     renderCommand
         ->add_option("--fps", renderArgs.videoSettings.fps,
                      "The video's frames per second (default: the sequence's, sequence.fps or 30)")

@@ -69,9 +69,9 @@ std::string lowerExtension(const fs::path& path) {
 
 void checkVideoPath(const fs::path& path, const std::string& option) {
     if (lowerExtension(path) != ".mp4")
-        throw InputError(path.string(), fmt::format("{} writes an H.264 video in an MP4 file: expected .mp4, got "
-                                                    "'{}'",
-                                                    option, path.extension().string()));
+        throw InputError(path.string(),
+                         fmt::format("{} writes an H.264 video in an MP4 file: expected .mp4, got '{}'",
+                                     option, path.extension().string()));
 }
 
 void checkVideoEncoder(const std::string& option) {

@@ -1,5 +1,5 @@
-// H.264 MP4 output through the FFmpeg libraries (libavcodec with libx264, libavformat, libswscale): the frames
-// of a sequence as a video, written atomically as every output is (deltagi/atomic_file.h).
+// H.264 MP4 output through the FFmpeg libraries (libavcodec with libx264, libavformat, libswscale): the
+// frames of a sequence as a video, written atomically as every output is (deltagi/atomic_file.h).
 #pragma once
 
 #include <cstdint>
@@ -29,10 +29,10 @@ void checkVideoEncoder(const std::string& option);
 // Frames go in one by one as 8-bit sRGB (the pixels a PNG of the frame holds; a linear image is encoded as
 // the PNG writer does: clamped to [0, 1], sRGB transfer function); they are converted to BT.709 YUV 4:2:0
 // (limited range; an odd width or height is padded by repeating the last column or row) and encoded with
-// libx264 at `settings.crf` (preset medium, no macroblock-tree rate control, one thread, bit-exact: the same frames give the same
-// file, byte for byte).
-// The file is written to a temporary beside `destination` and renamed into place by commit(); a failure or an
-// interruption before then leaves the previous file, if any, as it was.
+// libx264 at `settings.crf` (preset medium, no macroblock-tree rate control, one thread, bit-exact: the same
+// frames give the same file, byte for byte). The file is written to a temporary beside `destination` and
+// renamed into place by commit(); a failure or an interruption before then leaves the previous file, if any,
+// as it was.
 class VideoWriter {
   public:
     VideoWriter(const std::filesystem::path& destination, int width, int height, VideoSettings settings);

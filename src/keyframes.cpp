@@ -39,8 +39,9 @@ T sample(const std::vector<std::pair<double, T>>& keys, double frame, T identity
     if (keys.empty()) return identity;
     if (frame <= keys.front().first) return keys.front().second;
     if (frame >= keys.back().first) return keys.back().second;
-    const auto next = std::upper_bound(keys.begin(), keys.end(), frame,
-                                       [](double f, const std::pair<double, T>& key) { return f < key.first; });
+    const auto next =
+        std::upper_bound(keys.begin(), keys.end(), frame,
+                         [](double f, const std::pair<double, T>& key) { return f < key.first; });
     const auto& [f1, v1] = *next;
     const auto& [f0, v0] = *(next - 1);
     return mix(v0, v1, static_cast<float>((frame - f0) / (f1 - f0)));
@@ -52,9 +53,9 @@ std::pair<double, double> keySpan(const ObjectAnimation& a) {
                      a.rotation.empty() ? first : a.rotation.front().first,
                      a.scale.empty() ? first : a.scale.front().first})
         first = std::min(first, f);
-    for (double f : {a.translate.empty() ? last : a.translate.back().first,
-                     a.rotation.empty() ? last : a.rotation.back().first,
-                     a.scale.empty() ? last : a.scale.back().first})
+    for (double f :
+         {a.translate.empty() ? last : a.translate.back().first,
+          a.rotation.empty() ? last : a.rotation.back().first, a.scale.empty() ? last : a.scale.back().first})
         last = std::max(last, f);
     return {first, last};
 }
@@ -79,16 +80,18 @@ ObjectAnimation readKeyframes(const JsonNode& node, double frameRate) {
             key.fail("missing \"frame\" (a frame of the transforms file) or \"time\" (seconds)");
         const std::string thisKind = hasFrame ? "frame" : "time";
         if (kind && *kind != thisKind)
-            key.child(thisKind).fail(fmt::format(
-                "the first keyframe gives a \"{}\": give every keyframe of an object a \"{}\"", *kind, *kind));
+            key.child(thisKind).fail(
+                fmt::format("the first keyframe gives a \"{}\": give every keyframe of an object a \"{}\"",
+                            *kind, *kind));
         kind = thisKind;
         const JsonNode at = key.child(thisKind);
         const double frame = hasFrame ? at.number({0.0, kMaxKeyFrame})
                                       : at.number({0.0, kMaxKeyFrame / frameRate}) * frameRate;
         if (i > 0 && !(frame > previous))
-            at.fail(fmt::format("keyframes out of order: {} {} does not come after {} ({}); give them in "
-                                "increasing order",
-                                thisKind, at.number(), hasFrame ? previous : previous / frameRate, previousWhere));
+            at.fail(fmt::format(
+                "keyframes out of order: {} {} does not come after {} ({}); give them in "
+                "increasing order",
+                thisKind, at.number(), hasFrame ? previous : previous / frameRate, previousWhere));
         previous = frame;
         previousWhere = at.path();
         if (!key.has("translate") && !key.has("rotate_deg") && !key.has("scale"))
@@ -158,7 +161,8 @@ void fixVolumeRegionOverAnimation(Scene& scene) {
             for (double f : frames) {
                 const glm::mat4 pose = worldFromObjectAt(animation, f);
                 for (int corner = 0; corner < 8; ++corner) {
-                    const glm::vec3 p((corner & 1) ? box.max.x : box.min.x, (corner & 2) ? box.max.y : box.min.y,
+                    const glm::vec3 p((corner & 1) ? box.max.x : box.min.x,
+                                      (corner & 2) ? box.max.y : box.min.y,
                                       (corner & 4) ? box.max.z : box.min.z);
                     swept.extend(glm::vec3(pose * glm::vec4(p, 1.0f)));
                 }
@@ -167,7 +171,8 @@ void fixVolumeRegionOverAnimation(Scene& scene) {
     }
     for (size_t m = 0; m < scene.virtuals.size(); ++m)
         if (!animated[m]) swept.extend(scene.virtuals[m].bounds());
-    // volumeRegion() over stand-ins: a mesh of two points spanning the swept box, one spanning the real scene.
+    // volumeRegion() over stand-ins: a mesh of two points spanning the swept box, one spanning the real
+    // scene.
     Scene standIn;
     standIn.options = scene.options;
     standIn.virtuals.resize(1);

@@ -384,8 +384,7 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
     if (fileNode && shapeNode) shapeNode->fail("give either \"file\" or \"shape\", not both");
     if (!fileNode && !shapeNode) entry.fail("expected a \"file\" or a \"shape\"");
     if (auto n = entry.find("keyframes")) {
-        if (!keyframes)
-            n->fail("only virtual objects move (the real scene is what the photos show)");
+        if (!keyframes) n->fail("only virtual objects move (the real scene is what the photos show)");
         if (entry.has("transform"))
             n->fail("give either \"transform\" or \"keyframes\" (each keyframe gives the pose), not both");
         if (keyframes->scene.sequence.empty())

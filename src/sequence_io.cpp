@@ -140,8 +140,9 @@ std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range
         if (const auto size = imageFileSize(out.back().photo);
             size && (size->first != camera.width || size->second != camera.height))
             frame.child("file_path")
-                .fail(fmt::format("expected a photo of the camera's size {}x{}, got {}x{} ('{}')", camera.width,
-                                  camera.height, size->first, size->second, out.back().photo.string()));
+                .fail(fmt::format("expected a photo of the camera's size {}x{}, got {}x{} ('{}')",
+                                  camera.width, camera.height, size->first, size->second,
+                                  out.back().photo.string()));
     }
     return out;
 }

@@ -4,8 +4,8 @@
 #include <filesystem>
 #include <string>
 
-#include <glm/gtc/quaternion.hpp>
 #include <gtest/gtest.h>
+#include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
 #include "deltagi/error.h"
@@ -100,7 +100,8 @@ TEST_F(KeyframesScene, LoadsPosedForTheFirstFrameInARegionForAllFrames) {
     doc["options"]["volume"] = {{"center", {0, 0, 0}}, {"size", 4}};
     EXPECT_FLOAT_EQ(*loadScene(doc, dir_ / "scene.json").options.volume.size, 4.0f);
     // A sequence that starts later: posed for its first frame; "time" keys in seconds at sequence.fps.
-    doc = scene({{{"time", 0.0}, {"translate", {0, 0.15, 0}}}, {{"time", 0.4}, {"translate", {0.4, 0.15, 0}}}});
+    doc =
+        scene({{{"time", 0.0}, {"translate", {0, 0.15, 0}}}, {{"time", 0.4}, {"translate", {0.4, 0.15, 0}}}});
     doc["sequence"]["frames"] = "2:4";
     doc["sequence"]["fps"] = 10;
     s = loadScene(doc, dir_ / "scene.json");
@@ -134,14 +135,17 @@ TEST_F(KeyframesScene, BadKeyframesNameTheFileAndTheKey) {
                    {"keyframes[0]", "at least one of"});
     expectContains(errorOf(scene(keys({{"frame", 0}, {"scale", 0}}, {{"frame", 1}, {"translate", t0}}))),
                    {"keyframes[0].scale", "non-zero"});
-    expectContains(errorOf(scene(keys({{"frame", 0}, {"scale", {1, 1, 1}}}, {{"frame", 2}, {"scale", {1, -1, 1}}}))),
-                   {"keyframes[1].scale", "y factor changes sign"});
+    expectContains(
+        errorOf(scene(keys({{"frame", 0}, {"scale", {1, 1, 1}}}, {{"frame", 2}, {"scale", {1, -1, 1}}}))),
+        {"keyframes[1].scale", "y factor changes sign"});
     expectContains(errorOf(scene(keys({{"frame", 0}, {"scale", 1e-20}}, {{"frame", 1}, {"translate", t0}}))),
                    {"keyframes[0]", "invertible"});
-    expectContains(errorOf(scene(keys({{"frame", 0}, {"translate", {1e39, 0, 0}}}, {{"frame", 1}, {"translate", t0}}))),
-                   {"keyframes[0].translate[0]", "finite"});
-    expectContains(errorOf(scene(keys({{"frame", -1}, {"translate", t0}}, {{"frame", 1}, {"translate", t0}}))),
-                   {"keyframes[0].frame", "expected a number in"});
+    expectContains(
+        errorOf(scene(keys({{"frame", 0}, {"translate", {1e39, 0, 0}}}, {{"frame", 1}, {"translate", t0}}))),
+        {"keyframes[0].translate[0]", "finite"});
+    expectContains(
+        errorOf(scene(keys({{"frame", -1}, {"translate", t0}}, {{"frame", 1}, {"translate", t0}}))),
+        {"keyframes[0].frame", "expected a number in"});
     expectContains(errorOf(scene(keys({{"frame", 0}, {"translate", t0}, {"rotate", 5}}, {{"frame", 1}}))),
                    {"keyframes[0].rotate"});
     expectContains(errorOf(scene(json::array())), {"virtual[0].keyframes", "at least one keyframe"});
@@ -171,12 +175,13 @@ TEST_F(KeyframesScene, ChunksRenderTheFramesOfTheWholeRun) {
     ASSERT_EQ(runCli(render + "--frames 2:4 -o " + (dir_ / "part_####.exr").string()), 0) << errors();
     ASSERT_EQ(runCli(render + "--frames 3:4 -o " + (dir_ / "last_####.exr").string()), 0) << errors();
     float largest = 0.0f;
-    for (const auto& [whole, chunk] : {std::pair{"all_0002.exr", "part_0002.exr"},
-                                       std::pair{"all_0003.exr", "part_0003.exr"},
-                                       std::pair{"all_0003.exr", "last_0003.exr"}}) {
+    for (const auto& [whole, chunk] :
+         {std::pair{"all_0002.exr", "part_0002.exr"}, std::pair{"all_0003.exr", "part_0003.exr"},
+          std::pair{"all_0003.exr", "last_0003.exr"}}) {
         const Image a = readImage(dir_ / whole), b = readImage(dir_ / chunk);
         ASSERT_EQ(a.data().size(), b.data().size());
-        for (size_t k = 0; k < a.data().size(); ++k) largest = std::max(largest, std::abs(a.data()[k] - b.data()[k]));
+        for (size_t k = 0; k < a.data().size(); ++k)
+            largest = std::max(largest, std::abs(a.data()[k] - b.data()[k]));
     }
     EXPECT_LE(largest, 1e-4f);
     // The box moved: its coverage (the object layer's alpha) differs between the first and the last frame.

@@ -74,8 +74,8 @@ class SequenceTest : public ::testing::Test {
 
     // `deltagi ARGS` (the paths in ARGS as given), its stderr in err.txt; returns the exit status.
     int runCli(const std::string& args, const std::string& environment = "") const {
-        const std::string command = environment + " " + std::string(DELTAGI_CLI) + " " + args + " 2>" +
-                                    (dir_ / "err.txt").string();
+        const std::string command =
+            environment + " " + std::string(DELTAGI_CLI) + " " + args + " 2>" + (dir_ / "err.txt").string();
         const int status = std::system(command.c_str());
         return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     }

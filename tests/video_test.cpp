@@ -141,8 +141,8 @@ TEST_F(VideoTest, RenderWritesTheFramesAsH264) {
     json withFps = json::parse(text(scene));
     withFps["sequence"]["fps"] = 12.5;
     const fs::path scene2 = write(withFps, "scene2.json");
-    ASSERT_EQ(runCli("render " + scene2.string() + " -q --frames 1:3 --video " + (dir_ / "part.mp4").string()),
-              0)
+    ASSERT_EQ(
+        runCli("render " + scene2.string() + " -q --frames 1:3 --video " + (dir_ / "part.mp4").string()), 0)
         << errors();
     const Decoded part = decode(dir_ / "part.mp4");
     EXPECT_NEAR(part.fps, 12.5, 1e-9);
@@ -158,7 +158,8 @@ TEST_F(VideoTest, TheSameFramesGiveTheSameFile) {
     write(transforms(5));
     const fs::path scene = writeSequenceScene(test::tinySceneJson(32, 24, {0.2, 0.8, 0.3}));
     const std::string render = "render " + scene.string() + " -q --video ";
-    ASSERT_EQ(runCli(render + (dir_ / "a.mp4").string() + " -o " + (dir_ / "f_##.png").string()), 0) << errors();
+    ASSERT_EQ(runCli(render + (dir_ / "a.mp4").string() + " -o " + (dir_ / "f_##.png").string()), 0)
+        << errors();
     ASSERT_EQ(runCli(render + (dir_ / "b.mp4").string() + " --threads 1", "MALLOC_PERTURB_=85"), 0);
     ASSERT_EQ(runCli(render + (dir_ / "c.mp4").string() + " --threads 2", "MALLOC_PERTURB_=200"), 0);
     ASSERT_EQ(runCli("encode " + (dir_ / "f_##.png").string() + " -q -o " + (dir_ / "d.mp4").string()), 0)
@@ -175,7 +176,8 @@ TEST_F(VideoTest, TheSameFramesGiveTheSameFile) {
 TEST_F(VideoTest, AnOddSizeIsPadded) {
     write(transforms(2, 33, 25));
     const fs::path scene = writeSequenceScene(test::tinySceneJson(33, 25, {0.5, 0.5, 0.5}));
-    ASSERT_EQ(runCli("render " + scene.string() + " -q --video " + (dir_ / "odd.mp4").string()), 0) << errors();
+    ASSERT_EQ(runCli("render " + scene.string() + " -q --video " + (dir_ / "odd.mp4").string()), 0)
+        << errors();
     const Decoded video = decode(dir_ / "odd.mp4");
     EXPECT_EQ(video.width, 34);
     EXPECT_EQ(video.height, 26);
@@ -225,7 +227,8 @@ TEST_F(VideoTest, OutputsAreAtomicAndChecked) {
 
 // `deltagi encode` takes consecutive frames and names the first one missing, or one of another size.
 TEST_F(VideoTest, EncodeChecksItsFrames) {
-    for (int i : {3, 4, 5, 7}) writeImage(Image(8, 6, 3, 0.1f * i), dir_ / ("f_" + std::to_string(i) + ".png"));
+    for (int i : {3, 4, 5, 7})
+        writeImage(Image(8, 6, 3, 0.1f * i), dir_ / ("f_" + std::to_string(i) + ".png"));
     const std::string encode = "encode " + (dir_ / "f_#.png").string() + " -o " + (dir_ / "v.mp4").string();
     EXPECT_EQ(runCli(encode), 1);
     test::expectContains(errors(), {"f_6.png", "frame 6 of 3:8 is missing"});
