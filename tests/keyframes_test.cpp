@@ -162,6 +162,11 @@ TEST_F(KeyframesScene, BadKeyframesNameTheFileAndTheKey) {
     doc = scene(kMoving);
     doc["sequence"]["fps"] = 0;
     expectContains(errorOf(doc), {"sequence.fps", "expected a number in"});
+    doc["sequence"].erase("fps");
+    json badFps = transforms(4);
+    badFps["fps"] = "thirty";
+    write(badFps);
+    expectContains(errorOf(doc), {"transforms.json: fps", "expected a number"});
 }
 
 // The object moves from frame to frame; rendering frames 2:4 alone gives the frames of the whole run.
