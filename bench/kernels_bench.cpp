@@ -9,6 +9,8 @@
 #include <numbers>
 
 #include "cone_trace.h"
+#include "deltagi/transforms.h"
+#include "gbuffer.h"
 #include "inject.h"
 #include "mipmap.h"
 #include "object_volumes.h"
@@ -125,6 +127,26 @@ BENCHMARK_CAPTURE(BM_MovingObjectFrame, Inject, FrameStage::Inject)
 BENCHMARK_CAPTURE(BM_MovingObjectFrame, Mipmap, FrameStage::Mipmap)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
+
+// The real half of the G-buffer, redone every frame while the camera moves: one camera ray per pixel of a
+// 640 x 480 image into a closed box (the Cornell box's shape: every ray hits).
+void BM_RealSurfaces(benchmark::State& state) {
+    Scene scene;
+    TriangleMesh room = makeBox(glm::vec3(1.0f));
+    room.name = "room";
+    scene.real.push_back(std::move(room));
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    Camera camera;
+    camera.setFieldOfView(60.0);
+    camera.worldFromCamera = lookAtPose({0.0f, 0.0f, 0.45f}, {0.0f, 0.0f, 0.0f});
+    std::vector<SurfacePoint> real;  // reused, as FrameRenderer does
+    for (auto _ : state) {
+        renderRealSurfaces(camera, realOnly, real);
+        benchmark::DoNotOptimize(real.data());
+    }
+    state.SetItemsProcessed(state.iterations() * camera.width * camera.height);
+}
+BENCHMARK(BM_RealSurfaces)->Unit(benchmark::kMillisecond);
 
 // Cones from points on the floor around the ball, through the two visibility volumes and the delta volume
 // (light cones) or the visibility volumes alone (shadow cones towards the light).

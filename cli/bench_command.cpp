@@ -29,6 +29,11 @@ CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
         ->add_option("--motion", args.options.motionVoxels,
                      "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still)")
         ->check(CLI::Range(0.0f, 1000.0f));
+    command
+        ->add_option("--camera-motion", args.options.cameraDegrees,
+                     "Move the camera too: swing it up to DEG degrees either way about the objects' centre "
+                     "(default 0: still); each pose's photo is rendered first, untimed")
+        ->check(CLI::Range(0.0f, 90.0f));
     command->add_option("--json", args.json, "Also write the figures as JSON here");
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     command->add_option("--threads", args.threads, "Worker threads (default: all cores)")

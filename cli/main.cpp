@@ -1,6 +1,6 @@
 // The `deltagi` command: `render` a scene file to an image (and its AOVs), print `info` about a scene, render
 // the path-traced `reference`, `compare` two images, `eval` DGI against the reference, `bench` the pipeline,
-// or `encode` frames into an H.264 MP4.
+// measure its `stability`, or `encode` frames into an H.264 MP4.
 //
 // Errors: bad input (InputError) and any other exception become one line `deltagi: error: <message>` on
 // stderr and exit code 1; command-line usage errors exit with code 2; SIGINT and SIGTERM exit with 130 and
@@ -26,6 +26,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_command.h"
+#include "stability_command.h"
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/evaluation.h"
@@ -756,6 +757,8 @@ int main(int argc, char** argv) {
 
     cli::BenchArgs benchArgs;
     CLI::App* benchCommand = cli::addBenchCommand(app, benchArgs, kMaxThreads);
+    cli::StabilityArgs stabilityArgs;
+    CLI::App* stabilityCommand = cli::addStabilityCommand(app, stabilityArgs, kMaxThreads);
 
     cli::EncodeArgs encodeArgs;
     CLI::App* encodeCommand = cli::addEncodeCommand(app, encodeArgs);
@@ -770,8 +773,7 @@ int main(int argc, char** argv) {
             return reportError(
                 fmt::format(
                     "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
-                    "'bench' or 'encode' "
-                    "(see deltagi --help)",
+                    "'bench', 'stability' or 'encode' (see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);
@@ -788,6 +790,7 @@ int main(int argc, char** argv) {
                 kExitUsageError);
         if (*evalCommand) return runEval(evalArgs);
         if (*benchCommand) return cli::runBench(benchArgs);
+        if (*stabilityCommand) return cli::runStability(stabilityArgs);
         if (*encodeCommand) return cli::runEncode(encodeArgs);
         return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <fmt/core.h>
 #include <tbb/global_control.h>
@@ -39,6 +42,37 @@ BenchStatistics statistics(std::vector<double> values) {
     s.median = n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
     s.max = values.back();
     return s;
+}
+
+struct CameraPose {
+    Camera camera;
+    Image photo;
+};
+
+// The camera's poses for BenchOptions::cameraDegrees (at most a period of 16, and `frames`), each with the
+// real scene rendered alone from there as its photo.
+std::vector<CameraPose> cameraPoses(const Scene& scene, float degrees, int frames) {
+    Bounds3f objects;
+    for (const TriangleMesh& m : scene.virtuals) objects.extend(m.bounds());
+    const glm::vec3 centre = objects.center();
+    Scene real;
+    real.file = scene.file;
+    real.camera = scene.camera;
+    real.real = scene.real;
+    real.lights = scene.lights;
+    real.environment = scene.environment;
+    real.options = scene.options;
+    std::vector<CameraPose> poses;
+    for (int k = 0; k < std::min(frames, 16); ++k) {
+        const float angle = glm::radians(degrees) *
+                            std::sin(2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / 16.0f);
+        const glm::mat4 turn = glm::translate(glm::mat4(1.0f), centre) *
+                               glm::rotate(glm::mat4(1.0f), angle, glm::vec3(0.0f, 1.0f, 0.0f)) *
+                               glm::translate(glm::mat4(1.0f), -centre);
+        real.camera.worldFromCamera = turn * scene.camera.worldFromCamera;
+        poses.push_back({real.camera, render(real).background});
+    }
+    return poses;
 }
 
 size_t triangleCount(const std::vector<TriangleMesh>& meshes) {
@@ -88,18 +122,37 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
         }
     };
 
-    FrameRenderer renderer;
     const int total = options.warmup + options.frames;
+    const Camera camera = scene.camera;
+    const std::optional<Image> background = scene.background;
+    const std::optional<glm::vec3> viewpoint = scene.options.volume.viewpoint;
+    std::vector<CameraPose> poses;
+    if (options.cameraDegrees > 0.0f) {
+        // As a sequence does: the volumes light the real surfaces' side that the first camera sees.
+        if (!viewpoint) scene.options.volume.viewpoint = camera.position();
+        poses = cameraPoses(scene, options.cameraDegrees, total);
+    }
+
+    FrameRenderer renderer;
     for (int f = 0; f < total; ++f) {
         placeObjects(f);
+        if (!poses.empty()) {
+            const CameraPose& pose = poses[static_cast<size_t>(f) % poses.size()];
+            scene.camera = pose.camera;
+            scene.background = pose.photo;
+        }
         if (options.cold) renderer.clear();
         RenderOutput out = renderer.render(scene);
         if (f < options.warmup) continue;
+        if (renderer.lastFrameKept().world) ++result.worldKeptFrames;
         result.frames.push_back(std::move(out.timings));
         result.totals.push_back(out.totalMs);
         if (onFrame) onFrame(f - options.warmup, out.totalMs);
     }
     placeObjects(0);
+    scene.camera = camera;
+    scene.background = background;
+    scene.options.volume.viewpoint = viewpoint;
     return result;
 }
 
@@ -108,6 +161,8 @@ nlohmann::ordered_json benchToJson(const BenchResult& r) {
     json["frames"] = r.options.frames;
     json["warmup"] = r.options.warmup;
     json["cold"] = r.options.cold;
+    json["camera_motion_deg"] = r.options.cameraDegrees;
+    json["world_kept_frames"] = r.worldKeptFrames;
     json["threads"] = r.threads;
     json["width"] = r.width;
     json["height"] = r.height;
@@ -127,6 +182,9 @@ std::string benchTable(const BenchResult& r) {
         "{}x{}, volumes {}^3, {} real + {} virtual triangles, {} threads, {} frames ({}{} warm-up)\n",
         r.width, r.height, r.volumeResolution, r.realTriangles, r.virtualTriangles, r.threads,
         r.options.frames, r.options.cold ? "cold, " : "", r.options.warmup);
+    if (r.options.cameraDegrees > 0.0f)
+        out += fmt::format("camera swinging +-{} deg; the world-space work kept in {} of {} frames\n",
+                           r.options.cameraDegrees, r.worldKeptFrames, r.options.frames);
     out += fmt::format("{:<15} {:>10} {:>10} {:>12}\n", "stage", "median ms", "max ms", "paper ms");
     for (const BenchRow& row : benchRows()) {
         const BenchStatistics s = r.row(row);

@@ -18,6 +18,12 @@ constexpr float kMinCoherence = 0.2f;
 constexpr int kGatherLevel = 1;
 constexpr uint32_t kBounceStream = 9000;  // hashToUnit streams of the cones' jitter
 
+// Surfaces are two-sided and the winding of a reconstruction is not reliable: the side of a voxel that
+// gathers is the one facing the viewpoint; true where that is the side against its mean normal.
+bool facesAway(glm::vec3 meanNormal, glm::vec3 centre, glm::vec3 viewpoint) {
+    return glm::dot(meanNormal, viewpoint - centre) < 0.0f;
+}
+
 // The diffuse cones' light (cosine-weighted, so that albedo times it is the reflected radiance) gathered at a
 // coarse voxel of `size` (world units) around `normal`, from the voxel's face along the normal so that its
 // own surfaces do not occlude; jittered by the voxel's `index`.
@@ -71,10 +77,8 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
                 const float coherence = glm::length(meanNormal);
                 if (coherence < kMinCoherence) continue;
                 const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
-                // Surfaces are two-sided and the winding of a reconstruction is not reliable: the side that
-                // gathers is the one facing the viewpoint.
-                const glm::vec3 normal =
-                    (glm::dot(meanNormal, viewpoint - centre) < 0.0f ? -1.0f : 1.0f) * meanNormal / coherence;
+                const glm::vec3 normal = (facesAway(meanNormal, centre, viewpoint) ? -1.0f : 1.0f) *
+                                         meanNormal / coherence;
                 gathered[i] = gatherAtVoxel(centre, normal, coarseSize, i, light, occluders, cones, settings);
             }
         });
@@ -91,6 +95,25 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
         });
     }
     return indirect;
+}
+
+std::vector<bool> bounceViewSides(const MipVolume& visibility, glm::vec3 viewpoint) {
+    if (visibility.levelCount() <= kGatherLevel) return {};
+    const VolumeRegion& region = visibility.region();
+    const Grid3& coarse = visibility.level(kGatherLevel);
+    const int m = coarse.resolution();
+    const float coarseSize = region.voxelSize() * static_cast<float>(region.resolution / m);
+    std::vector<bool> sides(coarse.size(), false);
+    for (int z = 0; z < m; ++z)
+        for (int y = 0; y < m; ++y)
+            for (int x = 0; x < m; ++x) {
+                const size_t i = coarse.index(x, y, z);
+                const glm::vec4 v = coarse[i];
+                if (v.x <= 0.0f) continue;
+                const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+                sides[i] = facesAway(glm::vec3(v.y, v.z, v.w) / v.x, centre, viewpoint);
+            }
+    return sides;
 }
 
 namespace {

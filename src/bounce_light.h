@@ -29,6 +29,11 @@ namespace deltagi {
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
                   const Options& options, int bounces, glm::vec3 viewpoint);
 
+// Which side of each gathering voxel faces `viewpoint` (per voxel of `visibility`'s level 1: true where it is
+// the side against the voxel's mean normal): bounceLight's result for two viewpoints is the same where these
+// are (FrameRenderer keeps it while the camera moves).
+std::vector<bool> bounceViewSides(const MipVolume& visibility, glm::vec3 viewpoint);
+
 // The virtual objects' own reflection of the light they receive (their further bounce): the light volume
 // `light` gathered at every mip-`level` voxel of the objects inside `box` (level-0 voxels), around its mean
 // normal (objects are closed and wound outwards), occluded by the scene and the objects, and reflected by

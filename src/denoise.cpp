@@ -135,6 +135,24 @@ std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const S
     return weights;
 }
 
+// Stride > 1, without a plan: whether pixel (x, y), whose surface is p, is zero without its weights — the
+// filtered samples around it are all zero and the first of them, (x / stride, y / stride), lies on its
+// surface, so interpolatePixel would give zero (most of a shadow's change is zero: this saves computing the
+// other weights there).
+bool zeroAround(const FilterPass& f, std::span<const uint8_t> filteredNonZero, int x, int y, size_t k00,
+                const SurfacePoint& p) {
+    const int sx0 = x / f.stride, sy0 = y / f.stride;
+    const bool right = sx0 + 1 < f.sw, below = sy0 + 1 < f.sh;
+    if (filteredNonZero[k00] || (right && filteredNonZero[k00 + 1]) ||
+        (below && filteredNonZero[k00 + f.sw]) || (right && below && filteredNonZero[k00 + f.sw + 1]))
+        return false;
+    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    const float allowance = planeAllowance * f.offsetLength[static_cast<size_t>(sy0 * f.stride - y + f.reach) *
+                                                                f.side +
+                                                            sx0 * f.stride - x + f.reach];
+    return neighbourWeight(f, p, f.samples[k00], allowance) > 0.0f;
+}
+
 // Stride > 1, the pixels between the samples: the filtered values of the (up to) 4 samples around the pixel
 // with `weights` (interpolationWeights); k00 is the first of them, (x / stride, y / stride). A pixel with
 // none of them on its surface (an edge between samples) takes the full filter over its window. Returns false
@@ -240,6 +258,10 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
                 } else {
                     const SurfacePoint& p = f.points[i];
                     if (!p.valid()) continue;
+                    if (interpolate && zeroAround(f, filteredNonZero, x, y, k00, p)) {
+                        std::fill_n(&out[i * channels], channels, 0.0f);
+                        continue;
+                    }
                     ok = interpolate ? interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, &p,
                                                            interpolationWeights(f, f.samples, x, y, p),
                                                            &out[i * channels])

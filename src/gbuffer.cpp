@@ -24,6 +24,18 @@ RayHit visibleObjectHit(const RayScene& all, glm::vec3 eye, glm::vec3 dir) {
     return hit;
 }
 
+// visibleObjectHit for many rays: the objects' layer in packets.
+void visibleObjectHits(const RayScene& all, glm::vec3 eye, std::span<const glm::vec3> directions,
+                       std::span<RayHit> hits) {
+    if (!all.base()) {
+        for (size_t i = 0; i < directions.size(); ++i) hits[i] = visibleObjectHit(all, eye, directions[i]);
+        return;
+    }
+    all.intersectCoherent(eye, directions, hits, true);
+    for (size_t i = 0; i < directions.size(); ++i)
+        if (!hits[i].isVirtual || all.base()->intersect(eye, directions[i], 0.0f, hits[i].t).hit()) hits[i] = {};
+}
+
 // The pixel rows and columns [x0, x1] x [y0, y1] whose rays may meet the box `b` (its corners' projections,
 // with a margin for the sub-samples); the whole image when the box reaches behind the camera.
 std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
@@ -55,16 +67,24 @@ std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
 }  // namespace
 
 std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly) {
-    std::vector<SurfacePoint> real(static_cast<size_t>(camera.width) * camera.height);
+    std::vector<SurfacePoint> real;
+    renderRealSurfaces(camera, realOnly, real);
+    return real;
+}
+
+void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vector<SurfacePoint>& real) {
+    real.resize(static_cast<size_t>(camera.width) * camera.height);
     const glm::vec3 eye = camera.position();
     parallelFor(0, camera.height, 2, [&](int64_t y) {
-        for (int x = 0; x < camera.width; ++x) {
-            const glm::vec3 dir = glm::normalize(camera.rayDirection(x + 0.5f, y + 0.5f));
-            real[static_cast<size_t>(y) * camera.width + x] =
-                toSurfacePoint(realOnly.intersect(eye, dir), dir);
-        }
+        // A row's rays in packets.
+        std::vector<glm::vec3> directions(static_cast<size_t>(camera.width));
+        std::vector<RayHit> hits(directions.size());
+        for (int x = 0; x < camera.width; ++x)
+            directions[x] = glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f));
+        realOnly.intersectCoherent(eye, directions, hits);
+        for (int x = 0; x < camera.width; ++x)
+            real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(hits[x], directions[x]);
     });
-    return real;
 }
 
 void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
@@ -78,9 +98,14 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
             std::fill(g.object.begin() + row + w.x0, g.object.begin() + row + w.x1, SurfacePoint{});
             std::fill(g.coverage.begin() + row + w.x0, g.coverage.begin() + row + w.x1, 0.0f);
         }
-    } else {
-        g.object.assign(count, {});
-        g.coverage.assign(count, 0.0f);
+    } else {  // a new camera: 15 MiB at 640 x 480, cleared in parallel
+        g.object.resize(count);
+        g.coverage.resize(count);
+        parallelFor(0, height, 16, [&](int64_t y) {
+            const size_t row = static_cast<size_t>(y) * width;
+            std::fill(g.object.begin() + row, g.object.begin() + row + width, SurfacePoint{});
+            std::fill(g.coverage.begin() + row, g.coverage.begin() + row + width, 0.0f);
+        });
     }
     g.width = width;
     g.height = height;
@@ -91,10 +116,14 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     const auto [x0, x1, y0, y1] = pixelsCovering(camera, objectBounds);
     g.written = x1 < x0 || y1 < y0 ? PixelRect{} : PixelRect{x0, y0, x1 + 1, y1 + 1};
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
+        std::vector<glm::vec3> directions;
+        for (int x = x0; x <= x1; ++x)
+            directions.push_back(glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f)));
+        std::vector<RayHit> hits(directions.size());
+        visibleObjectHits(all, eye, directions, hits);
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
-            const glm::vec3 dir = glm::normalize(camera.rayDirection(x + 0.5f, y + 0.5f));
-            g.object[i] = toSurfacePoint(visibleObjectHit(all, eye, dir), dir);
+            g.object[i] = toSurfacePoint(hits[x - x0], directions[x - x0]);
             g.coverage[i] = g.object[i].valid() ? 1.0f : 0.0f;
         }
     });
@@ -127,6 +156,21 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
         static_cast<size_t>(std::max(rectWidth, 0)) * std::max(samples.rect.y1 - samples.rect.y0, 0) * k * k,
         SurfacePoint{});
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
+        // The row's sub-sample rays, in packets.
+        std::vector<glm::vec3> directions;
+        for (int x = x0; x <= x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * width + x;
+            if (!silhouette[i] && !g.object[i].valid()) continue;
+            for (int sy = 0; sy < k; ++sy)
+                for (int sx = 0; sx < k; ++sx) {
+                    const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
+                    directions.push_back(glm::normalize(
+                        camera.rayDirection(x + 0.5f + ox, static_cast<float>(y) + 0.5f + oy)));
+                }
+        }
+        std::vector<RayHit> hits(directions.size());
+        visibleObjectHits(all, eye, directions, hits);
+        size_t next = 0;
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
             if (!silhouette[i] && !g.object[i].valid()) continue;
@@ -138,8 +182,8 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
             for (int sy = 0; sy < k; ++sy)
                 for (int sx = 0; sx < k; ++sx) {
                     const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
-                    const glm::vec3 dir = glm::normalize(camera.rayDirection(x + 0.5f + ox, y + 0.5f + oy));
-                    const RayHit hit = visibleObjectHit(all, eye, dir);
+                    const RayHit& hit = hits[next];
+                    const glm::vec3 dir = directions[next++];
                     if (!hit.hit()) continue;
                     ++virtualCount;
                     out[sy * k + sx] = toSurfacePoint(hit, dir);

@@ -76,6 +76,8 @@ struct GBuffer {
 // The real surfaces behind the pixel centres (what the photo shows): rays against the real scene alone. They
 // do not change while only the virtual objects move, so FrameRenderer keeps them between frames.
 std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly);
+// The same into `real` (resized; its memory is reused from frame to frame as the camera moves).
+void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vector<SurfacePoint>& real);
 
 // The virtual half of `g` (object, coverage): `all` holds the real and the virtual surfaces (the virtual
 // objects' layer over the real scene's, see RayScene), whose virtual objects lie inside `objectBounds`: only

@@ -294,7 +294,7 @@ bool isPowerOfTwo(int64_t v) {
 constexpr int kMinVolumeResolution = 4, kMaxVolumeResolution = 1024;
 
 void readVolume(const JsonNode& node, VolumeOptions& volume) {
-    node.allowKeys({"resolution", "extent_scale", "reach_scale", "center", "size"});
+    node.allowKeys({"resolution", "extent_scale", "reach_scale", "center", "size", "viewpoint"});
     if (auto n = node.find("resolution")) {
         int64_t r = n->integer64();
         if (!isPowerOfTwo(r) || r < kMinVolumeResolution || r > kMaxVolumeResolution)
@@ -308,6 +308,7 @@ void readVolume(const JsonNode& node, VolumeOptions& volume) {
     auto center = node.find("center"), size = node.find("size");
     if (center && !center->value().is_null()) volume.center = center->vec3();
     if (size && !size->value().is_null()) volume.size = size->floatNumber(kPositive);
+    if (auto n = node.find("viewpoint"); n && !n->value().is_null()) volume.viewpoint = n->vec3();
     if (volume.center.has_value() != volume.size.has_value()) {
         if (volume.center) center->fail("given without options.volume.size; give both or neither");
         size->fail("given without options.volume.center; give both or neither");
@@ -465,9 +466,12 @@ json optionsToJson(const Options& o) {
                    {"extent_scale", o.volume.extentScale},
                    {"reach_scale", o.volume.reachScale},
                    {"center", nullptr},
-                   {"size", nullptr}};
+                   {"size", nullptr},
+                   {"viewpoint", nullptr}};
     if (o.volume.center) volume["center"] = {o.volume.center->x, o.volume.center->y, o.volume.center->z};
     if (o.volume.size) volume["size"] = *o.volume.size;
+    if (o.volume.viewpoint)
+        volume["viewpoint"] = {o.volume.viewpoint->x, o.volume.viewpoint->y, o.volume.viewpoint->z};
     return {
         {"volume", volume},
         {"rsm", {{"resolution", o.rsm.resolution > 0 ? json(o.rsm.resolution) : json("auto")}}},

@@ -146,12 +146,61 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return result;
+    return hitOn(rh.hit.geomID, rh.hit.primID, {rh.hit.u, rh.hit.v, rh.ray.tfar},
+                 {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, origin, direction);
+}
 
-    const MeshRef& ref = meshes_[rh.hit.geomID];
+void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
+                                 std::span<RayHit> hits, bool topLayerOnly) const {
+    if (meshes_.empty() || (base_ && !topLayerOnly)) {  // layers: one ray at a time
+        for (size_t i = 0; i < directions.size(); ++i)
+            hits[i] = topLayerOnly ? RayHit{} : intersect(origin, directions[i]);
+        return;
+    }
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    constexpr size_t kPacket = 8;
+    for (size_t first = 0; first < directions.size(); first += kPacket) {
+        alignas(32) RTCRayHit8 rh;
+        alignas(32) int valid[kPacket];
+        const size_t n = std::min(kPacket, directions.size() - first);
+        for (size_t k = 0; k < kPacket; ++k) {
+            const glm::vec3 d = directions[first + std::min(k, n - 1)];
+            valid[k] = k < n ? -1 : 0;
+            rh.ray.org_x[k] = origin.x;
+            rh.ray.org_y[k] = origin.y;
+            rh.ray.org_z[k] = origin.z;
+            rh.ray.dir_x[k] = d.x;
+            rh.ray.dir_y[k] = d.y;
+            rh.ray.dir_z[k] = d.z;
+            rh.ray.tnear[k] = 0.0f;
+            rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
+            rh.ray.time[k] = 0.0f;
+            rh.ray.mask[k] = ~0u;
+            rh.ray.id[k] = static_cast<unsigned>(k);
+            rh.ray.flags[k] = 0;
+            rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect8(valid, impl_->scene, &context, &rh);
+        for (size_t k = 0; k < n; ++k)
+            hits[first + k] = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
+                                  ? RayHit{}
+                                  : hitOn(rh.hit.geomID[k], rh.hit.primID[k],
+                                          {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
+                                          {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin,
+                                          directions[first + k]);
+    }
+}
+
+RayHit RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
+                       glm::vec3 direction) const {
+    RayHit result;
+    const MeshRef& ref = meshes_[geomID];
     const TriangleMesh& mesh = *ref.mesh;
-    const glm::uvec3 tri = mesh.triangles[rh.hit.primID];
-    float u = rh.hit.u, v = rh.hit.v, t = rh.ray.tfar;
-    glm::vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    const glm::uvec3 tri = mesh.triangles[primID];
+    float u = uvt.x, v = uvt.y, t = uvt.z;
     if (const auto again = recomputeHit(origin, direction, mesh.positions[tri.x], mesh.positions[tri.y],
                                         mesh.positions[tri.z])) {
         t = again->t, u = again->u, v = again->v, ng = again->ng;

@@ -51,6 +51,12 @@ class RayScene {
     // The closest hit in this layer alone, without the base's.
     RayHit intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
                              float tMax = std::numeric_limits<float>::infinity()) const;
+    // intersect() (or intersectTopLayer()) for many rays from one origin (camera rays), traced in packets:
+    // hits[i] for directions[i] (unit length), t in (0, infinity). The same hits as one ray at a time: each
+    // is computed again from its triangle (an edge shared by two triangles may be found on either, at the
+    // same point to rounding).
+    void intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions, std::span<RayHit> hits,
+                           bool topLayerOnly = false) const;
     // Whether anything lies along origin + t * direction, t in (tMin, tMax): shadow rays (any hit, cheaper
     // than the closest). Of this layer and its base, or of this layer alone.
     bool occluded(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
@@ -62,6 +68,9 @@ class RayScene {
     bool empty() const { return meshes_.empty() && (!base_ || base_->empty()); }
 
   private:
+    // The hit on triangle `primID` of mesh `geomID` that Embree found at (u, v, t) with normal `ng`.
+    RayHit hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
+                 glm::vec3 direction) const;
     struct Impl;
     std::unique_ptr<Impl> impl_;
     struct MeshRef {

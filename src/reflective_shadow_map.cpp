@@ -342,4 +342,24 @@ std::vector<int> rsmResolutions(const Options& options, std::span<const Light> l
     return out;
 }
 
+std::vector<int8_t> rsmViewSides(std::span<const TriangleMesh> meshes, glm::vec3 viewpoint) {
+    constexpr float kTolerance = 1e-4f;
+    std::vector<int8_t> sides;
+    for (const TriangleMesh& mesh : meshes)
+        for (const glm::uvec3& t : mesh.triangles) {
+            const glm::vec3 a = mesh.positions[t.x], b = mesh.positions[t.y], c = mesh.positions[t.z];
+            const glm::vec3 normal = glm::cross(b - a, c - a);
+            const float area2 = glm::length(normal);
+            if (!(area2 > 0.0f)) {  // degenerate: no ray hits it
+                sides.push_back(1);
+                continue;
+            }
+            const glm::vec3 toViewpoint = viewpoint - a;
+            const float distance = glm::dot(normal / area2, toViewpoint);
+            const float scale = glm::length(toViewpoint) + glm::length(b - a) + glm::length(c - a);
+            sides.push_back(distance > kTolerance * scale ? 1 : distance < -kTolerance * scale ? -1 : 0);
+        }
+    return sides;
+}
+
 }  // namespace deltagi

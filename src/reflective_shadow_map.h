@@ -45,6 +45,13 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
                                               const VolumeRegion& region, int resolution,
                                               std::optional<glm::vec3> viewpoint = std::nullopt);
 
+// Which side of each real triangle's plane `viewpoint` is on, for the texels renderReflectiveShadowMap keeps:
+// per triangle of `meshes` in order, +1 or -1, and 0 where the viewpoint is too close to the plane to tell
+// (within a ten-thousandth of its distance to the triangle and the triangle's size, far more than the hit
+// points' rounding). The maps of two viewpoints are the same where these are, with no 0 (FrameRenderer keeps
+// them while the camera moves).
+std::vector<int8_t> rsmViewSides(std::span<const TriangleMesh> meshes, glm::vec3 viewpoint);
+
 // Texel indices [first, last).
 struct TexelRange {
     uint32_t first = 0, last = 0;

@@ -2,6 +2,7 @@
 // own file pair; this file only wires them up and times them.
 #include "deltagi/renderer.h"
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 #include <optional>
@@ -17,6 +18,7 @@
 #include "mipmap.h"
 #include "object_bounce_rays.h"
 #include "object_volumes.h"
+#include "parallel.h"
 #include "ray_scene.h"
 #include "reflective_shadow_map.h"
 #include "shading.h"
@@ -111,7 +113,7 @@ struct ConeJob {
     SceneOcclusionCache* sceneShadows = nullptr;  // relit with DeltaShadow: the scene's share, kept
     // Relit real surfaces: the filter's interpolation weights of the shadow, diffuse and specular passes,
     // kept (their surfaces are the real G-buffer's), and the pixels whose points differ from it (covered).
-    std::array<InterpolationPlan, 5>* plans = nullptr;
+    std::array<InterpolationPlan, 5>* plans = nullptr;  // one per stride (filter())
     PixelRect changed;
     ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
     // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
@@ -141,11 +143,19 @@ struct ConeJob {
     }
     // The edge-aware filter of its sparse cones; the real surfaces' change varies slowly, so its pixels
     // between samples are interpolated.
-    enum Pass { Shadow, Diffuse, Specular, AreaLight, ObjectBounce };
-    DenoiseSettings filter(const Options& o, Pass pass) const {
-        DenoiseSettings s{o.render.denoiseRadius};
+    // The passes of one stride share their plan: their weights are the same.
+    DenoiseSettings filter(const Options& o, int stride) const {
+        DenoiseSettings s;
+        s.radius = o.render.denoiseRadius;
         s.interpolate = relit();
-        if (plans) s.plan = &(*plans)[pass];
+        if (plans) {
+            auto plan = std::find_if(plans->begin(), plans->end(),
+                                     [&](const InterpolationPlan& p) { return p.stride == stride; });
+            if (plan == plans->end())  // one not built yet
+                plan = std::find_if(plans->begin(), plans->end(),
+                                    [](const InterpolationPlan& p) { return p.stride == 0; });
+            if (plan != plans->end()) s.plan = &*plan;
+        }
         s.planChanged = changed;
         return s;
     }
@@ -260,7 +270,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         const ConeJob& job = jobs[j];
         results[j].shadows = traceSparse<ShadowOcclusion>(
             job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
-            job.filter(o, ConeJob::Shadow), [&](std::span<const uint32_t> pixels) {
+            job.filter(o, job.shadowStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                 if (o.shadow.method == "rays")
                     return traceShadowRays(job.points, directLights, job.rays, o, job.mode, pixels,
                                            job.pixelSamples, scene.camera.width);
@@ -273,7 +283,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         if (!job.emitters || job.emitters->empty()) continue;
         results[j].areaLight = traceSparse<glm::vec3>(
             job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-            job.filter(o, ConeJob::AreaLight), [&](std::span<const uint32_t> pixels) {
+            job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                 return traceAreaLightRays(job.points, *job.emitters, job.rays, o, job.mode, pixels);
             });
     }
@@ -283,7 +293,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         addInto(results[j].areaLight,
                 traceSparse<glm::vec3>(
                     job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-                    job.filter(o, ConeJob::AreaLight), [&](std::span<const uint32_t> pixels) {
+                    job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                         return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode,
                                                     pixels);
                     }));
@@ -294,7 +304,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         if (!job.indirect) continue;
         results[j].diffuse = traceSparse<glm::vec3>(
             job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
-            job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
+            job.filter(o, job.diffuseStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                 return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
                                          job.objectLight, job.objectBounceByRays(o), job.diffuseAperture(o));
             });
@@ -302,7 +312,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             addInto(results[j].diffuse,
                     traceSparse<glm::vec3>(
                         job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-                        job.filter(o, ConeJob::ObjectBounce), [&](std::span<const uint32_t> pixels) {
+                        job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                             return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels);
                         }));
     }
@@ -317,7 +327,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
         results[j].specular = job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
                                                                    job.specularStride(o, scene.camera), 1,
-                                                                   job.filter(o, ConeJob::Specular), trace)
+                                                                   job.filter(o, job.specularStride(o, scene.camera)), trace)
                                           : trace({});
     }
     timer.lap("specular");
@@ -331,7 +341,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             addInto(results[j].diffuse,
                     traceSparse<glm::vec3>(
                         job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
-                        job.filter(o, ConeJob::Diffuse), [&](std::span<const uint32_t> pixels) {
+                        job.filter(o, job.diffuseStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                             return traceSkyCones(job.points, environment, job.visibility, job.mode, o,
                                                  SkyParts::Diffuse, pixels)
                                 .diffuse;
@@ -346,12 +356,20 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
 }
 
 // The static half of a frame: what depends only on the real scene, its lights, the camera, the options and
-// the volume region. Built lazily, kept by FrameRenderer while its signature and region are unchanged.
+// the volume region. Built lazily, kept by FrameRenderer while its signature and region are unchanged. Of it,
+// the camera-space work (the G-buffer, the background, the per-pixel caches) is redone when the camera
+// changes; the world-space work (BVHs, voxels, RSMs, injected and bounced light, the objects' volumes) is
+// kept while the camera stays on the same side of every real surface (keepWorldWork).
 struct StaticWork {
-    uint64_t signature = 0;
+    uint64_t signature = 0;        // of the world: everything but the camera (worldSignature)
+    uint64_t cameraSignature = 0;  // of the camera
+    // The camera is the last frame's: the filter's weights over the real surfaces are worth keeping (a
+    // camera that moves every frame would build them for one use; its passes compute only those they need).
+    bool cameraSteady = false;
     std::unique_ptr<RayScene> realOnly;
     std::unique_ptr<RayScene> objects;  // the virtual objects' layer over realOnly, refit as they move
-    std::optional<std::vector<SurfacePoint>> realSurfaces;  // the G-buffer's real half
+    std::vector<SurfacePoint> realSurfaces;  // the G-buffer's real half, when realSurfacesMade
+    bool realSurfacesMade = false;
     std::optional<Image> background;                        // the real scene rendered alone (no photo)
     // Over `region`:
     std::optional<VolumeRegion> region;
@@ -371,20 +389,86 @@ struct StaticWork {
     std::unique_ptr<EnvironmentSampler> environmentSampler;
     // The objects' volumes of the last frame, updated where the objects changed them.
     std::optional<ObjectVolumes> objectVolumes;
+    // The viewpoint the world-space work holds for, and the sides of the real surfaces it is on there: the
+    // RSMs' (rsmViewSides) and the further bounces' (bounceViewSides).
+    std::optional<glm::vec3> viewpoint;
+    std::vector<int8_t> rsmSides;
+    std::vector<bool> bounceSides;
 };
+
+// The point whose side of the real surfaces the volumes light (options.volume.viewpoint; the camera's).
+glm::vec3 viewpointOf(const Scene& scene) {
+    return scene.options.volume.viewpoint.value_or(scene.camera.position());
+}
+
+// Forgets what depends on the camera: the real G-buffer and what is made over its pixels.
+// The large buffers keep their memory for the next camera's (14 MiB each at 640 x 480: allocated afresh, their
+// pages would be faulted in every frame).
+void forgetCameraWork(StaticWork& kept) {
+    kept.realSurfacesMade = false;
+    kept.background.reset();
+    kept.relitShadows = {};
+    for (InterpolationPlan& plan : kept.relitPlans) {
+        plan.stride = 0;
+        plan.weights.clear();
+    }
+    kept.gbuffer.object.clear();  // renderObjectSurfaces starts afresh
+    kept.gbuffer.coverage.clear();
+    kept.relitSurfaces.clear();
+    kept.hidden.clear();
+}
+
+// Keeps the world-space work for the camera at `viewpoint` where it is the same as made afresh: the RSMs keep
+// a real surface's texels on the camera's side only, and the further bounces gather on the camera's side of
+// each voxel. Where the camera crossed a surface's plane, they are redone (and what is made from them).
+void keepWorldWork(const Scene& scene, glm::vec3 viewpoint, StaticWork& kept) {
+    if (kept.viewpoint == viewpoint) return;
+    kept.viewpoint = viewpoint;
+    if (kept.sceneRsms) {
+        const std::vector<int8_t> sides = rsmViewSides(scene.real, viewpoint);
+        if (sides != kept.rsmSides || std::find(sides.begin(), sides.end(), 0) != sides.end()) {
+            kept.sceneRsms.reset();
+            kept.sceneLight.reset();
+            kept.sceneBounce.reset();
+            kept.objectVolumes.reset();
+            return;
+        }
+    }
+    if (kept.sceneBounce && bounceViewSides(*kept.sceneVisibility, viewpoint) != kept.bounceSides) {
+        kept.sceneLight.reset();
+        kept.sceneBounce.reset();
+        kept.objectVolumes.reset();
+    }
+}
 
 bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
     return a.origin == b.origin && a.size == b.size && a.resolution == b.resolution;
 }
 
-// FNV-1a over everything the static half depends on. The scene's and its real meshes' addresses are part of
-// it: the kept BVH and surfaces point into them.
-uint64_t staticSignature(const Scene& scene) {
-    uint64_t h = 1469598103934665603ull;
-    auto bytes = [&](const void* data, size_t size) {
+// FNV-1a over bytes.
+class Fnv1a {
+  public:
+    void bytes(const void* data, size_t size) {
         const auto* p = static_cast<const unsigned char*>(data);
-        for (size_t i = 0; i < size; ++i) h = (h ^ p[i]) * 1099511628211ull;
-    };
+        for (size_t i = 0; i < size; ++i) h_ = (h_ ^ p[i]) * 1099511628211ull;
+    }
+    uint64_t value() const { return h_; }
+
+  private:
+    uint64_t h_ = 1469598103934665603ull;
+};
+
+uint64_t cameraSignature(const Camera& camera) {
+    Fnv1a h;
+    h.bytes(&camera, sizeof(camera));
+    return h.value();
+}
+
+// A hash of everything the static half depends on but the camera. The scene's and its real meshes' addresses
+// are part of it: the kept BVH and surfaces point into them.
+uint64_t worldSignature(const Scene& scene) {
+    Fnv1a h;
+    auto bytes = [&](const void* data, size_t size) { h.bytes(data, size); };
     auto value = [&](const auto& v) { bytes(&v, sizeof(v)); };
     value(&scene);
     value(scene.real.data());
@@ -411,11 +495,10 @@ uint64_t staticSignature(const Scene& scene) {
     // The environment lights the background rendered without a photo (its sky term).
     value(scene.environment ? scene.environment->radiance.data().data() : nullptr);
     if (scene.environment) value(scene.environment->worldFromEnvironment);
-    value(scene.camera);
     value(scene.background.has_value());
     const std::string options = optionsToJson(scene.options).dump();
     bytes(options.data(), options.size());
-    return h;
+    return h.value();
 }
 
 // The real surfaces that show through (coverage < 1), to be relit: `real` without the pixels the objects
@@ -423,8 +506,14 @@ uint64_t staticSignature(const Scene& scene) {
 const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePoint>& real,
                                                      const GBuffer& gbuffer, StaticWork& kept) {
     std::vector<SurfacePoint>& points = kept.relitSurfaces;
-    if (points.size() != real.size()) {
-        points = real;
+    if (points.size() != real.size()) {  // a new camera: 14 MiB at 640 x 480, copied in parallel
+        points.resize(real.size());
+        constexpr int64_t kChunk = 1 << 14;
+        parallelFor(0, (static_cast<int64_t>(real.size()) + kChunk - 1) / kChunk, 1, [&](int64_t c) {
+            const size_t begin = static_cast<size_t>(c * kChunk);
+            const size_t end = std::min(real.size(), begin + static_cast<size_t>(kChunk));
+            std::copy(real.begin() + begin, real.begin() + end, points.begin() + begin);
+        });
         kept.hidden.clear();
     }
     for (uint32_t i : kept.hidden) points[i] = real[i];
@@ -459,13 +548,15 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
-    if (!kept.sceneRsms)
-        kept.sceneRsms = renderRsms(realOnly, lights, region, scene.options, scene.camera.position());
+    if (!kept.sceneRsms) {
+        kept.sceneRsms = renderRsms(realOnly, lights, region, scene.options, viewpointOf(scene));
+        kept.rsmSides = rsmViewSides(scene.real, viewpointOf(scene));
+    }
     std::vector<RsmUpdate> updates;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
     for (size_t l = 0; l < lights.size(); ++l)
-        updates.push_back(traceRsmUpdate((*kept.sceneRsms)[l], all, lights[l], region, objectBounds,
-                                         scene.camera.position()));
+        updates.push_back(
+            traceRsmUpdate((*kept.sceneRsms)[l], all, lights[l], region, objectBounds, viewpointOf(scene)));
     timer.lap("rsm");
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
@@ -475,7 +566,8 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
             if (!kept.sceneVisibility)
                 kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
             kept.sceneBounce = bounceLight(*kept.sceneLight, *kept.sceneGeometry, *kept.sceneVisibility,
-                                           scene.options, bounces, scene.camera.position());
+                                           scene.options, bounces, viewpointOf(scene));
+            kept.bounceSides = bounceViewSides(*kept.sceneVisibility, viewpointOf(scene));
             for (size_t i = 0; i < kept.sceneLight->size(); ++i)
                 (*kept.sceneLight)[i] += (*kept.sceneBounce)[i];
         }
@@ -511,7 +603,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const int bounces = o.render.lightBounces - 1;
     VoxelGeometry geometry = voxelize(scene.real, region, !areaRays, bounces > 0);
     const std::vector<ReflectiveShadowMap> rsms =
-        renderRsms(realOnly, rsmLights(scene, realOnly), region, o, scene.camera.position());
+        renderRsms(realOnly, rsmLights(scene, realOnly), region, o, viewpointOf(scene));
     const AreaLights emitters(scene, SceneContent::RealOnly);
     std::optional<EnvironmentSampler> environment;
     if (environmentByRays(scene)) environment.emplace(*scene.environment);
@@ -520,7 +612,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const MipVolume visibility = buildMipChain(region, geometry.visibility.clone());
     Grid3 direct = injectLight(rsms, region, geometries);
     if (bounces > 0) {
-        const Grid3 bounced = bounceLight(direct, geometry, visibility, o, bounces, scene.camera.position());
+        const Grid3 bounced = bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene));
         for (size_t i = 0; i < direct.size(); ++i) direct[i] += bounced[i];
     }
     const MipVolume light = buildMipChain(region, std::move(direct));
@@ -584,8 +676,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     timer.lap("bvh");
 
     auto realSurfaces = [&]() -> const std::vector<SurfacePoint>& {
-        if (!kept.realSurfaces) kept.realSurfaces = renderRealSurfaces(camera, realOnly);
-        return *kept.realSurfaces;
+        if (!kept.realSurfacesMade) renderRealSurfaces(camera, realOnly, kept.realSurfaces);
+        kept.realSurfacesMade = true;
+        return kept.realSurfaces;
     };
     auto background = [&]() -> const Image& {
         if (scene.background) return *scene.background;
@@ -663,7 +756,7 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
          relightMode,
          {0, 0, camera.width, camera.height},
          &kept.relitShadows,
-         &kept.relitPlans,
+         kept.cameraSteady ? &kept.relitPlans : nullptr,
          objectPixels,
          shadowRays,
          o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
@@ -763,6 +856,7 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
 
 struct FrameRenderer::State {
     StaticWork kept;
+    KeptWork lastKept;
 };
 
 FrameRenderer::FrameRenderer() : state_(std::make_unique<State>()) {}
@@ -772,14 +866,28 @@ void FrameRenderer::clear() {
     state_->kept = StaticWork{};
 }
 
+FrameRenderer::KeptWork FrameRenderer::lastFrameKept() const {
+    return state_->lastKept;
+}
+
 RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onStage) {
     checkFrame(scene);
-    const uint64_t signature = staticSignature(scene);
-    if (signature != state_->kept.signature) {
-        state_->kept = StaticWork{};
-        state_->kept.signature = signature;
+    StaticWork& kept = state_->kept;
+    const uint64_t world = worldSignature(scene);
+    if (world != kept.signature) {
+        kept = StaticWork{};
+        kept.signature = world;
     }
-    return renderFrame(scene, state_->kept, onStage);
+    const uint64_t camera = cameraSignature(scene.camera);
+    state_->lastKept.camera = camera == kept.cameraSignature;
+    kept.cameraSteady = state_->lastKept.camera;
+    if (!state_->lastKept.camera) {
+        forgetCameraWork(kept);
+        kept.cameraSignature = camera;
+    }
+    keepWorldWork(scene, viewpointOf(scene), kept);
+    state_->lastKept.world = kept.sceneRsms.has_value();
+    return renderFrame(scene, kept, onStage);
 }
 
 }  // namespace deltagi

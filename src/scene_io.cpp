@@ -579,6 +579,8 @@ Scene loadScene(const json& document, const fs::path& file) {
         scene.camera = readCamera(root.child("camera"));
     }
     if (auto n = root.find("options")) scene.options = readOptions(*n);
+    if (!scene.sequence.empty() && !scene.options.volume.viewpoint)
+        scene.options.volume.viewpoint = sequenceViewpoint(scene.sequenceFile);
     if (auto n = root.find("lights")) {
         n->requireArray();
         for (size_t i = 0; i < n->size(); ++i) scene.lights.push_back(readLight(n->element(i)));

@@ -115,17 +115,31 @@ FrameRange parseFrameRange(const std::string& text, const std::string& where) {
     return range;
 }
 
-std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range) {
+namespace {
+
+json readTransformsDocument(const fs::path& file) {
     std::ifstream in(file, std::ios::binary);
     if (!fs::is_regular_file(file) || !in) throw InputError(file.string(), "cannot open the transforms file");
     const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-    const json document = parseJson(text, file.string());
-    const JsonNode root(document, file.string());
+    return parseJson(text, file.string());
+}
+
+// The document's "frames", checked to be a non-empty array.
+JsonNode framesOf(const JsonNode& root) {
     root.requireObject();
-    const JsonNode frames = root.child("frames");
+    JsonNode frames = root.child("frames");
     frames.requireArray();
+    if (frames.size() == 0) frames.fail("no frames");
+    return frames;
+}
+
+}  // namespace
+
+std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range) {
+    const json document = readTransformsDocument(file);
+    const JsonNode root(document, file.string());
+    const JsonNode frames = framesOf(root);
     const int count = static_cast<int>(frames.size());
-    if (count == 0) frames.fail("no frames");
     const int last = range.last < 0 ? count : range.last;
     if (range.first >= count || last > count)
         frames.fail(fmt::format("the frame range {}:{} is outside the file's {} frames (0:{})", range.first,
@@ -147,11 +161,16 @@ std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range
     return out;
 }
 
+glm::vec3 sequenceViewpoint(const fs::path& file) {
+    const json document = readTransformsDocument(file);
+    const JsonNode root(document, file.string());
+    const JsonNode first = framesOf(root).element(0);
+    first.requireObject();
+    return readFrameCamera(first, root).position();
+}
+
 std::optional<double> transformsFrameRate(const fs::path& file) {
-    std::ifstream in(file, std::ios::binary);
-    if (!fs::is_regular_file(file) || !in) throw InputError(file.string(), "cannot open the transforms file");
-    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-    const json document = parseJson(text, file.string());
+    const json document = readTransformsDocument(file);
     const JsonNode root(document, file.string());
     root.requireObject();
     if (auto n = root.find("fps")) return n->number({0.0, kMaxFrameRate, true, false});

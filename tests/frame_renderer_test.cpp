@@ -2,6 +2,8 @@
 // render()'s.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "deltagi/benchmark.h"
 #include "deltagi/renderer.h"
 #include "test_scenes.h"
@@ -129,6 +131,45 @@ TEST(FrameRenderer, ChangesToTheRealSceneAreNotMissed) {
     expectSameImages(frames.render(s), render(s));
 }
 
+// The camera moves too, as in a real session: the world-space work is kept, the camera-space work redone.
+TEST(FrameRenderer, FramesOfAMovingCameraAreExactlyRendersFromScratchAndKeepTheWorldSpaceWork) {
+    Scene s = ballOverFloor();
+    FrameRenderer frames;
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_FALSE(frames.lastFrameKept().world);
+    for (int f = 1; f <= 3; ++f) {
+        SCOPED_TRACE(testing::Message() << "frame " << f);
+        const float angle = 0.05f * static_cast<float>(f);  // round the ball, above the floor and the box
+        s.camera = test::lookAtCamera({1.6f * std::sin(angle), 1.6f, 1.6f * std::cos(angle)},
+                                      {0.1f, 0.3f, 0.0f}, 64, 48, 60.0f);
+        moveVirtuals(s, {0.01f, 0.0f, 0.0f});
+        expectSameImages(frames.render(s), render(s));
+        EXPECT_TRUE(frames.lastFrameKept().world);
+        EXPECT_FALSE(frames.lastFrameKept().camera);
+    }
+    moveVirtuals(s, {0.01f, 0.0f, 0.0f});  // the camera still
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_TRUE(frames.lastFrameKept().world);
+    EXPECT_TRUE(frames.lastFrameKept().camera);
+}
+
+// A camera that crosses the plane of a real surface sees its other side: the RSMs and the bounces, which keep
+// the camera's side of the real surfaces, are redone.
+TEST(FrameRenderer, ACameraThatCrossesARealSurfacesPlaneRedoesTheWorldSpaceWork) {
+    Scene s = ballOverFloor();
+    // The box's face at x = -0.45 faces the camera at x = -0.3, and the camera at x = -0.6 sees its plane
+    // from the other side (from above the box's top, at y = 1.6).
+    FrameRenderer frames;
+    s.camera = test::lookAtCamera({-0.3f, 1.6f, 1.6f}, {0.0f, 0.3f, 0.0f}, 64, 48, 60.0f);
+    expectSameImages(frames.render(s), render(s));
+    s.camera = test::lookAtCamera({-0.6f, 1.6f, 1.6f}, {0.0f, 0.3f, 0.0f}, 64, 48, 60.0f);
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_FALSE(frames.lastFrameKept().world);
+    s.camera = test::lookAtCamera({-0.65f, 1.6f, 1.6f}, {0.0f, 0.3f, 0.0f}, 64, 48, 60.0f);
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_TRUE(frames.lastFrameKept().world);
+}
+
 TEST(Benchmark, ReportsEveryRowAndPutsTheObjectsBack) {
     Scene s = ballOverFloor();
     const std::vector<glm::vec3> before = s.virtuals[0].positions;
@@ -148,6 +189,27 @@ TEST(Benchmark, ReportsEveryRowAndPutsTheObjectsBack) {
     EXPECT_GT(json["total_ms"]["median"].get<double>(), json["diffuse_ms"]["median"].get<double>());
     EXPECT_EQ(json["triangles"]["virtual"].get<size_t>(), s.virtuals[0].triangleCount());
     EXPECT_EQ(json["volume_resolution"].get<int>(), 32);
+}
+
+// With a moving camera each frame has its photo and keeps the real scene's world-space work; the scene's
+// camera, photo and options are put back.
+TEST(Benchmark, AMovingCameraKeepsTheWorldSpaceWorkAndPutsTheCameraBack) {
+    Scene s = ballOverFloor();
+    const Camera camera = s.camera;
+    BenchOptions o;
+    o.frames = 3;
+    o.warmup = 1;
+    o.cameraDegrees = 3.0f;
+    const BenchResult r = runBenchmark(s, o);
+    EXPECT_EQ(r.worldKeptFrames, 3);
+    EXPECT_EQ(s.camera.worldFromCamera, camera.worldFromCamera);
+    EXPECT_FALSE(s.background.has_value());
+    EXPECT_FALSE(s.options.volume.viewpoint.has_value());
+    const nlohmann::ordered_json json = benchToJson(r);
+    EXPECT_EQ(json["camera_motion_deg"].get<float>(), 3.0f);
+    EXPECT_EQ(json["world_kept_frames"].get<int>(), 3);
+    // The frames used their photos: nothing was rendered for the background.
+    EXPECT_LT(json["background_ms"]["max"].get<double>(), json["total_ms"]["median"].get<double>());
 }
 
 }  // namespace

@@ -151,6 +151,25 @@ TEST_F(SequenceTest, BadTransformsNameTheFileAndTheFrame) {
 }
 
 // deltagi render over a sequence writes one file per frame; 0:3 at once and 1:3 alone give the same frames.
+// The volumes light the side of the real surfaces that the transforms file's first camera sees, whatever
+// frames are rendered: the camera moves without the real scene's volumes being redone, and chunks agree.
+TEST_F(SequenceTest, TheFirstCameraIsTheVolumesViewpoint) {
+    write(transforms(3));
+    json scene = test::tinySceneJson(32, 24, {0.8, 0.2, 0.1});
+    scene.erase("camera");
+    scene["sequence"] = {{"transforms", "transforms.json"}, {"frames", "1:3"}};
+    Scene loaded = loadScene(scene, dir_ / "scene.json");
+    ASSERT_TRUE(loaded.options.volume.viewpoint.has_value());
+    EXPECT_EQ(*loaded.options.volume.viewpoint, glm::vec3(0.0f, 0.8f, 2.0f));
+    EXPECT_FLOAT_EQ(loaded.camera.position().x, 0.1f);  // the range's first frame
+    scene["options"]["volume"]["viewpoint"] = {0.5, 1.0, 1.5};  // given: kept
+    loaded = loadScene(scene, dir_ / "scene.json");
+    EXPECT_EQ(*loaded.options.volume.viewpoint, glm::vec3(0.5f, 1.0f, 1.5f));
+    scene["options"]["volume"]["viewpoint"] = {0.5, "up", 1.5};
+    expectContains(inputErrorOf([&] { loadScene(scene, dir_ / "scene.json"); }),
+                   {"options.volume.viewpoint"});
+}
+
 TEST_F(SequenceTest, RenderingInChunksGivesTheSameFrames) {
     write(transforms(3));
     json scene = test::tinySceneJson(32, 24, {0.8, 0.2, 0.1});

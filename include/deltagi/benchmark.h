@@ -21,6 +21,11 @@ struct BenchOptions {
     // The virtual objects move on a horizontal circle of this radius (in level-0 voxels of the volume
     // region), one sixteenth of a turn per frame.
     float motionVoxels = 1.0f;
+    // The camera moves too (as in a real session) when > 0: it swings about the vertical axis through the
+    // objects' centre, up to this many degrees either way, one sixteenth of a period per frame. Each pose has
+    // its photo (the real scene rendered alone from there, before the measured frames), so the frames do not
+    // render the background; they redo the camera-space work and keep the world-space work.
+    float cameraDegrees = 0.0f;
 };
 
 // The rows of the report, in order: Table 1's stages first, then the others, then the total.
@@ -42,16 +47,17 @@ struct BenchResult {
     int threads = 0;
     int width = 0, height = 0, volumeResolution = 0;
     size_t realTriangles = 0, virtualTriangles = 0;
+    int worldKeptFrames = 0;  // measured frames that kept the real scene's world-space work
 
     BenchStatistics row(const BenchRow& row) const;  // over the measured frames
 };
 
 // Renders options.warmup + options.frames frames of `scene`, moving its virtual objects (their vertices are
-// changed in place and put back at the end). `onFrame(index, total_ms)` is called after each measured frame.
+// changed in place and put back at the end) and with options.cameraDegrees its camera (put back too). `onFrame(index, total_ms)` is called after each measured frame.
 BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
                          const std::function<void(int, double)>& onFrame = {});
 
-// {"frames", "warmup", "cold", "threads", "width", "height", "volume_resolution", "triangles": {"real",
+// {"frames", "warmup", "cold", "camera_motion_deg", "world_kept_frames", "threads", "width", "height", "volume_resolution", "triangles": {"real",
 // "virtual"}, then one object {"median", "max", "paper"} per row key ("voxelize_ms" ... "total_ms")}.
 nlohmann::ordered_json benchToJson(const BenchResult& result);
 

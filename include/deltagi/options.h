@@ -25,6 +25,13 @@ struct VolumeOptions {
     // neither.
     std::optional<glm::vec3> center;
     std::optional<float> size;
+    // "viewpoint" [x,y,z]: the point that says which side of a real surface is the room's. Surfaces are
+    // two-sided and a reconstruction's winding is not reliable: the reflective shadow maps keep a real
+    // surface's texels where its lit side faces this point, and the further bounces gather on its side. Not
+    // set (null): the camera's position. A sequence sets it to its transforms file's first camera, so that
+    // every frame (and every chunk of frames) lights the volumes alike and the camera can move without the
+    // real scene's volumes being redone.
+    std::optional<glm::vec3> viewpoint;
 };
 
 // options.rsm: reflective shadow maps (Dachsbacher & Stamminger 2005), one per light.

@@ -56,12 +56,14 @@ void checkFrame(const Scene& scene);
 // Renders one frame from scratch.
 RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 
-// Renders a sequence of frames of one scene whose virtual objects change from frame to frame, as in a mixed
-// reality session. What depends only on the real side (the reconstruction's ray-casting BVH, its voxels, its
-// reflective shadow maps and injected light, the real half of the G-buffer, the rendered background, the real
-// scene's share of the real surfaces' shadow cones, the edge-aware filter's weights over the real surfaces)
-// is kept from the previous frame while the scene object, its real meshes, lights, camera, photo size,
-// options and the volume region are unchanged (compared by identity and content at every call). The virtual
+// Renders a sequence of frames of one scene whose virtual objects and camera change from frame to frame, as
+// in a mixed reality session. What depends only on the real side is kept from the previous frame: its
+// world-space work (the reconstruction's ray-casting BVH, its voxels, its reflective shadow maps and injected
+// and bounced light) while the scene object, its real meshes, lights, options and the volume region are
+// unchanged (compared by identity and content at every call) and the camera stays on the same side of every
+// real surface (the RSMs and the bounces keep a surface's camera side); its camera-space work (the real half
+// of the G-buffer, the rendered background, the real scene's share of the real surfaces' shadow cones, the
+// edge-aware filter's weights over the real surfaces) while the camera is unchanged too. The virtual
 // objects' voxels, the full and delta light volumes and their mipmaps are kept too and redone only where the
 // objects change them (their voxels, and the voxels lit differently because of them); so are the objects'
 // half of the G-buffer (redone where they were and are) and their BVH (refit when only their vertices moved).
@@ -79,6 +81,12 @@ class FrameRenderer {
     RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
     // Forgets everything kept: the next frame is a cold one.
     void clear();
+    // What the last frame kept from the frames before: the real scene's world-space work (its voxels, RSMs
+    // and light, with virtual objects in the scene) and its camera-space work.
+    struct KeptWork {
+        bool world = false, camera = false;
+    };
+    KeptWork lastFrameKept() const;
 
   private:
     struct State;

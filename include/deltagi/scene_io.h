@@ -53,6 +53,10 @@ FrameRange parseFrameRange(const std::string& text, const std::string& where);
 // another size than its camera's, or a range outside the frames.
 std::vector<SequenceFrame> readTransforms(const std::filesystem::path& file, FrameRange range);
 
+// The position of the camera of the first frame of `file` (whatever range is rendered): a sequence's
+// options.volume.viewpoint unless the scene gives one.
+glm::vec3 sequenceViewpoint(const std::filesystem::path& file);
+
 // The frame rate a transforms file gives in a top-level "fps" (a number > 0; some capture tools write one),
 // or nothing. Throws InputError naming the file and the key when it is not such a number.
 inline constexpr double kMaxFrameRate = 1000.0;

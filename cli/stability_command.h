@@ -1,0 +1,29 @@
+// `deltagi stability`: flicker without a reference, over frames in which the objects and the camera move
+// (include/deltagi/temporal.h).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "deltagi/temporal.h"
+
+namespace deltagi::cli {
+
+struct StabilityArgs {
+    std::filesystem::path scene;
+    std::filesystem::path json;  // empty: no JSON file
+    std::vector<std::string> overrides;
+    MotionOptions motion;
+    std::vector<float> direction;
+    int threads = 0;  // 0: all cores
+};
+
+CLI::App* addStabilityCommand(CLI::App& app, StabilityArgs& args, int maxThreads);
+
+// The figures on stdout; throws InputError on bad input.
+int runStability(StabilityArgs args);
+
+}  // namespace deltagi::cli

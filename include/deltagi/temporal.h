@@ -1,0 +1,56 @@
+// Temporal stability: flicker measured without a reference. A mixed reality session shows one frame after the
+// other while the objects and the camera move a little each time; DGI's change to the photo must follow the
+// motion smoothly, not pop or boil. `deltagi stability` renders such frames and reports
+// `temporal_instability`: the RMS of the second temporal difference of the frames, D[t+1] - 2 D[t] +
+// D[t-1], relative to the RMS of their first (central) difference, (D[t+1] - D[t-1]) / 2. It is near 0 when
+// each frame's change lies on the line between its neighbours (a steady motion) and of order 1 or more when
+// frames jump back and forth.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
+
+#include "deltagi/renderer.h"
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+struct MotionOptions {
+    int frames = 8;
+    // The virtual objects move this far each frame, in level-0 voxels of the volume region (its voxel size
+    // at the first frame), along `objectDirection` (normalized).
+    float objectStepVoxels = 0.25f;
+    glm::vec3 objectDirection{1.0f, 0.0f, 0.0f};
+    // The camera turns this many degrees each frame about the vertical axis through the objects' centre (0:
+    // still).
+    float cameraStepDeg = 0.0f;
+};
+
+// Renders options.frames frames of `scene` with one FrameRenderer, as a session would, moving its objects and
+// camera as `options` says (its meshes and camera are put back at the end).
+std::vector<RenderOutput> renderMotion(Scene& scene, const MotionOptions& options);
+
+struct TemporalFigures {
+    // Over the real pixels (no object in any of the three frames of a triple), of the delta.
+    double realInstability = 0.0;
+    // Over the objects' pixels (covered fully in all three frames), of the composite.
+    double objectInstability = 0.0;
+    size_t realSamples = 0, objectSamples = 0;  // pixel-triples counted
+    // Per frame, the mean of the delta over the real pixels of every frame (channels averaged): a value that
+    // alternates from frame to frame is flicker of the whole image.
+    std::vector<double> meanDelta;
+};
+
+// The figures of frames rendered in order (at least 3, all of one size; InputError otherwise).
+TemporalFigures temporalInstability(std::span<const RenderOutput> frames);
+
+// {"frames", "real_instability", "object_instability", "real_samples", "object_samples", "mean_delta": [...]}.
+nlohmann::ordered_json temporalToJson(const TemporalFigures& figures);
+
+// The camera turned by `degrees` about the vertical axis through `centre`: a camera walking round the objects.
+Camera turnedCamera(const Camera& camera, glm::vec3 centre, float degrees);
+
+}  // namespace deltagi
