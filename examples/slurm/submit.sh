@@ -41,8 +41,9 @@ frames_job=$(sbatch --parsable ${SBATCH_ARGS:-} --chdir="$out" --array="0-$((chu
   "$here/render-frames.sbatch")
 echo "submit.sh: frames $first:$end in $chunks tasks of $chunk: job $frames_job"
 if [ "${NO_VIDEO:-0}" != 1 ]; then
+  # --kill-on-invalid-dep: when a task fails, the video job is cancelled rather than left pending for ever.
   # shellcheck disable=SC2086
   video_job=$(sbatch --parsable ${SBATCH_ARGS:-} --chdir="$out" --dependency="afterok:$frames_job" \
-    --export="$vars" "$here/encode-video.sbatch")
+    --kill-on-invalid-dep=yes --export="$vars" "$here/encode-video.sbatch")
   echo "submit.sh: $out/sequence.mp4 at $fps frames/s after it: job $video_job"
 fi
