@@ -1,5 +1,6 @@
 // The `deltagi` command: `render` a scene file to an image (and its AOVs), print `info` about a scene, render
-// the path-traced `reference`, `compare` two images, or `eval` DGI against the reference.
+// the path-traced `reference`, `compare` two images, `eval` DGI against the reference, `bench` the pipeline,
+// measure its `stability`, or `encode` frames into an H.264 MP4.
 //
 // Errors: bad input (InputError) and any other exception become one line `deltagi: error: <message>` on
 // stderr and exit code 1; command-line usage errors exit with code 2; SIGINT and SIGTERM exit with 130 and
@@ -14,12 +15,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
-#include <regex>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 #include <tbb/global_control.h>
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -30,17 +31,21 @@
 #include "deltagi/error.h"
 #include "deltagi/evaluation.h"
 #include "deltagi/image.h"
+#include "deltagi/keyframes.h"
 #include "deltagi/reference.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_info.h"
 #include "deltagi/scene_io.h"
 #include "deltagi_version.h"
+#include "encode_command.h"
 #include "eval_suite.h"
 #include "outputs.h"
+#include "video_output.h"
 
 namespace fs = std::filesystem;
 using namespace deltagi;
 using cli::checkOutputs;
+using cli::framePath;
 using cli::OutputFiles;
 using cli::refuseInputs;
 using cli::sceneInputs;
@@ -57,6 +62,9 @@ struct RenderArgs {
     fs::path aovDir;
     fs::path layers;     // a multi-layer EXR; empty: none
     std::string frames;  // a sequence's frame range "A:B"; empty: the scene's
+    fs::path video;      // a sequence's H.264 MP4; empty: none
+    cli::VideoSettings videoSettings;
+    bool fpsGiven = false;  // --fps; otherwise the scene's frame rate
     std::vector<std::string> overrides;
     int threads = 0;  // 0: not given, TBB's default (all cores)
     bool quiet = false;
@@ -208,31 +216,6 @@ void writeAovs(const RenderOutput& output, const Scene& scene, int threads, doub
     out.json(timingsJson(output, scene, threads, loadMs), folder / "timings.json");
 }
 
-// The file of frame `index` for an output pattern: a run of '#' (frame_####.png) or a printf-style %d / %0Nd
-// (frame_%04d.png) is replaced by the number, zero-padded to its width. Throws InputError when `pattern` has
-// neither.
-fs::path framePath(const fs::path& pattern, int index) {
-    const std::string text = pattern.string();
-    const size_t hash = text.find('#');
-    if (hash != std::string::npos) {
-        size_t end = hash;
-        while (end < text.size() && text[end] == '#') ++end;
-        return text.substr(0, hash) + fmt::format("{:0{}d}", index, static_cast<int>(end - hash)) +
-               text.substr(end);
-    }
-    static const std::regex printfNumber("%(0?)([0-9]?)d");
-    std::smatch match;
-    if (std::regex_search(text, match, printfNumber)) {
-        const int width = match[2].length() > 0 ? std::stoi(match[2].str()) : 0;
-        const std::string number = match[1].length() > 0 ? fmt::format("{:0{}d}", index, width)
-                                                         : fmt::format("{:{}d}", index, width);
-        return match.prefix().str() + number + match.suffix().str();
-    }
-    throw InputError(text,
-                     "a sequence writes one file per frame: give the frame number's place, "
-                     "e.g. frame_####.png or frame_%04d.png");
-}
-
 // A sequence ("sequence" in the scene): every frame with its camera and photo through one FrameRenderer, each
 // frame's files written and renamed into place when it is done (an interrupted run keeps the finished
 // frames).
@@ -241,29 +224,48 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
         throw InputError("--aov", "not with a sequence: use --layers FRAME_####.exr for each frame's layers");
     std::vector<fs::path> outputs;
     for (const SequenceFrame& frame : scene.sequence) {
-        outputs.push_back(framePath(args.output, frame.index));
+        if (!args.output.empty()) outputs.push_back(framePath(args.output, frame.index));
         if (!args.layers.empty()) outputs.push_back(framePath(args.layers, frame.index));
     }
+    if (!args.video.empty()) outputs.push_back(args.video);
     // Every frame's photo and the transforms file are inputs too, not only the first frame's photo.
     std::vector<cli::RunInput> inputs = sceneInputs(scene);
     inputs.push_back({scene.sequenceFile, "the sequence's transforms file"});
     for (const SequenceFrame& frame : scene.sequence)
         inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
     refuseInputs(outputs, inputs);
+    const std::vector<SequenceFrame>& frames = scene.sequence;  // the loop changes the camera and photo only
+    std::optional<cli::VideoWriter> video;
+    if (!args.video.empty()) {
+        cli::VideoSettings settings = args.videoSettings;
+        if (!args.fpsGiven) settings.fps = scene.frameRate;
+        for (const SequenceFrame& frame : frames)
+            if (frame.camera.width != frames.front().camera.width ||
+                frame.camera.height != frames.front().camera.height)
+                throw InputError(
+                    fmt::format("{}: frames[{}]", scene.sequenceFile.string(), frame.index),
+                    fmt::format(
+                        "a {}x{} frame after {}x{} ones: the frames of a video (--video) have one size",
+                        frame.camera.width, frame.camera.height, frames.front().camera.width,
+                        frames.front().camera.height));
+        createOutputFolder(args.video.parent_path());
+        video.emplace(args.video, frames.front().camera.width, frames.front().camera.height, settings);
+    }
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const auto start = std::chrono::steady_clock::now();
     FrameRenderer renderer;
-    const std::vector<SequenceFrame>& frames = scene.sequence;  // the loop changes the camera and photo only
     for (size_t i = 0; i < frames.size(); ++i) {
         const SequenceFrame& frame = frames[i];
         scene.camera = frame.camera;
         if (i > 0) scene.background = readFramePhoto(frame, scene.sequenceFile);
         scene.backgroundFile = frame.photo;
+        poseObjects(scene, frame.index);  // the keyframed objects (none: nothing moves)
         const RenderOutput output = renderer.render(scene);
         OutputFiles out;
-        out.image(output.composite, framePath(args.output, frame.index));
+        if (!args.output.empty()) out.image(output.composite, framePath(args.output, frame.index));
         if (!args.layers.empty()) out.layers(compositingLayers(output), framePath(args.layers, frame.index));
         out.commit();
+        if (video) video->add(output.composite);
         if (progress) {
             const double seconds =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -272,11 +274,15 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
                  frame.index, rate, static_cast<double>(frames.size() - i - 1) / rate);
         }
     }
+    if (video) video->commit();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (progress) note("\n");
+    std::vector<std::string> written;
+    for (const fs::path* path : {&args.output, &args.layers, &args.video})
+        if (!path->empty()) written.push_back(path->string());
     if (!args.quiet)
         note("deltagi: wrote {} frames {} to {} ({}x{}, {:.2f} s, {:.2f} frames/s, {})\n", frames.size(),
-             fmt::format("{}:{}", frames.front().index, frames.back().index + 1), args.output.string(),
+             fmt::format("{}:{}", frames.front().index, frames.back().index + 1), fmt::join(written, ", "),
              scene.camera.width, scene.camera.height, seconds, static_cast<double>(frames.size()) / seconds,
              plural(threads, "thread", "threads"));
     return 0;
@@ -294,8 +300,19 @@ int runRender(const RenderArgs& args) {
     auto printStep = [](const std::string& name, double ms) { note("  {:<12} {:>9.1f} ms\n", name, ms); };
 
     // Bad paths fail before the render, not after it; so does an output that is one of the inputs.
-    checkOutputPath(args.output);
-    std::vector<fs::path> outputs = outputFiles(args.output, args.aovDir, kRenderAovFiles);
+    if (args.output.empty() && args.video.empty())
+        return reportError("render: expected -o OUTPUT, --video OUT.mp4 or both (see deltagi --help)",
+                           kExitUsageError);
+    std::vector<fs::path> outputs;
+    if (!args.output.empty()) {
+        checkOutputPath(args.output);
+        outputs = outputFiles(args.output, args.aovDir, kRenderAovFiles);
+    }
+    if (!args.video.empty()) {
+        cli::checkVideoPath(args.video, "--video");
+        cli::checkVideoEncoder("--video");
+        outputs.push_back(args.video);
+    }
     if (!args.layers.empty()) {
         if (lowerExtension(args.layers) != ".exr")
             throw InputError(args.layers.string(), "--layers writes an OpenEXR file: expected .exr");
@@ -316,6 +333,9 @@ int runRender(const RenderArgs& args) {
     }
     if (!args.layers.empty()) scene.options.render.layers = true;
     if (!scene.sequence.empty()) return runRenderSequence(args, scene, threads);
+    if (!args.video.empty())
+        throw InputError(
+            "--video", "needs a scene with a \"sequence\" (the video's frames): a still is written with -o");
     if (progress) printStep("load", loadMs);
     refuseInputs(outputs, sceneInputs(scene));
 
@@ -641,10 +661,9 @@ int main(int argc, char** argv) {
     CLI::App* renderCommand = app.add_subcommand("render", "Render a scene file to an image");
     renderCommand->add_option("scene", renderArgs.scene, "Scene file (JSON, see docs/scene-format.md)")
         ->required();
-    renderCommand
-        ->add_option("-o,--output", renderArgs.output,
-                     "Output image: .png (8-bit sRGB), .exr or .hdr (linear)")
-        ->required();
+    renderCommand->add_option("-o,--output", renderArgs.output,
+                              "Output image: .png (8-bit sRGB), .exr or .hdr (linear); with a sequence, each "
+                              "frame's (frame_####.png); may be left out with --video");
     renderCommand->add_option(
         "--aov", renderArgs.aovDir,
         "Also write background, composite, object_mask, delta (.exr) and timings.json here");
@@ -654,6 +673,21 @@ int main(int argc, char** argv) {
     renderCommand->add_option("--frames", renderArgs.frames,
                               "With a \"sequence\": the frames A:B to render (A included, B not; e.g. 0:120, "
                               "40:, :10); -o and --layers then name each frame's file with #### or %04d");
+    CLI::Option* videoOption =
+        renderCommand->add_option("--video", renderArgs.video,
+                                  "With a \"sequence\": also (or, without -o, only) write the composites as "
+                                  "an H.264 MP4 (8-bit sRGB as the PNGs, yuv420p)");
+    renderCommand
+        ->add_option("--fps", renderArgs.videoSettings.fps,
+                     "The video's frames per second (default: the sequence's, sequence.fps or 30)")
+        ->check(finiteNumber(0.0, true, "a number of frames per second > 0"))
+        ->check(CLI::Range(0.0, kMaxFrameRate))
+        ->needs(videoOption);
+    renderCommand
+        ->add_option("--crf", renderArgs.videoSettings.crf,
+                     "The video's quality: x264's constant rate factor, 0 (lossless) to 51 (default 18)")
+        ->check(CLI::Range(0, cli::kMaxCrf))
+        ->needs(videoOption);
     renderCommand->add_option("--set", renderArgs.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     renderCommand->add_option("--threads", renderArgs.threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, kMaxThreads));
@@ -726,8 +760,12 @@ int main(int argc, char** argv) {
     cli::StabilityArgs stabilityArgs;
     CLI::App* stabilityCommand = cli::addStabilityCommand(app, stabilityArgs, kMaxThreads);
 
+    cli::EncodeArgs encodeArgs;
+    CLI::App* encodeCommand = cli::addEncodeCommand(app, encodeArgs);
+
     try {
         app.parse(argc, argv);
+        renderArgs.fpsGiven = renderCommand->count("--fps") > 0;
     } catch (const CLI::ParseError& error) {
         if (error.get_exit_code() == static_cast<int>(CLI::ExitCodes::Success))
             return app.exit(error);  // --help
@@ -735,7 +773,7 @@ int main(int argc, char** argv) {
             return reportError(
                 fmt::format(
                     "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
-                    "'bench' or 'stability' (see deltagi --help)",
+                    "'bench', 'stability' or 'encode' (see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);
@@ -753,6 +791,7 @@ int main(int argc, char** argv) {
         if (*evalCommand) return runEval(evalArgs);
         if (*benchCommand) return cli::runBench(benchArgs);
         if (*stabilityCommand) return cli::runStability(stabilityArgs);
+        if (*encodeCommand) return cli::runEncode(encodeArgs);
         return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         removeTemporaryOutputs();            // output folders made for nothing

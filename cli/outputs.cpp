@@ -5,7 +5,10 @@
 #include <csignal>
 #include <cstdlib>
 #include <cstring>
+#include <regex>
 #include <system_error>
+
+#include <fmt/format.h>
 
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
@@ -76,6 +79,33 @@ void checkOutputs(const std::vector<fs::path>& outputs, const std::vector<RunInp
 
 void writeJson(const nlohmann::ordered_json& json, const fs::path& path) {
     writeFileAtomically(path, json.dump(2) + '\n');
+}
+
+FramePattern parseFramePattern(const fs::path& pattern) {
+    const std::string text = pattern.string();
+    const size_t hash = text.find('#');
+    if (hash != std::string::npos) {
+        size_t end = hash;
+        while (end < text.size() && text[end] == '#') ++end;
+        return {text.substr(0, hash), text.substr(end), static_cast<int>(end - hash), true};
+    }
+    static const std::regex printfNumber("%(0?)([0-9]?)d");
+    std::smatch match;
+    if (std::regex_search(text, match, printfNumber))
+        return {match.prefix().str(), match.suffix().str(),
+                match[2].length() > 0 ? std::stoi(match[2].str()) : 0, match[1].length() > 0};
+    throw InputError(text,
+                     "a sequence writes one file per frame: give the frame number's place, "
+                     "e.g. frame_####.png or frame_%04d.png");
+}
+
+fs::path FramePattern::path(int index) const {
+    return prefix + (zeros ? fmt::format("{:0{}d}", index, width) : fmt::format("{:{}d}", index, width)) +
+           suffix;
+}
+
+fs::path framePath(const fs::path& pattern, int index) {
+    return parseFramePattern(pattern).path(index);
 }
 
 AtomicFile& OutputFiles::add(const fs::path& path) {

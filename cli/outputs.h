@@ -48,6 +48,19 @@ void checkOutputs(const std::vector<std::filesystem::path>& outputs, const std::
 // Writes JSON (2-space indent) atomically; the folder must exist.
 void writeJson(const nlohmann::ordered_json& json, const std::filesystem::path& path);
 
+// A file name with the place of a frame's number: a run of '#' (frame_####.png) or a printf-style %d / %0Nd
+// (frame_%04d.png), replaced by the number, padded to its width (with zeros, or spaces for %Nd). Throws
+// InputError naming the pattern when it has neither.
+struct FramePattern {
+    std::string prefix, suffix;  // around the number
+    int width = 0;
+    bool zeros = true;
+    std::filesystem::path path(int index) const;
+};
+FramePattern parseFramePattern(const std::filesystem::path& pattern);
+// parseFramePattern(pattern).path(index).
+std::filesystem::path framePath(const std::filesystem::path& pattern, int index);
+
 // A run's outputs, each written whole to its temporary as it comes, all renamed into place by commit(): a
 // failure or a signal before then replaces none of them (the temporaries go, the previous files stay).
 // Folders are created when their first file is written.

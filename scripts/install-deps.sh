@@ -7,6 +7,7 @@ packages=(
   cmake ninja-build g++ pkg-config
   libembree-dev libtbb-dev libassimp-dev libopenimageio-dev openimageio-tools
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev
+  libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest
   jq

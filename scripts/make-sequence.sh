@@ -2,11 +2,12 @@
 # A tracked camera sequence to try `deltagi render` over: the Cornell box example (its real part alone)
 # path-traced by `deltagi reference` from a camera that pans and turns a little, frame after frame, written as
 # a nerfstudio / instant-ngp transforms.json with the photos beside it, and a scene file that puts the
-# example's ball and ring into it:
+# example's ball and ring into it, the ball rolling 8.5 cm across the floor from the first frame to the last
+# ("keyframes"; STILL=1 keeps it where the example has it):
 #
 #   scripts/make-sequence.sh [FRAMES] [SPP]          # default 8 frames, 64 samples per pixel, 320x240
 #   DISTORTION=1 scripts/make-sequence.sh            # photos through an OPENCV lens (k1 -0.15, k2 0.02)
-#   build/deltagi render out/sequence/scene.json -o out/sequence/render/frame_####.png
+#   build/deltagi render out/sequence/scene.json -o out/sequence/render/frame_####.png --video out/sequence.mp4
 #
 # Writes out/sequence/{transforms.json,scene.json,images/frame_NNNN.png}. Needs build/deltagi and jq
 # (scripts/install-deps.sh). About 1 s per frame at the defaults on 2 cores.
@@ -67,6 +68,16 @@ jq -n --argjson w "$width" --argjson h "$height" --argjson fov "$fov" --argjson 
   (($h / 2) / (($fov * 3.141592653589793 / 360) | tan)) as $f
   | {"w": $w, "h": $h, "fl_x": $f, "fl_y": $f, "cx": ($w / 2), "cy": ($h / 2)} + $model + {"frames": $frames}' \
   > "$out/transforms.json"
-# The example with its ball and ring, over the sequence instead of its own camera.
+# The example with its ball and ring, over the sequence instead of its own camera; the ball rolls from its
+# place 8.5 cm towards the camera (keyframes at the first and the last frame).
 jq 'del(.camera) | del(.background) | .sequence = {"transforms": "transforms.json"}' "$example" > "$out/scene.json"
+if [ "${STILL:-0}" != 1 ]; then
+  jq --argjson last "$((frames > 1 ? frames - 1 : 1))" '
+    (.virtual[] | select(.name == "blue_ball")) |= (
+      .transform.translate as $p
+      | del(.transform)
+      | .keyframes = [{"frame": 0, "translate": $p},
+                      {"frame": $last, "translate": [($p[0] + 0.03), $p[1], ($p[2] - 0.08)]}])' \
+    "$out/scene.json" > "$out/scene.json.tmp" && mv "$out/scene.json.tmp" "$out/scene.json"
+fi
 echo "make-sequence.sh: wrote $out/transforms.json, $out/scene.json and $frames photos in $out/images"

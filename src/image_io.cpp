@@ -99,6 +99,16 @@ class QuietStderr {
 
 }  // namespace
 
+std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& path) {
+    QuietStderr quiet;
+    auto input = OIIO::ImageInput::open(path.string());
+    if (!input) {
+        OIIO::geterror();  // cleared, not to show up in a later message
+        return std::nullopt;
+    }
+    return std::pair{input->spec().width, input->spec().height};
+}
+
 ImageFile readImageFile(const std::filesystem::path& path) {
     QuietStderr quiet;
     OIIO::ImageSpec config;
@@ -149,6 +159,8 @@ float finiteOrZero(float v) {
     return std::isfinite(v) ? v : 0.0f;
 }
 
+}  // namespace
+
 std::vector<uint8_t> encodeSrgb8(const Image& image) {
     std::vector<uint8_t> bytes(image.data().size());
     for (size_t i = 0; i < bytes.size(); ++i) {
@@ -159,8 +171,6 @@ std::vector<uint8_t> encodeSrgb8(const Image& image) {
     }
     return bytes;
 }
-
-}  // namespace
 
 namespace {
 

@@ -11,11 +11,13 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/error.h"
+#include "deltagi/keyframes.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_info.h"
 #include "deltagi/transforms.h"
 #include "environment_io.h"
 #include "json_reader.h"
+#include "keyframes_io.h"
 #include "mesh_io.h"
 #include "shapes.h"
 
@@ -366,13 +368,29 @@ TriangleMesh readShape(const JsonNode& node) {
     typeNode.fail("expected \"box\", \"sphere\", \"quad\", \"torus\" or \"triangles\", got \"" + type + "\"");
 }
 
+// The virtual objects' "keyframes" (null for the real scene's entries, which cannot move).
+struct KeyframeReader {
+    const Scene& scene;  // its sequence and frame rate
+    std::vector<ObjectAnimation>& animations;
+};
+
 // Keeps each mesh's object-space copy when `movable` (the virtual objects, which setTransform() moves).
 std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& sceneFolder,
-                                        std::vector<fs::path>& files, bool movable) {
-    entry.allowKeys({"name", "file", "shape", "transform", "material"});
+                                        std::vector<fs::path>& files, bool movable,
+                                        std::optional<ObjectAnimation>& animation,
+                                        const KeyframeReader* keyframes) {
+    entry.allowKeys({"name", "file", "shape", "transform", "material", "keyframes"});
     auto fileNode = entry.find("file"), shapeNode = entry.find("shape");
     if (fileNode && shapeNode) shapeNode->fail("give either \"file\" or \"shape\", not both");
     if (!fileNode && !shapeNode) entry.fail("expected a \"file\" or a \"shape\"");
+    if (auto n = entry.find("keyframes")) {
+        if (!keyframes) n->fail("only virtual objects move (the real scene is what the photos show)");
+        if (entry.has("transform"))
+            n->fail("give either \"transform\" or \"keyframes\" (each keyframe gives the pose), not both");
+        if (keyframes->scene.sequence.empty())
+            n->fail("keyframes need a \"sequence\": their frames are the sequence's");
+        animation = readKeyframes(*n, keyframes->scene.frameRate);
+    }
     std::optional<std::string> name;
     if (auto n = entry.find("name")) name = n->string();
     glm::mat4 worldFromObject =
@@ -405,13 +423,21 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
     return result;
 }
 
-// Appends the mesh files it reads to `files`.
+// Appends the mesh files it reads to `files`, and the entries' keyframes to `keyframes->animations`.
 std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sceneFolder,
-                                       std::vector<fs::path>& files, bool movable) {
+                                       std::vector<fs::path>& files, bool movable,
+                                       const KeyframeReader* keyframes = nullptr) {
     list.requireArray();
     std::vector<TriangleMesh> meshes;
     for (size_t i = 0; i < list.size(); ++i) {
-        std::vector<TriangleMesh> entry = readMeshEntry(list.element(i), sceneFolder, files, movable);
+        std::optional<ObjectAnimation> animation;
+        std::vector<TriangleMesh> entry =
+            readMeshEntry(list.element(i), sceneFolder, files, movable, animation, keyframes);
+        if (animation) {
+            animation->firstMesh = meshes.size();
+            animation->meshCount = entry.size();
+            keyframes->animations.push_back(std::move(*animation));
+        }
         std::move(entry.begin(), entry.end(), std::back_inserter(meshes));
     }
     return meshes;
@@ -433,14 +459,18 @@ void readBackground(const JsonNode& node, const fs::path& sceneFolder, Scene& sc
             sizeText(scene.background->width(), scene.background->height()), scene.backgroundFile.string()));
 }
 
-// "sequence": {"transforms": FILE, "frames": "A:B"}: the frames' cameras and photos; the first frame's camera
-// and photo are the scene's.
+// "sequence": {"transforms": FILE, "frames": "A:B", "fps": N}: the frames' cameras and photos; the first
+// frame's camera and photo are the scene's.
 void readSequence(const JsonNode& node, const fs::path& sceneFolder, Scene& scene) {
-    node.allowKeys({"transforms", "frames"});
+    node.allowKeys({"transforms", "frames", "fps"});
     scene.sequenceFile = inputFile(node.child("transforms"), sceneFolder);
     FrameRange range;
     if (auto n = node.find("frames")) range = parseFrameRange(n->string(), n->where());
     scene.sequence = readTransforms(scene.sequenceFile, range);
+    if (auto n = node.find("fps"))
+        scene.frameRate = n->number({0.0, kMaxFrameRate, true, false});
+    else if (auto fps = transformsFrameRate(scene.sequenceFile))
+        scene.frameRate = *fps;
     scene.camera = scene.sequence.front().camera;
     scene.backgroundFile = scene.sequence.front().photo;
     scene.background = readFramePhoto(scene.sequence.front(), scene.sequenceFile);
@@ -567,7 +597,15 @@ Scene loadScene(const json& document, const fs::path& file) {
     if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
     if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder, scene.meshFiles, false);
-    if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles, true);
+    if (auto n = root.find("virtual")) {
+        const KeyframeReader keyframes{scene, scene.animations};
+        scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles, true, &keyframes);
+    }
+    // Moving objects: placed for the first frame, in a volume region that holds them in every frame.
+    if (!scene.animations.empty()) {
+        poseObjects(scene, scene.sequence.front().index);
+        fixVolumeRegionOverAnimation(scene);
+    }
     for (const std::string& warning : lightPlacementWarnings(scene))
         scene.warnings.push_back(file.string() + ": " + warning);
     for (const std::string& warning : sceneWarnings(scene))

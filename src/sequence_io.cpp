@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "deltagi/error.h"
+#include "deltagi/transforms.h"
 #include "json_reader.h"
 
 namespace fs = std::filesystem;
@@ -71,6 +72,12 @@ Camera readFrameCamera(const JsonNode& frame, const JsonNode& root) {
     const glm::mat4& m = camera.worldFromCamera;  // column-major: m[column][row]
     if (m[0][3] != 0.0f || m[1][3] != 0.0f || m[2][3] != 0.0f || m[3][3] != 1.0f)
         matrix.fail("expected the last row [0, 0, 0, 1]");
+    // A scaled, sheared or mirrored pose would fail only when the frame is rendered, without the file's name.
+    try {
+        checkCameraPose(camera.worldFromCamera);
+    } catch (const InputError& e) {
+        matrix.fail(e.message());
+    }
     return camera;
 }
 
@@ -142,6 +149,14 @@ std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range
         const JsonNode frame = frames.element(static_cast<size_t>(i));
         frame.requireObject();
         out.push_back({i, readFrameCamera(frame, root), framePhoto(frame, file.parent_path())});
+        // A photo of the wrong size fails now, from its header, not after the frames before it are rendered.
+        const Camera& camera = out.back().camera;
+        if (const auto size = imageFileSize(out.back().photo);
+            size && (size->first != camera.width || size->second != camera.height))
+            frame.child("file_path")
+                .fail(fmt::format("expected a photo of the camera's size {}x{}, got {}x{} ('{}')",
+                                  camera.width, camera.height, size->first, size->second,
+                                  out.back().photo.string()));
     }
     return out;
 }
@@ -152,6 +167,14 @@ glm::vec3 sequenceViewpoint(const fs::path& file) {
     const JsonNode first = framesOf(root).element(0);
     first.requireObject();
     return readFrameCamera(first, root).position();
+}
+
+std::optional<double> transformsFrameRate(const fs::path& file) {
+    const json document = readTransformsDocument(file);
+    const JsonNode root(document, file.string());
+    root.requireObject();
+    if (auto n = root.find("fps")) return n->number({0.0, kMaxFrameRate, true, false});
+    return std::nullopt;
 }
 
 Image readFramePhoto(const SequenceFrame& frame, const fs::path& transformsFile) {

@@ -16,6 +16,7 @@
 #include "test_errors.h"
 #include "test_files.h"
 #include "test_scene_json.h"
+#include "test_sequence.h"
 
 namespace deltagi {
 namespace {
@@ -74,53 +75,7 @@ TEST(LensDistortion, TheSceneFilesCameraReadsIt) {
     expectContains(inputErrorOf([&] { loadScene(doc, "scene.json"); }), {"camera.distortion", "p1"});
 }
 
-class SequenceTest : public ::testing::Test {
-  protected:
-    void SetUp() override {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ =
-            fs::temp_directory_path() / ("deltagi_sequence_" + std::to_string(getpid()) + "_" + info->name());
-        fs::remove_all(dir_);
-        fs::create_directories(dir_ / "images");
-    }
-    void TearDown() override {
-        std::error_code ignored;
-        fs::remove_all(dir_, ignored);
-    }
-
-    // A transforms.json of `count` frames of a camera moving along x at height 0.8, looking down -z at the
-    // tiny scene, with grey photos of w x h; OPENCV distortion globally.
-    json transforms(int count, int w = 32, int h = 24) const {
-        json frames = json::array();
-        for (int i = 0; i < count; ++i) {
-            const std::string name = "images/frame_" + std::to_string(i) + ".png";
-            writeImage(Image(w, h, 3, 0.2f + 0.1f * i), dir_ / name);
-            const double x = 0.1 * i;
-            frames.push_back(
-                {{"file_path", name},
-                 {"transform_matrix", {{1, 0, 0, x}, {0, 1, 0, 0.8}, {0, 0, 1, 2}, {0, 0, 0, 1}}}});
-        }
-        return {{"camera_model", "OPENCV"},
-                {"fl_x", 30.0},
-                {"fl_y", 30.0},
-                {"cx", w / 2.0},
-                {"cy", h / 2.0},
-                {"w", w},
-                {"h", h},
-                {"k1", -0.1},
-                {"k2", 0.01},
-                {"p1", 0.0},
-                {"p2", 0.0},
-                {"aabb_scale", 16},
-                {"frames", frames}};
-    }
-    fs::path write(const json& document, const std::string& name = "transforms.json") const {
-        test::writeText(dir_ / name, document.dump(1));
-        return dir_ / name;
-    }
-
-    fs::path dir_;
-};
+using test::SequenceTest;
 
 TEST_F(SequenceTest, ReadsCamerasPhotosAndDistortion) {
     const fs::path file = write(transforms(3));
@@ -153,6 +108,20 @@ TEST_F(SequenceTest, BadTransformsNameTheFileAndTheFrame) {
     doc = transforms(2);
     doc["frames"][1]["transform_matrix"] = {{1, 0, 0, 0}, {0, 0, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
     expectContains(errorOf(doc), {"frames[1].transform_matrix", "singular"});
+    // A pose with a scale (or a mirror) is no camera pose: refused when the file is read, not at its frame.
+    doc = transforms(2);
+    doc["frames"][1]["transform_matrix"] = {{2, 0, 0, 0}, {0, 2, 0, 0}, {0, 0, 2, 0}, {0, 0, 0, 1}};
+    expectContains(errorOf(doc), {"transforms.json: frames[1].transform_matrix", "orthonormal"});
+    doc["frames"][1]["transform_matrix"] = {{-1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    expectContains(errorOf(doc), {"frames[1].transform_matrix", "reflection"});
+    doc["frames"][1]["transform_matrix"] = {{1, 0, 0, 1e39}, {0, 1, 0, 0}, {0, 0, 1, 0}, {0, 0, 0, 1}};
+    expectContains(errorOf(doc), {"frames[1].transform_matrix", "finite"});
+    doc = transforms(2);
+    doc["frames"] = json::array();
+    expectContains(errorOf(doc), {"transforms.json: frames", "no frames"});
+    doc = transforms(2);
+    doc["frames"][1].erase("file_path");
+    expectContains(errorOf(doc), {"frames[1]", "file_path"});
     doc = transforms(2);
     doc["frames"][0]["file_path"] = "images/missing.png";
     expectContains(errorOf(doc), {"frames[0].file_path", "photo not found"});
@@ -166,7 +135,14 @@ TEST_F(SequenceTest, BadTransformsNameTheFileAndTheFrame) {
     expectContains(inputErrorOf([&] { readTransforms(dir_ / "nan.json", {}); }), {"nan.json"});
     expectContains(inputErrorOf([] { parseFrameRange("3:1", "--frames"); }), {"--frames", "empty"});
     expectContains(inputErrorOf([] { parseFrameRange("a:b", "--frames"); }), {"--frames", "A:B"});
-    // A photo of another size than the camera's.
+    // A photo of another size than the camera's: found from its header when the file is read ...
+    doc = transforms(3);
+    write(doc);
+    writeImage(Image(8, 8, 3), dir_ / "images/frame_2.png");
+    expectContains(inputErrorOf([&] { readTransforms(dir_ / "transforms.json", {}); }),
+                   {"transforms.json: frames[2].file_path", "32x24", "8x8"});
+    EXPECT_EQ(readTransforms(dir_ / "transforms.json", {0, 2}).size(), 2u);  // not in the range: not read
+    // ... and when it is read for its frame (it may have changed since).
     doc = transforms(2);
     const std::vector<SequenceFrame> frames = readTransforms(write(doc), {});
     writeImage(Image(8, 8, 3), dir_ / "images/frame_1.png");

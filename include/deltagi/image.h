@@ -1,9 +1,12 @@
 // Images: linear float pixels, row-major, top row first, channels interleaved.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -50,6 +53,10 @@ class Image {
 // pixel is NaN or infinite.
 Image readImage(const std::filesystem::path& path);
 
+// The width and height an image file's header gives, without reading its pixels; nothing when it cannot be
+// read (readImage() then says why).
+std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& path);
+
 // readImage() without the check for NaN and infinite pixels, which it leaves as they are (for callers that
 // repair them), and whether the file held float (linear) pixels rather than sRGB-encoded integers.
 struct ImageFile {
@@ -63,6 +70,10 @@ ImageFile readImageFile(const std::filesystem::path& path);
 // or a failure never sees it half written. Throws InputError when the file cannot be written (its folder
 // must exist).
 void writeImage(const Image& image, const std::filesystem::path& path);
+
+// The 8-bit sRGB bytes a PNG of `image` holds: each channel clamped to [0, 1] (NaN and infinities as 0),
+// encoded with the sRGB transfer function (a 4th channel, alpha, stays linear), rounded.
+std::vector<uint8_t> encodeSrgb8(const Image& image);
 
 // The same into `file`'s temporary, closed but not renamed into place: for callers that commit several
 // outputs together (a failure before then replaces none of them).

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
 #include <glm/vec2.hpp>
 
 #include "deltagi/environment.h"
@@ -135,6 +136,19 @@ struct SequenceFrame {
     std::filesystem::path photo;
 };
 
+// A virtual object that moves over a sequence (its "keyframes" in the scene file; deltagi/keyframes.h): each
+// channel is a list of (frame, value) in increasing frame order, interpolated linearly between its keys,
+// rotations by slerp (the shorter way round), and held before its first key and after its last; a channel
+// without keys is the identity. Frames are the transforms file's frame indices ("time" keys are converted
+// with the sequence's frame rate), fractions allowed.
+struct ObjectAnimation {
+    size_t firstMesh = 0, meshCount = 0;  // its meshes in Scene::virtuals (a mesh file may hold several)
+    std::vector<std::pair<double, glm::vec3>> translate;
+    std::vector<std::pair<double, glm::quat>> rotation;
+    std::vector<std::pair<double, glm::vec3>> scale;
+    std::string where;  // "scene.json: virtual[1].keyframes", for messages
+};
+
 struct Scene {
     std::filesystem::path file;  // the scene file, for messages; relative paths were resolved against it
     Camera camera;               // with a sequence: its first frame's
@@ -142,6 +156,10 @@ struct Scene {
     // first frame's photo, and each frame's is read when it is rendered.
     std::vector<SequenceFrame> sequence;
     std::filesystem::path sequenceFile;  // the transforms file
+    // The sequence's frame rate (frames per second): "sequence.fps", else the transforms file's "fps", else
+    // 30. Converts keyframe times to frames, and is the video's default rate.
+    double frameRate = 30.0;
+    std::vector<ObjectAnimation> animations;  // the virtual objects that move (only with a sequence)
     std::optional<Image> background;  // the real camera image, linear RGB, camera-sized; absent: rendered
     std::filesystem::path backgroundFile;
     // The mesh files read ("file" keys), in the scene's order.

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -47,13 +48,19 @@ FrameRange parseFrameRange(const std::string& text, const std::string& where);
 
 // The frames of `file` in `range`, in order: camera (with its distortion) and photo path (which must exist;
 // a file_path without an extension may name a .png or .jpg). Throws InputError naming the file and the frame
-// (frames[3].transform_matrix) for a missing or malformed key, a NaN or singular matrix, an unknown camera
-// model, a missing photo, or a range outside the frames.
+// (frames[3].transform_matrix) for a missing or malformed key, a NaN or singular matrix or one that is no
+// rotation (a scale, shear or mirror), an unknown camera model, a missing photo or one whose header gives
+// another size than its camera's, or a range outside the frames.
 std::vector<SequenceFrame> readTransforms(const std::filesystem::path& file, FrameRange range);
 
 // The position of the camera of the first frame of `file` (whatever range is rendered): a sequence's
 // options.volume.viewpoint unless the scene gives one.
 glm::vec3 sequenceViewpoint(const std::filesystem::path& file);
+
+// The frame rate a transforms file gives in a top-level "fps" (a number > 0; some capture tools write one),
+// or nothing. Throws InputError naming the file and the key when it is not such a number.
+inline constexpr double kMaxFrameRate = 1000.0;
+std::optional<double> transformsFrameRate(const std::filesystem::path& file);
 
 // The frame's photo, which must be of its camera's size: InputError naming the transforms file and the frame
 // otherwise.
