@@ -17,7 +17,7 @@ glm::mat4 worldFromObjectAt(const ObjectAnimation& animation, double frame);
 void poseObjects(Scene& scene, double frame);
 
 // Without an explicit options.volume region, the region follows the virtual objects' bounding box, so a
-// moving object would move the voxel grid every frame (the real scene voxelized again, frames that shimmer).
+// moving object would move the voxel grid every frame (the real scene voxelized again, differently).
 // This fixes options.volume.center and size to the region that volumeRegion() gives for the box the objects
 // sweep over all their keyframes (each animated mesh's object-space box at every whole frame from the first
 // key to the last, the other virtual meshes as they are): the same for every frame and every --frames chunk.
