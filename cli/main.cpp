@@ -36,6 +36,7 @@
 #include "deltagi_version.h"
 #include "eval_suite.h"
 #include "outputs.h"
+#include "serve_command.h"
 
 namespace fs = std::filesystem;
 using namespace deltagi;
@@ -723,6 +724,9 @@ int main(int argc, char** argv) {
     cli::BenchArgs benchArgs;
     CLI::App* benchCommand = cli::addBenchCommand(app, benchArgs, kMaxThreads);
 
+    cli::ServeArgs serveArgs;
+    CLI::App* serveCommand = cli::addServeCommand(app, serveArgs, kMaxThreads);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& error) {
@@ -731,8 +735,8 @@ int main(int argc, char** argv) {
         if (app.get_subcommands().empty() && argc > 1 && argv[1][0] != '-')
             return reportError(
                 fmt::format(
-                    "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval' or "
-                    "'bench' "
+                    "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
+                    "'bench' or 'serve' "
                     "(see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
@@ -750,6 +754,7 @@ int main(int argc, char** argv) {
                 kExitUsageError);
         if (*evalCommand) return runEval(evalArgs);
         if (*benchCommand) return cli::runBench(benchArgs);
+        if (*serveCommand) return cli::runServe(serveArgs);
         return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         removeTemporaryOutputs();            // output folders made for nothing

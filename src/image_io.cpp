@@ -14,6 +14,7 @@
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/image.h"
+#include "image_encode.h"
 
 namespace deltagi {
 
@@ -161,6 +162,14 @@ std::vector<uint8_t> encodeSrgb8(const Image& image) {
 }
 
 }  // namespace
+
+std::vector<uint8_t> srgb8Pixels(const Image& image) {
+    return encodeSrgb8(image);
+}
+
+float linearToSrgbValue(float linear) {
+    return linearToSrgb(linear);
+}
 
 namespace {
 

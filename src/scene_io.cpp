@@ -406,12 +406,15 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
 }
 
 // Appends the mesh files it reads to `files`.
+// `entries`, when given, gets each mesh's entry index.
 std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sceneFolder,
-                                       std::vector<fs::path>& files, bool movable) {
+                                       std::vector<fs::path>& files, bool movable,
+                                       std::vector<int>* entries = nullptr) {
     list.requireArray();
     std::vector<TriangleMesh> meshes;
     for (size_t i = 0; i < list.size(); ++i) {
         std::vector<TriangleMesh> entry = readMeshEntry(list.element(i), sceneFolder, files, movable);
+        if (entries) entries->insert(entries->end(), entry.size(), static_cast<int>(i));
         std::move(entry.begin(), entry.end(), std::back_inserter(meshes));
     }
     return meshes;
@@ -565,7 +568,8 @@ Scene loadScene(const json& document, const fs::path& file) {
     if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
     if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder, scene.meshFiles, false);
-    if (auto n = root.find("virtual")) scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles, true);
+    if (auto n = root.find("virtual"))
+        scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles, true, &scene.virtualEntries);
     for (const std::string& warning : lightPlacementWarnings(scene))
         scene.warnings.push_back(file.string() + ": " + warning);
     for (const std::string& warning : sceneWarnings(scene))
