@@ -358,7 +358,7 @@ void Server::renderLoop() {
             client = session_.lastInputClient();
             seq = session_.lastInputSeq();
             version = session_.version();
-            Options wanted = live::interactiveOptions(scene.options);
+            Options wanted = live::interactiveOptions(scene.options, scene.camera.width, scene.camera.height);
             wanted.render.layers = layers;
             Options own = scene.options;
             own.render.layers = layers;
@@ -386,8 +386,7 @@ void Server::renderLoop() {
             }
         }
         try {
-            const RenderOutput out =
-                refining ? fullFrames.render(full) : interactiveFrames.render(interactive);
+            RenderOutput out = refining ? fullFrames.render(full) : interactiveFrames.render(interactive);
             const auto encodeStart = Clock::now();
             auto frame = std::make_shared<Frame>();
             frame->number = ++frameNumber;
@@ -406,7 +405,7 @@ void Server::renderLoop() {
                          {"encode_ms", std::round(encodeMs * 100.0) / 100.0},
                          {"bytes", frame->jpeg.size()}};
             frame->info = info.dump();
-            auto composite = std::make_shared<const Image>(out.composite);
+            auto composite = std::make_shared<const Image>(std::move(out.composite));
             {
                 std::lock_guard lock(sessionMutex_);
                 latestFrame_ = frame;
@@ -456,7 +455,8 @@ int Server::run() {
     if (!context) {
         mg_exit_library();
         throw InputError(fmt::format("serve: {}", ports),
-                         fmt::format("cannot listen{}", lastLog.empty() ? "" : ": " + lastLog));
+                         fmt::format("cannot listen{} (is the port in use? --port 0 takes any free one)",
+                                     lastLog.empty() ? "" : ": " + lastLog));
     }
     mg_server_port listening[4]{};
     const int count = mg_get_server_ports(context, 4, listening);
@@ -512,7 +512,6 @@ CLI::App* addServeCommand(CLI::App& app, ServeArgs& args, int maxThreads) {
 int runServe(const ServeArgs& args) {
     std::optional<tbb::global_control> threadLimit;
     if (args.threads > 0) threadLimit.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
-    fmt::print(stderr, "deltagi serve: loading {}\n", args.scene.string());
     Server server(args);
     return server.run();
 }

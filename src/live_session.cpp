@@ -177,7 +177,11 @@ Session::Session(const fs::path& file, const std::vector<std::string>& overrides
         names_.push_back(entry.contains("name") && entry["name"].is_string()
                              ? entry["name"].get<std::string>()
                              : fmt::format("object {}", k));
-        const Bounds3f b = objectBounds(int(k));
+        const Bounds3f b = meshBounds(int(k));
+        transforms_.push_back(meshes_[k].empty() ? glm::mat4(1.0f)
+                                                 : scene_->virtuals[meshes_[k][0]].worldFromObject);
+        bounds_.push_back(b);
+        unplaced_.push_back(false);
         contact_.push_back(b.empty() ? glm::vec3(0.0f) : glm::vec3(b.center().x, b.min.y, b.center().z));
         contactNormal_.push_back({0.0f, 1.0f, 0.0f});
     }
@@ -186,7 +190,7 @@ Session::Session(const fs::path& file, const std::vector<std::string>& overrides
 
 Session::~Session() = default;
 
-Bounds3f Session::objectBounds(int object) const {
+Bounds3f Session::meshBounds(int object) const {
     Bounds3f b;
     for (int m : meshes_[object]) b.extend(scene_->virtuals[m].bounds());
     return b;
@@ -257,19 +261,30 @@ MessageResult Session::dispatch(const json& message) {
 
 int Session::objectIndex(const json& message) const {
     if (meshes_.empty()) refuse(message["type"].get<std::string>(), "the scene has no virtual objects");
-    return integer(message, "object", 0, static_cast<int>(meshes_.size()) - 1);
+    const int object = integer(message, "object", 0, static_cast<int>(meshes_.size()) - 1);
+    if (meshes_[object].empty()) refuse(message["type"].get<std::string>(), "the object has no meshes");
+    return object;
 }
 
+// Records the object's new transform in the document; its meshes follow in applyPlacements().
 void Session::placeObject(int object, const glm::mat4& worldFromObject) {
     checkTransform(worldFromObject);
-    // Each mesh first into a copy, so that a failure leaves the scene as it was.
-    std::vector<TriangleMesh> placed;
-    for (int m : meshes_[object]) {
-        placed.push_back(scene_->virtuals[m]);
-        setTransform(placed.back(), worldFromObject);
-    }
-    for (size_t i = 0; i < placed.size(); ++i) scene_->virtuals[meshes_[object][i]] = std::move(placed[i]);
+    transforms_[object] = worldFromObject;
+    unplaced_[object] = true;
     document_["virtual"][object]["transform"] = matrixJson(worldFromObject);
+}
+
+void Session::applyPlacements() {
+    for (size_t k = 0; k < meshes_.size(); ++k) {
+        if (!unplaced_[k]) continue;
+        for (int m : meshes_[k]) setTransform(scene_->virtuals[m], transforms_[k]);
+        unplaced_[k] = false;
+    }
+}
+
+const Scene& Session::scene() {
+    applyPlacements();
+    return *scene_;
 }
 
 void Session::drag(const json& message) {
@@ -283,15 +298,14 @@ void Session::drag(const json& message) {
     if (!hit.hit()) refuse("drag", fmt::format("no real surface under pixel ({:.1f}, {:.1f})", x, y));
     // Rest the object on the surface: its box's centre along the normal, by the box's half-extent that way.
     const glm::vec3 normal = hit.geometricNormal;
-    const Bounds3f bounds = objectBounds(object);
+    const Bounds3f bounds = bounds_[object];
     const glm::vec3 half = 0.5f * (bounds.max - bounds.min);
     const float support = glm::dot(glm::abs(normal), half);
     const glm::vec3 target = hit.position + normal * support;
     const glm::vec3 move = target - bounds.center();
-    if (!std::isfinite(move.x) || !std::isfinite(move.y) || !std::isfinite(move.z))
-        refuse("drag", "the object cannot be placed there");
-    const int m0 = meshes_[object].front();
-    placeObject(object, glm::translate(glm::mat4(1.0f), move) * scene_->virtuals[m0].worldFromObject);
+    if (!(glm::length(move) < kMaxCoordinate)) refuse("drag", "the object cannot be placed there");
+    placeObject(object, glm::translate(glm::mat4(1.0f), move) * transforms_[object]);
+    bounds_[object] = {bounds.min + move, bounds.max + move};
     contact_[object] = hit.position;
     contactNormal_[object] = normal;
 }
@@ -305,10 +319,11 @@ void Session::rotate(const json& message) {
     const glm::mat4 turn = glm::translate(glm::mat4(1.0f), p) *
                            glm::rotate(glm::mat4(1.0f), glm::radians(degrees), contactNormal_[object]) *
                            glm::translate(glm::mat4(1.0f), -p);
-    const int m0 = meshes_[object].front();
-    glm::mat4 m = turn * scene_->virtuals[m0].worldFromObject;
+    glm::mat4 m = turn * transforms_[object];
     for (int c = 0; c < 4; ++c) m[c][3] = c == 3 ? 1.0f : 0.0f;  // affine, exactly
     placeObject(object, m);
+    applyPlacements();  // its new bounds
+    bounds_[object] = meshBounds(object);
 }
 
 void Session::light(const json& message) {
@@ -390,7 +405,7 @@ json Session::state() const {
     }
     Bounds3f real;
     for (const TriangleMesh& m : scene_->real) real.extend(m.bounds());
-    for (int k = 0; k < static_cast<int>(meshes_.size()); ++k) real.extend(objectBounds(k));
+    for (const Bounds3f& b : bounds_) real.extend(b);
     const json effective = optionsToJson(scene_->options);
     json options = json::object();
     for (std::string_view key : kLiveOptions) options[std::string(key)] = optionValue(effective, key);
@@ -414,9 +429,16 @@ json Session::document() const {
     return out;
 }
 
-Options interactiveOptions(const Options& full) {
+Options interactiveOptions(const Options& full, int width, int height) {
     Options o = full;
     o.render.samplesPerPixel = 1;
+    auto sparser = [&](int& option, int autoStride) {
+        option = std::min(2 * pixelStrideFor(option, autoStride, width, height), 32);
+    };
+    sparser(o.diffuse.pixelStride, kAutoDiffuseStride);
+    sparser(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride);
+    sparser(o.specular.relightPixelStride, kAutoRelightSpecularStride);
+    sparser(o.shadow.relightPixelStride, kAutoRelightShadowStride);
     return o;
 }
 

@@ -68,7 +68,9 @@ class Session {
     // wherever it is saved).
     nlohmann::json document() const;
 
-    const Scene& scene() const { return *scene_; }
+    // The scene, with the objects at the places the messages gave them (a drag only records the place; the
+    // meshes are moved here, once for any number of drags between two frames).
+    const Scene& scene();
     View view() const { return view_; }
     // Incremented by every change; `structure` by changes other than objects' transforms and the view
     // (lights, options), after which a renderer copies the whole scene rather than the objects.
@@ -86,7 +88,8 @@ class Session {
     void options(const nlohmann::json& message);
     int objectIndex(const nlohmann::json& message) const;
     void placeObject(int object, const glm::mat4& worldFromObject);
-    Bounds3f objectBounds(int object) const;
+    void applyPlacements();
+    Bounds3f meshBounds(int object) const;
 
     std::filesystem::path file_;
     nlohmann::json document_;
@@ -94,6 +97,11 @@ class Session {
     std::unique_ptr<RayScene> picking_;     // the real scene, for the surface under the cursor
     std::vector<std::vector<int>> meshes_;  // per "virtual" entry, its meshes in scene_->virtuals
     std::vector<std::string> names_;        // per entry
+    // Per entry: its transform, its meshes' bounds there (moved with it by drags, computed again after a
+    // rotation), and whether its meshes are still to be moved there (applyPlacements).
+    std::vector<glm::mat4> transforms_;
+    std::vector<Bounds3f> bounds_;
+    std::vector<bool> unplaced_;
     // Per entry: where it rests on the real surfaces (world) and that surface's normal.
     std::vector<glm::vec3> contact_, contactNormal_;
     size_t fileLights_ = 0;  // the scene file's lights (the environment's follow them)
@@ -104,9 +112,11 @@ class Session {
     int64_t lastSeq_ = 0;
 };
 
-// The options of the frames rendered while the scene changes: the scene's own, with one G-buffer sample per
-// pixel (the sub-samples cost the Buddha's frame about 10 ms). The idle frames use the scene's own options.
-Options interactiveOptions(const Options& full);
+// The options of the frames rendered while the scene changes, for a width x height image: the scene's own,
+// with one G-buffer sample per pixel and the cones and the real surfaces' shadow rays at twice their pixel
+// strides (at most 32; the objects' own shadow rays keep theirs). The idle frames use the scene's own
+// options, which give `deltagi render`'s image.
+Options interactiveOptions(const Options& full, int width, int height);
 
 // The picture of `view`, as 8-bit sRGB RGB pixels (width x height x 3), for the page.
 std::vector<uint8_t> viewPixels(const RenderOutput& output, View view);

@@ -269,12 +269,24 @@ TEST_F(LiveSessionTest, ASequenceSceneIsRefused) {
     }
 }
 
-TEST(LiveSessionImages, InteractiveOptionsDropOnlyTheGBufferSubSamples) {
+TEST(LiveSessionImages, InteractiveOptionsTakeOneSamplePerPixelAndSparserCones) {
     Options full;
     full.diffuse.count = 12;
-    Options fast = interactiveOptions(full);
+    full.diffuse.relightPixelStride = 32;
+    Options fast = interactiveOptions(full, 640, 480);
     EXPECT_EQ(fast.render.samplesPerPixel, 1);
+    EXPECT_EQ(fast.diffuse.pixelStride, 2 * kAutoDiffuseStride);
+    EXPECT_EQ(fast.diffuse.relightPixelStride, 32);  // at most 32
+    EXPECT_EQ(fast.specular.relightPixelStride, 2 * kAutoRelightSpecularStride);
+    EXPECT_EQ(fast.shadow.relightPixelStride, 2 * kAutoRelightShadowStride);
+    EXPECT_EQ(fast.shadow.pixelStride, 0);  // the objects' shadows as they are
+    EXPECT_EQ(interactiveOptions(full, 320, 240).diffuse.pixelStride, kAutoDiffuseStride);  // auto is 4 there
+    // Everything else is the scene's.
     fast.render.samplesPerPixel = full.render.samplesPerPixel;
+    fast.diffuse.pixelStride = full.diffuse.pixelStride;
+    fast.diffuse.relightPixelStride = full.diffuse.relightPixelStride;
+    fast.specular.relightPixelStride = full.specular.relightPixelStride;
+    fast.shadow.relightPixelStride = full.shadow.relightPixelStride;
     EXPECT_EQ(optionsToJson(fast), optionsToJson(full));
 }
 

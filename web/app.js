@@ -12,15 +12,20 @@ const live = (window.deltagi = {
   frames: 0,          // frames drawn
   lastInfo: null,     // the info of the last frame drawn
   shownTimes: [],     // performance.now() of each frame drawn
-  latencies: [],      // ms from a drag's first mouse event to the first frame drawn that shows it
+  latencies: [],      // per mouse event of a drag: ms to the first frame drawn that shows it
+  drawn: [],          // per frame drawn: [performance.now(), frame ms, refined]
   errors: [],
 });
 let socket = null;
 let seq = 0;
 let pendingInfo = null;   // the info that came before the next picture
 let newestDrawn = 0;      // frame numbers arrive in order; decoding may not finish in order
-let inFlight = null;      // the drag message sent and not yet shown: {seq, inputAt, sentAt}
-let queuedDrag = null;    // the newest cursor position not yet sent: {x, y, inputAt}
+// Drag messages sent whose frame has not come yet: {seq, inputs, sentAt}, `inputs` the times of the mouse
+// events it carries. Each mouse move goes out at once: the server renders the newest position when it starts a
+// frame (it never queues frames). Past kMaxInFlight (a server that stopped answering) moves wait, coalesced.
+const kMaxInFlight = 30;
+let inFlight = [];
+let queuedDrag = null;    // the newest cursor position not yet sent: {x, y, inputs}
 let awaiting = [];        // drags whose frame info came, whose picture is not yet drawn
 let dragging = null;      // {mouse: [x, y], anchor: [x, y]}
 const history = [];       // the last frames' timings, for the chart
@@ -42,7 +47,7 @@ function connect() {
   socket.onopen = () => status('connected');
   socket.onclose = () => {
     status('disconnected; trying again');
-    inFlight = null;
+    inFlight = [];
     setTimeout(connect, 1000);
   };
   socket.onmessage = (event) => {
@@ -57,13 +62,13 @@ function connect() {
     else if (message.type === 'state') applyState(message);
     else if (message.type === 'error') {
       showError(message.message);
-      inFlight = null;  // a refused drag gets no frame
+      inFlight = [];  // a refused drag gets no frame
       flushDrag();
     } else if (message.type === 'frame') {
       pendingInfo = message;
-      if (inFlight && message.client === live.client && message.seq >= inFlight.seq) {
-        awaiting.push({ ...inFlight, number: message.number });
-        inFlight = null;
+      if (message.client === live.client) {
+        for (const drag of inFlight.filter((d) => d.seq <= message.seq)) awaiting.push({ ...drag, number: message.number });
+        inFlight = inFlight.filter((d) => d.seq > message.seq);
         flushDrag();  // the next position goes out while this picture decodes
       }
     }
@@ -84,10 +89,12 @@ async function draw(blob, info) {
   live.frames += 1;
   live.lastInfo = info;
   live.shownTimes.push(now);
+  live.drawn.push([now, info.timings.total_ms, info.refined]);
   if (live.shownTimes.length > 10000) live.shownTimes.splice(0, 5000);
+  if (live.drawn.length > 10000) live.drawn.splice(0, 5000);
   awaiting = awaiting.filter((drag) => {
     if (drag.number > info.number) return true;
-    live.latencies.push(now - drag.inputAt);
+    for (const t of drag.inputs) live.latencies.push(now - t);
     return false;
   });
   $('scale').hidden = !['delta', 'shadow', 'indirect'].includes(info.view);
@@ -198,11 +205,11 @@ function imagePoint(event) {
 }
 
 function flushDrag() {
-  if (inFlight && performance.now() - inFlight.sentAt > 1000) inFlight = null;  // lost: do not stall
-  if (inFlight || !queuedDrag || !live.state) return;
+  inFlight = inFlight.filter((d) => performance.now() - d.sentAt < 2000);  // lost: do not stall
+  if (inFlight.length >= kMaxInFlight || !queuedDrag || !live.state) return;
   seq += 1;
   send({ type: 'drag', object: live.state.selected, x: queuedDrag.x, y: queuedDrag.y, seq });
-  inFlight = { seq, inputAt: queuedDrag.inputAt, sentAt: performance.now() };
+  inFlight.push({ seq, inputs: queuedDrag.inputs, sentAt: performance.now() });
   queuedDrag = null;
 }
 
@@ -220,7 +227,7 @@ window.addEventListener('mousemove', (event) => {
   const [mx, my] = imagePoint(event);
   const x = Math.min(Math.max(dragging.anchor[0] + mx - dragging.mouse[0], 0), live.state.width);
   const y = Math.min(Math.max(dragging.anchor[1] + my - dragging.mouse[1], 0), live.state.height);
-  queuedDrag = { x, y, inputAt: queuedDrag ? queuedDrag.inputAt : performance.now() };
+  queuedDrag = { x, y, inputs: [...(queuedDrag ? queuedDrag.inputs : []), performance.now()] };
   flushDrag();
 });
 window.addEventListener('mouseup', () => {

@@ -159,12 +159,12 @@ try {
 
   // ---- drag the selected object by a known number of pixels ----------------------------------------------
   const state0 = await page.evaluate(() => window.deltagi.state);
-  check(state0.objects.length > 0 && state0.objects[0].anchor, `object "${state0.objects[0].name}" rests at ` +
-    `pixel (${state0.objects[0].anchor.map((v) => v.toFixed(1))})`);
+  const object0 = state0.objects[state0.selected];
+  check(object0 && object0.anchor, `object "${object0.name}" rests at pixel (${object0.anchor.map((v) => v.toFixed(1))})`);
   await setView(page, 'delta');
   await keep(page, 'deltaBefore');
   await setView(page, 'mask');
-  const anchor0 = state0.objects[state0.objects[0] ? state0.selected : 0].anchor;
+  const anchor0 = state0.objects[state0.selected].anchor;
   const seedOffset = Math.max(3, state0.height / 48);
   const before = await maskCentroid(page, [anchor0[0], anchor0[1] - seedOffset]);
   check(before && before.pixels > 20, `mask of the object before the drag: ${before && before.pixels} pixels`);
@@ -191,9 +191,9 @@ try {
   }
   await page.mouse.up();
   const drag = await page.evaluate((c) => {
-    const { shownTimes, latencies, frames } = window.deltagi;
+    const { drawn, latencies, frames } = window.deltagi;
     return { frames: frames - c.frames, seconds: (performance.now() - c.t) / 1000,
-      latencies: latencies.slice(c.latencies), shown: shownTimes.filter((t) => t > c.t) };
+      latencies: latencies.slice(c.latencies), frameMs: drawn.filter(([t]) => t > c.t).map(([, ms]) => ms) };
   }, countsBefore);
   await settled(page, 'composite', since);
   const sorted = [...drag.latencies].sort((a, b) => a - b);
@@ -201,7 +201,8 @@ try {
   const fps = drag.frames / drag.seconds;
   log(`FIGURES: drag of ${drag.seconds.toFixed(2)} s: ${drag.frames} frames displayed = ${fps.toFixed(1)} per ` +
     `second; input-to-frame latency median ${quantile(0.5).toFixed(0)} ms, p90 ${quantile(0.9).toFixed(0)} ms, ` +
-    `max ${sorted.length ? sorted[sorted.length - 1].toFixed(0) : NaN} ms (${sorted.length} drags)`);
+    `max ${sorted.length ? sorted[sorted.length - 1].toFixed(0) : NaN} ms (${sorted.length} mouse events); ` +
+    `render time per frame median ${[...drag.frameMs].sort((a, b) => a - b)[drag.frameMs.length >> 1]} ms`);
   check(drag.frames >= 3 && sorted.length >= 3, 'frames were shown during the drag');
 
   const state1 = await page.evaluate(() => window.deltagi.state);
@@ -210,7 +211,7 @@ try {
     `the object rests under the cursor: anchor moved by (${(anchor1[0] - anchor0[0]).toFixed(2)}, ` +
     `${(anchor1[1] - anchor0[1]).toFixed(2)}) for a drag of (${move})`);
   if (args.screenshot) {
-    await page.screenshot({ path: args.screenshot });
+    await page.screenshot({ path: args.screenshot, fullPage: true });
     log(`screenshot: ${args.screenshot}`);
   }
   await setView(page, 'mask');
