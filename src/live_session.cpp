@@ -186,6 +186,7 @@ Session::Session(const fs::path& file, const std::vector<std::string>& overrides
         contactNormal_.push_back({0.0f, 1.0f, 0.0f});
     }
     fileLights_ = document_.contains("lights") ? document_["lights"].size() : 0;
+    for (const TriangleMesh& m : scene_->real) realBounds_.extend(m.bounds());
 }
 
 Session::~Session() = default;
@@ -250,6 +251,10 @@ MessageResult Session::dispatch(const json& message) {
             refuse("view.view",
                    "expected composite, background, delta, mask, object, shadow, indirect or depth, got " +
                        describeValue(message["view"]));
+        if (*view == view_) {  // nothing to render again
+            result.changed = false;
+            result.reply = {{"type", "ok"}};
+        }
         if (viewNeedsLayers(*view) != viewNeedsLayers(view_)) ++structureVersion_;
         view_ = *view;
     } else {
@@ -277,8 +282,22 @@ void Session::placeObject(int object, const glm::mat4& worldFromObject) {
 void Session::applyPlacements() {
     for (size_t k = 0; k < meshes_.size(); ++k) {
         if (!unplaced_[k]) continue;
-        for (int m : meshes_[k]) setTransform(scene_->virtuals[m], transforms_[k]);
         unplaced_[k] = false;
+        std::vector<TriangleMesh> placed;
+        try {
+            for (int m : meshes_[k]) {
+                placed.push_back(scene_->virtuals[m]);
+                setTransform(placed.back(), transforms_[k]);
+            }
+        } catch (const std::exception&) {
+            // Not expected (the transform was checked, the meshes are the loaded ones): the object stays
+            // where its meshes are, and the document says so.
+            transforms_[k] = scene_->virtuals[meshes_[k][0]].worldFromObject;
+            document_["virtual"][k]["transform"] = matrixJson(transforms_[k]);
+            bounds_[k] = meshBounds(static_cast<int>(k));
+            continue;
+        }
+        for (size_t i = 0; i < placed.size(); ++i) scene_->virtuals[meshes_[k][i]] = std::move(placed[i]);
     }
 }
 
@@ -403,8 +422,7 @@ json Session::state() const {
              {"position", toJson(l.position)},
              {"intensity", l.intensity}});
     }
-    Bounds3f real;
-    for (const TriangleMesh& m : scene_->real) real.extend(m.bounds());
+    Bounds3f real = realBounds_;
     for (const Bounds3f& b : bounds_) real.extend(b);
     const json effective = optionsToJson(scene_->options);
     json options = json::object();

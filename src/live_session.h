@@ -45,7 +45,9 @@ inline constexpr float kMaxRotationDeg = 360.0f;
 
 // The result of one message.
 struct MessageResult {
-    nlohmann::json reply;  // to the sender only: {"type":"error","message":...}; null when there is none
+    // To the sender only: {"type":"error","message":...}, {"type":"pong"}, or {"type":"ok"} for a message
+    // that changed nothing (the view it shows already); null after a change.
+    nlohmann::json reply;
     bool changed = false;  // the scene or the view changed: render again and send every client the state
 };
 
@@ -104,6 +106,7 @@ class Session {
     std::vector<bool> unplaced_;
     // Per entry: where it rests on the real surfaces (world) and that surface's normal.
     std::vector<glm::vec3> contact_, contactNormal_;
+    Bounds3f realBounds_;
     size_t fileLights_ = 0;  // the scene file's lights (the environment's follow them)
     int selected_ = 0;
     View view_ = View::Composite;

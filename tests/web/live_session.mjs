@@ -104,7 +104,10 @@ try {
     await action();
     await settled(p, view, since);
   }
-  const setView = (p, view) => change(p, () => p.click(`input[name=view][value=${view}]`), view);
+  const setView = async (p, view) => {
+    if (await p.evaluate((v) => window.deltagi.state.view === v, view)) return;  // no change, no new frame
+    await change(p, () => p.click(`input[name=view][value=${view}]`), view);
+  };
   // The canvas's pixels, kept in the page under `name`; statistics computed there.
   const keep = (p, name) => p.evaluate((n) => {
     const c = document.getElementById('frame');
