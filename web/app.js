@@ -121,7 +121,9 @@ function showTimings(info, now) {
   const g = chart.getContext('2d');
   g.clearRect(0, 0, chart.width, chart.height);
   const totals = history.map((stages) => stages.reduce((sum, [, ms]) => sum + ms, 0));
-  const scale = (chart.height - 12) / Math.max(50, ...totals);
+  // Scaled to the slowest frame but the few slowest (a cold frame after a light or an option change is clipped).
+  const full = Math.max(50, [...totals].sort((x, y) => x - y)[Math.floor(0.9 * (totals.length - 1))]);
+  const scale = (chart.height - 12) / full;
   const names = [];
   for (const stages of history) for (const [name] of stages) if (!names.includes(name)) names.push(name);
   const width = chart.width / 60;
@@ -136,7 +138,7 @@ function showTimings(info, now) {
   });
   g.fillStyle = '#aaa';
   g.font = '10px sans-serif';
-  g.fillText(`${Math.max(50, ...totals).toFixed(0)} ms`, 2, 10);
+  g.fillText(`${full.toFixed(0)} ms`, 2, 10);
   const legend = $('chart-legend');
   legend.replaceChildren(...info.timings.stages.filter(([, ms]) => ms >= 0.05).map(([name, ms]) => {
     const span = document.createElement('span');

@@ -81,7 +81,7 @@ const browser = await chromium.launch({
 });
 let failed = null;
 try {
-  const page = await browser.newPage({ viewport: { width: 1280, height: 820 }, acceptDownloads: true });
+  const page = await browser.newPage({ viewport: { width: 1280, height: 1000 }, acceptDownloads: true });
   page.on('pageerror', (e) => { failed = failed || new Error(`page error: ${e.message}`); });
   await page.goto(url);
   await page.waitForFunction(() => window.deltagi && window.deltagi.frames > 0 && window.deltagi.state, null,
