@@ -253,6 +253,16 @@ try {
   await settled(page, 'composite', v0 + 1);
   check(true, 'the first tab gets frames after the second left mid-frame');
 
+  // ---- the object list chooses the object the mouse moves ---------------------------------------------------
+  if (state0.objects.length > 1) {
+    const v = await versionOf(page);
+    await page.selectOption('#object', '1');
+    await page.waitForFunction((w) => window.deltagi.state.version > w, v, { timeout: 60000 });
+    const selected = await page.evaluate(() => window.deltagi.state.selected);
+    await page.selectOption('#object', '0');
+    check(selected === 1, `object "${state0.objects[1].name}" chosen from the list`);
+  }
+
   // ---- bad messages get errors, and the session goes on ----------------------------------------------------
   const replies = await page.evaluate(() => new Promise((resolve) => {
     const ws = new WebSocket(`ws://${location.host}/ws`);
