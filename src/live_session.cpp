@@ -456,6 +456,7 @@ Options interactiveOptions(const Options& full, int width, int height) {
     sparser(o.diffuse.pixelStride, kAutoDiffuseStride);
     sparser(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride);
     sparser(o.specular.relightPixelStride, kAutoRelightSpecularStride);
+    sparser(o.shadow.pixelStride, kAutoShadowStride);
     sparser(o.shadow.relightPixelStride, kAutoRelightShadowStride);
     return o;
 }

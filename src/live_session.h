@@ -116,9 +116,9 @@ class Session {
 };
 
 // The options of the frames rendered while the scene changes, for a width x height image: the scene's own,
-// with one G-buffer sample per pixel and the cones and the real surfaces' shadow rays at twice their pixel
-// strides (at most 32; the objects' own shadow rays keep theirs). The idle frames use the scene's own
-// options, which give `deltagi render`'s image.
+// with one G-buffer sample per pixel and the cones and the shadow rays at twice their pixel strides (at most
+// 32). On the benchmark scene each of the three halves a stage: G-buffer, diffuse cones, shadows. The idle
+// frames use the scene's own options, which give `deltagi render`'s image.
 Options interactiveOptions(const Options& full, int width, int height);
 
 // The picture of `view`, as 8-bit sRGB RGB pixels (width x height x 3), for the page.

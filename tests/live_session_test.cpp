@@ -279,13 +279,14 @@ TEST(LiveSessionImages, InteractiveOptionsTakeOneSamplePerPixelAndSparserCones) 
     EXPECT_EQ(fast.diffuse.relightPixelStride, 32);  // at most 32
     EXPECT_EQ(fast.specular.relightPixelStride, 2 * kAutoRelightSpecularStride);
     EXPECT_EQ(fast.shadow.relightPixelStride, 2 * kAutoRelightShadowStride);
-    EXPECT_EQ(fast.shadow.pixelStride, 0);  // the objects' shadows as they are
+    EXPECT_EQ(fast.shadow.pixelStride, 2 * kAutoShadowStride);
     EXPECT_EQ(interactiveOptions(full, 320, 240).diffuse.pixelStride, kAutoDiffuseStride);  // auto is 4 there
     // Everything else is the scene's.
     fast.render.samplesPerPixel = full.render.samplesPerPixel;
     fast.diffuse.pixelStride = full.diffuse.pixelStride;
     fast.diffuse.relightPixelStride = full.diffuse.relightPixelStride;
     fast.specular.relightPixelStride = full.specular.relightPixelStride;
+    fast.shadow.pixelStride = full.shadow.pixelStride;
     fast.shadow.relightPixelStride = full.shadow.relightPixelStride;
     EXPECT_EQ(optionsToJson(fast), optionsToJson(full));
 }
