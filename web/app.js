@@ -13,7 +13,7 @@ const live = (window.deltagi = {
   lastInfo: null,     // the info of the last frame drawn
   shownTimes: [],     // performance.now() of each frame drawn
   latencies: [],      // per mouse event of a drag: ms to the first frame drawn that shows it
-  drawn: [],          // per frame drawn: [performance.now(), frame ms, refined]
+  drawn: [],          // per frame drawn: [performance.now(), frame ms, refined, stages, JPEG ms]
   errors: [],
 });
 let socket = null;
@@ -89,7 +89,7 @@ async function draw(blob, info) {
   live.frames += 1;
   live.lastInfo = info;
   live.shownTimes.push(now);
-  live.drawn.push([now, info.timings.total_ms, info.refined]);
+  live.drawn.push([now, info.timings.total_ms, info.refined, info.timings.stages, info.encode_ms]);
   if (live.shownTimes.length > 10000) live.shownTimes.splice(0, 5000);
   if (live.drawn.length > 10000) live.drawn.splice(0, 5000);
   awaiting = awaiting.filter((drag) => {

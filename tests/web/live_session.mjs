@@ -179,6 +179,7 @@ try {
   const countsBefore = await page.evaluate(() => ({ frames: window.deltagi.frames,
     latencies: window.deltagi.latencies.length, t: performance.now() }));
   const since = await versionOf(page);
+  const loadBefore = fs.readFileSync('/proc/loadavg', 'utf8').split(' ')[0];
   await page.mouse.move(startX, startY);
   await page.mouse.down();
   // A path that wanders (so that the whole drag renders) and ends at the move.
@@ -196,7 +197,8 @@ try {
   const drag = await page.evaluate((c) => {
     const { drawn, latencies, frames } = window.deltagi;
     return { frames: frames - c.frames, seconds: (performance.now() - c.t) / 1000,
-      latencies: latencies.slice(c.latencies), frameMs: drawn.filter(([t]) => t > c.t).map(([, ms]) => ms) };
+      latencies: latencies.slice(c.latencies), frameMs: drawn.filter(([t]) => t > c.t).map(([, ms]) => ms),
+      stages: drawn.filter(([t]) => t > c.t).map(([, , , stages, jpeg]) => [...stages, ['jpeg', jpeg]]) };
   }, countsBefore);
   await settled(page, 'composite', since);
   const sorted = [...drag.latencies].sort((a, b) => a - b);
@@ -205,7 +207,13 @@ try {
   log(`FIGURES: drag of ${drag.seconds.toFixed(2)} s: ${drag.frames} frames displayed = ${fps.toFixed(1)} per ` +
     `second; input-to-frame latency median ${quantile(0.5).toFixed(0)} ms, p90 ${quantile(0.9).toFixed(0)} ms, ` +
     `max ${sorted.length ? sorted[sorted.length - 1].toFixed(0) : NaN} ms (${sorted.length} mouse events); ` +
-    `render time per frame median ${[...drag.frameMs].sort((a, b) => a - b)[drag.frameMs.length >> 1]} ms`);
+    `render time per frame median ${[...drag.frameMs].sort((a, b) => a - b)[drag.frameMs.length >> 1]} ms; ` +
+    `load average (1 min) ${loadBefore} before the drag, ${fs.readFileSync('/proc/loadavg', 'utf8').split(' ')[0]} ` +
+    `after, on ${os.cpus().length} cores`);
+  const stageMedians = {};
+  for (const stages of drag.stages) for (const [name, ms] of stages) (stageMedians[name] ||= []).push(ms);
+  log(`FIGURES: median ms per stage of the frames shown during the drag: ${Object.entries(stageMedians)
+    .map(([name, v]) => `${name} ${v.sort((a, b) => a - b)[v.length >> 1].toFixed(1)}`).join(', ')}`);
   check(drag.frames >= 3 && sorted.length >= 3, 'frames were shown during the drag');
 
   const state1 = await page.evaluate(() => window.deltagi.state);
