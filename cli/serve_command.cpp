@@ -358,7 +358,8 @@ void Server::renderLoop() {
             client = session_.lastInputClient();
             seq = session_.lastInputSeq();
             version = session_.version();
-            Options wanted = live::interactiveOptions(scene.options, scene.camera.width, scene.camera.height);
+            Options wanted = live::interactiveOptions(scene.options, scene.camera.width, scene.camera.height,
+                                                      scene.lights.size());
             wanted.render.layers = layers;
             Options own = scene.options;
             own.render.layers = layers;

@@ -447,7 +447,7 @@ json Session::document() const {
     return out;
 }
 
-Options interactiveOptions(const Options& full, int width, int height) {
+Options interactiveOptions(const Options& full, int width, int height, size_t lightCount) {
     Options o = full;
     o.render.samplesPerPixel = 1;
     auto sparser = [&](int& option, int autoStride) {
@@ -457,6 +457,14 @@ Options interactiveOptions(const Options& full, int width, int height) {
     sparser(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride);
     sparser(o.specular.relightPixelStride, kAutoRelightSpecularStride);
     sparser(o.shadow.pixelStride, kAutoShadowStride);
+    // Half the reflective shadow maps' side: a quarter of the texels to trace again and inject. "auto" gives
+    // each of several lights its own share, which one number cannot; it is halved for a single light only.
+    if (o.rsm.resolution > 0)
+        o.rsm.resolution = std::max(kAutoRsmMinResolution, o.rsm.resolution / 2);
+    else if (lightCount == 1)
+        o.rsm.resolution =
+            std::max(kAutoRsmMinResolution, rsmResolutionCeiling(0, o.volume.resolution, false) / 2);
+    o.diffuse.objectRays = std::min(o.diffuse.objectRays, 4);
     sparser(o.shadow.relightPixelStride, kAutoRelightShadowStride);
     return o;
 }

@@ -115,11 +115,13 @@ class Session {
     int64_t lastSeq_ = 0;
 };
 
-// The options of the frames rendered while the scene changes, for a width x height image: the scene's own,
-// with one G-buffer sample per pixel and the cones and the shadow rays at twice their pixel strides (at most
-// 32). On the benchmark scene each of the three halves a stage: G-buffer, diffuse cones, shadows. The idle
-// frames use the scene's own options, which give `deltagi render`'s image.
-Options interactiveOptions(const Options& full, int width, int height);
+// The options of the frames rendered while the scene changes, for a width x height image and `lightCount`
+// lights (the scene's and its environment's): the scene's own, with one G-buffer sample per pixel, the cones
+// and the shadow rays at twice their pixel strides (at most 32), reflective shadow maps of half the side (of
+// a single light, when "auto") and at most 4 rays for the objects' further bounce. On the benchmark scene
+// each of these about halves a stage: G-buffer, diffuse cones, shadows, RSM update and injection, the
+// objects' bounce. The idle frames use the scene's own options, which give `deltagi render`'s image.
+Options interactiveOptions(const Options& full, int width, int height, size_t lightCount);
 
 // The picture of `view`, as 8-bit sRGB RGB pixels (width x height x 3), for the page.
 std::vector<uint8_t> viewPixels(const RenderOutput& output, View view);

@@ -273,14 +273,21 @@ TEST(LiveSessionImages, InteractiveOptionsTakeOneSamplePerPixelAndSparserCones) 
     Options full;
     full.diffuse.count = 12;
     full.diffuse.relightPixelStride = 32;
-    Options fast = interactiveOptions(full, 640, 480);
+    Options fast = interactiveOptions(full, 640, 480, 1);
     EXPECT_EQ(fast.render.samplesPerPixel, 1);
     EXPECT_EQ(fast.diffuse.pixelStride, 2 * kAutoDiffuseStride);
     EXPECT_EQ(fast.diffuse.relightPixelStride, 32);  // at most 32
     EXPECT_EQ(fast.specular.relightPixelStride, 2 * kAutoRelightSpecularStride);
     EXPECT_EQ(fast.shadow.relightPixelStride, 2 * kAutoRelightShadowStride);
     EXPECT_EQ(fast.shadow.pixelStride, 2 * kAutoShadowStride);
-    EXPECT_EQ(interactiveOptions(full, 320, 240).diffuse.pixelStride, kAutoDiffuseStride);  // auto is 4 there
+    EXPECT_EQ(fast.rsm.resolution, 256);  // "auto" is 512 at 128^3
+    EXPECT_EQ(fast.diffuse.objectRays, 4);
+    EXPECT_EQ(interactiveOptions(full, 320, 240, 1).diffuse.pixelStride,
+              kAutoDiffuseStride);                                       // auto is 4 there
+    EXPECT_EQ(interactiveOptions(full, 640, 480, 3).rsm.resolution, 0);  // several lights keep "auto"
+    full.rsm.resolution = 64;
+    EXPECT_EQ(interactiveOptions(full, 640, 480, 3).rsm.resolution, 64);  // not below the smallest
+    full.rsm.resolution = 0;
     // Everything else is the scene's.
     fast.render.samplesPerPixel = full.render.samplesPerPixel;
     fast.diffuse.pixelStride = full.diffuse.pixelStride;
@@ -288,6 +295,8 @@ TEST(LiveSessionImages, InteractiveOptionsTakeOneSamplePerPixelAndSparserCones) 
     fast.specular.relightPixelStride = full.specular.relightPixelStride;
     fast.shadow.pixelStride = full.shadow.pixelStride;
     fast.shadow.relightPixelStride = full.shadow.relightPixelStride;
+    fast.rsm.resolution = full.rsm.resolution;
+    fast.diffuse.objectRays = full.diffuse.objectRays;
     EXPECT_EQ(optionsToJson(fast), optionsToJson(full));
 }
 
