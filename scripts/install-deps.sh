@@ -33,7 +33,8 @@ fi
 # playwright-core for the browser test (tests/web/live_session.mjs), when it is not installed at the locked
 # version already.
 web="$(cd "$(dirname "$0")/../tests/web" && pwd)"
-if [ "$(node -p "try { require('$web/node_modules/playwright-core/package.json').version } catch { '' }")" != \
+if command -v node >/dev/null 2>&1 && command -v npm >/dev/null 2>&1 &&
+   [ "$(node -p "try { require('$web/node_modules/playwright-core/package.json').version } catch { '' }")" != \
      "$(node -p "require('$web/package-lock.json').packages['node_modules/playwright-core'].version")" ]; then
   PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --prefix "$web" --no-audit --no-fund
 fi

@@ -77,7 +77,8 @@ function cpuSeconds(pid) {  // user + system time of the process, from /proc
 const browser = await chromium.launch({
   executablePath: browserPath,
   headless: true,
-  args: process.getuid && process.getuid() === 0 ? ['--no-sandbox'] : [],
+  // Root (CI) cannot use chromium's sandbox; containers often give /dev/shm 64 MB, too little for it.
+  args: [...(process.getuid && process.getuid() === 0 ? ['--no-sandbox'] : []), '--disable-dev-shm-usage'],
 });
 let failed = null;
 try {
