@@ -46,6 +46,7 @@ using nlohmann::json;
 constexpr auto kRefineDelay = std::chrono::milliseconds(150);
 constexpr size_t kMaxClients = 32;
 constexpr size_t kMaxQueuedReplies = 32;
+constexpr size_t kMaxWaitingMessages = 256;
 
 struct Frame {
     uint64_t number = 0;
@@ -154,6 +155,7 @@ class Server {
 
   private:
     void renderLoop();
+    void handleMessages();
     void publishState();
     bool hostAllowed(const mg_connection* connection) const;
 
@@ -165,6 +167,17 @@ class Server {
     std::shared_ptr<const Frame> latestFrame_;
     std::shared_ptr<const Image> latestComposite_;
     bool latestRefined_ = false;
+
+    // Messages wait here for the handler thread: civetweb's threads have a small stack, and a message is
+    // parsed and checked on a thread of this program's own.
+    struct Incoming {
+        std::shared_ptr<Client> client;
+        std::string text;
+    };
+    std::mutex inboxMutex_;
+    std::condition_variable inboxWake_;
+    std::deque<Incoming> inbox_;
+    bool stopHandler_ = false;
 
     std::mutex clientsMutex_;
     std::map<const mg_connection*, std::shared_ptr<Client>> clients_;
@@ -292,14 +305,42 @@ void Server::onMessage(mg_connection* connection, int opcode, const char* data, 
         client->reply(json{{"type", "error"}, {"message", "message: expected a JSON text message"}}.dump());
         return;
     }
-    live::MessageResult result;
-    {
-        std::lock_guard lock(sessionMutex_);
-        result = session_.handle(std::string_view(data, size), client->id());
-        if (result.changed) changed_.notify_all();
+    if (size > live::kMaxMessageBytes) {  // refused as the handler refuses it, without a copy
+        client->reply(
+            json{{"type", "error"},
+                 {"message", fmt::format("message: {} bytes, more than {}", size, live::kMaxMessageBytes)}}
+                .dump());
+        return;
     }
-    if (!result.reply.is_null()) client->reply(result.reply.dump());
-    if (result.changed) publishState();
+    std::lock_guard lock(inboxMutex_);
+    if (inbox_.size() >= kMaxWaitingMessages) {
+        client->reply(
+            json{{"type", "error"}, {"message", "message: too many messages waiting; dropped"}}.dump());
+        return;
+    }
+    inbox_.push_back({client, std::string(data, size)});
+    inboxWake_.notify_one();
+}
+
+void Server::handleMessages() {
+    for (;;) {
+        Incoming message;
+        {
+            std::unique_lock lock(inboxMutex_);
+            inboxWake_.wait(lock, [&] { return stopHandler_ || !inbox_.empty(); });
+            if (stopHandler_) return;
+            message = std::move(inbox_.front());
+            inbox_.pop_front();
+        }
+        live::MessageResult result;
+        {
+            std::lock_guard lock(sessionMutex_);
+            result = session_.handle(message.text, message.client->id());
+            if (result.changed) changed_.notify_all();
+        }
+        if (!result.reply.is_null()) message.client->reply(result.reply.dump());
+        if (result.changed) publishState();
+    }
 }
 
 void Server::onClose(const mg_connection* connection) {
@@ -480,11 +521,18 @@ int Server::run() {
         },
         [](const mg_connection* c, void* self) { static_cast<Server*>(self)->onClose(c); }, this);
 
+    std::thread handler([this] { handleMessages(); });
     std::thread renderer([this] { renderLoop(); });
     const std::string shown = args_.host.find(':') != std::string::npos ? "[" + args_.host + "]" : args_.host;
     fmt::print("deltagi serve: http://{}:{}/ ({}; Ctrl-C stops)\n", shown, port_, args_.scene.string());
     std::fflush(stdout);
     renderer.join();  // runs until SIGINT or SIGTERM ends the process (cli/outputs.cpp)
+    {
+        std::lock_guard lock(inboxMutex_);
+        stopHandler_ = true;
+        inboxWake_.notify_all();
+    }
+    handler.join();
     mg_stop(context);
     mg_exit_library();
     return 0;

@@ -3,6 +3,7 @@
 // loads to the session's scene bit for bit.
 #include "live_session.h"
 
+#include <pthread.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -81,6 +82,36 @@ TEST_F(LiveSessionTest, OversizedMessagesAreRefusedBeforeTheyAreParsed) {
     auto session = tinySession();
     std::string big = "{\"type\": \"ping\", \"pad\": \"" + std::string(kMaxMessageBytes, 'x') + "\"}";
     expectRefused(*session, big, "bytes, more than");
+}
+
+// The server's threads may have a small stack: a long malformed message is refused there too.
+TEST_F(LiveSessionTest, AMalformedMessageIsRefusedOnASmallStack) {
+    auto session = tinySession();
+    const std::string message = "{\"type\": \"" + std::string(kMaxMessageBytes - 20, 'x');
+    MessageResult result;
+    pthread_attr_t attributes;
+    pthread_attr_init(&attributes);
+    pthread_attr_setstacksize(&attributes, 128 * 1024);
+    struct Call {
+        Session* session;
+        const std::string* message;
+        MessageResult* result;
+    } call{session.get(), &message, &result};
+    pthread_t thread;
+    ASSERT_EQ(pthread_create(
+                  &thread, &attributes,
+                  [](void* p) -> void* {
+                      auto* c = static_cast<Call*>(p);
+                      *c->result = c->session->handle(*c->message);
+                      return nullptr;
+                  },
+                  &call),
+              0);
+    pthread_join(thread, nullptr);
+    pthread_attr_destroy(&attributes);
+    EXPECT_FALSE(result.changed);
+    ASSERT_TRUE(result.reply.is_object());
+    EXPECT_NE(result.reply["message"].get<std::string>().find("message: line 1"), std::string::npos);
 }
 
 TEST_F(LiveSessionTest, OutOfRangeNumbersAndUnknownObjectsAreRefused) {
