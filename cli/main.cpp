@@ -40,6 +40,7 @@
 #include "encode_command.h"
 #include "eval_suite.h"
 #include "outputs.h"
+#include "serve_command.h"
 #include "video_output.h"
 
 namespace fs = std::filesystem;
@@ -763,6 +764,9 @@ int main(int argc, char** argv) {
     cli::EncodeArgs encodeArgs;
     CLI::App* encodeCommand = cli::addEncodeCommand(app, encodeArgs);
 
+    cli::ServeArgs serveArgs;
+    CLI::App* serveCommand = cli::addServeCommand(app, serveArgs, kMaxThreads);
+
     try {
         app.parse(argc, argv);
         renderArgs.fpsGiven = renderCommand->count("--fps") > 0;
@@ -773,7 +777,7 @@ int main(int argc, char** argv) {
             return reportError(
                 fmt::format(
                     "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
-                    "'bench', 'stability' or 'encode' (see deltagi --help)",
+                    "'bench', 'stability', 'encode' or 'serve' (see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);
@@ -792,6 +796,7 @@ int main(int argc, char** argv) {
         if (*benchCommand) return cli::runBench(benchArgs);
         if (*stabilityCommand) return cli::runStability(stabilityArgs);
         if (*encodeCommand) return cli::runEncode(encodeArgs);
+        if (*serveCommand) return cli::runServe(serveArgs);
         return runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         removeTemporaryOutputs();            // output folders made for nothing

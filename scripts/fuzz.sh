@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Fuzzes the scene reader and mesh loading with libFuzzer (clang 16 from Debian 12): builds build-fuzz/ with
-# -DDELTAGI_FUZZ=ON, seeds each target, runs each for a fixed budget and prints executions and findings.
+# Fuzzes the scene reader, mesh loading and the live session's message handler with libFuzzer (clang 16 from
+# Debian 12): builds build-fuzz/ with -DDELTAGI_FUZZ=ON, seeds each target, runs each for a fixed budget and
+# prints executions and findings.
 #   scripts/fuzz.sh [SECONDS_PER_TARGET]      (default 300)
 # Seeds: the scenes of examples/ and tests/bad-inputs/ (and ../shared/data/scenes when present) for the scene
 # reader; Debian's assimp-testmodels (OBJ, PLY, OFF, glTF 2, STL) and the meshes of tests/bad-inputs/ for
 # mesh loading. The corpus grows in build-fuzz/corpus-*/ from run to run; crashes, timeouts and running out of
-# memory (4 GB) are written to build-fuzz/findings/. Every crash found becomes a case of tests/bad-inputs/.
+# memory (4 GB) are written to build-fuzz/findings/. The live session's handler (`deltagi serve`) is seeded with
+# one message of each type. Every crash found becomes a case of tests/bad-inputs/.
 # Exit status 1 when a target found something. Installs clang 16, libFuzzer and assimp-testmodels when missing
 # (as root). Clang 16, not Debian's default 14: the renderer captures structured bindings in lambdas (C++20),
 # which clang supports from version 16.
@@ -18,12 +20,13 @@ scripts/install-deps.sh clang-16 libclang-rt-16-dev assimp-testmodels
 build=build-fuzz
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-16 \
   -DDELTAGI_FUZZ=ON -DDELTAGI_BUILD_TESTS=OFF -DDELTAGI_BUILD_BENCHMARKS=OFF
-cmake --build "$build" -j2 --target fuzz_scene_reader fuzz_mesh_loader
+cmake --build "$build" -j2 --target fuzz_scene_reader fuzz_mesh_loader fuzz_live_session
 
 # Seeds, rebuilt each run (the corpus folders keep what the fuzzer found).
 seeds="$build/seeds"
 rm -rf "$seeds"
-mkdir -p "$seeds/scene" "$seeds/mesh" "$build/corpus-scene" "$build/corpus-mesh" "$build/findings"
+mkdir -p "$seeds/scene" "$seeds/mesh" "$seeds/live" "$build/corpus-scene" "$build/corpus-mesh" \
+  "$build/corpus-live" "$build/findings"
 for f in examples/*.json tests/bad-inputs/*.json ../shared/data/scenes/*.json; do
   [ -f "$f" ] && [ "$(stat -c %s "$f")" -le 65536 ] && cp "$f" "$seeds/scene/$(echo "$f" | tr / _)"
 done
@@ -43,15 +46,36 @@ for f in "$models"/OBJ/* "$models"/PLY/* "$models"/OFF/* "$models"/glTF2/*/*/* "
   [ -f "$f" ] && seed_mesh "$f"
 done
 
+n=0
+while IFS= read -r message; do
+  n=$((n + 1))
+  printf '%s' "$message" > "$seeds/live/message-$n.json"
+done <<'MESSAGES'
+{"type": "drag", "object": 0, "x": 32.5, "y": 30, "seq": 1}
+{"type": "rotate", "object": 1, "degrees": -15}
+{"type": "select", "object": 1}
+{"type": "light", "light": 0, "position": [0.5, 1.4, 0.5], "intensity": 2}
+{"type": "light", "light": 1, "intensity": 0.5}
+{"type": "options", "values": {"volume.resolution": 32, "diffuse.count": 4, "diffuse.pixel_stride": "auto"}}
+{"type": "options", "values": {"shadow.ray_samples": 9, "render.samples_per_pixel": 1}}
+{"type": "view", "view": "depth"}
+{"type": "ping"}
+MESSAGES
+
 status=0
-for target in scene mesh; do
-  binary="$build/fuzz/fuzz_${target}_$([ $target = scene ] && echo reader || echo loader)"
+for target in scene mesh live; do
+  case $target in
+    scene) binary="$build/fuzz/fuzz_scene_reader" ;;
+    mesh) binary="$build/fuzz/fuzz_mesh_loader" ;;
+    live) binary="$build/fuzz/fuzz_live_session" ;;
+  esac
   log="$build/fuzz-$target.log"
   echo "== fuzz_$target: $budget s, $(ls "$seeds/$target" | wc -l) seeds"
   # Inputs that are slow (20 s) or need more than 4 GB are findings too; TBB and Assimp keep caches alive
   # at exit, so leaks are not reported.
   dict=()
   [ $target = scene ] && dict=(-dict=fuzz/scene.dict)  # the format's keys and values
+  [ $target = live ] && dict=(-dict=fuzz/live_session.dict)
   set +e
   # One child process at a time (-fork=1) that is restarted after a finding, so that one run collects all.
   ASAN_OPTIONS=detect_leaks=0 "$binary" -fork=1 -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1 \

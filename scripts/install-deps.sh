@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs every build and test dependency of deltagi from Debian 12 packages (run as root), and the packages
-# named as arguments (scripts/fuzz.sh adds its own); apt-get runs only when one of them is missing.
+# named as arguments (scripts/fuzz.sh adds its own); apt-get runs only when one of them is missing. Then the
+# browser test's one npm package (tests/web: playwright-core, at the version of its package-lock.json; it
+# drives Debian's chromium and downloads no browser).
 #   scripts/install-deps.sh [PACKAGE ...]
 set -euo pipefail
 packages=(
@@ -11,8 +13,14 @@ packages=(
   libgtest-dev libgmock-dev libbenchmark-dev
   pybind11-dev python3-dev python3-numpy python3-pytest
   jq
+  libcivetweb-dev chromium
   "$@"
 )
+# Node.js: Debian's nodejs and npm, unless a node with npm is there already (NodeSource's nodejs package holds
+# npm and conflicts with Debian's).
+if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
+  packages+=(nodejs npm)
+fi
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -21,4 +29,13 @@ if [ ${#missing[@]} -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   apt-get update
   apt-get install -y --no-install-recommends "${missing[@]}"
+fi
+
+# playwright-core for the browser test (tests/web/live_session.mjs), when it is not installed at the locked
+# version already.
+web="$(cd "$(dirname "$0")/../tests/web" && pwd)"
+if command -v node >/dev/null 2>&1 && command -v npm >/dev/null 2>&1 &&
+   [ "$(node -p "try { require('$web/node_modules/playwright-core/package.json').version } catch { '' }")" != \
+     "$(node -p "require('$web/package-lock.json').packages['node_modules/playwright-core'].version")" ]; then
+  PLAYWRIGHT_SKIP_BROWSER_DOWNLOAD=1 npm ci --prefix "$web" --no-audit --no-fund
 fi

@@ -14,6 +14,7 @@
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/image.h"
+#include "image_encode.h"
 
 namespace deltagi {
 
@@ -170,6 +171,10 @@ std::vector<uint8_t> encodeSrgb8(const Image& image) {
         bytes[i] = static_cast<uint8_t>(std::lround(encoded * 255.0f));
     }
     return bytes;
+}
+
+float linearToSrgbValue(float linear) {
+    return linearToSrgb(linear);
 }
 
 namespace {

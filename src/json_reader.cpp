@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <regex>
 #include <unordered_set>
 #include <vector>
 
@@ -85,11 +84,13 @@ class StrictJsonSax {
                                          token.substr(0, kMaxTokenChars)));
         }
         // nlohmann's message reads "[json.exception.parse_error.101] parse error at line 3, column 5:
-        // <what>".
-        static const std::regex kPosition(R"(at line \d+, column \d+: (.*))");
-        std::smatch match;
+        // <what>". Found without std::regex, whose matching recurses once per character: a long token in the
+        // message (an unterminated string of megabytes) overflowed the stack.
         std::string message = error.what();
-        if (std::regex_search(message, match, kPosition)) message = match[1].str();
+        if (const size_t line = message.find("at line "); line != std::string::npos)
+            if (const size_t column = message.find(", column ", line); column != std::string::npos)
+                if (const size_t colon = message.find(": ", column); colon != std::string::npos)
+                    message = message.substr(colon + 2);
         throw InputError(at, message);
     }
 

@@ -424,9 +424,11 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
 }
 
 // Appends the mesh files it reads to `files`, and the entries' keyframes to `keyframes->animations`.
+// `entries`, when given, gets each mesh's entry index.
 std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sceneFolder,
                                        std::vector<fs::path>& files, bool movable,
-                                       const KeyframeReader* keyframes = nullptr) {
+                                       const KeyframeReader* keyframes = nullptr,
+                                       std::vector<int>* entries = nullptr) {
     list.requireArray();
     std::vector<TriangleMesh> meshes;
     for (size_t i = 0; i < list.size(); ++i) {
@@ -438,6 +440,7 @@ std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sce
             animation->meshCount = entry.size();
             keyframes->animations.push_back(std::move(*animation));
         }
+        if (entries) entries->insert(entries->end(), entry.size(), static_cast<int>(i));
         std::move(entry.begin(), entry.end(), std::back_inserter(meshes));
     }
     return meshes;
@@ -599,7 +602,8 @@ Scene loadScene(const json& document, const fs::path& file) {
     if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder, scene.meshFiles, false);
     if (auto n = root.find("virtual")) {
         const KeyframeReader keyframes{scene, scene.animations};
-        scene.virtuals = readMeshList(*n, sceneFolder, scene.meshFiles, true, &keyframes);
+        scene.virtuals =
+            readMeshList(*n, sceneFolder, scene.meshFiles, true, &keyframes, &scene.virtualEntries);
     }
     // Moving objects: placed for the first frame, in a volume region that holds them in every frame.
     if (!scene.animations.empty()) {

@@ -1,8 +1,11 @@
 // The `deltagi` command end to end: bad input gives one `deltagi: error:` line naming the file and key and a
 // non-zero exit; a tiny scene renders with every AOV; `info --json` is valid JSON; outputs are never inputs,
 // are checked before the work, and survive interruptions whole.
+#include <arpa/inet.h>
 #include <fcntl.h>
+#include <netinet/in.h>
 #include <spawn.h>
+#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -317,6 +320,28 @@ TEST_F(CliTest, BenchBadInput) {
     expectOneErrorLine(run("bench " + quote(writeScene(tinyScene()).string()) + " --json " +
                            quote((dir_ / "no-such-folder" / "b.json").string())),
                        {"b.json"});
+}
+
+// `deltagi serve`'s bad input ends before it listens, like any command's; a port in use is one line too.
+TEST_F(CliTest, ServeBadInput) {
+    json scene = tinyScene();
+    scene["camera"]["width"] = -3;
+    expectOneErrorLine(run("serve " + quote(writeScene(scene).string()) + " --port 0"),
+                       {"scene.json", "width"});
+    expectOneErrorLine(run("serve " + quote((dir_ / "none.json").string())), {"none.json"});
+    const int busy = ::socket(AF_INET, SOCK_STREAM, 0);
+    ASSERT_GE(busy, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    socklen_t length = sizeof(address);
+    ASSERT_EQ(::bind(busy, reinterpret_cast<sockaddr*>(&address), sizeof(address)), 0);
+    ASSERT_EQ(::listen(busy, 1), 0);
+    ASSERT_EQ(::getsockname(busy, reinterpret_cast<sockaddr*>(&address), &length), 0);
+    const CliResult result = run("serve " + quote(writeScene(tinyScene()).string()) + " --port " +
+                                 std::to_string(ntohs(address.sin_port)));
+    ::close(busy);
+    expectOneErrorLine(result, {"cannot listen", "--port 0"});
 }
 
 // ---- reference, compare, eval ----

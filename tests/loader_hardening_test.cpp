@@ -54,6 +54,16 @@ TEST(ParseJsonTest, NestingIsBoundedAndTheMessageStaysShort) {
     EXPECT_LT(deep.size(), 200u) << deep;
 }
 
+// A syntax error after a long token: the message was taken apart with std::regex, whose matching recursed
+// once per character of the token and overflowed the stack (found by `deltagi serve` on a small thread
+// stack).
+TEST(ParseJsonTest, ASyntaxErrorAfterALongTokenIsOneMessage) {
+    const std::string text = "{\"a\": \"" + std::string(2000000, 'x');  // a string that never ends
+    const std::string message = inputErrorOf([&] { parseJson(text, "f.json"); });
+    expectContains(message, {"f.json: line 1, column ", "syntax error while parsing value"});
+    EXPECT_EQ(message.find("[json.exception"), std::string::npos) << message.substr(0, 200);
+}
+
 TEST(ParseJsonTest, NumbersBeyondADoubleNameTheLineAndTheKey) {
     expectContains(inputErrorOf([] { parseJson("{\"a\": {\"b\": [0,\n 1, 1e999]}}", "f.json"); }),
                    {"f.json: line 2, column ", "a.b[2]: the number 1e999 is out of range"});

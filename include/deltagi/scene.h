@@ -166,6 +166,9 @@ struct Scene {
     std::vector<std::filesystem::path> meshFiles;
     std::vector<TriangleMesh> real;      // "scene": the reconstruction of the real scene
     std::vector<TriangleMesh> virtuals;  // "virtual": the virtual objects
+    // For each of `virtuals`, its entry in the scene file's "virtual" list (a file entry may hold several
+    // meshes, which share its "transform"); filled by loadScene, may be empty for scenes built in code.
+    std::vector<int> virtualEntries;
     std::vector<Light> lights;           // the scene file's lights, then those extracted from the environment
     std::optional<Environment> environment;  // "environment": the light probe
     Options options;

@@ -1,0 +1,568 @@
+// `deltagi serve`: the web server, the render thread and the clients' senders (serve_command.h).
+//
+// Threads: civetweb's workers answer HTTP requests and read each WebSocket's messages, which go to the
+// session's handler under `sessionMutex`; one render thread owns the renderers and their scenes, copies the
+// session's scene when it changed, renders, encodes the view as a JPEG and hands it to every client; each
+// client has a sender thread that writes its replies, the latest state and the latest frame (a frame not
+// yet sent when a newer one comes is dropped: no queue grows when a browser is slower than the renderer).
+#include "serve_command.h"
+
+#include <civetweb.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <cstdio>
+#include <cstring>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+
+#include <fmt/core.h>
+#include <tbb/global_control.h>
+#include <nlohmann/json.hpp>
+
+#include "deltagi/error.h"
+#include "deltagi/renderer.h"
+#include "deltagi/scene_io.h"
+#include "live_session.h"
+#include "web_assets.h"
+
+namespace deltagi::cli {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using live::Session;
+using live::View;
+using nlohmann::json;
+
+// A frame after the last change waits this long before the idle refinement starts, so that a pause between
+// two mouse moves does not start a full-quality frame that the next move has to wait for.
+constexpr auto kRefineDelay = std::chrono::milliseconds(150);
+constexpr size_t kMaxClients = 32;
+constexpr size_t kMaxQueuedReplies = 32;
+constexpr size_t kMaxWaitingMessages = 256;
+
+struct Frame {
+    uint64_t number = 0;
+    std::string info;  // JSON text, sent before the picture
+    std::string jpeg;
+};
+
+class Client {
+  public:
+    Client(mg_connection* connection, int id) : connection_(connection), id_(id) {
+        sender_ = std::thread([this] { send(); });
+    }
+    ~Client() { close(); }
+    int id() const { return id_; }
+
+    void reply(std::string text) {
+        std::lock_guard lock(mutex_);
+        if (replies_.size() >= kMaxQueuedReplies) replies_.pop_front();
+        replies_.push_back(std::move(text));
+        wake_.notify_one();
+    }
+    void state(std::shared_ptr<const std::string> state) {
+        std::lock_guard lock(mutex_);
+        state_ = std::move(state);
+        wake_.notify_one();
+    }
+    void frame(std::shared_ptr<const Frame> frame) {
+        std::lock_guard lock(mutex_);
+        frame_ = std::move(frame);
+        wake_.notify_one();
+    }
+    // Stops the sender; civetweb frees the connection only after its close handler returns.
+    void close() {
+        {
+            std::lock_guard lock(mutex_);
+            closed_ = true;
+            wake_.notify_one();
+        }
+        if (sender_.joinable()) sender_.join();
+    }
+
+  private:
+    void send() {
+        uint64_t sent = 0;
+        for (;;) {
+            std::deque<std::string> replies;
+            std::shared_ptr<const std::string> state;
+            std::shared_ptr<const Frame> frame;
+            {
+                std::unique_lock lock(mutex_);
+                wake_.wait(lock, [&] {
+                    return closed_ || !replies_.empty() || state_ || (frame_ && frame_->number != sent);
+                });
+                if (closed_) return;
+                replies.swap(replies_);
+                state.swap(state_);
+                if (frame_ && frame_->number != sent) frame = frame_;
+            }
+            bool ok = true;
+            for (const std::string& text : replies) ok = ok && write(MG_WEBSOCKET_OPCODE_TEXT, text);
+            if (state) ok = ok && write(MG_WEBSOCKET_OPCODE_TEXT, *state);
+            if (frame) {
+                ok = ok && write(MG_WEBSOCKET_OPCODE_TEXT, frame->info) &&
+                     write(MG_WEBSOCKET_OPCODE_BINARY, frame->jpeg);
+                sent = frame->number;
+            }
+            if (!ok) {  // the browser went away: wait for the close handler
+                std::unique_lock lock(mutex_);
+                wake_.wait(lock, [&] { return closed_; });
+                return;
+            }
+        }
+    }
+    bool write(int opcode, const std::string& data) {
+        return mg_websocket_write(connection_, opcode, data.data(), data.size()) > 0;
+    }
+
+    mg_connection* connection_;
+    int id_;
+    std::mutex mutex_;
+    std::condition_variable wake_;
+    std::deque<std::string> replies_;
+    std::shared_ptr<const std::string> state_;
+    std::shared_ptr<const Frame> frame_;
+    bool closed_ = false;
+    std::thread sender_;
+};
+
+bool isLoopback(const std::string& host) {
+    return host == "127.0.0.1" || host == "localhost" || host == "::1" || host == "[::1]";
+}
+
+class Server {
+  public:
+    Server(const ServeArgs& args) : args_(args), session_(args.scene, args.overrides) {}
+
+    int run();
+
+    // civetweb's callbacks
+    int onRequest(mg_connection* connection);
+    bool acceptWebSocket(const mg_connection* connection);
+    void onReady(mg_connection* connection);
+    void onMessage(mg_connection* connection, int opcode, const char* data, size_t size);
+    void onClose(const mg_connection* connection);
+    std::string lastLog;
+
+  private:
+    void renderLoop();
+    void handleMessages();
+    void publishState();
+    bool hostAllowed(const mg_connection* connection) const;
+
+    ServeArgs args_;
+    std::mutex sessionMutex_;  // the session and the fields below it
+    std::condition_variable changed_;
+    Session session_;
+    bool stop_ = false;
+    std::shared_ptr<const Frame> latestFrame_;
+    std::shared_ptr<const Image> latestComposite_;
+    bool latestRefined_ = false;
+
+    // Messages wait here for the handler thread: civetweb's threads have a small stack, and a message is
+    // parsed and checked on a thread of this program's own.
+    struct Incoming {
+        std::shared_ptr<Client> client;
+        std::string text;
+    };
+    std::mutex inboxMutex_;
+    std::condition_variable inboxWake_;
+    std::deque<Incoming> inbox_;
+    bool stopHandler_ = false;
+
+    std::mutex clientsMutex_;
+    std::map<const mg_connection*, std::shared_ptr<Client>> clients_;
+    int nextClient_ = 1;
+    int port_ = 0;
+};
+
+// The Host header names this server (a page of another site reaching the loopback server through a DNS name
+// that points to 127.0.0.1 does not), and a WebSocket's Origin, when given, is this server's page.
+bool Server::hostAllowed(const mg_connection* connection) const {
+    if (!isLoopback(args_.host)) return true;  // bound elsewhere on purpose (the warning says so)
+    const char* host = mg_get_header(connection, "Host");
+    if (!host) return false;
+    const std::string h(host);
+    bool ok = false;
+    for (const char* name : {"127.0.0.1", "localhost", "[::1]"})
+        if (h == name || h == fmt::format("{}:{}", name, port_)) ok = true;
+    if (!ok) return false;
+    const char* origin = mg_get_header(connection, "Origin");
+    return !origin || std::string(origin) == "http://" + h;
+}
+
+void respond(mg_connection* connection, int status, const char* statusText, const char* type,
+             const std::string& body, const char* extraHeaders = "") {
+    mg_printf(connection,
+              "HTTP/1.1 %d %s\r\nContent-Type: %s\r\nContent-Length: %zu\r\nCache-Control: no-store\r\n"
+              "X-Content-Type-Options: nosniff\r\n%sConnection: close\r\n\r\n",
+              status, statusText, type, body.size(), extraHeaders);
+    mg_write(connection, body.data(), body.size());
+}
+
+const char* contentType(const std::string& name) {
+    if (name.ends_with(".html")) return "text/html; charset=utf-8";
+    if (name.ends_with(".js")) return "text/javascript; charset=utf-8";
+    if (name.ends_with(".css")) return "text/css; charset=utf-8";
+    return "application/octet-stream";
+}
+
+// Only the page's own files and two generated downloads; no name from a request reaches the file system.
+int Server::onRequest(mg_connection* connection) {
+    const mg_request_info* request = mg_get_request_info(connection);
+    const std::string uri = request->local_uri ? request->local_uri : "";
+    const std::string method = request->request_method ? request->request_method : "";
+    if (!hostAllowed(connection)) {
+        respond(connection, 403, "Forbidden", "text/plain", "deltagi serve: unexpected Host or Origin\n");
+        return 403;
+    }
+    if (method != "GET" && method != "HEAD") {
+        respond(connection, 405, "Method Not Allowed", "text/plain", "GET only\n");
+        return 405;
+    }
+    const std::string name = uri == "/" ? "index.html" : uri.substr(1);
+    for (const assets::Asset& asset : assets::kAssets)
+        if (name == asset.name) {
+            respond(connection, 200, "OK", contentType(name),
+                    std::string(reinterpret_cast<const char*>(asset.data), asset.size));
+            return 200;
+        }
+    if (name == "scene.json") {
+        std::string text;
+        {
+            std::lock_guard lock(sessionMutex_);
+            text = session_.document().dump(2) + "\n";
+        }
+        respond(connection, 200, "OK", "application/json", text,
+                "Content-Disposition: attachment; filename=\"scene.json\"\r\n");
+        return 200;
+    }
+    if (name == "image.png") {
+        std::shared_ptr<const Image> composite;
+        bool refined = false;
+        {
+            std::lock_guard lock(sessionMutex_);
+            composite = latestComposite_;
+            refined = latestRefined_;
+        }
+        if (!composite) {
+            respond(connection, 503, "Service Unavailable", "text/plain", "no frame yet\n");
+            return 503;
+        }
+        try {
+            respond(
+                connection, 200, "OK", "image/png", live::encodePng(*composite),
+                refined
+                    ? "Content-Disposition: attachment; filename=\"image.png\"\r\nX-Deltagi-Refined: 1\r\n"
+                    : "Content-Disposition: attachment; filename=\"image.png\"\r\nX-Deltagi-Refined: 0\r\n");
+        } catch (const std::exception& e) {
+            respond(connection, 500, "Internal Server Error", "text/plain", std::string(e.what()) + "\n");
+        }
+        return 200;
+    }
+    respond(connection, 404, "Not Found", "text/plain", "not found\n");
+    return 404;
+}
+
+bool Server::acceptWebSocket(const mg_connection* connection) {
+    if (!hostAllowed(connection)) return false;
+    std::lock_guard lock(clientsMutex_);
+    return clients_.size() < kMaxClients;
+}
+
+void Server::onReady(mg_connection* connection) {
+    std::shared_ptr<Client> client;
+    {
+        std::lock_guard lock(clientsMutex_);
+        client = std::make_shared<Client>(connection, nextClient_++);
+        clients_[connection] = client;
+    }
+    json hello = {{"type", "hello"}, {"client", client->id()}};
+    client->reply(hello.dump());
+    std::lock_guard lock(sessionMutex_);
+    client->state(std::make_shared<const std::string>(session_.state().dump()));
+    if (latestFrame_) client->frame(latestFrame_);
+}
+
+void Server::onMessage(mg_connection* connection, int opcode, const char* data, size_t size) {
+    std::shared_ptr<Client> client;
+    {
+        std::lock_guard lock(clientsMutex_);
+        auto it = clients_.find(connection);
+        if (it == clients_.end()) return;
+        client = it->second;
+    }
+    if (opcode != MG_WEBSOCKET_OPCODE_TEXT) {
+        client->reply(json{{"type", "error"}, {"message", "message: expected a JSON text message"}}.dump());
+        return;
+    }
+    if (size > live::kMaxMessageBytes) {  // refused as the handler refuses it, without a copy
+        client->reply(
+            json{{"type", "error"},
+                 {"message", fmt::format("message: {} bytes, more than {}", size, live::kMaxMessageBytes)}}
+                .dump());
+        return;
+    }
+    std::lock_guard lock(inboxMutex_);
+    if (inbox_.size() >= kMaxWaitingMessages) {
+        client->reply(
+            json{{"type", "error"}, {"message", "message: too many messages waiting; dropped"}}.dump());
+        return;
+    }
+    inbox_.push_back({client, std::string(data, size)});
+    inboxWake_.notify_one();
+}
+
+void Server::handleMessages() {
+    for (;;) {
+        Incoming message;
+        {
+            std::unique_lock lock(inboxMutex_);
+            inboxWake_.wait(lock, [&] { return stopHandler_ || !inbox_.empty(); });
+            if (stopHandler_) return;
+            message = std::move(inbox_.front());
+            inbox_.pop_front();
+        }
+        live::MessageResult result;
+        {
+            std::lock_guard lock(sessionMutex_);
+            result = session_.handle(message.text, message.client->id());
+            if (result.changed) changed_.notify_all();
+        }
+        if (!result.reply.is_null()) message.client->reply(result.reply.dump());
+        if (result.changed) publishState();
+    }
+}
+
+void Server::onClose(const mg_connection* connection) {
+    std::shared_ptr<Client> client;
+    {
+        std::lock_guard lock(clientsMutex_);
+        auto it = clients_.find(connection);
+        if (it == clients_.end()) return;
+        client = it->second;
+        clients_.erase(it);
+    }
+    client->close();
+}
+
+void Server::publishState() {
+    std::shared_ptr<const std::string> state;
+    {
+        std::lock_guard lock(sessionMutex_);
+        state = std::make_shared<const std::string>(session_.state().dump());
+    }
+    std::lock_guard lock(clientsMutex_);
+    for (auto& [connection, client] : clients_) client->state(state);
+}
+
+// Interactive frames while the scene changes; once it has not changed for kRefineDelay, one frame with the
+// scene's own options (the image `deltagi render` gives), then nothing until the next change.
+void Server::renderLoop() {
+    Scene interactive, full;
+    FrameRenderer interactiveFrames, fullFrames;
+    uint64_t interactiveVersion = 0, interactiveStructure = 0, fullStructure = 0;
+    bool refined = true;  // nothing to refine before the first frame
+    Clock::time_point lastChange = Clock::now();
+    uint64_t frameNumber = 0;
+    bool layers = false;
+    for (;;) {
+        bool refining = false, sameOptions = false;
+        View view;
+        int client = 0;
+        int64_t seq = 0;
+        uint64_t version = 0;
+        {
+            std::unique_lock lock(sessionMutex_);
+            for (;;) {
+                if (stop_) return;
+                if (session_.version() != interactiveVersion) break;
+                if (!refined) {
+                    if (Clock::now() >= lastChange + kRefineDelay) break;
+                    changed_.wait_until(lock, lastChange + kRefineDelay);
+                    continue;
+                }
+                changed_.wait(lock);
+            }
+            const Scene& scene = session_.scene();
+            view = session_.view();
+            layers = live::viewNeedsLayers(view);
+            client = session_.lastInputClient();
+            seq = session_.lastInputSeq();
+            version = session_.version();
+            Options wanted = live::interactiveOptions(scene.options, scene.camera.width, scene.camera.height,
+                                                      scene.lights.size());
+            wanted.render.layers = layers;
+            Options own = scene.options;
+            own.render.layers = layers;
+            sameOptions = optionsToJson(wanted) == optionsToJson(own);
+            if (session_.version() != interactiveVersion) {
+                if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
+                    interactive = scene;
+                    interactive.options = wanted;
+                    interactiveStructure = session_.structureVersion();
+                } else {
+                    interactive.virtuals = scene.virtuals;
+                }
+                interactiveVersion = session_.version();
+                lastChange = Clock::now();
+                refined = sameOptions;
+            } else {
+                refining = true;
+                if (session_.structureVersion() != fullStructure || fullStructure == 0) {
+                    full = scene;
+                    full.options = own;
+                    fullStructure = session_.structureVersion();
+                } else {
+                    full.virtuals = scene.virtuals;
+                }
+            }
+        }
+        try {
+            RenderOutput out = refining ? fullFrames.render(full) : interactiveFrames.render(interactive);
+            const auto encodeStart = Clock::now();
+            auto frame = std::make_shared<Frame>();
+            frame->number = ++frameNumber;
+            frame->jpeg = live::encodeJpeg(live::viewPixels(out, view), out.composite.width(),
+                                           out.composite.height(), args_.jpegQuality);
+            const double encodeMs =
+                std::chrono::duration<double, std::milli>(Clock::now() - encodeStart).count();
+            json info = {{"type", "frame"},
+                         {"number", frame->number},
+                         {"version", version},
+                         {"view", live::viewName(view)},
+                         {"refined", refining || sameOptions},
+                         {"client", client},
+                         {"seq", seq},
+                         {"timings", live::timingsJson(out)},
+                         {"encode_ms", std::round(encodeMs * 100.0) / 100.0},
+                         {"bytes", frame->jpeg.size()}};
+            frame->info = info.dump();
+            auto composite = std::make_shared<const Image>(std::move(out.composite));
+            {
+                std::lock_guard lock(sessionMutex_);
+                latestFrame_ = frame;
+                latestComposite_ = std::move(composite);
+                latestRefined_ = (refining || sameOptions) && session_.version() == version;
+            }
+            std::lock_guard lock(clientsMutex_);
+            for (auto& [connection, c] : clients_) c->frame(frame);
+        } catch (const std::exception& e) {
+            // A frame that cannot be rendered (the memory for the volumes, a bad state): every client is
+            // told, and the session waits for the next change.
+            const std::string text =
+                json{{"type", "error"}, {"message", fmt::format("frame: {}", e.what())}}.dump();
+            interactiveFrames.clear();
+            fullFrames.clear();
+            std::lock_guard lock(clientsMutex_);
+            for (auto& [connection, c] : clients_) c->reply(text);
+        }
+        if (refining) refined = true;
+    }
+}
+
+int Server::run() {
+    for (const std::string& warning : session_.scene().warnings)
+        fmt::print(stderr, "deltagi: warning: {}\n", warning);
+    if (!isLoopback(args_.host))
+        fmt::print(stderr,
+                   "deltagi: warning: listening on {}: anyone who can reach this machine there can watch and "
+                   "change the session (the default, 127.0.0.1, is this machine only)\n",
+                   args_.host);
+    // civetweb's form: 127.0.0.1:8080, [::1]:8080
+    const std::string address = args_.host == "localhost" ? "127.0.0.1" : args_.host;
+    const std::string ports = address.find(':') != std::string::npos
+                                  ? fmt::format("[{}]:{}", address, args_.port)
+                                  : fmt::format("{}:{}", address, args_.port);
+    mg_init_library(MG_FEATURES_WEBSOCKET);
+    mg_callbacks callbacks{};
+    callbacks.log_message = [](const mg_connection* connection, const char* message) {
+        auto* self = static_cast<Server*>(mg_get_user_data(mg_get_context(connection)));
+        if (self) self->lastLog = message;
+        return 1;
+    };
+    const char* options[] = {
+        "listening_ports", ports.c_str(),        "num_threads", "40",   "websocket_timeout_ms",
+        "3600000",         "request_timeout_ms", "10000",       nullptr};
+    mg_context* context = mg_start(&callbacks, this, options);
+    if (!context) {
+        mg_exit_library();
+        throw InputError(fmt::format("serve: {}", ports),
+                         fmt::format("cannot listen{} (is the port in use? --port 0 takes any free one)",
+                                     lastLog.empty() ? "" : ": " + lastLog));
+    }
+    mg_server_port listening[4]{};
+    const int count = mg_get_server_ports(context, 4, listening);
+    port_ = count > 0 ? listening[0].port : args_.port;
+    mg_set_request_handler(
+        context, "/", [](mg_connection* c, void* self) { return static_cast<Server*>(self)->onRequest(c); },
+        this);
+    mg_set_websocket_handler(
+        context, "/ws",
+        [](const mg_connection* c, void* self) {
+            return static_cast<Server*>(self)->acceptWebSocket(c) ? 0 : 1;
+        },
+        [](mg_connection* c, void* self) { static_cast<Server*>(self)->onReady(c); },
+        [](mg_connection* c, int bits, char* data, size_t size, void* self) {
+            const int opcode = bits & 0xf;
+            if (opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
+            if (opcode == MG_WEBSOCKET_OPCODE_PING || opcode == MG_WEBSOCKET_OPCODE_PONG) return 1;
+            static_cast<Server*>(self)->onMessage(c, opcode, data, size);
+            return 1;
+        },
+        [](const mg_connection* c, void* self) { static_cast<Server*>(self)->onClose(c); }, this);
+
+    std::thread handler([this] { handleMessages(); });
+    std::thread renderer([this] { renderLoop(); });
+    const std::string shown = args_.host.find(':') != std::string::npos ? "[" + args_.host + "]" : args_.host;
+    fmt::print("deltagi serve: http://{}:{}/ ({}; Ctrl-C stops)\n", shown, port_, args_.scene.string());
+    std::fflush(stdout);
+    renderer.join();  // runs until SIGINT or SIGTERM ends the process (cli/outputs.cpp)
+    {
+        std::lock_guard lock(inboxMutex_);
+        stopHandler_ = true;
+        inboxWake_.notify_all();
+    }
+    handler.join();
+    mg_stop(context);
+    mg_exit_library();
+    return 0;
+}
+
+}  // namespace
+
+CLI::App* addServeCommand(CLI::App& app, ServeArgs& args, int maxThreads) {
+    CLI::App* command = app.add_subcommand(
+        "serve", "A live session in the browser: drag the virtual objects over the real scene (README)");
+    command->add_option("scene", args.scene, "Scene file (JSON, see docs/scene-format.md)")->required();
+    command->add_option("--port", args.port, "TCP port (default 8080; 0: any free port, printed)")
+        ->check(CLI::Range(0, 65535));
+    command->add_option(
+        "--host", args.host,
+        "Address to listen on (default 127.0.0.1: this machine only; say 0.0.0.0 to let others "
+        "in, with a warning)");
+    command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
+    command->add_option("--threads", args.threads, "Worker threads (default: all cores)")
+        ->check(CLI::Range(1, maxThreads));
+    command->add_option("--jpeg-quality", args.jpegQuality, "Quality of the streamed frames (default 85)")
+        ->check(CLI::Range(1, 100));
+    return command;
+}
+
+int runServe(const ServeArgs& args) {
+    std::optional<tbb::global_control> threadLimit;
+    if (args.threads > 0) threadLimit.emplace(tbb::global_control::max_allowed_parallelism, args.threads);
+    Server server(args);
+    return server.run();
+}
+
+}  // namespace deltagi::cli

@@ -1,0 +1,293 @@
+// The live session's page (`deltagi serve`): shows the frames the server streams over a WebSocket and sends
+// it the user's changes as JSON messages (src/live_session.h lists them). window.deltagi holds what the
+// browser test reads: the frames shown, their infos, the input-to-frame latencies.
+'use strict';
+
+const $ = (id) => document.getElementById(id);
+const canvas = $('frame');
+const context = canvas.getContext('2d');
+const live = (window.deltagi = {
+  client: 0,
+  state: null,
+  frames: 0,          // frames drawn
+  lastInfo: null,     // the info of the last frame drawn
+  shownTimes: [],     // performance.now() of each frame drawn
+  latencies: [],      // per mouse event of a drag: ms to the first frame drawn that shows it
+  drawn: [],          // per frame drawn: [performance.now(), frame ms, refined, stages, JPEG ms]
+  errors: [],
+});
+let socket = null;
+let seq = 0;
+let pendingInfo = null;   // the info that came before the next picture
+let newestDrawn = 0;      // frame numbers arrive in order; decoding may not finish in order
+// Drag messages sent whose frame has not come yet: {seq, inputs, sentAt}, `inputs` the times of the mouse
+// events it carries. Each mouse move goes out at once: the server renders the newest position when it starts a
+// frame (it never queues frames). Past kMaxInFlight (a server that stopped answering) moves wait, coalesced.
+const kMaxInFlight = 30;
+let inFlight = [];
+let queuedDrag = null;    // the newest cursor position not yet sent: {x, y, inputs}
+let awaiting = [];        // drags whose frame info came, whose picture is not yet drawn
+let dragging = null;      // {mouse: [x, y], anchor: [x, y]}
+const history = [];       // the last frames' timings, for the chart
+const stageColours = ['#e6194b', '#3cb44b', '#ffe119', '#4363d8', '#f58231', '#911eb4', '#46f0f0', '#f032e6',
+  '#bcf60c', '#fabebe', '#008080', '#e6beff', '#9a6324', '#fffac8', '#800000', '#aaffc3'];
+
+function status(text) { $('status').textContent = text; }
+function showError(text) {
+  live.errors.push(text);
+  $('error').textContent = text;
+}
+function send(message) {
+  if (socket && socket.readyState === WebSocket.OPEN) socket.send(JSON.stringify(message));
+}
+
+function connect() {
+  socket = new WebSocket(`ws://${location.host}/ws`);
+  socket.binaryType = 'blob';
+  socket.onopen = () => status('connected');
+  socket.onclose = () => {
+    status('disconnected; trying again');
+    inFlight = [];
+    setTimeout(connect, 1000);
+  };
+  socket.onmessage = (event) => {
+    if (typeof event.data !== 'string') {
+      const info = pendingInfo;
+      pendingInfo = null;
+      if (info) draw(event.data, info);
+      return;
+    }
+    const message = JSON.parse(event.data);
+    if (message.type === 'hello') live.client = message.client;
+    else if (message.type === 'state') applyState(message);
+    else if (message.type === 'error') {
+      showError(message.message);
+      inFlight = [];  // a refused drag gets no frame
+      flushDrag();
+    } else if (message.type === 'frame') {
+      pendingInfo = message;
+      if (message.client === live.client) {
+        for (const drag of inFlight.filter((d) => d.seq <= message.seq)) awaiting.push({ ...drag, number: message.number });
+        inFlight = inFlight.filter((d) => d.seq > message.seq);
+        flushDrag();  // the next position goes out while this picture decodes
+      }
+    }
+  };
+}
+
+async function draw(blob, info) {
+  const bitmap = await createImageBitmap(blob);
+  if (info.number < newestDrawn) return;
+  newestDrawn = info.number;
+  if (canvas.width !== bitmap.width || canvas.height !== bitmap.height) {
+    canvas.width = bitmap.width;
+    canvas.height = bitmap.height;
+  }
+  context.drawImage(bitmap, 0, 0);
+  bitmap.close();
+  const now = performance.now();
+  live.frames += 1;
+  live.lastInfo = info;
+  live.shownTimes.push(now);
+  live.drawn.push([now, info.timings.total_ms, info.refined, info.timings.stages, info.encode_ms]);
+  if (live.shownTimes.length > 10000) live.shownTimes.splice(0, 5000);
+  if (live.drawn.length > 10000) live.drawn.splice(0, 5000);
+  awaiting = awaiting.filter((drag) => {
+    if (drag.number > info.number) return true;
+    for (const t of drag.inputs) live.latencies.push(now - t);
+    return false;
+  });
+  $('scale').hidden = !['delta', 'shadow', 'indirect'].includes(info.view);
+  showTimings(info, now);
+}
+
+function median(values) {
+  if (!values.length) return NaN;
+  const sorted = [...values].sort((a, b) => a - b);
+  return sorted[Math.floor(sorted.length / 2)];
+}
+
+function showTimings(info, now) {
+  const recent = live.shownTimes.filter((t) => t > now - 1000).length;
+  const latency = median(live.latencies.slice(-30));
+  $('frame-time').textContent =
+    `${info.refined ? 'refined: the deltagi render image' : 'interactive settings'} · ` +
+    `frame ${info.timings.total_ms.toFixed(1)} ms + JPEG ${info.encode_ms.toFixed(1)} ms · ` +
+    `${recent} frames shown in the last second` +
+    (Number.isFinite(latency) ? ` · input to frame ${latency.toFixed(0)} ms (median of the last 30)` : '');
+  history.push(info.timings.stages);
+  if (history.length > 60) history.shift();
+  const chart = $('chart');
+  const g = chart.getContext('2d');
+  g.clearRect(0, 0, chart.width, chart.height);
+  const totals = history.map((stages) => stages.reduce((sum, [, ms]) => sum + ms, 0));
+  // Scaled to the slowest frame but the few slowest (a cold frame after a light or an option change is clipped).
+  const full = Math.max(50, [...totals].sort((x, y) => x - y)[Math.floor(0.9 * (totals.length - 1))]);
+  const scale = (chart.height - 12) / full;
+  const names = [];
+  for (const stages of history) for (const [name] of stages) if (!names.includes(name)) names.push(name);
+  const width = chart.width / 60;
+  history.forEach((stages, i) => {
+    let y = chart.height;
+    for (const [name, ms] of stages) {
+      const h = ms * scale;
+      g.fillStyle = stageColours[names.indexOf(name) % stageColours.length];
+      g.fillRect(i * width, y - h, width - 1, h);
+      y -= h;
+    }
+  });
+  g.fillStyle = '#aaa';
+  g.font = '10px sans-serif';
+  g.fillText(`${full.toFixed(0)} ms`, 2, 10);
+  const legend = $('chart-legend');
+  legend.replaceChildren(...info.timings.stages.filter(([, ms]) => ms >= 0.05).map(([name, ms]) => {
+    const span = document.createElement('span');
+    const swatch = document.createElement('i');
+    swatch.style.background = stageColours[names.indexOf(name) % stageColours.length];
+    span.append(swatch, `${name} ${ms.toFixed(1)}`);
+    return span;
+  }));
+}
+
+function setOptions(select, values, current) {
+  const wanted = values.map(String);
+  if ([...select.options].map((o) => o.value).join() !== wanted.join())
+    select.replaceChildren(...values.map((v, i) => new Option(v, String(i))));
+  select.value = String(current);
+}
+
+function rangeFor(input, lo, hi) {
+  input.min = String(lo);
+  input.max = String(hi);
+}
+
+function applyState(state) {
+  const first = !live.state;
+  live.state = state;
+  $('scene-name').textContent = state.scene;
+  setOptions($('object'), state.objects.map((o) => o.name), state.selected);
+  document.querySelector(`input[name=view][value=${state.view}]`).checked = true;
+  const lightSelect = $('light');
+  const lightIndex = Math.min(Number(lightSelect.value) || 0, Math.max(0, state.lights.length - 1));
+  setOptions(lightSelect, state.lights.map((l) => l.name), lightIndex);
+  $('light-controls').hidden = state.lights.length === 0;
+  const light = state.lights[lightIndex];
+  if (light) {
+    const [lo, hi] = state.bounds;
+    ['x', 'y', 'z'].forEach((axis, a) => {
+      const input = $(`light-${axis}`);
+      const margin = 0.25 * (hi[a] - lo[a]);
+      rangeFor(input, Math.min(lo[a] - margin, light.position[a]), Math.max(hi[a] + margin, light.position[a]));
+      input.disabled = light.type === 'directional';
+      if (document.activeElement !== input) input.value = String(light.position[a]);
+      $(`light-${axis}-value`).textContent = light.position[a].toFixed(3);
+    });
+    const intensity = $('light-intensity');
+    if (first || Number(intensity.max) < light.intensity) intensity.max = String(Math.max(1, 2 * light.intensity));
+    if (document.activeElement !== intensity) intensity.value = String(light.intensity);
+    $('light-intensity-value').textContent = light.intensity.toFixed(3);
+  }
+  for (const control of document.querySelectorAll('[data-option]')) {
+    const value = state.options[control.dataset.option];
+    const text = value === 0 || value === null ? 'auto' : String(value);
+    if (control.tagName === 'SELECT' && ![...control.options].some((o) => o.value === text))
+      control.append(new Option(text, text));
+    if (document.activeElement !== control) control.value = text;
+    const output = control.parentElement.querySelector('output');
+    if (output) output.textContent = text;
+  }
+}
+
+// ---- input -----------------------------------------------------------------------------------------------
+
+function imagePoint(event) {
+  const rect = canvas.getBoundingClientRect();
+  return [(event.clientX - rect.left) * (canvas.width / rect.width),
+    (event.clientY - rect.top) * (canvas.height / rect.height)];
+}
+
+function flushDrag() {
+  inFlight = inFlight.filter((d) => performance.now() - d.sentAt < 2000);  // lost: do not stall
+  if (inFlight.length >= kMaxInFlight || !queuedDrag || !live.state) return;
+  seq += 1;
+  send({ type: 'drag', object: live.state.selected, x: queuedDrag.x, y: queuedDrag.y, seq });
+  inFlight.push({ seq, inputs: queuedDrag.inputs, sentAt: performance.now() });
+  queuedDrag = null;
+}
+
+canvas.addEventListener('mousedown', (event) => {
+  if (!live.state || !live.state.objects.length || event.button !== 0) return;
+  const mouse = imagePoint(event);
+  const anchor = live.state.objects[live.state.selected].anchor || mouse;
+  dragging = { mouse, anchor };
+  canvas.classList.add('dragging');
+  canvas.focus();
+  event.preventDefault();
+});
+window.addEventListener('mousemove', (event) => {
+  if (!dragging || !live.state) return;
+  const [mx, my] = imagePoint(event);
+  const x = Math.min(Math.max(dragging.anchor[0] + mx - dragging.mouse[0], 0), live.state.width);
+  const y = Math.min(Math.max(dragging.anchor[1] + my - dragging.mouse[1], 0), live.state.height);
+  queuedDrag = { x, y, inputs: [...(queuedDrag ? queuedDrag.inputs : []), performance.now()] };
+  flushDrag();
+});
+window.addEventListener('mouseup', () => {
+  dragging = null;
+  canvas.classList.remove('dragging');
+});
+setInterval(flushDrag, 100);
+
+function rotate(degrees) {
+  if (!live.state || !live.state.objects.length) return;
+  send({ type: 'rotate', object: live.state.selected, degrees, seq: ++seq });
+}
+canvas.addEventListener('wheel', (event) => {
+  event.preventDefault();
+  rotate(event.deltaY > 0 ? 15 : -15);
+}, { passive: false });
+canvas.addEventListener('keydown', (event) => {
+  if (event.key === 'q' || event.key === 'Q') rotate(-15);
+  if (event.key === 'e' || event.key === 'E') rotate(15);
+});
+$('rotate-left').onclick = () => rotate(-15);
+$('rotate-right').onclick = () => rotate(15);
+$('object').onchange = (event) => send({ type: 'select', object: Number(event.target.value) });
+for (const radio of document.querySelectorAll('input[name=view]'))
+  radio.onchange = () => send({ type: 'view', view: radio.value });
+$('light').onchange = () => live.state && applyState(live.state);
+for (const axis of ['x', 'y', 'z']) {
+  const input = $(`light-${axis}`);
+  input.oninput = () => { $(`light-${axis}-value`).textContent = Number(input.value).toFixed(3); };
+  input.onchange = () => {
+    const position = ['x', 'y', 'z'].map((a) => Number($(`light-${a}`).value));
+    send({ type: 'light', light: Number($('light').value), position, seq: ++seq });
+  };
+}
+$('light-intensity').oninput = () => {
+  $('light-intensity-value').textContent = Number($('light-intensity').value).toFixed(3);
+};
+$('light-intensity').onchange = () =>
+  send({ type: 'light', light: Number($('light').value), intensity: Number($('light-intensity').value), seq: ++seq });
+for (const control of document.querySelectorAll('[data-option]')) {
+  const output = control.parentElement.querySelector('output');
+  control.oninput = () => { if (output) output.textContent = control.value; };
+  control.onchange = () => {
+    const value = control.value === 'auto' ? 'auto' : parseInt(control.value, 10);
+    send({ type: 'options', values: { [control.dataset.option]: value }, seq: ++seq });
+  };
+}
+
+function download(url, name) {
+  const link = document.createElement('a');
+  link.href = url;
+  link.download = name;
+  document.body.append(link);
+  link.click();
+  link.remove();
+}
+$('save-scene').onclick = () => download('/scene.json', 'scene.json');
+$('save-image').onclick = () => download('/image.png', 'image.png');
+setInterval(() => send({ type: 'ping' }), 20000);
+
+connect();
