@@ -24,7 +24,8 @@ CLI::App* addStabilityCommand(CLI::App& app, StabilityArgs& args, int maxThreads
         ->add_option("--object-step", args.motion.objectStepVoxels,
                      "How far the objects move each frame, in voxels of the volume (default 0.25)")
         ->check(CLI::Range(0.0f, 1000.0f));
-    command->add_option("--direction", args.direction, "Direction of the objects' motion X,Y,Z (default 1,0,0)")
+    command
+        ->add_option("--direction", args.direction, "Direction of the objects' motion X,Y,Z (default 1,0,0)")
         ->delimiter(',')
         ->expected(3);
     command
@@ -47,7 +48,8 @@ int runStability(StabilityArgs args) {
     Scene scene = loadScene(args.scene, args.overrides);
     if (!args.json.empty()) refuseInputs({args.json}, sceneInputs(scene));
     if (scene.virtuals.empty())
-        throw InputError(args.scene.string(), "virtual: the objects' motion needs at least one virtual object");
+        throw InputError(args.scene.string(),
+                         "virtual: the objects' motion needs at least one virtual object");
     const std::vector<RenderOutput> frames = renderMotion(scene, args.motion);
     const TemporalFigures figures = temporalInstability(frames);
     fmt::print("{} frames of {}x{}, objects moving {} voxels a frame, camera turning {} deg a frame\n",

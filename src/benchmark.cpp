@@ -5,7 +5,6 @@
 #include <numbers>
 #include <optional>
 
-
 #include <fmt/core.h>
 #include <tbb/global_control.h>
 

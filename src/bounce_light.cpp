@@ -77,8 +77,8 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
                 const float coherence = glm::length(meanNormal);
                 if (coherence < kMinCoherence) continue;
                 const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
-                const glm::vec3 normal = (facesAway(meanNormal, centre, viewpoint) ? -1.0f : 1.0f) *
-                                         meanNormal / coherence;
+                const glm::vec3 normal =
+                    (facesAway(meanNormal, centre, viewpoint) ? -1.0f : 1.0f) * meanNormal / coherence;
                 gathered[i] = gatherAtVoxel(centre, normal, coarseSize, i, light, occluders, cones, settings);
             }
         });

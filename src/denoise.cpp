@@ -147,9 +147,9 @@ bool zeroAround(const FilterPass& f, std::span<const uint8_t> filteredNonZero, i
         (below && filteredNonZero[k00 + f.sw]) || (right && below && filteredNonZero[k00 + f.sw + 1]))
         return false;
     const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
-    const float allowance = planeAllowance * f.offsetLength[static_cast<size_t>(sy0 * f.stride - y + f.reach) *
-                                                                f.side +
-                                                            sx0 * f.stride - x + f.reach];
+    const float allowance =
+        planeAllowance * f.offsetLength[static_cast<size_t>(sy0 * f.stride - y + f.reach) * f.side +
+                                        sx0 * f.stride - x + f.reach];
     return neighbourWeight(f, p, f.samples[k00], allowance) > 0.0f;
 }
 

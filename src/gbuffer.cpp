@@ -33,7 +33,8 @@ void visibleObjectHits(const RayScene& all, glm::vec3 eye, std::span<const glm::
     }
     all.intersectCoherent(eye, directions, hits, true);
     for (size_t i = 0; i < directions.size(); ++i)
-        if (!hits[i].isVirtual || all.base()->intersect(eye, directions[i], 0.0f, hits[i].t).hit()) hits[i] = {};
+        if (!hits[i].isVirtual || all.base()->intersect(eye, directions[i], 0.0f, hits[i].t).hit())
+            hits[i] = {};
 }
 
 // The pixel rows and columns [x0, x1] x [y0, y1] whose rays may meet the box `b` (its corners' projections,

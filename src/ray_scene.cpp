@@ -185,12 +185,11 @@ void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> di
         }
         rtcIntersect8(valid, impl_->scene, &context, &rh);
         for (size_t k = 0; k < n; ++k)
-            hits[first + k] = rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
-                                  ? RayHit{}
-                                  : hitOn(rh.hit.geomID[k], rh.hit.primID[k],
-                                          {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
-                                          {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin,
-                                          directions[first + k]);
+            hits[first + k] =
+                rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
+                    ? RayHit{}
+                    : hitOn(rh.hit.geomID[k], rh.hit.primID[k], {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
+                            {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin, directions[first + k]);
     }
 }
 

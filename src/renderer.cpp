@@ -290,13 +290,13 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     for (size_t j = 0; j < jobs.size(); ++j) {
         const ConeJob& job = jobs[j];
         if (!job.environment) continue;
-        addInto(results[j].areaLight,
-                traceSparse<glm::vec3>(
-                    job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-                    job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
-                        return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode,
-                                                    pixels);
-                    }));
+        addInto(
+            results[j].areaLight,
+            traceSparse<glm::vec3>(
+                job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
+                job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
+                    return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode, pixels);
+                }));
     }
     timer.lap("shadow");
     for (size_t j = 0; j < jobs.size(); ++j) {
@@ -312,7 +312,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             addInto(results[j].diffuse,
                     traceSparse<glm::vec3>(
                         job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-                        job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
+                        job.filter(o, job.areaLightStride(o, scene.camera)),
+                        [&](std::span<const uint32_t> pixels) {
                             return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels);
                         }));
     }
@@ -325,10 +326,11 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                                       job.objectLight);
         };
         // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
-        results[j].specular = job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
-                                                                   job.specularStride(o, scene.camera), 1,
-                                                                   job.filter(o, job.specularStride(o, scene.camera)), trace)
-                                          : trace({});
+        results[j].specular =
+            job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
+                                                 job.specularStride(o, scene.camera), 1,
+                                                 job.filter(o, job.specularStride(o, scene.camera)), trace)
+                        : trace({});
     }
     timer.lap("specular");
     // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
@@ -341,7 +343,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             addInto(results[j].diffuse,
                     traceSparse<glm::vec3>(
                         job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
-                        job.filter(o, job.diffuseStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
+                        job.filter(o, job.diffuseStride(o, scene.camera)),
+                        [&](std::span<const uint32_t> pixels) {
                             return traceSkyCones(job.points, environment, job.visibility, job.mode, o,
                                                  SkyParts::Diffuse, pixels)
                                 .diffuse;
@@ -402,8 +405,8 @@ glm::vec3 viewpointOf(const Scene& scene) {
 }
 
 // Forgets what depends on the camera: the real G-buffer and what is made over its pixels.
-// The large buffers keep their memory for the next camera's (14 MiB each at 640 x 480: allocated afresh, their
-// pages would be faulted in every frame).
+// The large buffers keep their memory for the next camera's (14 MiB each at 640 x 480: allocated afresh,
+// their pages would be faulted in every frame).
 void forgetCameraWork(StaticWork& kept) {
     kept.realSurfacesMade = false;
     kept.background.reset();
@@ -728,9 +731,9 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     GBuffer& gbuffer = kept.gbuffer;
     renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer);
     const bool wholeRealSurfaces = kept.cameraSteady || !scene.background || o.render.layers;
-    const std::vector<SurfacePoint>& realPoints =
-        wholeRealSurfaces ? hideCoveredSurfaces(realSurfaces(), gbuffer, kept)
-                          : renderRelitSurfaces(camera, realOnly, gbuffer, kept);
+    const std::vector<SurfacePoint>& realPoints = wholeRealSurfaces
+                                                      ? hideCoveredSurfaces(realSurfaces(), gbuffer, kept)
+                                                      : renderRelitSurfaces(camera, realOnly, gbuffer, kept);
     timer.lap("gbuffer");
 
     // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both

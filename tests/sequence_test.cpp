@@ -161,7 +161,7 @@ TEST_F(SequenceTest, TheFirstCameraIsTheVolumesViewpoint) {
     Scene loaded = loadScene(scene, dir_ / "scene.json");
     ASSERT_TRUE(loaded.options.volume.viewpoint.has_value());
     EXPECT_EQ(*loaded.options.volume.viewpoint, glm::vec3(0.0f, 0.8f, 2.0f));
-    EXPECT_FLOAT_EQ(loaded.camera.position().x, 0.1f);  // the range's first frame
+    EXPECT_FLOAT_EQ(loaded.camera.position().x, 0.1f);          // the range's first frame
     scene["options"]["volume"]["viewpoint"] = {0.5, 1.0, 1.5};  // given: kept
     loaded = loadScene(scene, dir_ / "scene.json");
     EXPECT_EQ(*loaded.options.volume.viewpoint, glm::vec3(0.5f, 1.0f, 1.5f));

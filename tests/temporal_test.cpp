@@ -57,8 +57,8 @@ TEST(TemporalInstability, NeedsThreeFramesOfOneSize) {
 
 TEST(TemporalInstability, RenderMotionMovesTheObjectsAndPutsThemBack) {
     Scene s = test::floorScene();
-    s.virtuals.push_back(test::placed(makeSphere(0.2f, 16), {0.0f, 0.3f, 0.0f},
-                                      test::diffuse(glm::vec3(0.8f)), "ball"));
+    s.virtuals.push_back(
+        test::placed(makeSphere(0.2f, 16), {0.0f, 0.3f, 0.0f}, test::diffuse(glm::vec3(0.8f)), "ball"));
     s.options.volume.center = glm::vec3(0.0f, 0.3f, 0.0f);
     s.options.volume.size = 1.6f;
     const std::vector<glm::vec3> before = s.virtuals[0].positions;

@@ -53,12 +53,14 @@ struct BenchResult {
 };
 
 // Renders options.warmup + options.frames frames of `scene`, moving its virtual objects (their vertices are
-// changed in place and put back at the end) and with options.cameraDegrees its camera (put back too). `onFrame(index, total_ms)` is called after each measured frame.
+// changed in place and put back at the end) and with options.cameraDegrees its camera (put back too).
+// `onFrame(index, total_ms)` is called after each measured frame.
 BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
                          const std::function<void(int, double)>& onFrame = {});
 
-// {"frames", "warmup", "cold", "camera_motion_deg", "world_kept_frames", "threads", "width", "height", "volume_resolution", "triangles": {"real",
-// "virtual"}, then one object {"median", "max", "paper"} per row key ("voxelize_ms" ... "total_ms")}.
+// {"frames", "warmup", "cold", "camera_motion_deg", "world_kept_frames", "threads", "width", "height",
+// "volume_resolution", "triangles": {"real", "virtual"}, then one object {"median", "max", "paper"} per row
+// key ("voxelize_ms" ... "total_ms")}.
 nlohmann::ordered_json benchToJson(const BenchResult& result);
 
 // The table printed by `deltagi bench`.

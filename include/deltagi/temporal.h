@@ -47,7 +47,8 @@ struct TemporalFigures {
 // The figures of frames rendered in order (at least 3, all of one size; InputError otherwise).
 TemporalFigures temporalInstability(std::span<const RenderOutput> frames);
 
-// {"frames", "real_instability", "object_instability", "real_samples", "object_samples", "mean_delta": [...]}.
+// {"frames", "real_instability", "object_instability", "real_samples", "object_samples", "mean_delta":
+// [...]}.
 nlohmann::ordered_json temporalToJson(const TemporalFigures& figures);
 
 }  // namespace deltagi
