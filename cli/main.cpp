@@ -26,7 +26,6 @@
 #include <nlohmann/json.hpp>
 
 #include "bench_command.h"
-#include "stability_command.h"
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/evaluation.h"
@@ -41,6 +40,7 @@
 #include "eval_suite.h"
 #include "outputs.h"
 #include "serve_command.h"
+#include "stability_command.h"
 #include "video_output.h"
 
 namespace fs = std::filesystem;
