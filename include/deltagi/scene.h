@@ -2,6 +2,7 @@
 // Everything is in world space (right-handed; any unit, used consistently), already transformed.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <memory>
@@ -17,22 +18,58 @@
 #include "deltagi/image.h"
 #include "deltagi/math.h"
 #include "deltagi/options.h"
+#include "deltagi/texture.h"
 
 namespace deltagi {
 
-// Lambertian diffuse + a normalized Phong glossy lobe around the mirror direction:
+// Two reflection models; both are two-sided, and a material may also emit: a diffuse (Lambertian) area light
+// of uniform radiance over the mesh (times the emissive texture), from both faces.
+//
+// Phong (the scene format's "albedo"/"specular"/"roughness"): Lambertian diffuse + a normalized Phong glossy
+// lobe around the mirror direction:
 //   f(wi, wo) = albedo/pi + specular * (n+2)/(2 pi) * max(0, dot(reflect(-wo), wi))^n,  n = phongExponent().
 // albedo + specular must not exceed 1 per channel (energy conservation).
-// A material may also emit: a diffuse (Lambertian) area light of uniform radiance over the mesh, from both
-// faces, since surfaces in deltagi are two-sided.
+//
+// MetallicRoughness (glTF 2.0, and the scene format's "base_color"/"metallic"): the glTF BRDF, a Lambertian
+// diffuse of colour base * (1 - metallic) under a GGX (Trowbridge-Reitz) specular lobe with height-correlated
+// Smith visibility and Schlick Fresnel, F0 = mix(0.04, base, metallic); `albedo` holds the base colour
+// factor and `roughness` glTF's perceptual roughness (GGX alpha = roughness^2).
+enum class MaterialModel { Phong, MetallicRoughness };
+// glTF's alphaMode: Opaque ignores alpha; Mask drops the surface where alpha < alphaCutoff (rays pass
+// through it); Blend is read as Mask at 0.5 (a renderer of opaque surfaces cannot blend).
+enum class AlphaMode { Opaque, Mask };
+
 struct Material {
-    glm::vec3 albedo{0.8f};    // "albedo": diffuse reflectance in [0,1]
-    glm::vec3 specular{0.0f};  // "specular": glossy reflectance in [0,1]
+    glm::vec3 albedo{0.8f};    // "albedo": diffuse reflectance in [0,1]; MetallicRoughness: base colour factor
+    glm::vec3 specular{0.0f};  // "specular": glossy reflectance in [0,1] (Phong only)
     float roughness = 1.0f;    // "roughness" in (0,1], or "glossiness" = 1 - roughness
     // "emission" times "emission_scale": emitted radiance (W / (sr m^2), per world unit squared), linear RGB
     glm::vec3 emission{0.0f};
 
+    MaterialModel model = MaterialModel::Phong;
+    float metallic = 0.0f;  // "metallic" in [0, 1] (MetallicRoughness)
+    float opacity = 1.0f;   // the base colour factor's alpha
+    AlphaMode alphaMode = AlphaMode::Opaque;
+    float alphaCutoff = 0.5f;
+    // Textures (each may be null). Base colour (sRGB, RGBA) multiplies `albedo` and `opacity`; for Phong
+    // materials it is the diffuse map (OBJ map_Kd), `specularTexture` the specular map (map_Ks). Metallic-
+    // roughness: B = metallic, G = roughness, multiplying the factors. Normal: tangent-space, scaled in xy by
+    // `normalScale`. Emissive (sRGB) multiplies `emission`. Occlusion: R, blended in by
+    // `occlusionStrength`; it dims the indirect light only.
+    TextureSlot baseColorTexture;
+    TextureSlot specularTexture;
+    TextureSlot metallicRoughnessTexture;
+    TextureSlot normalTexture;
+    float normalScale = 1.0f;
+    TextureSlot emissiveTexture;
+    TextureSlot occlusionTexture;
+    float occlusionStrength = 1.0f;
+
     bool emits() const { return emission != glm::vec3(0.0f); }
+    bool textured() const {
+        return baseColorTexture || specularTexture || metallicRoughnessTexture || normalTexture ||
+               emissiveTexture || occlusionTexture;
+    }
     // What the light volumes reflect: the diffuse and the glossy reflectance together. A voxel holds one
     // radiance for every direction, so a glossy surface's light goes in spread evenly over the hemisphere
     // rather than left out (the glossy Cornell box's floor sends a third of the light it reflects through its
@@ -53,6 +90,14 @@ struct TriangleMesh {
     std::vector<glm::vec3> positions;   // world space
     std::vector<glm::vec3> normals;     // world space, unit length, one per position
     std::vector<glm::uvec3> triangles;  // indices into positions
+    // Optional per-vertex attributes, each empty or one per position: texture coordinate sets 0 and 1
+    // (glTF TEXCOORD_0/1, OBJ vt), tangents (xyz unit, in world space like the normals; w = +-1, the
+    // bitangent's handedness: bitangent = w * cross(normal, tangent)), and linear RGB vertex colours that
+    // multiply the material's albedo or base colour (glTF COLOR_0, PLY red/green/blue, estimated albedo).
+    std::vector<glm::vec2> uvs;
+    std::vector<glm::vec2> uvs1;
+    std::vector<glm::vec4> tangents;
+    std::vector<glm::vec3> colors;
     Material material;
     // The virtual objects' meshes as read, in object space, and the transform that placed them (the scene
     // file's "transform"): setTransform() (deltagi/transforms.h) places them again as the objects move.

@@ -1,0 +1,88 @@
+// Textures of materials: 2D images with their mip chain, and the sampler state glTF 2.0 gives them
+// (wrap modes and filters). Texels are kept as linear RGBA floats: 8/16-bit colour files (base colour,
+// emissive) are sRGB-decoded when read, data textures (metallic-roughness, normals, occlusion) are not.
+// Texture coordinates follow glTF: (0, 0) is the image's top-left corner, u to the right, v down.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace deltagi {
+
+enum class TextureWrap { Repeat, ClampToEdge, MirroredRepeat };
+enum class TextureFilter { Nearest, Linear };
+// How a file's integer texels become linear values: Srgb for colour (base colour, emissive, OBJ map_Kd),
+// Linear for data (metallic-roughness, normal, occlusion maps). Float files are always linear.
+enum class TextureEncoding { Linear, Srgb };
+
+// glTF's sampler: wrapS/wrapT, magFilter, minFilter (a minFilter with MIPMAP uses the mip chain).
+struct TextureSampler {
+    TextureWrap wrapS = TextureWrap::Repeat;
+    TextureWrap wrapT = TextureWrap::Repeat;
+    TextureFilter magFilter = TextureFilter::Linear;
+    TextureFilter minFilter = TextureFilter::Linear;
+    bool mipmaps = true;  // minification selects (and blends) mip levels by the lookup's footprint
+};
+
+// An immutable image with its mip chain (box-filtered halvings down to 1x1, any size: odd sizes round
+// down, never below 1). Shared by the materials that use it.
+class Texture {
+  public:
+    // `texels`: width * height linear RGBA values, row 0 at the top (v = 0). Throws InputError(name, ...)
+    // for a zero or negative size, a texel count that does not match, or a non-finite texel.
+    Texture(int width, int height, std::vector<glm::vec4> texels, std::string name);
+
+    // Reads an image file (PNG, JPEG, EXR, HDR, TGA, BMP, ... whatever OpenImageIO reads). Grey files repeat
+    // their channel to RGB, files without alpha get alpha 1. Throws InputError(where, ...) naming the file
+    // when it is missing, unreadable, of zero size or of a format nobody reads.
+    static std::shared_ptr<const Texture> load(const std::filesystem::path& file, TextureEncoding encoding,
+                                               const std::string& where);
+    // The same for an image held in memory (a texture embedded in a GLB file): `formatHint` is the file
+    // extension or MIME type the container gives ("png", "image/jpeg"), may be empty.
+    static std::shared_ptr<const Texture> decode(std::span<const std::byte> encoded, std::string_view formatHint,
+                                                 TextureEncoding encoding, const std::string& where);
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    int levels() const { return static_cast<int>(levels_.size()); }
+    const std::string& name() const { return name_; }
+
+    // Filtered lookup at `uv`. `footprint`: the size of the area looked up, in uv units (1 = the whole
+    // image's width); 0 or less: the finest level. Magnification (footprint at most one texel) uses
+    // magFilter; minification selects the mip level of the footprint and, with a Linear minFilter, blends
+    // bilinear lookups of the two nearest levels (trilinear). Wrap modes as the sampler says; a non-finite
+    // uv gives the mean texel (average()).
+    glm::vec4 sample(glm::vec2 uv, float footprint, const TextureSampler& sampler = {}) const;
+    // The mean of all texels (the 1x1 level).
+    glm::vec4 average() const;
+    // The texel (x, y) of mip level `level` (no filtering, no wrapping; x, y in range).
+    glm::vec4 texel(int level, int x, int y) const;
+
+  private:
+    struct Level {
+        int width = 0, height = 0;
+        std::vector<glm::vec4> texels;
+    };
+    int width_ = 0, height_ = 0;
+    std::vector<Level> levels_;
+    std::string name_;
+};
+
+// A material's use of a texture: which image, how it is sampled, and which of the mesh's texture
+// coordinate sets (glTF's texCoord: 0 or 1) it reads.
+struct TextureSlot {
+    std::shared_ptr<const Texture> texture;  // null: the material has no such texture
+    TextureSampler sampler;
+    int texCoord = 0;
+    explicit operator bool() const { return texture != nullptr; }
+    glm::vec4 sample(glm::vec2 uv, float footprint) const { return texture->sample(uv, footprint, sampler); }
+};
+
+}  // namespace deltagi
