@@ -65,8 +65,8 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        const Material& m = *p.material;
-        if (m.albedo == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)) return;
+        const SurfaceMaterial& m = p.surface;
+        if (m.diffuse == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)) return;
         const glm::vec3 origin = p.position + offset * p.normal;
         const float jitterU = hashToUnit(i, kAreaLightStream), jitterV = hashToUnit(i, kAreaLightStream + 1);
         const float jitterT = hashToUnit(i, kAreaLightStream + 2);
@@ -137,8 +137,8 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        const Material& m = *p.material;
-        if (m.albedo == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)) return;
+        const SurfaceMaterial& m = p.surface;
+        if (m.diffuse == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)) return;
         const glm::vec3 origin = p.position + offset * p.normal;
         const float jitterU = hashToUnit(i, kEnvironmentStream),
                     jitterV = hashToUnit(i, kEnvironmentStream + 1);

@@ -1,5 +1,6 @@
-// The one BRDF of deltagi (see deltagi::Material): Lambertian diffuse plus a normalized Phong lobe around the
-// mirror direction. The cone tracer and the reference path tracer both evaluate it here.
+// The BRDFs of deltagi (see deltagi::Material): Lambertian diffuse plus a normalized Phong lobe around the
+// mirror direction, or glTF's metallic-roughness BRDF (ggx.h). The cone tracer and the reference path tracer
+// both evaluate them here.
 #pragma once
 
 #include <algorithm>
@@ -9,6 +10,8 @@
 #include <glm/glm.hpp>
 
 #include "deltagi/scene.h"
+#include "ggx.h"
+#include "surface_material.h"
 
 namespace deltagi {
 
@@ -30,9 +33,11 @@ inline LobeOverLight phongLobeOverLight(float exponent, float lightAngle) {
 
 // f(wi, wo) for unit vectors pointing away from the surface; n is the unit normal on the side of wo.
 // `lightAngle`: the half-angle of the light wi points at (0: a point), see phongLobeOverLight.
-inline glm::vec3 evalBrdf(const Material& m, glm::vec3 n, glm::vec3 wo, glm::vec3 wi,
+inline glm::vec3 evalBrdf(const SurfaceMaterial& m, glm::vec3 n, glm::vec3 wo, glm::vec3 wi,
                           float lightAngle = 0.0f) {
-    glm::vec3 f = m.albedo * std::numbers::inv_pi_v<float>;
+    if (m.model == MaterialModel::MetallicRoughness)
+        return evalGltfBrdf(m.diffuse, m.specular, m.roughness * m.roughness, n, wo, wi, lightAngle);
+    glm::vec3 f = m.diffuse * std::numbers::inv_pi_v<float>;
     if (m.specular != glm::vec3(0.0f)) {
         const float exponent = m.phongExponent();
         const LobeOverLight lobe = phongLobeOverLight(exponent, lightAngle);
@@ -42,6 +47,11 @@ inline glm::vec3 evalBrdf(const Material& m, glm::vec3 n, glm::vec3 wo, glm::vec
                            std::pow(c, lobe.exponent));
     }
     return f;
+}
+
+// The BRDF of a material's factors (no textures): tests and callers without a surface point.
+inline glm::vec3 evalBrdf(const Material& m, glm::vec3 n, glm::vec3 wo, glm::vec3 wi, float lightAngle = 0.0f) {
+    return evalBrdf(constantSurfaceMaterial(m), n, wo, wi, lightAngle);
 }
 
 }  // namespace deltagi

@@ -10,10 +10,23 @@ namespace deltagi {
 
 namespace {
 
-SurfacePoint toSurfacePoint(const RayHit& hit, glm::vec3 rayDir) {
+// The smallest cosine between a camera ray and the surface it meets that widens a pixel's texture
+// footprint: grazing surfaces are filtered as at about 84 degrees rather than over the whole image.
+constexpr float kMinFootprintCosine = 0.1f;
+
+// `pixelAngle`: the angle (radians) a pixel subtends, for the textures' filter footprint.
+SurfacePoint toSurfacePoint(const RayHit& hit, glm::vec3 rayDir, float pixelAngle) {
     if (!hit.hit()) return {};
-    return {hit.position, hit.normal, -rayDir, hit.material};
+    if (variesOverSurface(*hit.mesh)) {
+        RayHit filtered = hit;
+        const float cosine = std::max(std::abs(glm::dot(hit.geometricNormal, rayDir)), kMinFootprintCosine);
+        lookUpMaterial(filtered, hit.t * pixelAngle / cosine);
+        return {filtered.position, filtered.normal, -rayDir, filtered.material, filtered.surface};
+    }
+    return {hit.position, hit.normal, -rayDir, hit.material, hit.surface};
 }
+
+float pixelAngleOf(const Camera& camera) { return 1.0f / std::max(camera.fy, 1e-6f); }
 
 // The first surface along a camera ray if it is virtual. With the objects in a layer of their own, the real
 // scene below is traced only for rays that meet an object, up to it (most rays near an object miss it).
@@ -84,7 +97,7 @@ void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vec
             directions[x] = glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f));
         realOnly.intersectCoherent(eye, directions, hits);
         for (int x = 0; x < camera.width; ++x)
-            real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(hits[x], directions[x]);
+            real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(hits[x], directions[x], pixelAngleOf(camera));
     });
 }
 
@@ -124,7 +137,7 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
         visibleObjectHits(all, eye, directions, hits);
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
-            g.object[i] = toSurfacePoint(hits[x - x0], directions[x - x0]);
+            g.object[i] = toSurfacePoint(hits[x - x0], directions[x - x0], pixelAngleOf(camera));
             g.coverage[i] = g.object[i].valid() ? 1.0f : 0.0f;
         }
     });
@@ -187,7 +200,7 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                     const glm::vec3 dir = directions[next++];
                     if (!hit.hit()) continue;
                     ++virtualCount;
-                    out[sy * k + sx] = toSurfacePoint(hit, dir);
+                    out[sy * k + sx] = toSurfacePoint(hit, dir, pixelAngleOf(camera) / static_cast<float>(k));
                     const float offset = ox * ox + oy * oy;
                     if (offset < bestOffset) {
                         bestOffset = offset;

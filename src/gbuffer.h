@@ -18,6 +18,7 @@ struct SurfacePoint {
     glm::vec3 normal{0.0f};              // unit, facing the camera
     glm::vec3 toEye{0.0f};               // unit, from the surface to the camera
     const Material* material = nullptr;  // null: no surface
+    SurfaceMaterial surface;             // the material at this point (textures filtered over the pixel)
     bool valid() const { return material != nullptr; }
 };
 

@@ -20,7 +20,7 @@
 
 #include <glm/glm.hpp>
 
-#include "brdf_sampling.h"
+#include "sampling.h"
 
 namespace deltagi {
 

@@ -35,7 +35,7 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        if (p.material->albedo == glm::vec3(0.0f)) return;
+        if (p.surface.diffuse == glm::vec3(0.0f)) return;
         const glm::vec3 origin = p.position + offset * p.normal;
         const glm::vec3 toCentre = centre - origin;
         const float distance = glm::length(toCentre);

@@ -75,7 +75,7 @@ glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) con
         const glm::vec3 origin = offsetOrigin(hit, s.wi);
         const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * settings_.rayOffset : s.distance;
         if (tMax <= 0.0f || rays_.intersect(origin, s.wi, 0.0f, tMax).hit()) continue;
-        sum += evalBrdf(*hit.material, hit.normal, wo, s.wi) * s.irradiance * cosTheta;
+        sum += evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.irradiance * cosTheta;
     }
     if (environment_) {
         const float u1 = rng.uniform(), u2 = rng.uniform();
@@ -86,8 +86,8 @@ glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) con
 
 glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
     const float uTriangle = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
-    const Material& m = *hit.material;
-    if (areaLights_.empty() || (m.albedo == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)))
+    const SurfaceMaterial& m = hit.surface;
+    if (areaLights_.empty() || (m.diffuse == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)))
         return glm::vec3(0.0f);
     const AreaLightSample s = areaLights_.sample(uTriangle, u1, u2);
     const glm::vec3 toLight = s.position - hit.position;
@@ -116,8 +116,8 @@ glm::vec3 PathTracer::environmentLight(const RayHit& hit, glm::vec3 wo, float u1
     const float cosTheta = glm::dot(s.wi, hit.normal);
     if (!(s.pdf > 0.0f) || cosTheta <= 0.0f || s.radiance == glm::vec3(0.0f)) return glm::vec3(0.0f);
     if (rays_.intersect(offsetOrigin(hit, s.wi), s.wi).hit()) return glm::vec3(0.0f);
-    const float weight = powerHeuristic(s.pdf, brdfPdf(*hit.material, hit.normal, wo, s.wi));
-    return evalBrdf(*hit.material, hit.normal, wo, s.wi) * s.radiance * (cosTheta * weight / s.pdf);
+    const float weight = powerHeuristic(s.pdf, brdfPdf(hit.surface, hit.normal, wo, s.wi));
+    return evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.radiance * (cosTheta * weight / s.pdf);
 }
 
 glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const {
@@ -142,14 +142,14 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
     for (int bounce = 0; hit.hit(); ++bounce) {
         const glm::vec3 wo = -direction;
         // Seen by the camera: all of it.
-        if (hit.material->emits())
+        if (hit.surface.emits())
             radiance +=
-                throughput * hit.material->emission * (bounce > 0 ? emitterWeight(hit, direction) : 1.0f);
+                throughput * hit.surface.emission * (bounce > 0 ? emitterWeight(hit, direction) : 1.0f);
         radiance += throughput * (directLight(hit, wo, rng) + emittedLight(hit, wo, rng));
         const bool lastBounce = bounce + 1 >= settings_.maxBounces;
         // Always four numbers per bounce, whatever happens, to keep the two correlated paths in step.
         const float uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), uRoulette = rng.uniform();
-        const BrdfSample s = sampleBrdf(*hit.material, hit.normal, wo, uLobe, u1, u2);
+        const BrdfSample s = sampleBrdf(hit.surface, hit.normal, wo, uLobe, u1, u2);
         if (!s.valid()) break;
         if (lastBounce) {
             // The bounce limit (a direct-light-only reference: maxBounces 1): the BRDF sample still brings
@@ -159,10 +159,10 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
             if (!next.hit() && environment_)
                 radiance += throughput * s.weight * environment_->radiance(s.wi) *
                             powerHeuristic(s.pdf, environment_->pdf(s.wi));
-            if (next.hit() && next.material->emits()) {
+            if (next.hit() && next.surface.emits()) {
                 previousPosition = hit.position;
                 previousPdf = s.pdf;
-                radiance += throughput * s.weight * next.material->emission * emitterWeight(next, s.wi);
+                radiance += throughput * s.weight * next.surface.emission * emitterWeight(next, s.wi);
             }
             break;
         }

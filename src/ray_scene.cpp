@@ -1,6 +1,7 @@
 #include "ray_scene.h"
 
 #include <cstring>
+#include <deque>
 #include <optional>
 #include <stdexcept>
 
@@ -11,6 +12,8 @@ namespace deltagi {
 struct RayScene::Impl {
     RTCDevice device = nullptr;
     RTCScene scene = nullptr;
+    // The alpha-masked meshes, for their geometries' filter functions (a deque: the addresses stay).
+    std::deque<const TriangleMesh*> maskedMeshes;
     ~Impl() {
         if (scene) rtcReleaseScene(scene);
         if (device) rtcReleaseDevice(device);
@@ -55,6 +58,32 @@ std::optional<TriangleHit> recomputeHit(glm::vec3 origin, glm::vec3 direction, g
                        static_cast<float>(glm::dot(d, q) * inv), glm::vec3(glm::cross(e1, e2))};
 }
 
+// Embree's filter for alpha-masked materials (glTF alphaMode MASK): a hit where the surface is cut away is
+// no hit, for closest-hit and shadow rays alike.
+void alphaMaskFilter(const RTCFilterFunctionNArguments* args) {
+    const TriangleMesh& mesh = **static_cast<const TriangleMesh* const*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        if (!surfacePresentAt(mesh, prim, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i)))
+            args->valid[i] = 0;
+    }
+}
+
+// The mesh's normals interpolated at (u, v), unit length; `fallback` where they cancel.
+glm::vec3 interpolatedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v, glm::vec3 fallback) {
+    const glm::vec3 n = (1.0f - u - v) * mesh.normals[tri.x] + u * mesh.normals[tri.y] + v * mesh.normals[tri.z];
+    const float len = glm::length(n);
+    return len > 0.0f ? n / len : fallback;
+}
+
+// The shading normal of a two-sided surface: the interpolated normal turned to the side the ray came from,
+// the side `geometricNormal` (unit) already faces.
+glm::vec3 shadingNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v, glm::vec3 geometricNormal) {
+    const glm::vec3 n = interpolatedNormal(mesh, tri, u, v, geometricNormal);
+    return glm::dot(n, geometricNormal) < 0.0f ? -n : n;
+}
+
 }  // namespace
 
 RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* base)
@@ -79,12 +108,20 @@ RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* bas
             geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
         std::memcpy(indices, mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
         if (dynamic) rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_REFIT);
+        if (mesh.material.alphaMode == AlphaMode::Mask) {
+            impl_->maskedMeshes.push_back(&mesh);
+            rtcSetGeometryUserData(geom, &impl_->maskedMeshes.back());
+            rtcSetGeometryIntersectFilterFunction(geom, alphaMaskFilter);
+            rtcSetGeometryOccludedFilterFunction(geom, alphaMaskFilter);
+        }
         rtcCommitGeometry(geom);
         unsigned id = rtcAttachGeometry(impl_->scene, geom);
         rtcReleaseGeometry(geom);
         if (id != meshes_.size()) throw std::logic_error("Embree geometry IDs are not consecutive");
         meshes_.push_back(
-            {&mesh, isVirtual, vertices, indices, mesh.positions.size(), mesh.triangles.size()});
+            {&mesh, isVirtual, vertices, indices, mesh.positions.size(), mesh.triangles.size(),
+             mesh.material.alphaMode == AlphaMode::Mask, variesOverSurface(mesh),
+             constantSurfaceMaterial(mesh.material)});
         bounds_.extend(mesh.bounds());
     };
     if (content != SceneContent::VirtualOnly)
@@ -109,17 +146,22 @@ bool RayScene::refit(const Scene& scene) {
         const TriangleMesh& now = *meshes[g];
         const MeshRef& built = meshes_[g];
         if (now.positions.size() != built.vertexCount || now.triangles.size() != built.triangleCount ||
+            (now.material.alphaMode == AlphaMode::Mask) != built.masked ||
             std::memcmp(built.indices, now.triangles.data(), now.triangles.size() * sizeof(glm::uvec3)) != 0)
             return false;
     }
     bounds_ = base_ ? base_->bounds() : Bounds3f{};
+    size_t masked = 0;
     for (size_t g = 0; g < meshes.size(); ++g) {
+        if (meshes_[g].masked) impl_->maskedMeshes[masked++] = meshes[g];
         const TriangleMesh& mesh = *meshes[g];
         std::memcpy(meshes_[g].vertices, mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
         RTCGeometry geom = rtcGetGeometry(impl_->scene, static_cast<unsigned>(g));
         rtcUpdateGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0);
         rtcCommitGeometry(geom);
         meshes_[g].mesh = &mesh;
+        meshes_[g].varying = variesOverSurface(mesh);
+        meshes_[g].surface = constantSurfaceMaterial(mesh.material);
         bounds_.extend(mesh.bounds());
     }
     rtcCommitScene(impl_->scene);
@@ -204,21 +246,34 @@ RayHit RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec
                                         mesh.positions[tri.z])) {
         t = again->t, u = again->u, v = again->v, ng = again->ng;
     }
-    glm::vec3 n = (1.0f - u - v) * mesh.normals[tri.x] + u * mesh.normals[tri.y] + v * mesh.normals[tri.z];
-    float len = glm::length(n);
-    n = len > 0.0f ? n / len : glm::normalize(ng);
-    // Two-sided: the shading normal faces the side the ray came from.
-    if (glm::dot(ng, direction) > 0.0f) ng = -ng;
-    if (glm::dot(n, ng) < 0.0f) n = -n;
     result.t = t;
     // Interpolate the position on the triangle (more precise than origin + t * direction far away).
     result.position =
         (1.0f - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] + v * mesh.positions[tri.z];
-    result.normal = n;
+    // Two-sided: the normals face the side the ray came from.
+    if (glm::dot(ng, direction) > 0.0f) ng = -ng;
     result.geometricNormal = glm::normalize(ng);
     result.material = &mesh.material;
+    result.mesh = &mesh;
+    result.triangle = primID;
+    result.barycentric = {u, v};
+    if (ref.varying) {
+        lookUpMaterial(result, 0.0f);
+    } else {
+        result.surface = ref.surface;
+        result.normal = shadingNormal(mesh, tri, u, v, result.geometricNormal);
+    }
     result.isVirtual = ref.isVirtual;
     return result;
+}
+
+void lookUpMaterial(RayHit& hit, float footprint) {
+    const TriangleMesh& mesh = *hit.mesh;
+    const glm::uvec3 tri = mesh.triangles[hit.triangle];
+    const float u = hit.barycentric.x, v = hit.barycentric.y;
+    glm::vec3 n = interpolatedNormal(mesh, tri, u, v, hit.geometricNormal);
+    hit.surface = surfaceMaterialAt(mesh, hit.triangle, u, v, footprint, n);
+    hit.normal = glm::dot(n, hit.geometricNormal) < 0.0f ? -n : n;
 }
 
 bool RayScene::occluded(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {

@@ -10,6 +10,7 @@
 
 #include "deltagi/math.h"
 #include "deltagi/scene.h"
+#include "surface_material.h"
 
 namespace deltagi {
 
@@ -20,9 +21,19 @@ struct RayHit {
         0.0f};  // interpolated shading normal, unit, facing the ray's origin (two-sided surfaces)
     glm::vec3 geometricNormal{0.0f};  // the triangle's plane normal, unit, facing the ray's origin
     const Material* material = nullptr;
+    SurfaceMaterial surface;  // the material at the hit, textures looked up at their finest level
+    // Where the hit is: the mesh, its triangle and Embree's barycentric (u, v) on it.
+    const TriangleMesh* mesh = nullptr;
+    unsigned triangle = 0;
+    glm::vec2 barycentric{0.0f};
     bool isVirtual = false;
     bool hit() const { return material != nullptr; }
 };
+
+// Looks up the material of a hit again for a lookup `footprint` world units wide (a camera pixel's), so
+// that textures are filtered over it (their mip level); sets `hit.surface` and, for normal-mapped
+// materials, `hit.normal`. Nothing changes for materials without textures.
+void lookUpMaterial(RayHit& hit, float footprint);
 
 // Which meshes a RayScene holds.
 enum class SceneContent { RealOnly, RealAndVirtual, VirtualOnly };
@@ -79,6 +90,9 @@ class RayScene {
         float* vertices;  // Embree's buffers, of vertexCount vertices and triangleCount triangles
         const unsigned* indices;
         size_t vertexCount, triangleCount;
+        bool masked;  // an alpha-masked material: Embree filters its hits
+        bool varying;  // variesOverSurface(): each hit looks its material up
+        SurfaceMaterial surface;  // else this, everywhere
     };
     SceneContent content_;
 

@@ -164,7 +164,7 @@ std::optional<RsmTexel> texelFromHit(const RayHit& hit, const TexelRay& ray, con
         return std::nullopt;
     const float cosTheta = std::max(glm::dot(hit.normal, -ray.dir), kMinCos);
     const float area = (ray.areaConst + ray.areaPerT2 * hit.t * hit.t) / cosTheta;
-    return RsmTexel{hit.position, hit.normal, hit.material->volumeReflectance() * ray.fluxIn, area, index};
+    return RsmTexel{hit.position, hit.normal, hit.surface.volumeReflectance() * ray.fluxIn, area, index};
 }
 
 uint32_t texelIndex(int res, int face, int i, int j) {

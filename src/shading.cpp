@@ -96,7 +96,7 @@ std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, c
         makeDiffuseCones(options.diffuse.count, apertureDeg.value_or(options.diffuse.apertureDeg));
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        if (p.material->albedo == glm::vec3(0.0f)) return;
+        if (p.surface.diffuse == glm::vec3(0.0f)) return;
         const glm::mat3 frame = frameAround(p.normal);
         glm::vec3 sum(0.0f);
         for (size_t k = 0; k < cones.directions.size(); ++k) {
@@ -122,12 +122,12 @@ std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, 
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        if (p.material->specular == glm::vec3(0.0f)) return;
+        if (p.surface.specular == glm::vec3(0.0f)) return;
         Cone cone;
         cone.direction = glm::normalize(glm::reflect(-p.toEye, p.normal));
         cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
         cone.tanHalfAngle = specularConeTanHalfAngle(
-            p.material->phongExponent(), options.specular.minApertureDeg, options.specular.maxApertureDeg);
+            p.surface.phongExponent(), options.specular.minApertureDeg, options.specular.maxApertureDeg);
         cone.jitter = hashToUnit(i, 2000u);
         out[i] = fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility, settings, objectLight)
                            : traceLightCone(cone, light, visibility, settings);
@@ -144,7 +144,7 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
                              : light.radius > 0.0f && s.distance > 0.0f
                                  ? std::asin(std::min(light.radius / s.distance, 1.0f))
                                  : 0.0f;
-    return evalBrdf(*point.material, point.normal, point.toEye, s.wi, lightAngle) * s.irradiance * cosTheta;
+    return evalBrdf(point.surface, point.normal, point.toEye, s.wi, lightAngle) * s.irradiance * cosTheta;
 }
 
 namespace {
@@ -176,7 +176,7 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
     auto shade = [&](size_t i) {
         const SurfacePoint& p = points[i];
         if (!p.valid()) return;
-        glm::vec3 radiance = emits ? p.material->emission : glm::vec3(0.0f);
+        glm::vec3 radiance = emits ? p.surface.emission : glm::vec3(0.0f);
         const std::span<const SurfacePoint> area =
             samples && mode == ShadowMode::Shaded ? samples->of(i, width) : std::span<const SurfacePoint>{};
         for (size_t l = 0; l < lights.size(); ++l) {
@@ -185,8 +185,8 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
             if (factor != 0.0f) radiance += directRadianceOver(p, area, lights[l]) * factor;
         }
         glm::vec3& reflected = indirect ? (*indirect)[i] : radiance;
-        if (!diffuse.empty()) reflected += p.material->albedo * diffuse[i];
-        if (!specular.empty()) reflected += p.material->specular * specular[i];
+        if (!diffuse.empty()) reflected += p.surface.diffuse * (p.surface.occlusion * diffuse[i]);
+        if (!specular.empty()) reflected += p.surface.specular * (p.surface.occlusion * specular[i]);
         out[i] = radiance;
     };
     if (!bounds) {

@@ -11,13 +11,15 @@ namespace deltagi {
 namespace {
 
 // Appends the rectangle centre + (±1)*halfU*u + (±1)*halfV*v with normal cross(u, v), wound counter-clockwise
-// seen from the side the normal points to.
+// seen from the side the normal points to. Texture coordinates span [0, 1]^2 over it: texture u along v,
+// texture v along u (a quad's image lies unmirrored seen from above, its top towards -z).
 void addRectangle(TriangleMesh& mesh, glm::vec3 centre, glm::vec3 u, glm::vec3 v) {
     auto base = static_cast<unsigned>(mesh.positions.size());
     glm::vec3 normal = glm::normalize(glm::cross(u, v));
     for (glm::vec2 corner : {glm::vec2(-1, -1), glm::vec2(1, -1), glm::vec2(1, 1), glm::vec2(-1, 1)}) {
         mesh.positions.push_back(centre + corner.x * u + corner.y * v);
         mesh.normals.push_back(normal);
+        mesh.uvs.emplace_back(0.5f * (corner.y + 1.0f), 0.5f * (corner.x + 1.0f));
     }
     mesh.triangles.emplace_back(base, base + 1, base + 2);
     mesh.triangles.emplace_back(base, base + 2, base + 3);
@@ -74,6 +76,9 @@ TriangleMesh makeSphere(float radius, int segments) {
                              std::sin(theta) * std::cos(phi));
             mesh.positions.push_back(radius * normal);
             mesh.normals.push_back(normal);
+            // Longitude along u, the north pole at the image's top.
+            mesh.uvs.emplace_back(static_cast<float>(column) / static_cast<float>(segments),
+                                  static_cast<float>(row) / static_cast<float>(stacks));
         }
     }
     addGridTriangles(mesh, stacks, segments, true, true);
@@ -103,6 +108,8 @@ TriangleMesh makeTorus(float majorRadius, float minorRadius, int segments) {
             glm::vec3 normal = std::cos(theta) * radial - glm::vec3(0.0f, std::sin(theta), 0.0f);
             mesh.positions.push_back(majorRadius * radial + minorRadius * normal);
             mesh.normals.push_back(normal);
+            mesh.uvs.emplace_back(static_cast<float>(column) / static_cast<float>(segments),
+                                  static_cast<float>(row) / static_cast<float>(tubeSegments));
         }
     }
     addGridTriangles(mesh, tubeSegments, segments, false, false);

@@ -173,7 +173,7 @@ SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& 
     };
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
-        if (parts != SkyParts::Specular && p.material->albedo != glm::vec3(0.0f)) {
+        if (parts != SkyParts::Specular && p.surface.diffuse != glm::vec3(0.0f)) {
             const glm::mat3 frame = frameAround(p.normal);
             glm::vec3 sum(0.0f);
             for (size_t k = 0; k < cones.directions.size(); ++k)
@@ -182,10 +182,10 @@ SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& 
                                                   hashToUnit(i, static_cast<uint32_t>(3000 + k)));
             out.diffuse[i] = sum;
         }
-        if (parts != SkyParts::Diffuse && p.material->specular != glm::vec3(0.0f)) {
+        if (parts != SkyParts::Diffuse && p.surface.specular != glm::vec3(0.0f)) {
             const glm::vec3 mirror = glm::normalize(glm::reflect(-p.toEye, p.normal));
             const float tanHalf =
-                specularConeTanHalfAngle(p.material->phongExponent(), options.specular.minApertureDeg,
+                specularConeTanHalfAngle(p.surface.phongExponent(), options.specular.minApertureDeg,
                                          options.specular.maxApertureDeg);
             out.specular[i] = coneSky(p.position, p.normal, mirror, tanHalf, hashToUnit(i, 4000u));
         }

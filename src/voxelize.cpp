@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "parallel.h"
+#include "surface_material.h"
 
 namespace deltagi {
 
@@ -18,6 +19,10 @@ struct VoxelTriangle {
     bool oneVoxel;       // lies inside a single voxel of the grid
     glm::vec3 emission;  // the material's emitted radiance
     glm::vec3 albedo;    // what the material reflects into the volumes (Material::volumeReflectance)
+    // Textured or vertex-coloured meshes: the mesh and the triangle's index, whose material is looked up
+    // over each piece in a voxel instead (null: the constant emission and albedo above hold everywhere).
+    const TriangleMesh* varying;
+    uint32_t index;
     glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
     bool touchesGrid() const { return hi.x >= lo.x; }
 };
@@ -31,6 +36,11 @@ struct Polygon {
         glm::vec3 sum(0.0f);
         for (int i = 1; i + 1 < count; ++i) sum += glm::cross(v[i] - v[0], v[i + 1] - v[0]);
         return 0.5f * glm::length(sum);
+    }
+    glm::vec3 vertexMean() const {
+        glm::vec3 sum(0.0f);
+        for (int i = 0; i < count; ++i) sum += v[i];
+        return sum / static_cast<float>(count);
     }
 };
 
@@ -53,8 +63,8 @@ void splitPolygon(const Polygon& p, int axis, float k, Polygon* below, Polygon* 
     }
 }
 
-// Calls f(x, y, z, area) for each voxel with lo <= (x, y) <= hi and z0 <= z < z1 that the triangle t touches
-// (closed voxels), with the area of the triangle inside it: the triangle is cut into the voxels' pieces by
+// Calls f(x, y, z, piece) for each voxel with lo <= (x, y) <= hi and z0 <= z < z1 that the triangle t touches
+// (closed voxels), with the area of the part (a Polygon) of the triangle inside it: the triangle is cut into the voxels' pieces by
 // the grid planes, one plane at a time. Layer by layer in z, row by row in y, then x.
 template <typename F>
 void forEachTouchedVoxel(const VoxelTriangle& t, int z0, int z1, F&& f) {
@@ -92,9 +102,20 @@ void forEachTouchedVoxel(const VoxelTriangle& t, int z0, int z1, F&& f) {
     // z from the slab's first layer z0 (slabs are cut each on its own), then y and x within each part.
     layers(triangle, 2, z0, z1 - 1, [&](int z, const Polygon& layerZ) {
         layers(layerZ, 1, t.lo.y, t.hi.y, [&](int y, const Polygon& rowY) {
-            layers(rowY, 0, t.lo.x, t.hi.x, [&](int x, const Polygon& piece) { f(x, y, z, piece.area()); });
+            layers(rowY, 0, t.lo.x, t.hi.x, [&](int x, const Polygon& piece) { f(x, y, z, piece); });
         });
     });
+}
+
+// Embree's barycentric (u, v) of a point `p` in the plane of triangle t (p = (1 - u - v) p0 + u p1 + v p2).
+glm::vec2 barycentricOf(const VoxelTriangle& t, glm::vec3 p) {
+    const glm::vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0], d = p - t.p[0];
+    const float d11 = glm::dot(e1, e1), d12 = glm::dot(e1, e2), d22 = glm::dot(e2, e2);
+    const float d1 = glm::dot(d, e1), d2 = glm::dot(d, e2);
+    const float det = d11 * d22 - d12 * d12;
+    if (!(det > 0.0f)) return glm::vec2(1.0f / 3.0f);
+    const glm::vec2 uv((d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det);
+    return glm::clamp(uv, glm::vec2(0.0f), glm::vec2(1.0f));
 }
 
 // Every triangle of `meshes` in voxel space, in mesh and triangle order; in parallel (a detailed object has
@@ -133,6 +154,8 @@ std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
             vt.area = 0.5f * len;
             vt.emission = mesh.material.emission;
             vt.albedo = mesh.material.volumeReflectance();
+            vt.varying = variesOverSurface(mesh) ? &mesh : nullptr;
+            vt.index = static_cast<uint32_t>(i);
             glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
             glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
             if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
@@ -193,7 +216,16 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     parallelFor(0, slabCount, 1, [&](int64_t s) {
         const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
         const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
-        auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a) {
+        // The emission and albedo of a textured triangle's piece `where` (voxel space) of area `a`: its material
+        // at the piece's centre, its textures filtered over the piece's size.
+        auto materialOf = [&](const VoxelTriangle& t, glm::vec3 where, float a) {
+            const glm::vec2 uv = barycentricOf(t, where);
+            glm::vec3 normal = t.normal;
+            const SurfaceMaterial m =
+                surfaceMaterialAt(*t.varying, t.index, uv.x, uv.y, std::sqrt(a) * region.voxelSize(), normal);
+            return std::pair{m.emission, m.volumeReflectance()};
+        };
+        auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a, glm::vec3 where) {
             const size_t i = out.visibility.index(x, y, z);
             glm::vec4& v = out.visibility[i];
             v.x = 1.0f;
@@ -201,6 +233,12 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             v.z += t.normal.y * a;
             v.w += t.normal.z * a;
             out.area[i] += a;
+            if (t.varying && (emissive || withAlbedo)) {
+                const auto [emission, albedo] = materialOf(t, where, a);
+                if (emissive) out.emission[i] += emission * a;
+                if (withAlbedo) out.albedo[i] += albedo * a;
+                return;
+            }
             if (emissive) out.emission[i] += t.emission * a;
             if (withAlbedo) out.albedo[i] += t.albedo * a;
         };
@@ -208,11 +246,13 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             const VoxelTriangle& t = tris[ti];
             // A triangle inside one voxel (most of a detailed mesh's) needs no cutting.
             if (t.oneVoxel) {
-                add(t.lo.x, t.lo.y, t.lo.z, t, t.area);
+                add(t.lo.x, t.lo.y, t.lo.z, t, t.area, (t.p[0] + t.p[1] + t.p[2]) / 3.0f);
                 continue;
             }
             forEachTouchedVoxel(t, std::max(zBegin, t.lo.z), std::min(zEnd, t.hi.z + 1),
-                                [&](int x, int y, int z, float a) { add(x, y, z, t, a); });
+                                [&](int x, int y, int z, const Polygon& piece) {
+                                    add(x, y, z, t, piece.area(), t.varying ? piece.vertexMean() : glm::vec3(0.0f));
+                                });
         }
     });
     // Normal sums to area-weighted means; areas from voxel units to world units.

@@ -21,6 +21,7 @@ struct Fixture {
             for (int x = 0; x < kW; ++x) {
                 SurfacePoint p;
                 p.material = &material;
+                p.surface = constantSurfaceMaterial(material);
                 p.toEye = {0, 0, 1};
                 if (x < kW / 2) {
                     p.position = {0.01f * x, 0.0f, 0.01f * y};

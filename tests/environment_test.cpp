@@ -263,7 +263,7 @@ TEST(SkyLight, AUniformEnvironmentGivesPiLOnAPlane) {
     Options options;
     Material white = diffuse(glm::vec3(1.0f));
     for (glm::vec3 normal : {glm::vec3(0, 1, 0), glm::normalize(glm::vec3(0.3f, 0.9f, -0.4f))}) {
-        const SurfacePoint point{glm::vec3(0.0f), normal, normal, &white};
+        const SurfacePoint point{glm::vec3(0.0f), normal, normal, &white, constantSurfaceMaterial(white)};
         for (int count : {0, 16}) {
             Environment env;
             env.radiance = map;

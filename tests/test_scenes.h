@@ -52,6 +52,7 @@ inline SurfacePoint floorPoint(glm::vec3 p, const Material& material) {
     s.normal = glm::vec3(0, 1, 0);
     s.toEye = glm::vec3(0, 1, 0);
     s.material = &material;
+    s.surface = constantSurfaceMaterial(material);
     return s;
 }
 

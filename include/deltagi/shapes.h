@@ -1,4 +1,5 @@
-// Procedural meshes, in object space, counter-clockwise (outward) winding, with unit vertex normals: the
+// Procedural meshes, in object space, counter-clockwise (outward) winding, with unit vertex normals and
+// texture coordinates (each face of a box and a quad span [0, 1]^2; spheres and tori wrap once around): the
 // scene file's "shape" entries, and the parts of a scene built in code (place them with setTransform(),
 // deltagi/transforms.h). The scene reader checks their parameters; these functions expect valid ones
 // (positive sizes, enough segments, indices in range).

@@ -1,0 +1,57 @@
+// A material's values at one point of a surface: its textures looked up at the point's texture coordinates,
+// its vertex colours interpolated, its normal map applied. What the BRDF (brdf.h), the G-buffer, the
+// reflective shadow maps, voxelization and the path tracer use, so that every stage sees the same texel.
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+struct SurfaceMaterial {
+    // The Lambertian part's reflectance: Phong's albedo; glTF's base colour * (1 - metallic).
+    glm::vec3 diffuse{0.0f};
+    // Phong: the glossy reflectance; MetallicRoughness: F0, the Fresnel reflectance at normal incidence,
+    // mix(0.04, base colour, metallic).
+    glm::vec3 specular{0.0f};
+    // Phong: r, the lobe's width (Material::roughness); MetallicRoughness: glTF's perceptual roughness.
+    float roughness = 1.0f;
+    glm::vec3 emission{0.0f};
+    float occlusion = 1.0f;  // the occlusion map's value (1: none); dims the indirect light only
+    MaterialModel model = MaterialModel::Phong;
+
+    bool emits() const { return emission != glm::vec3(0.0f); }
+    bool glossy() const { return specular != glm::vec3(0.0f); }
+    // What the light volumes reflect (see Material::volumeReflectance): diffuse plus glossy reflectance,
+    // for MetallicRoughness diffuse + F0 (the specular lobe's reflectance at normal incidence).
+    glm::vec3 volumeReflectance() const { return diffuse + specular; }
+    // The exponent of the Phong lobe cos^n around the mirror direction that the specular cone stands for:
+    // Phong's own (Material::phongExponent), or the one as wide as the GGX lobe's half-maximum.
+    float phongExponent() const;
+};
+
+// The values of a material without textures and vertex colours (its factors).
+SurfaceMaterial constantSurfaceMaterial(const Material& m);
+
+// Whether looking up `mesh`'s material at a point needs its triangle and texture coordinates: textures or
+// vertex colours. False: constantSurfaceMaterial(mesh.material) is the answer everywhere.
+bool variesOverSurface(const TriangleMesh& mesh);
+
+// The material of `mesh` at barycentric (u, v) of triangle `triangle` (Embree's: the point is
+// (1 - u - v) a + u b + v c). `footprint`: the width in world units of the area the lookup stands for (a
+// pixel's, a texel's), 0 for the finest texels; it selects the textures' mip levels through the triangle's
+// texture-coordinate density. `normal`: the interpolated unit shading normal, oriented as the mesh's
+// normals are; replaced by the normal-mapped one when the material has a normal map.
+SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, float footprint,
+                                  glm::vec3& normal);
+
+// The texture coordinates (set `set`, 0 or 1) at barycentric (u, v) of `triangle`; (0, 0) when the mesh has
+// none.
+glm::vec2 textureCoordinatesAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, int set = 0);
+
+// Whether an alpha-masked material's surface is there at a point: the base colour's alpha (factor times
+// texture, finest texels) at least the cutoff. Always true for opaque materials.
+bool surfacePresentAt(const TriangleMesh& mesh, unsigned triangle, float u, float v);
+
+}  // namespace deltagi
