@@ -177,6 +177,10 @@ float linearToSrgbValue(float linear) {
     return linearToSrgb(linear);
 }
 
+float srgbToLinearValue(float encoded) {
+    return srgbToLinear(encoded);
+}
+
 namespace {
 
 void checkImagePath(const Image& image, const std::filesystem::path& path) {

@@ -18,6 +18,7 @@
 #include <assimp/LogStream.hpp>
 
 #include "deltagi/error.h"
+#include "image_encode.h"
 #include "json_reader.h"
 
 namespace deltagi {
@@ -26,12 +27,21 @@ namespace {
 
 constexpr float kMinRoughness = 1e-3f;  // roughness is in (0, 1]; a huge Ns still gives a usable lobe
 
+std::string lowerExtension(const std::filesystem::path& file) {
+    std::string ext = file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    return ext;
+}
+
+bool isGltf(const std::filesystem::path& file) {
+    const std::string ext = lowerExtension(file);
+    return ext == ".gltf" || ext == ".glb";
+}
+
 // Assimp invents a material for files that have none: "DefaultMaterial" for OBJ, and an unnamed one with
 // white diffuse and specular for PLY. Such a stand-in gives no values of its own.
 bool isStandIn(const std::string& name, const std::filesystem::path& file) {
-    std::string ext = file.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return name == AI_DEFAULT_MATERIAL_NAME || (name.empty() && ext == ".ply");
+    return name == AI_DEFAULT_MATERIAL_NAME || (name.empty() && lowerExtension(file) == ".ply");
 }
 
 FileMaterial readMaterial(const aiMaterial& material, const std::filesystem::path& file) {
@@ -85,6 +95,49 @@ TriangleMesh readTriangles(const aiMesh& source) {
             mesh.triangles.emplace_back(face.mIndices[0], face.mIndices[1], face.mIndices[2]);
     }
     return mesh;
+}
+
+// The per-vertex attributes beyond positions and normals.
+// Texture coordinates: Assimp gives every format's in OpenGL's convention, v up from the image's bottom (its
+// glTF reader flips glTF's v); deltagi keeps glTF's, v down from the top (deltagi/texture.h): v = 1 - v.
+// Colours: glTF's COLOR_0 is linear (the glTF spec); every other format's (PLY red/green/blue, which
+// Assimp divides by 255, and OBJ's "v x y z r g b") is taken as sRGB-encoded, as the camera colours of
+// scans are, and decoded. Alpha is dropped.
+// Tangents: Assimp's (glTF's TANGENT, else aiProcess_CalcTangentSpace's from texture coordinate set 0). Its
+// bitangent points along increasing OpenGL v, up the image, as a normal map's +y (green) does; w is the
+// handedness that gives it back as w * cross(n, t).
+void readAttributes(const aiMesh& source, bool linearColours, TriangleMesh& mesh) {
+    const unsigned count = source.mNumVertices;
+    for (int set = 0; set < 2; ++set) {
+        if (!source.HasTextureCoords(set)) continue;
+        std::vector<glm::vec2>& uvs = set == 0 ? mesh.uvs : mesh.uvs1;
+        uvs.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiVector3D& uv = source.mTextureCoords[set][i];
+            uvs.emplace_back(uv.x, 1.0f - uv.y);
+        }
+    }
+    if (source.HasVertexColors(0)) {
+        mesh.colors.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiColor4D& c = source.mColors[0][i];
+            glm::vec3 rgb(c.r, c.g, c.b);
+            // Rounding in a file's floats may step just past [0, 1]; cleanMesh() refuses real excursions.
+            if (!linearColours)
+                for (int k = 0; k < 3; ++k) rgb[k] = srgbToLinearValue(std::clamp(rgb[k], 0.0f, 1.0f));
+            mesh.colors.push_back(rgb);
+        }
+    }
+    if (source.HasTangentsAndBitangents() && source.HasNormals() && !mesh.uvs.empty()) {
+        mesh.tangents.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiVector3D &t = source.mTangents[i], &b = source.mBitangents[i], &n = source.mNormals[i];
+            const glm::vec3 tangent(t.x, t.y, t.z);
+            const float handedness = glm::dot(glm::cross(glm::vec3(n.x, n.y, n.z), tangent), glm::vec3(b.x, b.y, b.z));
+            // A NaN tangent (Assimp's mark for degenerate texture coordinates) is replaced by cleanMesh().
+            mesh.tangents.emplace_back(tangent, handedness < 0.0f ? -1.0f : 1.0f);
+        }
+    }
 }
 
 bool hasPolygons(const aiScene& scene) {
@@ -254,6 +307,17 @@ void validateRawScene(aiScene& scene, const std::filesystem::path& file, const s
                                  fmt::format("vertex {} of mesh '{}' is not finite: ({}, {}, {}) ('{}')", i,
                                              meshName, p.x, p.y, p.z, name));
         }
+        // Texture coordinates outside [0, 1] are legal (textures repeat); NaN or infinite ones are not.
+        for (unsigned set = 0; set < 2; ++set) {
+            if (!mesh->HasTextureCoords(set)) continue;
+            for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
+                const aiVector3D& uv = mesh->mTextureCoords[set][i];
+                if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+                    throw InputError(where, fmt::format("texture coordinate (set {}) of vertex {} of mesh '{}' is "
+                                                        "not finite: ({}, {}) ('{}')",
+                                                        set, i, meshName, uv.x, 1.0f - uv.y, name));  // glTF's v
+            }
+        }
         unsigned primitiveTypes = 0;
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const aiFace& face = mesh->mFaces[f];
@@ -367,8 +431,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
     validateRawScene(*const_cast<aiScene*>(scene), file, where, baseName);
     if (!hasPolygons(*scene)) throw InputError(where, fmt::format("'{}' contains no triangles", name));
     constexpr unsigned kFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices |
-                                aiProcess_SortByPType;
+                                aiProcess_GenSmoothNormals | aiProcess_CalcTangentSpace |
+                                aiProcess_PreTransformVertices | aiProcess_SortByPType;
     // SortByPType splits meshes by primitive type; point and line meshes are skipped below.
     scene = importer.ApplyPostProcessing(kFlags);
     if (scene == nullptr)
@@ -381,6 +445,7 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
         if ((source.mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
         FileMesh result{readTriangles(source), {}};
         if (result.mesh.triangles.empty()) continue;
+        readAttributes(source, isGltf(file), result.mesh);
         if (source.mMaterialIndex < scene->mNumMaterials)
             result.material = readMaterial(*scene->mMaterials[source.mMaterialIndex], file);
         std::string name =

@@ -48,14 +48,18 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
 // Area-weighted average of the face normals around each vertex, unit length; (0, 1, 0) where it vanishes.
 void computeVertexNormals(TriangleMesh& mesh);
 
-// Positions by `worldFromObject`, normals by its inverse transpose (renormalized); a mirroring transform
-// also flips the winding, so that outward faces stay outward.
+// Positions by `worldFromObject`, normals by its inverse transpose (renormalized), tangents by its linear
+// part (renormalized; their handedness w flips under a mirroring transform); a mirroring transform also flips
+// the winding, so that outward faces stay outward.
 void transformMesh(TriangleMesh& mesh, const glm::mat4& worldFromObject);
 
 // Validates a mesh read from input and makes it ready to render. Throws InputError(where, ...) for a
-// non-finite position (naming the vertex), an index out of range, and a mesh without triangles or with only
-// degenerate ones. Triangles with area < kDegenerateAreaFactor * (bounding box diagonal)^2 are dropped,
-// unreferenced vertices removed, missing or broken normals recomputed and all normals normalized.
+// non-finite position or texture coordinate (naming the vertex), a vertex colour outside [0, 1], a
+// per-vertex attribute whose count is not the vertices', an index out of range, and a mesh without
+// triangles or with only degenerate ones. Texture coordinates outside [0, 1] are fine (textures wrap).
+// Triangles with area < kDegenerateAreaFactor * (bounding box diagonal)^2 are dropped, unreferenced vertices
+// removed (with their attributes), missing or broken normals recomputed and all normals normalized, tangents
+// made unit length and perpendicular to the normals (any perpendicular where a tangent is broken), w = +-1.
 // Returns the number of degenerate triangles dropped.
 inline constexpr double kDegenerateAreaFactor = 1e-12;
 size_t cleanMesh(TriangleMesh& mesh, const std::string& where);
