@@ -1,7 +1,8 @@
-// The sRGB encoding (and decoding) of image_io.cpp, for code outside it (the live session's colour scale; its PNG and
-// JPEG bytes are encodeSrgb8()'s, include/deltagi/image.h).
+// The sRGB transfer functions of image_io.cpp, for code outside it: the live session's colour scale (its PNG
+// and JPEG bytes are encodeSrgb8()'s, include/deltagi/image.h) and the textures' decoding (texture.cpp).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -11,8 +12,9 @@ namespace deltagi {
 
 // linearToSrgb() of image_io.cpp: the exact piecewise sRGB encoding of a linear value in [0, 1].
 float linearToSrgbValue(float linear);
-// srgbToLinear() of image_io.cpp: the exact piecewise sRGB decoding of an encoded value in [0, 1] (vertex
-// colours of PLY files).
+// srgbToLinear() of image_io.cpp: the exact piecewise sRGB decoding of an encoded value in [0, 1].
 float srgbToLinearValue(float encoded);
+// srgbToLinearValue(i / 255) for every 8-bit value i, the table image_io.cpp reads 8-bit files with.
+const std::array<float, 256>& srgb8ToLinearValues();
 
 }  // namespace deltagi

@@ -15,6 +15,7 @@
 #include "deltagi/error.h"
 #include "deltagi/image.h"
 #include "image_encode.h"
+#include "quiet_stderr.h"
 
 namespace deltagi {
 
@@ -75,28 +76,6 @@ std::string lowerExtension(const std::filesystem::path& path) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
     return ext;
 }
-
-// libpng's default error handler prints "libpng error: ..." on stderr before OpenImageIO reports the same
-// error, which our message then carries: the user would see two lines. glibc lets a program assign stderr
-// ("stdin, stdout, and stderr are normal variables", glibc manual 12.2), so while an image is read it points
-// at /dev/null. Only the FILE is swapped: file descriptor 2 stays, and sanitizer reports still reach it.
-// Images are read on one thread at a time.
-class QuietStderr {
-  public:
-    QuietStderr() : saved_(stderr), null_(std::fopen("/dev/null", "w")) {
-        if (null_ != nullptr) stderr = null_;
-    }
-    ~QuietStderr() {
-        stderr = saved_;
-        if (null_ != nullptr) std::fclose(null_);
-    }
-    QuietStderr(const QuietStderr&) = delete;
-    QuietStderr& operator=(const QuietStderr&) = delete;
-
-  private:
-    FILE* saved_;
-    FILE* null_;
-};
 
 }  // namespace
 
@@ -179,6 +158,10 @@ float linearToSrgbValue(float linear) {
 
 float srgbToLinearValue(float encoded) {
     return srgbToLinear(encoded);
+}
+
+const std::array<float, 256>& srgb8ToLinearValues() {
+    return srgb8ToLinearTable();
 }
 
 namespace {

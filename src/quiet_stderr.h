@@ -1,0 +1,30 @@
+// Silencing libpng's own error lines while OpenImageIO reads an image (image_io.cpp, texture.cpp).
+#pragma once
+
+#include <cstdio>
+
+namespace deltagi {
+
+// libpng's default error handler prints "libpng error: ..." on stderr before OpenImageIO reports the same
+// error, which our message then carries: the user would see two lines. glibc lets a program assign stderr
+// ("stdin, stdout, and stderr are normal variables", glibc manual 12.2), so while an image is read it points
+// at /dev/null. Only the FILE is swapped: file descriptor 2 stays, and sanitizer reports still reach it.
+// Images are read on one thread at a time: `stderr` is one global, swapped without a lock.
+class QuietStderr {
+  public:
+    QuietStderr() : saved_(stderr), null_(std::fopen("/dev/null", "w")) {
+        if (null_ != nullptr) stderr = null_;
+    }
+    ~QuietStderr() {
+        stderr = saved_;
+        if (null_ != nullptr) std::fclose(null_);
+    }
+    QuietStderr(const QuietStderr&) = delete;
+    QuietStderr& operator=(const QuietStderr&) = delete;
+
+  private:
+    FILE* saved_;
+    FILE* null_;
+};
+
+}  // namespace deltagi
