@@ -9,7 +9,6 @@
 #include <map>
 #include <sstream>
 
-#include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
@@ -25,8 +24,6 @@ namespace deltagi {
 
 namespace {
 
-constexpr float kMinRoughness = 1e-3f;  // roughness is in (0, 1]; a huge Ns still gives a usable lobe
-
 std::string lowerExtension(const std::filesystem::path& file) {
     std::string ext = file.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
@@ -36,42 +33,6 @@ std::string lowerExtension(const std::filesystem::path& file) {
 bool isGltf(const std::filesystem::path& file) {
     const std::string ext = lowerExtension(file);
     return ext == ".gltf" || ext == ".glb";
-}
-
-// Assimp invents a material for files that have none: "DefaultMaterial" for OBJ, and an unnamed one with
-// white diffuse and specular for PLY. Such a stand-in gives no values of its own.
-bool isStandIn(const std::string& name, const std::filesystem::path& file) {
-    return name == AI_DEFAULT_MATERIAL_NAME || (name.empty() && lowerExtension(file) == ".ply");
-}
-
-FileMaterial readMaterial(const aiMaterial& material, const std::filesystem::path& file) {
-    FileMaterial result;
-    aiString name;
-    if (material.Get(AI_MATKEY_NAME, name) == AI_SUCCESS) result.name = name.C_Str();
-    if (isStandIn(result.name, file)) return result;
-    aiColor3D colour;
-    if (material.Get(AI_MATKEY_COLOR_DIFFUSE, colour) == AI_SUCCESS)
-        result.albedo = glm::vec3(colour.r, colour.g, colour.b);
-    if (material.Get(AI_MATKEY_COLOR_SPECULAR, colour) == AI_SUCCESS)
-        result.specular = glm::vec3(colour.r, colour.g, colour.b);
-    // Many exporters write "Ke 0 0 0" for every material; only a positive, finite Ke makes an emitter.
-    if (material.Get(AI_MATKEY_COLOR_EMISSIVE, colour) == AI_SUCCESS) {
-        const glm::vec3 ke(colour.r, colour.g, colour.b);
-        bool valid = ke != glm::vec3(0.0f);
-        for (int c = 0; c < 3; ++c) valid = valid && std::isfinite(ke[c]) && ke[c] >= 0.0f;
-        if (valid) result.emission = ke;
-    }
-    float shininess = 0.0f, roughnessFactor = 0.0f;
-    if (material.Get(AI_MATKEY_ROUGHNESS_FACTOR, roughnessFactor) == AI_SUCCESS &&
-        std::isfinite(roughnessFactor)) {
-        // glTF: perceptual roughness; its square is the Beckmann roughness this renderer uses (scene.h).
-        result.roughness = std::clamp(roughnessFactor * roughnessFactor, kMinRoughness, 1.0f);
-    } else if (material.Get(AI_MATKEY_SHININESS, shininess) == AI_SUCCESS && std::isfinite(shininess)) {
-        // The Phong exponent of the normalized lobe is n = 2/r^2 - 2 (scene.h), so r = sqrt(2 / (n + 2)).
-        float roughness = shininess > 0.0f ? std::sqrt(2.0f / (shininess + 2.0f)) : 1.0f;
-        result.roughness = std::clamp(roughness, kMinRoughness, 1.0f);
-    }
-    return result;
 }
 
 TriangleMesh readTriangles(const aiMesh& source) {
@@ -397,7 +358,7 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
 }
 
 std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
-                                   const std::string& baseName) {
+                                   const std::string& baseName, std::vector<std::string>* warnings) {
     checkMeshFileClaims(file, where, physicalMemoryBytes());
     Assimp::Importer importer;
     importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, kCreaseAngleDeg);
@@ -440,14 +401,19 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
 
     std::vector<FileMesh> meshes;
     std::map<std::string, int> timesSeen;
+    MaterialReader materialReader{*scene, file, where, {}, {}, false};
+    std::vector<std::optional<FileMaterial>> materials(scene->mNumMaterials);  // each read once
     for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
         const aiMesh& source = *scene->mMeshes[m];
         if ((source.mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
         FileMesh result{readTriangles(source), {}};
         if (result.mesh.triangles.empty()) continue;
         readAttributes(source, isGltf(file), result.mesh);
-        if (source.mMaterialIndex < scene->mNumMaterials)
-            result.material = readMaterial(*scene->mMaterials[source.mMaterialIndex], file);
+        if (source.mMaterialIndex < scene->mNumMaterials) {
+            std::optional<FileMaterial>& material = materials[source.mMaterialIndex];
+            if (!material) material = readFileMaterial(*scene->mMaterials[source.mMaterialIndex], materialReader);
+            result.material = *material;
+        }
         std::string name =
             baseName + "/" + (source.mName.length > 0 ? source.mName.C_Str() : std::to_string(m));
         // A mesh placed by several nodes (glTF instancing) appears once per node: number the repeats.
@@ -458,6 +424,7 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
     if (meshes.empty())
         throw InputError(where, fmt::format("'{}' contains no triangles", file.filename().string()));
     if (meshes.size() == 1) meshes[0].mesh.name = baseName;
+    if (warnings) warnings->insert(warnings->end(), materialReader.warnings.begin(), materialReader.warnings.end());
     return meshes;
 }
 
