@@ -12,6 +12,8 @@
 #include <gtest/gtest.h>
 
 #include "deltagi/error.h"
+#include "deltagi/image.h"
+#include "deltagi/scene_io.h"
 #include "deltagi/transforms.h"
 #include "image_encode.h"
 #include "mesh_io.h"
@@ -230,6 +232,262 @@ TEST(TransformMeshTest, TangentsTurnWithTheMeshAndPlacedCopiesKeepAttributes) {
         EXPECT_NEAR(glm::length(glm::vec3(placed.tangents[i]) - glm::vec3(0, 1, 0)), 0.0f, 1e-5f);
         EXPECT_EQ(placed.tangents[i].w, mesh.tangents[i].w);
     }
+}
+
+// ---- materials ----------------------------------------------------------------------------------------------
+
+constexpr glm::vec3 kRed{1, 0, 0}, kBlue{0, 0, 1};
+
+// A 3x2 PNG (not a power of two): red at the top-left texel, blue elsewhere.
+void writeMarkedPng(const fs::path& path) {
+    Image image(3, 2, 3);
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 3; ++x)
+            for (int c = 0; c < 3; ++c) image.at(x, y, c) = (x == 0 && y == 0 ? kRed : kBlue)[c];
+    writeImage(image, path);
+}
+
+json texturedMaterial() {
+    return json::parse(R"({
+        "materials": [{"name": "painted",
+            "pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.6, 0.7, 0.8], "metallicFactor": 0.3,
+                "roughnessFactor": 0.4, "baseColorTexture": {"index": 0},
+                "metallicRoughnessTexture": {"index": 1, "texCoord": 1}},
+            "normalTexture": {"index": 1, "scale": 0.5},
+            "occlusionTexture": {"index": 1, "strength": 0.25},
+            "emissiveFactor": [1, 0.5, 0], "emissiveTexture": {"index": 0},
+            "alphaMode": "MASK", "alphaCutoff": 0.3}],
+        "textures": [{"source": 0, "sampler": 0}, {"source": 0, "sampler": 1}],
+        "images": [{"uri": "marked.png"}],
+        "samplers": [{"wrapS": 33071, "wrapT": 33648, "magFilter": 9728, "minFilter": 9729}, {}]
+    })");
+}
+
+// The uv at the point (x, y) of the quad: texture coordinates are affine over it.
+glm::vec2 uvAt(const TriangleMesh& mesh, glm::vec2 p) {
+    const glm::vec2 topLeft = mesh.uvs[vertexAt(mesh, {0, 1, 0})];
+    const glm::vec2 topRight = mesh.uvs[vertexAt(mesh, {1, 1, 0})];
+    const glm::vec2 bottomLeft = mesh.uvs[vertexAt(mesh, {0, 0, 0})];
+    return topLeft + p.x * (topRight - topLeft) + (1.0f - p.y) * (bottomLeft - topLeft);
+}
+
+TEST_F(MeshIoTest, GltfMetallicRoughnessMaterialWithTextures) {
+    writeMarkedPng(dir_ / "marked.png");
+    std::vector<std::string> warnings;
+    const std::vector<FileMesh> meshes =
+        loadMeshFile(test::writeQuadGltf(dir_, "quad", texturedMaterial()), "where", "quad", &warnings);
+    EXPECT_TRUE(warnings.empty()) << warnings.front();
+    const FileMaterial& m = meshes[0].material;
+    EXPECT_EQ(m.name, "painted");
+    EXPECT_EQ(m.model, MaterialModel::MetallicRoughness);
+    ASSERT_TRUE(m.albedo && m.metallic && m.roughness);
+    EXPECT_NEAR(glm::length(*m.albedo - glm::vec3(0.5f, 0.6f, 0.7f)), 0.0f, kTolerance);
+    EXPECT_NEAR(m.opacity, 0.8f, kTolerance);
+    EXPECT_NEAR(*m.metallic, 0.3f, kTolerance);
+    EXPECT_NEAR(*m.roughness, 0.4f, kTolerance);  // perceptual, as in the file
+    ASSERT_TRUE(m.emission);
+    EXPECT_NEAR(glm::length(*m.emission - glm::vec3(1.0f, 0.5f, 0.0f)), 0.0f, kTolerance);
+    EXPECT_EQ(m.alphaMode, AlphaMode::Mask);
+    EXPECT_NEAR(m.alphaCutoff, 0.3f, kTolerance);
+    ASSERT_TRUE(m.baseColorTexture && m.metallicRoughnessTexture && m.normalTexture && m.occlusionTexture &&
+                m.emissiveTexture);
+    EXPECT_FALSE(m.specularTexture);
+    EXPECT_EQ(m.baseColorTexture.texture->width(), 3);
+    EXPECT_EQ(m.baseColorTexture.texture->height(), 2);
+    // The sampler and texture coordinate set of each use.
+    const TextureSampler& sampler = m.baseColorTexture.sampler;
+    EXPECT_EQ(sampler.wrapS, TextureWrap::ClampToEdge);
+    EXPECT_EQ(sampler.wrapT, TextureWrap::MirroredRepeat);
+    EXPECT_EQ(sampler.magFilter, TextureFilter::Nearest);
+    EXPECT_EQ(sampler.minFilter, TextureFilter::Linear);
+    EXPECT_FALSE(sampler.mipmaps);
+    EXPECT_EQ(m.baseColorTexture.texCoord, 0);
+    EXPECT_EQ(m.metallicRoughnessTexture.texCoord, 1);
+    EXPECT_EQ(m.metallicRoughnessTexture.sampler.wrapS, TextureWrap::Repeat);
+    EXPECT_TRUE(m.metallicRoughnessTexture.sampler.mipmaps);
+    EXPECT_NEAR(m.normalScale, 0.5f, kTolerance);
+    EXPECT_NEAR(m.occlusionStrength, 0.25f, kTolerance);
+    // One image, read once per encoding: sRGB for colour, linear for data.
+    EXPECT_EQ(m.baseColorTexture.texture, m.emissiveTexture.texture);
+    EXPECT_EQ(m.normalTexture.texture, m.occlusionTexture.texture);
+    EXPECT_NE(m.baseColorTexture.texture, m.normalTexture.texture);
+
+    // Orientation: the image's top-left texel is where the quad's top-left corner is.
+    const TriangleMesh& mesh = meshes[0].mesh;
+    const glm::vec4 nearTopLeft = m.baseColorTexture.sample(uvAt(mesh, {0.05f, 0.95f}), 0.0f);
+    const glm::vec4 nearBottomRight = m.baseColorTexture.sample(uvAt(mesh, {0.95f, 0.05f}), 0.0f);
+    const glm::vec4 nearTopRight = m.baseColorTexture.sample(uvAt(mesh, {0.95f, 0.95f}), 0.0f);
+    EXPECT_NEAR(glm::length(glm::vec3(nearTopLeft) - kRed), 0.0f, 1e-3f);
+    EXPECT_NEAR(glm::length(glm::vec3(nearBottomRight) - kBlue), 0.0f, 1e-3f);
+    EXPECT_NEAR(glm::length(glm::vec3(nearTopRight) - kBlue), 0.0f, 1e-3f);
+}
+
+TEST_F(MeshIoTest, GltfFactorsOutOfRangeAreClampedWithAWarningAndBlendIsMask) {
+    json document = json::parse(R"({"materials": [{"name": "odd", "alphaMode": "BLEND",
+        "pbrMetallicRoughness": {"metallicFactor": 1.5, "roughnessFactor": -0.5}}]})");
+    std::vector<std::string> warnings;
+    const std::vector<FileMesh> meshes =
+        loadMeshFile(test::writeQuadGltf(dir_, "odd", document), "where", "odd", &warnings);
+    const FileMaterial& m = meshes[0].material;
+    EXPECT_EQ(*m.metallic, 1.0f);
+    EXPECT_GT(*m.roughness, 0.0f);
+    EXPECT_LT(*m.roughness, 0.01f);
+    EXPECT_EQ(m.alphaMode, AlphaMode::Mask);
+    EXPECT_EQ(m.alphaCutoff, 0.5f);
+    std::string all;
+    for (const std::string& w : warnings) all += w + "\n";
+    expectContains(all, {"where: material 'odd' of 'odd.gltf': metallicFactor is 1.5, outside [0, 1]: clamped",
+                         "roughnessFactor is -0.5", "alphaMode BLEND is read as MASK"});
+}
+
+TEST_F(MeshIoTest, BrokenTexturesAreErrorsNamingFileMaterialAndTexture) {
+    json document = texturedMaterial();
+    const fs::path gltf = test::writeQuadGltf(dir_, "quad", document);
+    // Missing.
+    expectContains(inputErrorOf([&] { loadMeshFile(gltf, "where", "quad"); }),
+                   {"where: material 'painted' of 'quad.gltf', ", " texture: texture '", "marked.png",
+                    "no such file"});
+    // Empty, and not an image.
+    write("marked.png", "");
+    expectContains(inputErrorOf([&] { loadMeshFile(gltf, "where", "quad"); }),
+                   {"material 'painted' of 'quad.gltf', ", "marked.png", "empty"});
+    write("marked.png", "this is not a PNG file, just text");
+    expectContains(inputErrorOf([&] { loadMeshFile(gltf, "where", "quad"); }),
+                   {"material 'painted' of 'quad.gltf', ", "marked.png", "Not a PNG"});
+}
+
+TEST_F(MeshIoTest, ObjMaps) {
+    writeMarkedPng(dir_ / "kd.png");
+    Image flat(4, 4, 3);  // a normal map's flat colour (0.5, 0.5, 1), linear
+    Image height(4, 4, 3, 0.2f);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) flat.at(x, y, 0) = flat.at(x, y, 1) = srgbToLinearValue(0.5f), flat.at(x, y, 2) = 1;
+    writeImage(flat, dir_ / "normals.png");
+    writeImage(height, dir_ / "height.png");
+    write("m.mtl", "newmtl a\nKd 0.5 0.5 0.5\nKs 0.1 0.1 0.1\nNs 10\nmap_Kd kd.png\nmap_Ks kd.png\n"
+                   "map_Bump normals.png\nmap_Ns kd.png\n"
+                   "newmtl b\nKd 0.5 0.5 0.5\nbump height.png\n");
+    const fs::path obj = write("m.obj",
+                               "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                               "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
+    std::vector<std::string> warnings;
+    const std::vector<FileMesh> meshes = loadMeshFile(obj, "where", "m", &warnings);
+    ASSERT_EQ(meshes.size(), 2u);
+    const FileMaterial& a = meshes[0].material.name == "a" ? meshes[0].material : meshes[1].material;
+    const FileMaterial& b = meshes[0].material.name == "a" ? meshes[1].material : meshes[0].material;
+    EXPECT_EQ(a.model, MaterialModel::Phong);
+    ASSERT_TRUE(a.baseColorTexture && a.specularTexture && a.normalTexture);
+    EXPECT_EQ(a.baseColorTexture.texture, a.specularTexture.texture);  // one file, one encoding: read once
+    EXPECT_FALSE(b.normalTexture);  // a height map
+    std::string all;
+    for (const std::string& w : warnings) all += w + "\n";
+    expectContains(all, {"where: material 'a' of 'm.obj': a shininess map (map_Ns) ('kd.png') is ignored",
+                         "material 'b' of 'm.obj': the bump map", "is a height map"});
+    // OBJ's vt orientation reaches the texture as glTF's: the image's top-left texel at the top-left corner.
+    const TriangleMesh& mesh = meshes[0].material.name == "a" ? meshes[0].mesh : meshes[1].mesh;
+    const size_t right = vertexAt(mesh, {1, 1, 0});
+    TextureSampler nearest;
+    nearest.magFilter = TextureFilter::Nearest;
+    const glm::vec2 nearTopLeft = mesh.uvs[right] + glm::vec2(-0.9f, 0.1f);
+    EXPECT_NEAR(glm::length(glm::vec3(a.baseColorTexture.texture->sample(nearTopLeft, 0.0f, nearest)) - kRed), 0.0f,
+                1e-3f);
+}
+
+TEST_F(MeshIoTest, SampleModelBoxTexturedLoads) {
+    const fs::path glb = "/usr/share/assimp/models/glTF2/BoxTextured-glTF-Binary/BoxTextured.glb";
+    if (!fs::exists(glb)) GTEST_SKIP() << glb << " is missing: install Debian's assimp-testmodels";
+    std::vector<std::string> warnings;
+    const std::vector<FileMesh> meshes = loadMeshFile(glb, "where", "box", &warnings);
+    ASSERT_EQ(meshes.size(), 1u);
+    const FileMaterial& m = meshes[0].material;
+    EXPECT_EQ(m.model, MaterialModel::MetallicRoughness);
+    ASSERT_TRUE(m.baseColorTexture);  // embedded PNG ("*0"), decoded from memory
+    EXPECT_GT(m.baseColorTexture.texture->width(), 1);
+    EXPECT_EQ(meshes[0].mesh.uvs.size(), meshes[0].mesh.positions.size());
+    EXPECT_EQ(meshes[0].mesh.tangents.size(), meshes[0].mesh.positions.size());
+    EXPECT_TRUE(warnings.empty());
+    // The .gltf with its PNG beside it gives the same image.
+    const fs::path gltf = "/usr/share/assimp/models/glTF2/BoxTextured-glTF/BoxTextured.gltf";
+    if (fs::exists(gltf)) {
+        const FileMaterial external = loadMeshFile(gltf, "where", "box")[0].material;
+        ASSERT_TRUE(external.baseColorTexture);
+        EXPECT_EQ(external.baseColorTexture.texture->width(), m.baseColorTexture.texture->width());
+        EXPECT_EQ(external.baseColorTexture.texture->average(), m.baseColorTexture.texture->average());
+    }
+}
+
+// ---- scene files ----------------------------------------------------------------------------------------------
+
+json sceneWith(json material, json shape = {{"type", "quad"}, {"size", {1, 1}}}) {
+    json scene = json::parse(R"({
+        "camera": {"width": 32, "height": 24, "fov_y_deg": 60, "position": [0, 1, 5], "look_at": [0, 0, 0]},
+        "lights": [{"type": "point", "position": [0, 5, 0], "intensity": 10}]})");
+    json entry = {{"name", "thing"}, {"material", material}};
+    if (shape.is_string())
+        entry["file"] = shape;
+    else
+        entry["shape"] = shape;
+    scene["virtual"] = {entry};
+    return scene;
+}
+
+TEST_F(MeshIoTest, SceneMetallicRoughnessMaterials) {
+    const fs::path sceneFile = dir_ / "s.json";
+    Scene scene = loadScene(sceneWith({{"base_color", {0.9, 0.5, 0.1, 0.5}}, {"roughness", 0.3}}), sceneFile);
+    const Material& m = scene.virtuals[0].material;
+    EXPECT_EQ(m.model, MaterialModel::MetallicRoughness);
+    EXPECT_NEAR(m.albedo.y, 0.5f, kTolerance);
+    EXPECT_NEAR(m.opacity, 0.5f, kTolerance);
+    EXPECT_EQ(m.metallic, 0.0f);
+    EXPECT_NEAR(m.roughness, 0.3f, kTolerance);
+    EXPECT_EQ(loadScene(sceneWith({{"metallic", 1}}), sceneFile).virtuals[0].material.model,
+              MaterialModel::MetallicRoughness);
+    EXPECT_EQ(loadScene(sceneWith({{"albedo", 0.5}}), sceneFile).virtuals[0].material.model, MaterialModel::Phong);
+
+    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"specular", 0.1}, {"metallic", 0.5}}), sceneFile); }),
+                   {"s.json: virtual[0].material.metallic: give either \"specular\""});
+    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"metallic", 1.5}}), sceneFile); }),
+                   {"s.json: virtual[0].material.metallic: expected a number in [0, 1], got 1.5"});
+    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"roughness", -1}}), sceneFile); }),
+                   {"s.json: virtual[0].material.roughness: expected a number in (0, 1]"});
+    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"alpha_mode", "MASK"}}), sceneFile); }),
+                   {"virtual[0].material.alpha_mode: expected \"opaque\", \"mask\" or \"blend\""});
+    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"base_color_texture", "none.png"}}), sceneFile); }),
+                   {"s.json: virtual[0].material.base_color_texture: file not found", "none.png"});
+    write("garbage.png", "not an image");
+    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"normal_texture", "garbage.png"}}), sceneFile); }),
+                   {"s.json: virtual[0].material.normal_texture: texture '", "garbage.png"});
+}
+
+TEST_F(MeshIoTest, SceneTexturesOverrideTheFilesAndNeedTextureCoordinates) {
+    writeMarkedPng(dir_ / "marked.png");
+    test::writeQuadGltf(dir_, "quad", texturedMaterial());
+    const fs::path sceneFile = dir_ / "s.json";
+    // The file's material, with the JSON's keys over it.
+    Scene scene = loadScene(sceneWith({{"metallic", 0.9}, {"alpha_mode", "blend"}, {"occlusion_texture", "marked.png"}},
+                                      "quad.gltf"),
+                            sceneFile);
+    const Material& m = scene.virtuals[0].material;
+    EXPECT_EQ(m.model, MaterialModel::MetallicRoughness);
+    EXPECT_NEAR(m.metallic, 0.9f, kTolerance);
+    EXPECT_NEAR(m.roughness, 0.4f, kTolerance);
+    EXPECT_NEAR(m.albedo.x, 0.5f, kTolerance);
+    EXPECT_EQ(m.alphaMode, AlphaMode::Mask);
+    EXPECT_EQ(m.alphaCutoff, 0.5f);
+    ASSERT_TRUE(m.baseColorTexture && m.normalTexture && m.occlusionTexture);
+    EXPECT_EQ(m.occlusionStrength, 1.0f);  // the JSON's texture, at full strength
+    EXPECT_EQ(scene.virtuals[0].uvs.size(), scene.virtuals[0].positions.size());
+    std::string all;
+    for (const std::string& w : scene.warnings) all += w + "\n";
+    expectContains(all, {"s.json: virtual[0].material.alpha_mode: \"blend\" is read as \"mask\""});
+
+    // A normal map on a mesh without texture coordinates (the shapes have none): a warning, and no normal map.
+    scene = loadScene(sceneWith({{"normal_texture", "marked.png"}}), sceneFile);
+    EXPECT_FALSE(scene.virtuals[0].material.normalTexture);
+    all.clear();
+    for (const std::string& w : scene.warnings) all += w + "\n";
+    expectContains(all, {"s.json: virtual[0].material: mesh 'thing' has no texture coordinates (set 0): its normal "
+                         "texture"});
 }
 
 }  // namespace
