@@ -53,14 +53,16 @@ glm::vec3 unitOrFallback(glm::dvec3 n) {
 
 // Keeps element i of `attribute` (empty, or one per vertex) at newIndex[i], for the vertices kept.
 template <typename T>
-void compact(std::vector<T>& attribute, const std::vector<uint32_t>& newIndex, uint32_t kept, uint32_t unused) {
+void compact(std::vector<T>& attribute, const std::vector<uint32_t>& newIndex, uint32_t kept,
+             uint32_t unused) {
     if (attribute.size() != newIndex.size()) return;
     for (size_t i = 0; i < newIndex.size(); ++i)
         if (newIndex[i] != unused) attribute[newIndex[i]] = attribute[i];
     attribute.resize(kept);
 }
 
-// Removes the vertices no triangle refers to, keeping the order of the others, and their attributes with them.
+// Removes the vertices no triangle refers to, keeping the order of the others, and their attributes with
+// them.
 void removeUnreferencedVertices(TriangleMesh& mesh) {
     constexpr uint32_t kUnused = UINT32_MAX;
     std::vector<uint32_t> newIndex(mesh.positions.size(), kUnused);
@@ -96,9 +98,10 @@ void checkAttributes(const TriangleMesh& mesh, const std::string& where) {
         const std::vector<glm::vec2>& uvs = set == 0 ? mesh.uvs : mesh.uvs1;
         for (size_t i = 0; i < uvs.size(); ++i)
             if (!std::isfinite(uvs[i].x) || !std::isfinite(uvs[i].y))
-                throw InputError(where, fmt::format("texture coordinate (set {}) of vertex {} of mesh '{}' is "
-                                                    "not finite: ({}, {})",
-                                                    set, i, mesh.name, uvs[i].x, uvs[i].y));
+                throw InputError(where,
+                                 fmt::format("texture coordinate (set {}) of vertex {} of mesh '{}' is "
+                                             "not finite: ({}, {})",
+                                             set, i, mesh.name, uvs[i].x, uvs[i].y));
     }
     for (size_t i = 0; i < mesh.colors.size(); ++i) {
         const glm::vec3 c = mesh.colors[i];

@@ -94,7 +94,8 @@ void readAttributes(const aiMesh& source, bool linearColours, TriangleMesh& mesh
         for (unsigned i = 0; i < count; ++i) {
             const aiVector3D &t = source.mTangents[i], &b = source.mBitangents[i], &n = source.mNormals[i];
             const glm::vec3 tangent(t.x, t.y, t.z);
-            const float handedness = glm::dot(glm::cross(glm::vec3(n.x, n.y, n.z), tangent), glm::vec3(b.x, b.y, b.z));
+            const float handedness =
+                glm::dot(glm::cross(glm::vec3(n.x, n.y, n.z), tangent), glm::vec3(b.x, b.y, b.z));
             // A NaN tangent (Assimp's mark for degenerate texture coordinates) is replaced by cleanMesh().
             mesh.tangents.emplace_back(tangent, handedness < 0.0f ? -1.0f : 1.0f);
         }
@@ -274,9 +275,10 @@ void validateRawScene(aiScene& scene, const std::filesystem::path& file, const s
             for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
                 const aiVector3D& uv = mesh->mTextureCoords[set][i];
                 if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
-                    throw InputError(where, fmt::format("texture coordinate (set {}) of vertex {} of mesh '{}' is "
-                                                        "not finite: ({}, {}) ('{}')",
-                                                        set, i, meshName, uv.x, 1.0f - uv.y, name));  // glTF's v
+                    throw InputError(where,
+                                     fmt::format("texture coordinate (set {}) of vertex {} of mesh '{}' is "
+                                                 "not finite: ({}, {}) ('{}')",
+                                                 set, i, meshName, uv.x, 1.0f - uv.y, name));  // glTF's v
             }
         }
         unsigned primitiveTypes = 0;
@@ -411,7 +413,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
         readAttributes(source, isGltf(file), result.mesh);
         if (source.mMaterialIndex < scene->mNumMaterials) {
             std::optional<FileMaterial>& material = materials[source.mMaterialIndex];
-            if (!material) material = readFileMaterial(*scene->mMaterials[source.mMaterialIndex], materialReader);
+            if (!material)
+                material = readFileMaterial(*scene->mMaterials[source.mMaterialIndex], materialReader);
             result.material = *material;
         }
         std::string name =
@@ -424,7 +427,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
     if (meshes.empty())
         throw InputError(where, fmt::format("'{}' contains no triangles", file.filename().string()));
     if (meshes.size() == 1) meshes[0].mesh.name = baseName;
-    if (warnings) warnings->insert(warnings->end(), materialReader.warnings.begin(), materialReader.warnings.end());
+    if (warnings)
+        warnings->insert(warnings->end(), materialReader.warnings.begin(), materialReader.warnings.end());
     return meshes;
 }
 

@@ -70,9 +70,10 @@ TextureSampler readSampler(const aiMaterial& material, aiTextureType type) {
         sampler.magFilter = value == kGlNearest ? TextureFilter::Nearest : TextureFilter::Linear;
     if (material.Get(AI_MATKEY_GLTF_MAPPINGFILTER_MIN(type, 0), value) == AI_SUCCESS) {
         // NEAREST, NEAREST_MIPMAP_NEAREST, NEAREST_MIPMAP_LINEAR pick the nearest texel within a level.
-        sampler.minFilter = value == kGlNearest || value == kGlNearestMipmapNearest || value == kGlNearestMipmapLinear
-                                ? TextureFilter::Nearest
-                                : TextureFilter::Linear;
+        sampler.minFilter =
+            value == kGlNearest || value == kGlNearestMipmapNearest || value == kGlNearestMipmapLinear
+                ? TextureFilter::Nearest
+                : TextureFilter::Linear;
         sampler.mipmaps = value >= kGlNearestMipmapNearest;
     }
     return sampler;
@@ -96,8 +97,8 @@ std::shared_ptr<const Texture> embeddedTexture(const aiTexture& texture, Texture
         const aiTexel& t = texture.pcData[i];
         texels[i] = glm::vec4(decode(t.r), decode(t.g), decode(t.b), static_cast<float>(t.a) / 255.0f);
     }
-    return std::make_shared<const Texture>(static_cast<int>(texture.mWidth), static_cast<int>(texture.mHeight),
-                                           std::move(texels), where);
+    return std::make_shared<const Texture>(static_cast<int>(texture.mWidth),
+                                           static_cast<int>(texture.mHeight), std::move(texels), where);
 }
 
 // The texture of `type` (its first), with its sampler and texture coordinate set; an empty slot when the
@@ -110,9 +111,10 @@ TextureSlot readTexture(const aiMaterial& material, aiTextureType type, TextureE
     const std::string where = fmt::format("{}: {}, {}", reader.where, describe(result, reader), label);
     int texCoord = 0;
     if (material.Get(AI_MATKEY_UVWSRC(type, 0), texCoord) == AI_SUCCESS && texCoord != 0 && texCoord != 1) {
-        reader.warnings.push_back(fmt::format("{}: reads texture coordinate set {}; only sets 0 and 1 are "
-                                              "read: the texture is ignored",
-                                              where, texCoord));
+        reader.warnings.push_back(
+            fmt::format("{}: reads texture coordinate set {}; only sets 0 and 1 are "
+                        "read: the texture is ignored",
+                        where, texCoord));
         return slot;
     }
     slot.texCoord = texCoord;
@@ -122,7 +124,8 @@ TextureSlot readTexture(const aiMaterial& material, aiTextureType type, TextureE
         return slot;
     }
     if (path.C_Str()[0] == '*')
-        throw InputError(where, fmt::format("embedded texture '{}' does not exist in the file", path.C_Str()));
+        throw InputError(where,
+                         fmt::format("embedded texture '{}' does not exist in the file", path.C_Str()));
     fs::path file = fs::path(path.C_Str());
     if (file.is_relative()) file = reader.file.parent_path() / file;
     slot.texture = reader.textures.load(file.lexically_normal(), encoding, where);
@@ -143,7 +146,10 @@ void readMetallicRoughness(const aiMaterial& material, FileMaterial& result, Mat
         material.Get(AI_MATKEY_COLOR_DIFFUSE, base) == AI_SUCCESS) {
         glm::vec3 rgb;
         for (int c = 0; c < 3; ++c)
-            rgb[c] = unitFactor(c == 0 ? base.r : c == 1 ? base.g : base.b, 0.0f, "baseColorFactor", result, reader);
+            rgb[c] = unitFactor(c == 0   ? base.r
+                                : c == 1 ? base.g
+                                         : base.b,
+                                0.0f, "baseColorFactor", result, reader);
         result.albedo = rgb;
         result.opacity = unitFactor(base.a, 0.0f, "baseColorFactor's alpha", result, reader);
     }
@@ -162,10 +168,11 @@ void readMetallicRoughness(const aiMaterial& material, FileMaterial& result, Mat
             result.alphaCutoff = unitFactor(value, 0.0f, "alphaCutoff", result, reader);
         if (mode == "BLEND" && !reader.warnedBlend) {
             reader.warnedBlend = true;
-            reader.warnings.push_back(fmt::format("{}: {}: alphaMode BLEND is read as MASK with alphaCutoff 0.5 "
-                                                  "(surfaces are opaque or cut out, never blended; said once "
-                                                  "per file)",
-                                                  reader.where, describe(result, reader)));
+            reader.warnings.push_back(
+                fmt::format("{}: {}: alphaMode BLEND is read as MASK with alphaCutoff 0.5 "
+                            "(surfaces are opaque or cut out, never blended; said once "
+                            "per file)",
+                            reader.where, describe(result, reader)));
         }
     }
     result.baseColorTexture = readTexture(material, aiTextureType_BASE_COLOR, TextureEncoding::Srgb,
@@ -174,9 +181,8 @@ void readMetallicRoughness(const aiMaterial& material, FileMaterial& result, Mat
         result.baseColorTexture = readTexture(material, aiTextureType_DIFFUSE, TextureEncoding::Srgb,
                                               "base colour texture", result, reader);
     // Assimp 5.2 keeps glTF's metallicRoughnessTexture as aiTextureType_UNKNOWN.
-    result.metallicRoughnessTexture =
-        readTexture(material, aiTextureType_UNKNOWN, TextureEncoding::Linear, "metallic-roughness texture",
-                    result, reader);
+    result.metallicRoughnessTexture = readTexture(material, aiTextureType_UNKNOWN, TextureEncoding::Linear,
+                                                  "metallic-roughness texture", result, reader);
     result.occlusionTexture = readTexture(material, aiTextureType_LIGHTMAP, TextureEncoding::Linear,
                                           "occlusion texture", result, reader);
     if (result.occlusionTexture &&
@@ -190,17 +196,17 @@ void warnIgnoredMaps(const aiMaterial& material, FileMaterial& result, MaterialR
         aiTextureType type;
         const char* what;
     };
-    static constexpr Ignored kIgnored[] = {
-        {aiTextureType_SHININESS, "a shininess map (map_Ns)"},
-        {aiTextureType_DIFFUSE_ROUGHNESS, "a roughness map (map_Pr)"},
-        {aiTextureType_OPACITY, "an opacity map (map_d)"},
-        {aiTextureType_DISPLACEMENT, "a displacement map (disp)"}};
+    static constexpr Ignored kIgnored[] = {{aiTextureType_SHININESS, "a shininess map (map_Ns)"},
+                                           {aiTextureType_DIFFUSE_ROUGHNESS, "a roughness map (map_Pr)"},
+                                           {aiTextureType_OPACITY, "an opacity map (map_d)"},
+                                           {aiTextureType_DISPLACEMENT, "a displacement map (disp)"}};
     aiString path;
     for (const Ignored& map : kIgnored)
         if (material.Get(AI_MATKEY_TEXTURE(map.type, 0), path) == AI_SUCCESS)
-            reader.warnings.push_back(fmt::format("{}: {}: {} ('{}') is ignored: deltagi's Phong materials have "
-                                                  "no such texture",
-                                                  reader.where, describe(result, reader), map.what, path.C_Str()));
+            reader.warnings.push_back(
+                fmt::format("{}: {}: {} ('{}') is ignored: deltagi's Phong materials have "
+                            "no such texture",
+                            reader.where, describe(result, reader), map.what, path.C_Str()));
 }
 
 void readPhongTextures(const aiMaterial& material, FileMaterial& result, MaterialReader& reader) {
@@ -215,14 +221,15 @@ void readPhongTextures(const aiMaterial& material, FileMaterial& result, Materia
                                    result, reader);
     if (bump && !result.normalTexture) {
         const glm::vec4 mean = bump.texture->average();
-        if (std::abs(mean.x - 0.5f) < kNormalMapMeanTolerance && std::abs(mean.y - 0.5f) < kNormalMapMeanTolerance &&
-            mean.z > kNormalMapMinBlue)
+        if (std::abs(mean.x - 0.5f) < kNormalMapMeanTolerance &&
+            std::abs(mean.y - 0.5f) < kNormalMapMeanTolerance && mean.z > kNormalMapMinBlue)
             result.normalTexture = bump;
         else
-            reader.warnings.push_back(fmt::format("{}: {}: the bump map ('{}') is a height map, which deltagi "
-                                                  "does not read: ignored (give a tangent-space normal map as "
-                                                  "\"norm\")",
-                                                  reader.where, describe(result, reader), bump.texture->name()));
+            reader.warnings.push_back(
+                fmt::format("{}: {}: the bump map ('{}') is a height map, which deltagi "
+                            "does not read: ignored (give a tangent-space normal map as "
+                            "\"norm\")",
+                            reader.where, describe(result, reader), bump.texture->name()));
     }
     warnIgnoredMaps(material, result, reader);
 }
@@ -314,15 +321,16 @@ void dropUnusableTextures(Material& material, const TriangleMesh& mesh, const st
         if (!*s.slot) continue;
         const bool hasSet = s.slot->texCoord == 0 ? !mesh.uvs.empty() : !mesh.uvs1.empty();
         if (!hasSet) {
-            warnings.push_back(fmt::format("{}: mesh '{}' has no texture coordinates (set {}): its {} texture "
-                                           "('{}') is ignored",
-                                           where, mesh.name, s.slot->texCoord, s.name, s.slot->texture->name()));
+            warnings.push_back(
+                fmt::format("{}: mesh '{}' has no texture coordinates (set {}): its {} texture "
+                            "('{}') is ignored",
+                            where, mesh.name, s.slot->texCoord, s.name, s.slot->texture->name()));
             *s.slot = TextureSlot{};
         }
     }
     if (material.normalTexture && mesh.tangents.empty()) {
-        warnings.push_back(fmt::format("{}: mesh '{}' has no tangents: its normal texture ('{}') is ignored", where,
-                                       mesh.name, material.normalTexture.texture->name()));
+        warnings.push_back(fmt::format("{}: mesh '{}' has no tangents: its normal texture ('{}') is ignored",
+                                       where, mesh.name, material.normalTexture.texture->name()));
         material.normalTexture = TextureSlot{};
     }
 }

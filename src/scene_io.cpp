@@ -236,16 +236,17 @@ TextureSlot readTextureFile(const JsonNode& node, TextureEncoding encoding, Mesh
 }
 
 MaterialOverrides readMaterial(const JsonNode& node, MeshInputs& inputs) {
-    node.allowKeys({"albedo", "specular", "roughness", "glossiness", "emission", "emission_scale", "base_color",
-                    "metallic", "base_color_texture", "metallic_roughness_texture", "normal_texture",
-                    "emissive_texture", "occlusion_texture", "alpha_mode", "alpha_cutoff"});
+    node.allowKeys({"albedo", "specular", "roughness", "glossiness", "emission", "emission_scale",
+                    "base_color", "metallic", "base_color_texture", "metallic_roughness_texture",
+                    "normal_texture", "emissive_texture", "occlusion_texture", "alpha_mode", "alpha_cutoff"});
     MaterialOverrides result;
     // The metallic-roughness model's own keys, and Phong's.
     for (const char* key : {"base_color", "metallic", "metallic_roughness_texture"})
         if (auto n = node.find(key)) {
             if (node.has("specular"))
-                n->fail("give either \"specular\" (the Phong model) or \"base_color\", \"metallic\" and "
-                        "\"metallic_roughness_texture\" (glTF's metallic-roughness model), not both");
+                n->fail(
+                    "give either \"specular\" (the Phong model) or \"base_color\", \"metallic\" and "
+                    "\"metallic_roughness_texture\" (glTF's metallic-roughness model), not both");
             result.model = MaterialModel::MetallicRoughness;
         }
     if (node.has("specular")) result.model = MaterialModel::Phong;
@@ -271,9 +272,10 @@ MaterialOverrides readMaterial(const JsonNode& node, MeshInputs& inputs) {
         } else if (mode == "mask" || mode == "blend") {
             result.alphaMode = AlphaMode::Mask;
             if (mode == "blend")
-                inputs.warnings.push_back(n->where() +
-                                          ": \"blend\" is read as \"mask\" with alpha_cutoff 0.5 (surfaces are "
-                                          "opaque or cut out, never blended)");
+                inputs.warnings.push_back(
+                    n->where() +
+                    ": \"blend\" is read as \"mask\" with alpha_cutoff 0.5 (surfaces are "
+                    "opaque or cut out, never blended)");
         } else {
             n->fail("expected \"opaque\", \"mask\" or \"blend\", got \"" + mode + "\"");
         }
@@ -314,10 +316,12 @@ Material combineMaterial(const MaterialOverrides& json, const FileMaterial& file
     m.model = json.model.value_or(file.model);
     const bool phong = m.model == MaterialModel::Phong, fileModel = m.model == file.model;
     m.albedo = json.albedo.value_or(file.albedo.value_or(m.albedo));
-    if (phong) m.specular = json.specular.value_or(fileModel ? file.specular.value_or(m.specular) : m.specular);
+    if (phong)
+        m.specular = json.specular.value_or(fileModel ? file.specular.value_or(m.specular) : m.specular);
     m.roughness =
         json.roughness.value_or(convertRoughness(file.roughness, file.model, m.model).value_or(m.roughness));
-    if (!phong) m.metallic = json.metallic.value_or(fileModel ? file.metallic.value_or(m.metallic) : m.metallic);
+    if (!phong)
+        m.metallic = json.metallic.value_or(fileModel ? file.metallic.value_or(m.metallic) : m.metallic);
     m.opacity = json.opacity.value_or(file.opacity);
     m.alphaMode = json.alphaMode.value_or(file.alphaMode);
     m.alphaCutoff = json.alphaCutoff.value_or(file.alphaCutoff);
@@ -529,9 +533,8 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, MeshInputs& input
     return result;
 }
 
-// Appends the mesh files it reads to `inputs.files`, its warnings to `inputs.warnings`, and the entries' keyframes to
-// `keyframes->animations`.
-// `entries`, when given, gets each mesh's entry index.
+// Appends the mesh files it reads to `inputs.files`, its warnings to `inputs.warnings`, and the entries'
+// keyframes to `keyframes->animations`. `entries`, when given, gets each mesh's entry index.
 std::vector<TriangleMesh> readMeshList(const JsonNode& list, MeshInputs& inputs, bool movable,
                                        const KeyframeReader* keyframes = nullptr,
                                        std::vector<int>* entries = nullptr) {

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/error.h"
 #include "deltagi/image.h"
@@ -34,7 +34,8 @@ class MeshIoTest : public ::testing::Test {
   protected:
     void SetUp() override {
         const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::temp_directory_path() / ("deltagi_mesh_io_" + std::to_string(getpid()) + "_" + info->name());
+        dir_ =
+            fs::temp_directory_path() / ("deltagi_mesh_io_" + std::to_string(getpid()) + "_" + info->name());
         fs::remove_all(dir_);
         fs::create_directories(dir_);
     }
@@ -118,11 +119,12 @@ TEST_F(MeshIoTest, ObjTextureCoordinatesAreFlippedToGltfs) {
 }
 
 TEST_F(MeshIoTest, PlyVertexColoursAreSrgbDecoded) {
-    const fs::path ply = write("coloured.ply",
-                               "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
-                               "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
-                               "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                               "0 0 0 255 128 0\n1 0 0 255 128 0\n0 1 0 0 0 255\n3 0 1 2\n");
+    const fs::path ply =
+        write("coloured.ply",
+              "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+              "property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n"
+              "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+              "0 0 0 255 128 0\n1 0 0 255 128 0\n0 1 0 0 0 255\n3 0 1 2\n");
     const TriangleMesh mesh = loadMeshFile(ply, "where", "coloured")[0].mesh;
     ASSERT_EQ(mesh.colors.size(), mesh.positions.size());
     EXPECT_TRUE(mesh.uvs.empty());
@@ -148,8 +150,8 @@ TEST_F(MeshIoTest, NonFiniteTextureCoordinatesAreErrorsNamingTheVertex) {
                    {"where: texture coordinate (set 0) of vertex 2 of mesh 'nan' is not finite: (nan, 0)",
                     "nan-uv.gltf"});
     // Out of [0, 1] is fine: textures repeat.
-    const fs::path wide = write("wide-uv.obj",
-                                "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt -3 0\nvt 7.5 0\nvt 0 12\nf 1/1 2/2 3/3\n");
+    const fs::path wide =
+        write("wide-uv.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt -3 0\nvt 7.5 0\nvt 0 12\nf 1/1 2/2 3/3\n");
     TriangleMesh mesh = loadMeshFile(wide, "where", "wide")[0].mesh;
     EXPECT_NO_THROW(cleanMesh(mesh, "where"));
     EXPECT_NEAR(mesh.uvs[vertexAt(mesh, {1, 0, 0})].x, 7.5f, kTolerance);
@@ -234,7 +236,8 @@ TEST(TransformMeshTest, TangentsTurnWithTheMeshAndPlacedCopiesKeepAttributes) {
     }
 }
 
-// ---- materials ----------------------------------------------------------------------------------------------
+// ---- materials
+// ----------------------------------------------------------------------------------------------
 
 constexpr glm::vec3 kRed{1, 0, 0}, kBlue{0, 0, 1};
 
@@ -336,17 +339,18 @@ TEST_F(MeshIoTest, GltfFactorsOutOfRangeAreClampedWithAWarningAndBlendIsMask) {
     EXPECT_EQ(m.alphaCutoff, 0.5f);
     std::string all;
     for (const std::string& w : warnings) all += w + "\n";
-    expectContains(all, {"where: material 'odd' of 'odd.gltf': metallicFactor is 1.5, outside [0, 1]: clamped",
-                         "roughnessFactor is -0.5", "alphaMode BLEND is read as MASK"});
+    expectContains(all,
+                   {"where: material 'odd' of 'odd.gltf': metallicFactor is 1.5, outside [0, 1]: clamped",
+                    "roughnessFactor is -0.5", "alphaMode BLEND is read as MASK"});
 }
 
 TEST_F(MeshIoTest, BrokenTexturesAreErrorsNamingFileMaterialAndTexture) {
     json document = texturedMaterial();
     const fs::path gltf = test::writeQuadGltf(dir_, "quad", document);
     // Missing.
-    expectContains(inputErrorOf([&] { loadMeshFile(gltf, "where", "quad"); }),
-                   {"where: material 'painted' of 'quad.gltf', ", " texture: texture '", "marked.png",
-                    "no such file"});
+    expectContains(
+        inputErrorOf([&] { loadMeshFile(gltf, "where", "quad"); }),
+        {"where: material 'painted' of 'quad.gltf', ", " texture: texture '", "marked.png", "no such file"});
     // Empty, and not an image.
     write("marked.png", "");
     expectContains(inputErrorOf([&] { loadMeshFile(gltf, "where", "quad"); }),
@@ -361,15 +365,18 @@ TEST_F(MeshIoTest, ObjMaps) {
     Image flat(4, 4, 3);  // a normal map's flat colour (0.5, 0.5, 1), linear
     Image height(4, 4, 3, 0.2f);
     for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 4; ++x) flat.at(x, y, 0) = flat.at(x, y, 1) = srgbToLinearValue(0.5f), flat.at(x, y, 2) = 1;
+        for (int x = 0; x < 4; ++x)
+            flat.at(x, y, 0) = flat.at(x, y, 1) = srgbToLinearValue(0.5f), flat.at(x, y, 2) = 1;
     writeImage(flat, dir_ / "normals.png");
     writeImage(height, dir_ / "height.png");
-    write("m.mtl", "newmtl a\nKd 0.5 0.5 0.5\nKs 0.1 0.1 0.1\nNs 10\nmap_Kd kd.png\nmap_Ks kd.png\n"
-                   "map_Bump normals.png\nmap_Ns kd.png\n"
-                   "newmtl b\nKd 0.5 0.5 0.5\nbump height.png\n");
-    const fs::path obj = write("m.obj",
-                               "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
-                               "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
+    write("m.mtl",
+          "newmtl a\nKd 0.5 0.5 0.5\nKs 0.1 0.1 0.1\nNs 10\nmap_Kd kd.png\nmap_Ks kd.png\n"
+          "map_Bump normals.png\nmap_Ns kd.png\n"
+          "newmtl b\nKd 0.5 0.5 0.5\nbump height.png\n");
+    const fs::path obj =
+        write("m.obj",
+              "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+              "usemtl a\nf 1/1 2/2 3/3\nusemtl b\nf 1/1 3/3 4/4\n");
     std::vector<std::string> warnings;
     const std::vector<FileMesh> meshes = loadMeshFile(obj, "where", "m", &warnings);
     ASSERT_EQ(meshes.size(), 2u);
@@ -378,7 +385,7 @@ TEST_F(MeshIoTest, ObjMaps) {
     EXPECT_EQ(a.model, MaterialModel::Phong);
     ASSERT_TRUE(a.baseColorTexture && a.specularTexture && a.normalTexture);
     EXPECT_EQ(a.baseColorTexture.texture, a.specularTexture.texture);  // one file, one encoding: read once
-    EXPECT_FALSE(b.normalTexture);  // a height map
+    EXPECT_FALSE(b.normalTexture);                                     // a height map
     std::string all;
     for (const std::string& w : warnings) all += w + "\n";
     expectContains(all, {"where: material 'a' of 'm.obj': a shininess map (map_Ns) ('kd.png') is ignored",
@@ -389,8 +396,8 @@ TEST_F(MeshIoTest, ObjMaps) {
     TextureSampler nearest;
     nearest.magFilter = TextureFilter::Nearest;
     const glm::vec2 nearTopLeft = mesh.uvs[right] + glm::vec2(-0.9f, 0.1f);
-    EXPECT_NEAR(glm::length(glm::vec3(a.baseColorTexture.texture->sample(nearTopLeft, 0.0f, nearest)) - kRed), 0.0f,
-                1e-3f);
+    EXPECT_NEAR(glm::length(glm::vec3(a.baseColorTexture.texture->sample(nearTopLeft, 0.0f, nearest)) - kRed),
+                0.0f, 1e-3f);
 }
 
 TEST_F(MeshIoTest, SampleModelBoxTexturedLoads) {
@@ -416,7 +423,8 @@ TEST_F(MeshIoTest, SampleModelBoxTexturedLoads) {
     }
 }
 
-// ---- scene files ----------------------------------------------------------------------------------------------
+// ---- scene files
+// ----------------------------------------------------------------------------------------------
 
 json sceneWith(json material, json shape = {{"type", "quad"}, {"size", {1, 1}}}) {
     json scene = json::parse(R"({
@@ -442,20 +450,33 @@ TEST_F(MeshIoTest, SceneMetallicRoughnessMaterials) {
     EXPECT_NEAR(m.roughness, 0.3f, kTolerance);
     EXPECT_EQ(loadScene(sceneWith({{"metallic", 1}}), sceneFile).virtuals[0].material.model,
               MaterialModel::MetallicRoughness);
-    EXPECT_EQ(loadScene(sceneWith({{"albedo", 0.5}}), sceneFile).virtuals[0].material.model, MaterialModel::Phong);
+    EXPECT_EQ(loadScene(sceneWith({{"albedo", 0.5}}), sceneFile).virtuals[0].material.model,
+              MaterialModel::Phong);
 
-    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"specular", 0.1}, {"metallic", 0.5}}), sceneFile); }),
+    expectContains(inputErrorOf([&] {
+                       loadScene(sceneWith({{"specular", 0.1}, {"metallic", 0.5}}), sceneFile);
+                   }),
                    {"s.json: virtual[0].material.metallic: give either \"specular\""});
-    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"metallic", 1.5}}), sceneFile); }),
+    expectContains(inputErrorOf([&] {
+                       loadScene(sceneWith({{"metallic", 1.5}}), sceneFile);
+                   }),
                    {"s.json: virtual[0].material.metallic: expected a number in [0, 1], got 1.5"});
-    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"roughness", -1}}), sceneFile); }),
+    expectContains(inputErrorOf([&] {
+                       loadScene(sceneWith({{"roughness", -1}}), sceneFile);
+                   }),
                    {"s.json: virtual[0].material.roughness: expected a number in (0, 1]"});
-    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"alpha_mode", "MASK"}}), sceneFile); }),
+    expectContains(inputErrorOf([&] {
+                       loadScene(sceneWith({{"alpha_mode", "MASK"}}), sceneFile);
+                   }),
                    {"virtual[0].material.alpha_mode: expected \"opaque\", \"mask\" or \"blend\""});
-    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"base_color_texture", "none.png"}}), sceneFile); }),
+    expectContains(inputErrorOf([&] {
+                       loadScene(sceneWith({{"base_color_texture", "none.png"}}), sceneFile);
+                   }),
                    {"s.json: virtual[0].material.base_color_texture: file not found", "none.png"});
     write("garbage.png", "not an image");
-    expectContains(inputErrorOf([&] { loadScene(sceneWith({{"normal_texture", "garbage.png"}}), sceneFile); }),
+    expectContains(inputErrorOf([&] {
+                       loadScene(sceneWith({{"normal_texture", "garbage.png"}}), sceneFile);
+                   }),
                    {"s.json: virtual[0].material.normal_texture: texture '", "garbage.png"});
 }
 
@@ -464,9 +485,10 @@ TEST_F(MeshIoTest, SceneTexturesOverrideTheFilesAndNeedTextureCoordinates) {
     test::writeQuadGltf(dir_, "quad", texturedMaterial());
     const fs::path sceneFile = dir_ / "s.json";
     // The file's material, with the JSON's keys over it.
-    Scene scene = loadScene(sceneWith({{"metallic", 0.9}, {"alpha_mode", "blend"}, {"occlusion_texture", "marked.png"}},
-                                      "quad.gltf"),
-                            sceneFile);
+    Scene scene =
+        loadScene(sceneWith({{"metallic", 0.9}, {"alpha_mode", "blend"}, {"occlusion_texture", "marked.png"}},
+                            "quad.gltf"),
+                  sceneFile);
     const Material& m = scene.virtuals[0].material;
     EXPECT_EQ(m.model, MaterialModel::MetallicRoughness);
     EXPECT_NEAR(m.metallic, 0.9f, kTolerance);
@@ -481,13 +503,15 @@ TEST_F(MeshIoTest, SceneTexturesOverrideTheFilesAndNeedTextureCoordinates) {
     for (const std::string& w : scene.warnings) all += w + "\n";
     expectContains(all, {"s.json: virtual[0].material.alpha_mode: \"blend\" is read as \"mask\""});
 
-    // A normal map on a mesh without texture coordinates (the shapes have none): a warning, and no normal map.
+    // A normal map on a mesh without texture coordinates (the shapes have none): a warning, and no normal
+    // map.
     scene = loadScene(sceneWith({{"normal_texture", "marked.png"}}), sceneFile);
     EXPECT_FALSE(scene.virtuals[0].material.normalTexture);
     all.clear();
     for (const std::string& w : scene.warnings) all += w + "\n";
-    expectContains(all, {"s.json: virtual[0].material: mesh 'thing' has no texture coordinates (set 0): its normal "
-                         "texture"});
+    expectContains(
+        all, {"s.json: virtual[0].material: mesh 'thing' has no texture coordinates (set 0): its normal "
+              "texture"});
 }
 
 }  // namespace

@@ -56,14 +56,18 @@ inline std::filesystem::path writeQuadGltf(const std::filesystem::path& folder, 
     document["bufferViews"] = {view(positions, sizeof(kQuadPositions)), view(uvs, sizeof(kQuadUvs)),
                                view(uvs1, sizeof(kQuadUvs1)), view(colourAt, sizeof(colours)),
                                view(indexAt, sizeof(indices))};
-    document["accessors"] = {
-        {{"bufferView", 0}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}, {"min", {0, 0, 0}},
-         {"max", {1, 1, 0}}},
-        {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
-        {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
-        {{"bufferView", 3}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
-        {{"bufferView", 4}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}};
-    std::ofstream(folder / (name + ".bin"), std::ios::binary).write(bin.data(), static_cast<std::streamsize>(bin.size()));
+    document["accessors"] = {{{"bufferView", 0},
+                              {"componentType", 5126},
+                              {"count", 4},
+                              {"type", "VEC3"},
+                              {"min", {0, 0, 0}},
+                              {"max", {1, 1, 0}}},
+                             {{"bufferView", 1}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
+                             {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}},
+                             {{"bufferView", 3}, {"componentType", 5126}, {"count", 4}, {"type", "VEC3"}},
+                             {{"bufferView", 4}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}};
+    std::ofstream(folder / (name + ".bin"), std::ios::binary)
+        .write(bin.data(), static_cast<std::streamsize>(bin.size()));
     const std::filesystem::path file = folder / (name + ".gltf");
     std::ofstream(file) << document.dump(2);
     return file;
