@@ -10,7 +10,7 @@ packages=(
   libembree-dev libtbb-dev libassimp-dev libopenimageio-dev openimageio-tools
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev
   libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev assimp-testmodels
   pybind11-dev python3-dev python3-numpy python3-pytest
   jq
   libcivetweb-dev chromium

@@ -9,7 +9,6 @@
 #include <map>
 #include <sstream>
 
-#include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
@@ -18,50 +17,22 @@
 #include <assimp/LogStream.hpp>
 
 #include "deltagi/error.h"
+#include "image_encode.h"
 #include "json_reader.h"
 
 namespace deltagi {
 
 namespace {
 
-constexpr float kMinRoughness = 1e-3f;  // roughness is in (0, 1]; a huge Ns still gives a usable lobe
-
-// Assimp invents a material for files that have none: "DefaultMaterial" for OBJ, and an unnamed one with
-// white diffuse and specular for PLY. Such a stand-in gives no values of its own.
-bool isStandIn(const std::string& name, const std::filesystem::path& file) {
+std::string lowerExtension(const std::filesystem::path& file) {
     std::string ext = file.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return name == AI_DEFAULT_MATERIAL_NAME || (name.empty() && ext == ".ply");
+    return ext;
 }
 
-FileMaterial readMaterial(const aiMaterial& material, const std::filesystem::path& file) {
-    FileMaterial result;
-    aiString name;
-    if (material.Get(AI_MATKEY_NAME, name) == AI_SUCCESS) result.name = name.C_Str();
-    if (isStandIn(result.name, file)) return result;
-    aiColor3D colour;
-    if (material.Get(AI_MATKEY_COLOR_DIFFUSE, colour) == AI_SUCCESS)
-        result.albedo = glm::vec3(colour.r, colour.g, colour.b);
-    if (material.Get(AI_MATKEY_COLOR_SPECULAR, colour) == AI_SUCCESS)
-        result.specular = glm::vec3(colour.r, colour.g, colour.b);
-    // Many exporters write "Ke 0 0 0" for every material; only a positive, finite Ke makes an emitter.
-    if (material.Get(AI_MATKEY_COLOR_EMISSIVE, colour) == AI_SUCCESS) {
-        const glm::vec3 ke(colour.r, colour.g, colour.b);
-        bool valid = ke != glm::vec3(0.0f);
-        for (int c = 0; c < 3; ++c) valid = valid && std::isfinite(ke[c]) && ke[c] >= 0.0f;
-        if (valid) result.emission = ke;
-    }
-    float shininess = 0.0f, roughnessFactor = 0.0f;
-    if (material.Get(AI_MATKEY_ROUGHNESS_FACTOR, roughnessFactor) == AI_SUCCESS &&
-        std::isfinite(roughnessFactor)) {
-        // glTF: perceptual roughness; its square is the Beckmann roughness this renderer uses (scene.h).
-        result.roughness = std::clamp(roughnessFactor * roughnessFactor, kMinRoughness, 1.0f);
-    } else if (material.Get(AI_MATKEY_SHININESS, shininess) == AI_SUCCESS && std::isfinite(shininess)) {
-        // The Phong exponent of the normalized lobe is n = 2/r^2 - 2 (scene.h), so r = sqrt(2 / (n + 2)).
-        float roughness = shininess > 0.0f ? std::sqrt(2.0f / (shininess + 2.0f)) : 1.0f;
-        result.roughness = std::clamp(roughness, kMinRoughness, 1.0f);
-    }
-    return result;
+bool isGltf(const std::filesystem::path& file) {
+    const std::string ext = lowerExtension(file);
+    return ext == ".gltf" || ext == ".glb";
 }
 
 TriangleMesh readTriangles(const aiMesh& source) {
@@ -85,6 +56,50 @@ TriangleMesh readTriangles(const aiMesh& source) {
             mesh.triangles.emplace_back(face.mIndices[0], face.mIndices[1], face.mIndices[2]);
     }
     return mesh;
+}
+
+// The per-vertex attributes beyond positions and normals.
+// Texture coordinates: Assimp gives every format's in OpenGL's convention, v up from the image's bottom (its
+// glTF reader flips glTF's v); deltagi keeps glTF's, v down from the top (deltagi/texture.h): v = 1 - v.
+// Colours: glTF's COLOR_0 is linear (the glTF spec); every other format's (PLY red/green/blue, which
+// Assimp divides by 255, and OBJ's "v x y z r g b") is taken as sRGB-encoded, as the camera colours of
+// scans are, and decoded. Alpha is dropped.
+// Tangents: Assimp's (glTF's TANGENT, else aiProcess_CalcTangentSpace's from texture coordinate set 0). Its
+// bitangent points along increasing OpenGL v, up the image, as a normal map's +y (green) does; w is the
+// handedness that gives it back as w * cross(n, t).
+void readAttributes(const aiMesh& source, bool linearColours, TriangleMesh& mesh) {
+    const unsigned count = source.mNumVertices;
+    for (int set = 0; set < 2; ++set) {
+        if (!source.HasTextureCoords(set)) continue;
+        std::vector<glm::vec2>& uvs = set == 0 ? mesh.uvs : mesh.uvs1;
+        uvs.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiVector3D& uv = source.mTextureCoords[set][i];
+            uvs.emplace_back(uv.x, 1.0f - uv.y);
+        }
+    }
+    if (source.HasVertexColors(0)) {
+        mesh.colors.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiColor4D& c = source.mColors[0][i];
+            glm::vec3 rgb(c.r, c.g, c.b);
+            // Rounding in a file's floats may step just past [0, 1]; cleanMesh() refuses real excursions.
+            if (!linearColours)
+                for (int k = 0; k < 3; ++k) rgb[k] = srgbToLinearValue(std::clamp(rgb[k], 0.0f, 1.0f));
+            mesh.colors.push_back(rgb);
+        }
+    }
+    if (source.HasTangentsAndBitangents() && source.HasNormals() && !mesh.uvs.empty()) {
+        mesh.tangents.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiVector3D &t = source.mTangents[i], &b = source.mBitangents[i], &n = source.mNormals[i];
+            const glm::vec3 tangent(t.x, t.y, t.z);
+            const float handedness =
+                glm::dot(glm::cross(glm::vec3(n.x, n.y, n.z), tangent), glm::vec3(b.x, b.y, b.z));
+            // A NaN tangent (Assimp's mark for degenerate texture coordinates) is replaced by cleanMesh().
+            mesh.tangents.emplace_back(tangent, handedness < 0.0f ? -1.0f : 1.0f);
+        }
+    }
 }
 
 bool hasPolygons(const aiScene& scene) {
@@ -254,6 +269,18 @@ void validateRawScene(aiScene& scene, const std::filesystem::path& file, const s
                                  fmt::format("vertex {} of mesh '{}' is not finite: ({}, {}, {}) ('{}')", i,
                                              meshName, p.x, p.y, p.z, name));
         }
+        // Texture coordinates outside [0, 1] are legal (textures repeat); NaN or infinite ones are not.
+        for (unsigned set = 0; set < 2; ++set) {
+            if (!mesh->HasTextureCoords(set)) continue;
+            for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
+                const aiVector3D& uv = mesh->mTextureCoords[set][i];
+                if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+                    throw InputError(where,
+                                     fmt::format("texture coordinate (set {}) of vertex {} of mesh '{}' is "
+                                                 "not finite: ({}, {}) ('{}')",
+                                                 set, i, meshName, uv.x, 1.0f - uv.y, name));  // glTF's v
+            }
+        }
         unsigned primitiveTypes = 0;
         for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
             const aiFace& face = mesh->mFaces[f];
@@ -333,7 +360,7 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
 }
 
 std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
-                                   const std::string& baseName) {
+                                   const std::string& baseName, std::vector<std::string>* warnings) {
     checkMeshFileClaims(file, where, physicalMemoryBytes());
     Assimp::Importer importer;
     importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, kCreaseAngleDeg);
@@ -367,8 +394,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
     validateRawScene(*const_cast<aiScene*>(scene), file, where, baseName);
     if (!hasPolygons(*scene)) throw InputError(where, fmt::format("'{}' contains no triangles", name));
     constexpr unsigned kFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
-                                aiProcess_GenSmoothNormals | aiProcess_PreTransformVertices |
-                                aiProcess_SortByPType;
+                                aiProcess_GenSmoothNormals | aiProcess_CalcTangentSpace |
+                                aiProcess_PreTransformVertices | aiProcess_SortByPType;
     // SortByPType splits meshes by primitive type; point and line meshes are skipped below.
     scene = importer.ApplyPostProcessing(kFlags);
     if (scene == nullptr)
@@ -376,13 +403,20 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
 
     std::vector<FileMesh> meshes;
     std::map<std::string, int> timesSeen;
+    MaterialReader materialReader{*scene, file, where, {}, {}, false};
+    std::vector<std::optional<FileMaterial>> materials(scene->mNumMaterials);  // each read once
     for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
         const aiMesh& source = *scene->mMeshes[m];
         if ((source.mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
         FileMesh result{readTriangles(source), {}};
         if (result.mesh.triangles.empty()) continue;
-        if (source.mMaterialIndex < scene->mNumMaterials)
-            result.material = readMaterial(*scene->mMaterials[source.mMaterialIndex], file);
+        readAttributes(source, isGltf(file), result.mesh);
+        if (source.mMaterialIndex < scene->mNumMaterials) {
+            std::optional<FileMaterial>& material = materials[source.mMaterialIndex];
+            if (!material)
+                material = readFileMaterial(*scene->mMaterials[source.mMaterialIndex], materialReader);
+            result.material = *material;
+        }
         std::string name =
             baseName + "/" + (source.mName.length > 0 ? source.mName.C_Str() : std::to_string(m));
         // A mesh placed by several nodes (glTF instancing) appears once per node: number the repeats.
@@ -393,6 +427,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
     if (meshes.empty())
         throw InputError(where, fmt::format("'{}' contains no triangles", file.filename().string()));
     if (meshes.size() == 1) meshes[0].mesh.name = baseName;
+    if (warnings)
+        warnings->insert(warnings->end(), materialReader.warnings.begin(), materialReader.warnings.end());
     return meshes;
 }
 

@@ -31,6 +31,7 @@ namespace {
 constexpr int kMaxImageSide = 16384;            // camera width and height
 constexpr int kMaxShapeSegments = 4096;         // sphere and torus tessellation
 constexpr float kEnergyTolerance = 1e-6f;       // albedo + specular <= 1 up to rounding
+constexpr float kMinPhongRoughness = 1e-3f;     // as mesh files' roughness (mesh_materials.cpp)
 
 }  // namespace
 
@@ -194,18 +195,68 @@ Light readLight(const JsonNode& node) {
 
 // ---- mesh entries -----------------------------------------------------------------------------------------
 
+// What reading the mesh entries shares: the scene file's folder, the mesh files read, the textures (each
+// read once) and the warnings.
+struct MeshInputs {
+    fs::path sceneFolder;
+    std::vector<fs::path>& files;
+    std::vector<std::string>& warnings;
+    TextureCache textures;
+};
+
 struct MaterialOverrides {
-    std::optional<glm::vec3> albedo, specular, emission;
-    std::optional<float> roughness;
+    std::optional<glm::vec3> albedo, specular, emission;  // albedo: "albedo" or "base_color"
+    std::optional<float> roughness, metallic, opacity, alphaCutoff;
+    std::optional<AlphaMode> alphaMode;
+    std::optional<TextureSlot> baseColorTexture, metallicRoughnessTexture, normalTexture, emissiveTexture,
+        occlusionTexture;
+    std::optional<MaterialModel> model;  // when a key belongs to one model only
     float emissionScale = 1.0f;
     std::string emissionWhere;  // the "emission_scale" key, for an overflowing product
 };
 
-MaterialOverrides readMaterial(const JsonNode& node) {
-    node.allowKeys({"albedo", "specular", "roughness", "glossiness", "emission", "emission_scale"});
+// "base_color": [r, g, b] or [r, g, b, a] (or one number for grey), each in [0, 1].
+void readBaseColor(const JsonNode& node, MaterialOverrides& result) {
+    if (node.value().is_array() && node.size() == 4) {
+        glm::vec3 rgb;
+        for (size_t c = 0; c < 3; ++c) rgb[static_cast<int>(c)] = node.element(c).floatNumber(kUnit);
+        result.albedo = rgb;
+        result.opacity = node.element(3).floatNumber(kUnit);
+        return;
+    }
+    result.albedo = node.colour(kUnit);
+}
+
+// A texture key: a file relative to the scene file, read once per scene (and encoding).
+TextureSlot readTextureFile(const JsonNode& node, TextureEncoding encoding, MeshInputs& inputs) {
+    const fs::path file = inputFile(node, inputs.sceneFolder);
+    TextureSlot slot;
+    slot.texture = inputs.textures.load(file, encoding, node.where());
+    return slot;
+}
+
+MaterialOverrides readMaterial(const JsonNode& node, MeshInputs& inputs) {
+    node.allowKeys({"albedo", "specular", "roughness", "glossiness", "emission", "emission_scale",
+                    "base_color", "metallic", "base_color_texture", "metallic_roughness_texture",
+                    "normal_texture", "emissive_texture", "occlusion_texture", "alpha_mode", "alpha_cutoff"});
     MaterialOverrides result;
+    // The metallic-roughness model's own keys, and Phong's.
+    for (const char* key : {"base_color", "metallic", "metallic_roughness_texture"})
+        if (auto n = node.find(key)) {
+            if (node.has("specular"))
+                n->fail(
+                    "give either \"specular\" (the Phong model) or \"base_color\", \"metallic\" and "
+                    "\"metallic_roughness_texture\" (glTF's metallic-roughness model), not both");
+            result.model = MaterialModel::MetallicRoughness;
+        }
+    if (node.has("specular")) result.model = MaterialModel::Phong;
+    if (auto n = node.find("base_color")) {
+        if (node.has("albedo")) n->fail("give either albedo or base_color (the same colour), not both");
+        readBaseColor(*n, result);
+    }
     if (auto n = node.find("albedo")) result.albedo = n->colour(kUnit);
     if (auto n = node.find("specular")) result.specular = n->colour(kUnit);
+    if (auto n = node.find("metallic")) result.metallic = n->floatNumber(kUnit);
     if (auto n = node.find("emission")) result.emission = n->colour(kNonNegative);
     if (auto n = node.find("emission_scale")) result.emissionScale = n->floatNumber(kNonNegative);
     result.emissionWhere = node.childWhere("emission_scale");
@@ -214,17 +265,76 @@ MaterialOverrides readMaterial(const JsonNode& node) {
         if (result.roughness) n->fail("give either roughness or glossiness, not both");
         result.roughness = 1.0f - n->floatNumber({0.0, 1.0, false, true});
     }
+    if (auto n = node.find("alpha_mode")) {
+        const std::string mode = n->string();
+        if (mode == "opaque") {
+            result.alphaMode = AlphaMode::Opaque;
+        } else if (mode == "mask" || mode == "blend") {
+            result.alphaMode = AlphaMode::Mask;
+            if (mode == "blend")
+                inputs.warnings.push_back(
+                    n->where() +
+                    ": \"blend\" is read as \"mask\" with alpha_cutoff 0.5 (surfaces are "
+                    "opaque or cut out, never blended)");
+        } else {
+            n->fail("expected \"opaque\", \"mask\" or \"blend\", got \"" + mode + "\"");
+        }
+        if (mode == "blend") {
+            if (auto cutoff = node.find("alpha_cutoff")) cutoff->fail("a cut-off applies to \"mask\" only");
+            result.alphaCutoff = 0.5f;
+        }
+    }
+    if (auto n = node.find("alpha_cutoff")) result.alphaCutoff = n->floatNumber(kUnit);
+    if (auto n = node.find("base_color_texture"))
+        result.baseColorTexture = readTextureFile(*n, TextureEncoding::Srgb, inputs);
+    if (auto n = node.find("metallic_roughness_texture"))
+        result.metallicRoughnessTexture = readTextureFile(*n, TextureEncoding::Linear, inputs);
+    if (auto n = node.find("normal_texture"))
+        result.normalTexture = readTextureFile(*n, TextureEncoding::Linear, inputs);
+    if (auto n = node.find("emissive_texture"))
+        result.emissiveTexture = readTextureFile(*n, TextureEncoding::Srgb, inputs);
+    if (auto n = node.find("occlusion_texture"))
+        result.occlusionTexture = readTextureFile(*n, TextureEncoding::Linear, inputs);
     return result;
 }
 
+// The file's roughness in the meaning of `to`: Phong's is Beckmann-like, r = alpha; glTF's is perceptual,
+// alpha = r^2 (scene.h).
+std::optional<float> convertRoughness(std::optional<float> roughness, MaterialModel from, MaterialModel to) {
+    if (!roughness || from == to) return roughness;
+    return to == MaterialModel::MetallicRoughness ? std::sqrt(*roughness)
+                                                  : std::max(*roughness * *roughness, kMinPhongRoughness);
+}
+
 // The JSON's keys win, then the mesh file's values, then the defaults of Material; the result must conserve
-// energy. `where` names the entry (or its "material"), for values that came from the file.
+// energy. The model is the JSON's when one of its keys belongs to one model ("specular": Phong; "base_color",
+// "metallic", "metallic_roughness_texture": metallic-roughness), else the file's. `where` names the entry (or
+// its "material"), for values that came from the file.
 Material combineMaterial(const MaterialOverrides& json, const FileMaterial& file, const std::string& meshName,
                          const std::string& where) {
     Material m;
+    m.model = json.model.value_or(file.model);
+    const bool phong = m.model == MaterialModel::Phong, fileModel = m.model == file.model;
     m.albedo = json.albedo.value_or(file.albedo.value_or(m.albedo));
-    m.specular = json.specular.value_or(file.specular.value_or(m.specular));
-    m.roughness = json.roughness.value_or(file.roughness.value_or(m.roughness));
+    if (phong)
+        m.specular = json.specular.value_or(fileModel ? file.specular.value_or(m.specular) : m.specular);
+    m.roughness =
+        json.roughness.value_or(convertRoughness(file.roughness, file.model, m.model).value_or(m.roughness));
+    if (!phong)
+        m.metallic = json.metallic.value_or(fileModel ? file.metallic.value_or(m.metallic) : m.metallic);
+    m.opacity = json.opacity.value_or(file.opacity);
+    m.alphaMode = json.alphaMode.value_or(file.alphaMode);
+    m.alphaCutoff = json.alphaCutoff.value_or(file.alphaCutoff);
+    m.baseColorTexture = json.baseColorTexture.value_or(file.baseColorTexture);
+    if (phong && fileModel) m.specularTexture = file.specularTexture;
+    if (!phong)
+        m.metallicRoughnessTexture =
+            json.metallicRoughnessTexture.value_or(fileModel ? file.metallicRoughnessTexture : TextureSlot{});
+    m.normalTexture = json.normalTexture.value_or(file.normalTexture);
+    m.normalScale = json.normalTexture ? 1.0f : file.normalScale;
+    m.emissiveTexture = json.emissiveTexture.value_or(file.emissiveTexture);
+    m.occlusionTexture = json.occlusionTexture.value_or(file.occlusionTexture);
+    m.occlusionStrength = json.occlusionTexture ? 1.0f : file.occlusionStrength;
     // The scale applies to the file's Ke too: MTL files give emission in arbitrary units.
     m.emission = json.emission.value_or(file.emission.value_or(m.emission)) * json.emissionScale;
     if (!std::isfinite(m.emission.x) || !std::isfinite(m.emission.y) || !std::isfinite(m.emission.z))
@@ -375,8 +485,7 @@ struct KeyframeReader {
 };
 
 // Keeps each mesh's object-space copy when `movable` (the virtual objects, which setTransform() moves).
-std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& sceneFolder,
-                                        std::vector<fs::path>& files, bool movable,
+std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, MeshInputs& inputs, bool movable,
                                         std::optional<ObjectAnimation>& animation,
                                         const KeyframeReader* keyframes) {
     entry.allowKeys({"name", "file", "shape", "transform", "material", "keyframes"});
@@ -396,14 +505,14 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
     glm::mat4 worldFromObject =
         entry.has("transform") ? readTransform(entry.child("transform")) : glm::mat4(1.0f);
     auto materialNode = entry.find("material");
-    MaterialOverrides overrides = materialNode ? readMaterial(*materialNode) : MaterialOverrides{};
+    MaterialOverrides overrides = materialNode ? readMaterial(*materialNode, inputs) : MaterialOverrides{};
     std::string materialWhere = materialNode ? materialNode->where() : entry.where();
 
     std::vector<FileMesh> meshes;
     if (fileNode) {
-        fs::path path = inputFile(*fileNode, sceneFolder);
-        files.push_back(path);
-        meshes = loadMeshFile(path, fileNode->where(), name.value_or(path.stem().string()));
+        fs::path path = inputFile(*fileNode, inputs.sceneFolder);
+        inputs.files.push_back(path);
+        meshes = loadMeshFile(path, fileNode->where(), name.value_or(path.stem().string()), &inputs.warnings);
     } else {
         meshes.push_back({readShape(*shapeNode), {}});
         meshes.back().mesh.name = name.value_or(shapeNode->child("type").string());
@@ -412,6 +521,7 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
     for (FileMesh& fileMesh : meshes) {
         TriangleMesh& mesh = fileMesh.mesh;
         mesh.material = combineMaterial(overrides, fileMesh.material, mesh.name, materialWhere);
+        dropUnusableTextures(mesh.material, mesh, materialWhere, inputs.warnings);
         if (movable) {
             mesh.objectSpace = std::make_shared<const TriangleMesh>(mesh);
             mesh.worldFromObject = worldFromObject;
@@ -423,10 +533,9 @@ std::vector<TriangleMesh> readMeshEntry(const JsonNode& entry, const fs::path& s
     return result;
 }
 
-// Appends the mesh files it reads to `files`, and the entries' keyframes to `keyframes->animations`.
-// `entries`, when given, gets each mesh's entry index.
-std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sceneFolder,
-                                       std::vector<fs::path>& files, bool movable,
+// Appends the mesh files it reads to `inputs.files`, its warnings to `inputs.warnings`, and the entries'
+// keyframes to `keyframes->animations`. `entries`, when given, gets each mesh's entry index.
+std::vector<TriangleMesh> readMeshList(const JsonNode& list, MeshInputs& inputs, bool movable,
                                        const KeyframeReader* keyframes = nullptr,
                                        std::vector<int>* entries = nullptr) {
     list.requireArray();
@@ -434,7 +543,7 @@ std::vector<TriangleMesh> readMeshList(const JsonNode& list, const fs::path& sce
     for (size_t i = 0; i < list.size(); ++i) {
         std::optional<ObjectAnimation> animation;
         std::vector<TriangleMesh> entry =
-            readMeshEntry(list.element(i), sceneFolder, files, movable, animation, keyframes);
+            readMeshEntry(list.element(i), inputs, movable, animation, keyframes);
         if (animation) {
             animation->firstMesh = meshes.size();
             animation->meshCount = entry.size();
@@ -599,11 +708,11 @@ Scene loadScene(const json& document, const fs::path& file) {
 
     if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
-    if (auto n = root.find("scene")) scene.real = readMeshList(*n, sceneFolder, scene.meshFiles, false);
+    MeshInputs meshInputs{sceneFolder, scene.meshFiles, scene.warnings, {}};
+    if (auto n = root.find("scene")) scene.real = readMeshList(*n, meshInputs, false);
     if (auto n = root.find("virtual")) {
         const KeyframeReader keyframes{scene, scene.animations};
-        scene.virtuals =
-            readMeshList(*n, sceneFolder, scene.meshFiles, true, &keyframes, &scene.virtualEntries);
+        scene.virtuals = readMeshList(*n, meshInputs, true, &keyframes, &scene.virtualEntries);
     }
     // Moving objects: placed for the first frame, in a volume region that holds them in every frame.
     if (!scene.animations.empty()) {

@@ -94,6 +94,10 @@ void setTransform(TriangleMesh& mesh, const glm::mat4& worldFromObject) {
     placed.positions = objectSpace->positions;
     placed.normals = objectSpace->normals;
     placed.triangles = objectSpace->triangles;
+    placed.uvs = objectSpace->uvs;
+    placed.uvs1 = objectSpace->uvs1;
+    placed.tangents = objectSpace->tangents;
+    placed.colors = objectSpace->colors;
     placed.name = mesh.name;
     placed.material = mesh.material;
     // The scene reader's order: transform, then clean up (scene_io.cpp, readMeshEntry).
