@@ -218,6 +218,9 @@ RayHit RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec
     result.geometricNormal = glm::normalize(ng);
     result.material = &mesh.material;
     result.isVirtual = ref.isVirtual;
+    result.mesh = &mesh;
+    result.triangle = primID;
+    result.barycentric = {u, v};
     return result;
 }
 

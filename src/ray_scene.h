@@ -2,6 +2,7 @@
 // rendered by casting one ray per sample instead of rasterizing. Embree types stay inside ray_scene.cpp.
 #pragma once
 
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <span>
@@ -21,6 +22,11 @@ struct RayHit {
     glm::vec3 geometricNormal{0.0f};  // the triangle's plane normal, unit, facing the ray's origin
     const Material* material = nullptr;
     bool isVirtual = false;
+    // Where on which triangle: the mesh, its triangle index and the barycentric weights of the triangle's
+    // second and third vertices (the first's is 1 - u - v); for per-vertex quantities (albedo estimation).
+    const TriangleMesh* mesh = nullptr;
+    uint32_t triangle = 0;
+    glm::vec2 barycentric{0.0f};
     bool hit() const { return material != nullptr; }
 };
 
