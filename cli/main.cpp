@@ -1,6 +1,7 @@
 // The `deltagi` command: `render` a scene file to an image (and its AOVs), print `info` about a scene, render
 // the path-traced `reference`, `compare` two images, `eval` DGI against the reference, `bench` the pipeline,
-// measure its `stability`, or `encode` frames into an H.264 MP4.
+// measure its `stability`, `estimate-albedo` of the real scene from its photo, or `encode` frames into an
+// H.264 MP4.
 //
 // Errors: bad input (InputError) and any other exception become one line `deltagi: error: <message>` on
 // stderr and exit code 1; command-line usage errors exit with code 2; SIGINT and SIGTERM exit with 130 and
@@ -25,6 +26,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include "albedo_command.h"
 #include "bench_command.h"
 #include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
@@ -761,6 +763,9 @@ int main(int argc, char** argv) {
     cli::StabilityArgs stabilityArgs;
     CLI::App* stabilityCommand = cli::addStabilityCommand(app, stabilityArgs, kMaxThreads);
 
+    cli::AlbedoArgs albedoArgs;
+    CLI::App* albedoCommand = cli::addAlbedoCommand(app, albedoArgs, kMaxThreads);
+
     cli::EncodeArgs encodeArgs;
     CLI::App* encodeCommand = cli::addEncodeCommand(app, encodeArgs);
 
@@ -777,7 +782,7 @@ int main(int argc, char** argv) {
             return reportError(
                 fmt::format(
                     "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
-                    "'bench', 'stability', 'encode' or 'serve' (see deltagi --help)",
+                    "'bench', 'stability', 'estimate-albedo', 'encode' or 'serve' (see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);
@@ -795,6 +800,7 @@ int main(int argc, char** argv) {
         if (*evalCommand) return runEval(evalArgs);
         if (*benchCommand) return cli::runBench(benchArgs);
         if (*stabilityCommand) return cli::runStability(stabilityArgs);
+        if (*albedoCommand) return cli::runAlbedo(albedoArgs);
         if (*encodeCommand) return cli::runEncode(encodeArgs);
         if (*serveCommand) return cli::runServe(serveArgs);
         return runInfo(infoArgs);

@@ -128,6 +128,12 @@ void OutputFiles::json(const nlohmann::ordered_json& json, const fs::path& path)
     file.close();
 }
 
+void OutputFiles::bytes(std::string_view bytes, const fs::path& path) {
+    AtomicFile& file = add(path);
+    file.write(bytes);
+    file.close();
+}
+
 void OutputFiles::commit() {
     for (const std::unique_ptr<AtomicFile>& file : files_) file->commit();
     files_.clear();

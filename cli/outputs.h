@@ -6,6 +6,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -69,6 +70,7 @@ class OutputFiles {
     void image(const Image& image, const std::filesystem::path& path);
     void layers(std::span<const ImageLayer> layers, const std::filesystem::path& path);
     void json(const nlohmann::ordered_json& json, const std::filesystem::path& path);
+    void bytes(std::string_view bytes, const std::filesystem::path& path);
     void commit();
 
   private:

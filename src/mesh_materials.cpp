@@ -328,11 +328,8 @@ void dropUnusableTextures(Material& material, const TriangleMesh& mesh, const st
             *s.slot = TextureSlot{};
         }
     }
-    if (material.normalTexture && mesh.tangents.empty()) {
-        warnings.push_back(fmt::format("{}: mesh '{}' has no tangents: its normal texture ('{}') is ignored",
-                                       where, mesh.name, material.normalTexture.texture->name()));
-        material.normalTexture = TextureSlot{};
-    }
+    // A normal map on a mesh without tangents uses each triangle's texture-coordinate derivative instead
+    // (surface_material.cpp).
 }
 
 }  // namespace deltagi

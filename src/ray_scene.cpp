@@ -168,6 +168,13 @@ bool RayScene::refit(const Scene& scene) {
     return true;
 }
 
+void RayScene::updateMaterials() {
+    for (MeshRef& ref : meshes_) {
+        ref.varying = variesOverSurface(*ref.mesh);
+        ref.surface = constantSurfaceMaterial(ref.mesh->material);
+    }
+}
+
 RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
     RayHit hit = intersectTopLayer(origin, direction, tMin, tMax);
     if (base_) {

@@ -2,6 +2,7 @@
 // rendered by casting one ray per sample instead of rasterizing. Embree types stay inside ray_scene.cpp.
 #pragma once
 
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <span>
@@ -22,7 +23,8 @@ struct RayHit {
     glm::vec3 geometricNormal{0.0f};  // the triangle's plane normal, unit, facing the ray's origin
     const Material* material = nullptr;
     SurfaceMaterial surface;  // the material at the hit, textures looked up at their finest level
-    // Where the hit is: the mesh, its triangle and Embree's barycentric (u, v) on it.
+    // Where the hit is: the mesh, its triangle and the barycentric weights (u, v) of the triangle's second
+    // and third vertices (the first's is 1 - u - v): for textures and per-vertex quantities.
     const TriangleMesh* mesh = nullptr;
     unsigned triangle = 0;
     glm::vec2 barycentric{0.0f};
@@ -55,6 +57,10 @@ class RayScene {
     // instead of built again (objects that move from frame to frame). False, and nothing changed, when the
     // triangles differ. `scene` must outlive the layer from then on.
     bool refit(const Scene& scene);
+    // Reads this layer's meshes' materials and vertex colours again, after they changed (the geometry must
+    // not have): hits give the new ones. Hits use a copy of each untextured material's values made at
+    // construction (and by refit()), so that they need not compute them again and again.
+    void updateMaterials();
 
     // Closest hit along origin + t * direction (direction unit length), t in (tMin, tMax).
     RayHit intersect(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,

@@ -10,6 +10,7 @@
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "deltagi/albedo_estimation.h"
 #include "deltagi/error.h"
 #include "deltagi/keyframes.h"
 #include "deltagi/renderer.h"
@@ -215,6 +216,14 @@ struct MaterialOverrides {
     std::string emissionWhere;  // the "emission_scale" key, for an overflowing product
 };
 
+// "albedo": "estimate": the real mesh's albedo comes from the photo (estimateRequestedAlbedo below), starting
+// from this grey.
+constexpr const char* kEstimateAlbedo = "estimate";
+constexpr float kEstimateStart = 0.5f;
+bool asksForEstimate(const nlohmann::json& albedo) {
+    return albedo.is_string() && albedo.get<std::string>() == kEstimateAlbedo;
+}
+
 // "base_color": [r, g, b] or [r, g, b, a] (or one number for grey), each in [0, 1].
 void readBaseColor(const JsonNode& node, MaterialOverrides& result) {
     if (node.value().is_array() && node.size() == 4) {
@@ -254,7 +263,8 @@ MaterialOverrides readMaterial(const JsonNode& node, MeshInputs& inputs) {
         if (node.has("albedo")) n->fail("give either albedo or base_color (the same colour), not both");
         readBaseColor(*n, result);
     }
-    if (auto n = node.find("albedo")) result.albedo = n->colour(kUnit);
+    if (auto n = node.find("albedo"))
+        result.albedo = asksForEstimate(n->value()) ? glm::vec3(kEstimateStart) : n->colour(kUnit);
     if (auto n = node.find("specular")) result.specular = n->colour(kUnit);
     if (auto n = node.find("metallic")) result.metallic = n->floatNumber(kUnit);
     if (auto n = node.find("emission")) result.emission = n->colour(kNonNegative);
@@ -555,6 +565,56 @@ std::vector<TriangleMesh> readMeshList(const JsonNode& list, MeshInputs& inputs,
     return meshes;
 }
 
+// ---- albedo from the photo --------------------------------------------------------------------------------
+
+// The "albedo" key of entry `index` of `list` when it is "estimate".
+std::optional<JsonNode> estimateKey(const JsonNode& list, size_t index) {
+    const JsonNode entry = list.element(index);
+    if (!entry.value().is_object()) return std::nullopt;
+    auto material = entry.find("material");
+    if (!material || !material->value().is_object()) return std::nullopt;
+    auto albedo = material->find("albedo");
+    if (!albedo || !asksForEstimate(albedo->value())) return std::nullopt;
+    return albedo;
+}
+
+// Which entries of "scene" ask for "albedo": "estimate" (checked before the meshes load: only real meshes,
+// and only with a photo).
+std::vector<bool> albedoRequests(const JsonNode& root, const Scene& scene) {
+    if (auto list = root.find("virtual"); list && list->value().is_array())
+        for (size_t i = 0; i < list->size(); ++i)
+            if (auto key = estimateKey(*list, i))
+                key->fail(
+                    "\"estimate\" is for the real scene's meshes (\"scene\"): the photo does not show the "
+                    "virtual objects");
+    std::vector<bool> requests;
+    auto list = root.find("scene");
+    if (!list || !list->value().is_array()) return requests;
+    for (size_t i = 0; i < list->size(); ++i) {
+        auto key = estimateKey(*list, i);
+        requests.push_back(key.has_value());
+        if (key && !scene.background)
+            key->fail("\"estimate\" takes the albedo from the photo, and the scene has no \"background\"");
+    }
+    return requests;
+}
+
+// The albedo of the real meshes whose entries asked for it, from the photo (deltagi/albedo_estimation.h),
+// with the estimator's defaults but fewer samples, as it runs at every load.
+constexpr int kLoadEstimateSamples = 16;
+void estimateRequestedAlbedo(const std::vector<bool>& requests, Scene& scene) {
+    AlbedoOptions options;
+    options.samplesPerPixel = kLoadEstimateSamples;
+    options.meshes.assign(scene.real.size(), false);
+    bool any = false;
+    for (size_t m = 0; m < scene.real.size(); ++m)
+        any |= options.meshes[m] = requests.at(static_cast<size_t>(scene.realEntries.at(m)));
+    if (!any) return;
+    const AlbedoEstimate estimate = estimateAlbedo(scene, options);
+    applyAlbedo(scene, estimate);
+    for (const std::string& warning : estimate.warnings) scene.warnings.push_back(warning);
+}
+
 // ---- the document -----------------------------------------------------------------------------------------
 
 void readBackground(const JsonNode& node, const fs::path& sceneFolder, Scene& scene) {
@@ -709,11 +769,13 @@ Scene loadScene(const json& document, const fs::path& file) {
     if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
     MeshInputs meshInputs{sceneFolder, scene.meshFiles, scene.warnings, {}};
-    if (auto n = root.find("scene")) scene.real = readMeshList(*n, meshInputs, false);
+    const std::vector<bool> albedoEstimates = albedoRequests(root, scene);
+    if (auto n = root.find("scene")) scene.real = readMeshList(*n, meshInputs, false, nullptr, &scene.realEntries);
     if (auto n = root.find("virtual")) {
         const KeyframeReader keyframes{scene, scene.animations};
         scene.virtuals = readMeshList(*n, meshInputs, true, &keyframes, &scene.virtualEntries);
     }
+    estimateRequestedAlbedo(albedoEstimates, scene);
     // Moving objects: placed for the first frame, in a volume region that holds them in every frame.
     if (!scene.animations.empty()) {
         poseObjects(scene, scene.sequence.front().index);

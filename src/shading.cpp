@@ -186,7 +186,9 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
         }
         glm::vec3& reflected = indirect ? (*indirect)[i] : radiance;
         if (!diffuse.empty()) reflected += p.surface.diffuse * (p.surface.occlusion * diffuse[i]);
-        if (!specular.empty()) reflected += p.surface.specular * (p.surface.occlusion * specular[i]);
+        if (!specular.empty())
+            reflected += p.surface.specularReflectance(glm::dot(p.normal, p.toEye)) *
+                         (p.surface.occlusion * specular[i]);
         out[i] = radiance;
     };
     if (!bounds) {

@@ -77,6 +77,15 @@ float SurfaceMaterial::phongExponent() const {
     return std::max(2.0f / (r * r) - 2.0f, 0.0f);
 }
 
+glm::vec3 SurfaceMaterial::specularReflectance(float nDotV) const {
+    if (model != MaterialModel::MetallicRoughness) return specular;
+    const glm::vec4 c0(-1.0f, -0.0275f, -0.572f, 0.022f), c1(1.0f, 0.0425f, 1.04f, -0.04f);
+    const glm::vec4 r = roughness * c0 + c1;
+    const float a004 = std::min(r.x * r.x, std::exp2(-9.28f * std::clamp(nDotV, 0.0f, 1.0f))) * r.x + r.y;
+    const float scale = -1.04f * a004 + r.z, bias = 1.04f * a004 + r.w;
+    return glm::clamp(specular * scale + bias, glm::vec3(0.0f), glm::vec3(1.0f));
+}
+
 SurfaceMaterial constantSurfaceMaterial(const Material& m) {
     return fromFactors(m, m.albedo, m.metallic, m.roughness);
 }

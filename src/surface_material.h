@@ -29,6 +29,11 @@ struct SurfaceMaterial {
     // The exponent of the Phong lobe cos^n around the mirror direction that the specular cone stands for:
     // Phong's own (Material::phongExponent), or the one as wide as the GGX lobe's half-maximum.
     float phongExponent() const;
+    // What the specular cone's radiance is weighted by, seen at n.v = `nDotV`: Phong's glossy reflectance;
+    // for GGX the lobe's directional albedo with Schlick's Fresnel, F0 * A + B (the split-sum
+    // approximation), after Karis' analytic fit ("Physically Based Shading on Mobile", 2014): the glancing
+    // Fresnel rise of a dielectric, and the energy a rough lobe loses.
+    glm::vec3 specularReflectance(float nDotV) const;
 };
 
 // The values of a material without textures and vertex colours (its factors).

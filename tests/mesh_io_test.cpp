@@ -503,9 +503,16 @@ TEST_F(MeshIoTest, SceneTexturesOverrideTheFilesAndNeedTextureCoordinates) {
     for (const std::string& w : scene.warnings) all += w + "\n";
     expectContains(all, {"s.json: virtual[0].material.alpha_mode: \"blend\" is read as \"mask\""});
 
-    // A normal map on a mesh without texture coordinates (the shapes have none): a warning, and no normal
-    // map.
+    // The shapes have texture coordinates: a normal map on a quad stays (its tangents come from them).
     scene = loadScene(sceneWith({{"normal_texture", "marked.png"}}), sceneFile);
+    EXPECT_TRUE(scene.virtuals[0].material.normalTexture);
+    // A normal map on a mesh without texture coordinates (a "triangles" shape has none): a warning, and no
+    // normal map.
+    scene = loadScene(sceneWith({{"normal_texture", "marked.png"}},
+                                {{"type", "triangles"},
+                                 {"positions", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}},
+                                 {"indices", {{0, 1, 2}}}}),
+                      sceneFile);
     EXPECT_FALSE(scene.virtuals[0].material.normalTexture);
     all.clear();
     for (const std::string& w : scene.warnings) all += w + "\n";
