@@ -222,12 +222,14 @@ std::vector<Light> emitterStandInLights(const Scene& scene, const RayScene& real
     for (const TriangleMesh& mesh : scene.real) {
         if (!mesh.material.emits()) continue;
         double area = 0.0;
-        glm::dvec3 centroid(0.0), normal(0.0);
-        for (const glm::uvec3& t : mesh.triangles) {
+        glm::dvec3 centroid(0.0), normal(0.0), emitted(0.0);
+        for (unsigned i = 0; i < mesh.triangles.size(); ++i) {
+            const glm::uvec3 t = mesh.triangles[i];
             const glm::vec3 a = mesh.positions[t.x], b = mesh.positions[t.y], c = mesh.positions[t.z];
             const glm::vec3 cross = glm::cross(b - a, c - a);
             const double triangleArea = 0.5 * glm::length(cross);
             area += triangleArea;
+            emitted += triangleArea * glm::dvec3(triangleEmission(mesh, i));
             centroid += triangleArea * glm::dvec3(a + b + c) / 3.0;
             normal += 0.5 * glm::dvec3(cross);
         }
@@ -248,7 +250,8 @@ std::vector<Light> emitterStandInLights(const Scene& scene, const RayScene& real
             light.position = position;
             light.direction = facing;
             light.innerAngleDeg = light.outerAngleDeg = 90.0f;
-            light.color = mesh.material.emission;
+            // An emissive texture's mean over the panel; without one, the material's emission.
+            light.color = mesh.material.emissiveTexture ? glm::vec3(emitted / area) : mesh.material.emission;
             // A Lambertian emitter of radiance L and area A sends L A cos(theta) per steradian.
             light.intensity = static_cast<float>(area);
             lights.push_back(light);

@@ -3,19 +3,22 @@
 #include <algorithm>
 #include <cmath>
 
+#include "surface_material.h"
+
 namespace deltagi {
 
 AreaLights::AreaLights(const Scene& scene, SceneContent content) {
     auto add = [&](const TriangleMesh& mesh, bool isVirtual) {
         if (!mesh.material.emits()) return;
-        const float weight = emitterWeight(mesh.material.emission);
-        for (const glm::uvec3& t : mesh.triangles) {
+        for (unsigned i = 0; i < mesh.triangles.size(); ++i) {
+            const glm::uvec3 t = mesh.triangles[i];
             const glm::vec3 a = mesh.positions[t.x], b = mesh.positions[t.y], c = mesh.positions[t.z];
             const glm::vec3 cross = glm::cross(b - a, c - a);
             const float doubleArea = glm::length(cross);
             if (!(doubleArea > 0.0f)) continue;  // never sampled, and a ray cannot hit it either
-            triangles_.push_back({a, b, c, cross / doubleArea, mesh.material.emission, isVirtual});
-            totalPower_ += 0.5 * static_cast<double>(doubleArea) * weight;
+            const glm::vec3 emission = triangleEmission(mesh, i);
+            triangles_.push_back({a, b, c, cross / doubleArea, emission, isVirtual});
+            totalPower_ += 0.5 * static_cast<double>(doubleArea) * emitterWeight(emission);
             cdf_.push_back(totalPower_);
         }
     };

@@ -135,7 +135,7 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
         const glm::vec3 step = at.position - previousPosition;
         const float cosLight = std::abs(glm::dot(at.geometricNormal, dir));
         const float pdfLight =
-            cosLight > 0.0f ? areaLights_.pdfArea(at.material->emission) * glm::dot(step, step) / cosLight
+            cosLight > 0.0f ? areaLights_.pdfArea(triangleEmission(*at.mesh, at.triangle)) * glm::dot(step, step) / cosLight
                             : std::numeric_limits<float>::infinity();
         return powerHeuristic(previousPdf, pdfLight);
     };

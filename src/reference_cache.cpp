@@ -1,5 +1,6 @@
 // The quality suite's cache of path-traced references (include/deltagi/quality_suite.h): a folder per
 // reference, keyed by what the path tracer reads, so that a suite re-renders only what changed.
+#include <cctype>
 #include <cstdint>
 #include <fstream>
 #include <iterator>
@@ -68,8 +69,59 @@ std::vector<fs::path> objMaterialFiles(const fs::path& obj, const std::string& t
     return files;
 }
 
+// The files a mesh or material file reads besides itself, relative to its folder: an OBJ's MTL libraries,
+// an MTL's texture maps (the last word of map_*, bump, norm, disp and refl lines: the options come first),
+// a glTF's buffers and images (those not embedded as data: URIs).
+std::vector<fs::path> dependentFiles(const fs::path& file, const std::string& text) {
+    std::string extension = file.extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension == ".obj") return objMaterialFiles(file, text);
+    std::vector<fs::path> files;
+    if (extension == ".mtl") {
+        std::istringstream lines(text);
+        std::string line;
+        while (std::getline(lines, line)) {
+            std::istringstream words(line);
+            std::string keyword, word, last;
+            if (!(words >> keyword)) continue;
+            std::string lower = keyword;
+            for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+            if (lower.rfind("map_", 0) != 0 && lower != "bump" && lower != "norm" && lower != "disp" &&
+                lower != "refl")
+                continue;
+            while (words >> word) last = word;
+            if (!last.empty()) files.push_back(file.parent_path() / last);
+        }
+    } else if (extension == ".gltf") {
+        const nlohmann::json document = nlohmann::json::parse(text, nullptr, false);
+        if (!document.is_object()) return files;
+        for (const char* key : {"buffers", "images"}) {
+            const auto list = document.find(key);
+            if (list == document.end() || !list->is_array()) continue;
+            for (const auto& item : *list) {
+                if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+                const std::string uri = item["uri"].get<std::string>();
+                if (uri.rfind("data:", 0) != 0) files.push_back(file.parent_path() / uri);
+            }
+        }
+    }
+    return files;
+}
+
+// Adds `path` (named `name`) and, recursively, the files it reads.
+void hashFileAndDependencies(const fs::path& path, const std::string& name, Hasher& hasher,
+                             std::set<fs::path>& seen) {
+    const std::string bytes = readBytes(path);
+    hasher.add(name);
+    hasher.add(bytes);
+    std::error_code error;
+    for (const fs::path& dependency : dependentFiles(path, bytes))
+        if (fs::is_regular_file(dependency, error) && seen.insert(dependency.lexically_normal()).second)
+            hashFileAndDependencies(dependency, dependency.filename().string(), hasher, seen);
+}
+
 // Adds every file the document names: any string that is the path of a file relative to the scene's folder
-// (meshes, photo, environment map), and the MTL files of OBJ meshes.
+// (meshes, photo, environment map, textures), and the files those read (dependentFiles).
 void hashReferencedFiles(const nlohmann::json& value, const fs::path& folder, Hasher& hasher,
                          std::set<fs::path>& seen) {
     if (value.is_object() || value.is_array()) {
@@ -80,15 +132,7 @@ void hashReferencedFiles(const nlohmann::json& value, const fs::path& folder, Ha
     const fs::path path = folder / value.get<std::string>();
     std::error_code error;
     if (!fs::is_regular_file(path, error) || !seen.insert(path.lexically_normal()).second) return;
-    const std::string bytes = readBytes(path);
-    hasher.add(value.get<std::string>());
-    hasher.add(bytes);
-    if (path.extension() == ".obj" || path.extension() == ".OBJ")
-        for (const fs::path& mtl : objMaterialFiles(path, bytes))
-            if (fs::is_regular_file(mtl, error) && seen.insert(mtl.lexically_normal()).second) {
-                hasher.add(mtl.filename().string());
-                hasher.add(readBytes(mtl));
-            }
+    hashFileAndDependencies(path, value.get<std::string>(), hasher, seen);
 }
 
 // A reference's limited-bounce version: references whose paths roulette ends long before their bounce limit

@@ -138,6 +138,21 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
     return s;
 }
 
+glm::vec3 triangleEmission(const TriangleMesh& mesh, unsigned triangle) {
+    const Material& m = mesh.material;
+    if (!m.emissiveTexture || mesh.uvs.empty()) return m.emission;
+    const glm::uvec3 tri = mesh.triangles[triangle];
+    const glm::vec3 a = mesh.positions[tri.x];
+    const float area = 0.5f * glm::length(glm::cross(mesh.positions[tri.y] - a, mesh.positions[tri.z] - a));
+    const glm::vec2 uv = textureCoordinatesAt(mesh, triangle, 1.0f / 3.0f, 1.0f / 3.0f, m.emissiveTexture.texCoord);
+    float uvFootprint = 0.0f;
+    if (area > 0.0f) {
+        const glm::vec2 d1 = mesh.uvs[tri.y] - mesh.uvs[tri.x], d2 = mesh.uvs[tri.z] - mesh.uvs[tri.x];
+        uvFootprint = std::sqrt(0.5f * std::abs(d1.x * d2.y - d2.x * d1.y));
+    }
+    return m.emission * glm::vec3(m.emissiveTexture.sample(uv, uvFootprint));
+}
+
 bool surfacePresentAt(const TriangleMesh& mesh, unsigned triangle, float u, float v) {
     const Material& m = mesh.material;
     if (m.alphaMode != AlphaMode::Mask) return true;

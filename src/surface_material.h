@@ -55,6 +55,12 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
 // none.
 glm::vec2 textureCoordinatesAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, int set = 0);
 
+// The emitted radiance of a triangle as the area lights sample it: the material's emission times its
+// emissive texture's mean over the triangle (a lookup at the centroid filtered over the triangle's size).
+// Where the texture varies within a triangle, the light sampled towards it is this mean, while a ray that
+// hits the triangle sees the texel: the same on average.
+glm::vec3 triangleEmission(const TriangleMesh& mesh, unsigned triangle);
+
 // Whether an alpha-masked material's surface is there at a point: the base colour's alpha (factor times
 // texture, finest texels) at least the cutoff. Always true for opaque materials.
 bool surfacePresentAt(const TriangleMesh& mesh, unsigned triangle, float u, float v);

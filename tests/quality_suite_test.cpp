@@ -266,6 +266,28 @@ TEST_F(QualitySuiteTest, TheKeyFollowsTheContentOfReferencedFiles) {
     EXPECT_EQ(referenceContentKey(file, {}), key);
 }
 
+// Textures count too: an OBJ's MTL maps and a glTF's images and buffers, which the scene file never names.
+TEST_F(QualitySuiteTest, TheKeyFollowsTexturesAndBuffersOfMeshFiles) {
+    write("tri.obj", "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n");
+    write("tri.mtl", "newmtl m\nKd 1 1 1\nmap_Kd -bm 1 checker.png\n");
+    write("checker.png", "first");
+    write("thing.gltf", R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "thing.bin", "byteLength": 4}],
+                            "images": [{"uri": "colour.png"}, {"uri": "data:image/png;base64,AAAA"}]})");
+    write("thing.bin", "abcd");
+    write("colour.png", "first");
+    json scene = tinyScene(0.5);
+    scene["scene"].push_back({{"file", "tri.obj"}});
+    scene["virtual"].push_back({{"file", "thing.gltf"}});
+    const fs::path file = write("textured.json", scene.dump());
+    const std::string key = referenceContentKey(file, {});
+    for (const char* dependency : {"checker.png", "thing.bin", "colour.png"}) {
+        write(dependency, "second");
+        EXPECT_NE(referenceContentKey(file, {}), key) << dependency;
+        write(dependency, dependency == std::string("thing.bin") ? "abcd" : "first");
+        EXPECT_EQ(referenceContentKey(file, {}), key) << dependency;
+    }
+}
+
 TEST_F(QualitySuiteTest, ABlackObjectOnAFloorChangesOnlyTheDirectLight) {
     // Nothing reaches the floor by way of a black box, and a plane does not light itself: the reference's
     // change is all shadow (direct light), the indirect share 0.

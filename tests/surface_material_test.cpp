@@ -6,6 +6,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "area_lights.h"
 #include "deltagi/shapes.h"
 #include "gbuffer.h"
 #include "ray_scene.h"
@@ -209,6 +210,32 @@ TEST(SurfaceMaterial, VoxelsAverageTheTexturedAlbedo) {
     // 4 x 4 checks over the 4 x 4 voxels: each voxel holds one check (voxel (0, 0) the image's top-left).
     expectNear(voxelAlbedo(4, 0, 0), glm::vec3(1, 0, 0), 1e-3f);
     expectNear(voxelAlbedo(4, 1, 0), glm::vec3(1, 1, 1), 1e-3f);
+}
+
+// An emissive texture scales each emitting triangle's radiance by its mean over the triangle: a panel whose
+// left half is black emits from its right half only, and the area lights sample only there.
+TEST(SurfaceMaterial, EmissiveTexturesScaleTheAreaLightsTriangles) {
+    Scene scene;
+    Material panel;
+    panel.albedo = glm::vec3(0.0f);
+    panel.emission = glm::vec3(2.0f);
+    panel.emissiveTexture.texture = textureOf(2, 1, {{0, 0, 0, 1}, {1, 1, 1, 1}});
+    panel.emissiveTexture.sampler.magFilter = TextureFilter::Nearest;
+    panel.emissiveTexture.sampler.minFilter = TextureFilter::Nearest;
+    // Two unit-by-two quads side by side along x.
+    for (int i = 0; i < 2; ++i) {
+        TriangleMesh half = makeQuad({1.0f, 2.0f});
+        // Texture coordinates of the left or the right half of the image over the whole quad.
+        for (glm::vec2& uv : half.uvs) uv.x = 0.25f + 0.5f * static_cast<float>(i);
+        scene.real.push_back(test::placed(half, {static_cast<float>(i), 0, 0}, panel, "panel"));
+    }
+    const AreaLights lights(scene, SceneContent::RealOnly);
+    for (float u : {0.1f, 0.4f, 0.6f, 0.9f}) {
+        const AreaLightSample s = lights.sample(u, 0.3f, 0.6f);
+        EXPECT_GT(s.position.x, 0.4f) << "sampled the black panel at " << u;
+        expectNear(s.radiance, glm::vec3(2.0f));
+    }
+    EXPECT_NEAR(lights.pdfArea(glm::vec3(2.0f)), 0.5f, 1e-5f);  // one unit panel of two holds all the power
 }
 
 }  // namespace
