@@ -52,6 +52,8 @@ struct FileMaterial {
     float alphaCutoff = 0.5f;
     TextureSlot baseColorTexture;  // glTF baseColorTexture; OBJ map_Kd
     TextureSlot specularTexture;   // OBJ map_Ks
+    TextureSlot roughnessTexture;  // OBJ map_Pr
+    TextureSlot shininessTexture;  // OBJ map_Ns
     TextureSlot metallicRoughnessTexture;
     TextureSlot normalTexture;  // glTF normalTexture; OBJ norm, or bump/map_Bump holding a normal map
     float normalScale = 1.0f;

@@ -196,9 +196,7 @@ void warnIgnoredMaps(const aiMaterial& material, FileMaterial& result, MaterialR
         aiTextureType type;
         const char* what;
     };
-    static constexpr Ignored kIgnored[] = {{aiTextureType_SHININESS, "a shininess map (map_Ns)"},
-                                           {aiTextureType_DIFFUSE_ROUGHNESS, "a roughness map (map_Pr)"},
-                                           {aiTextureType_OPACITY, "an opacity map (map_d)"},
+    static constexpr Ignored kIgnored[] = {{aiTextureType_OPACITY, "an opacity map (map_d)"},
                                            {aiTextureType_DISPLACEMENT, "a displacement map (disp)"}};
     aiString path;
     for (const Ignored& map : kIgnored)
@@ -214,6 +212,10 @@ void readPhongTextures(const aiMaterial& material, FileMaterial& result, Materia
                                           "diffuse texture (map_Kd)", result, reader);
     result.specularTexture = readTexture(material, aiTextureType_SPECULAR, TextureEncoding::Srgb,
                                          "specular texture (map_Ks)", result, reader);
+    result.roughnessTexture = readTexture(material, aiTextureType_DIFFUSE_ROUGHNESS, TextureEncoding::Linear,
+                                          "roughness map (map_Pr)", result, reader);
+    result.shininessTexture = readTexture(material, aiTextureType_SHININESS, TextureEncoding::Linear,
+                                          "shininess map (map_Ns)", result, reader);
     // A bump map is a height map by the MTL spec, but exporters write normal maps there too: one whose mean
     // is the flat normal's colour is used as a normal map; a height map is not (converting it needs the
     // bump multiplier's scale in world units, which the file does not pin down).
@@ -313,6 +315,8 @@ void dropUnusableTextures(Material& material, const TriangleMesh& mesh, const st
     };
     const Slot slots[] = {{&material.baseColorTexture, "base colour"},
                           {&material.specularTexture, "specular"},
+                          {&material.roughnessTexture, "roughness"},
+                          {&material.shininessTexture, "shininess"},
                           {&material.metallicRoughnessTexture, "metallic-roughness"},
                           {&material.normalTexture, "normal"},
                           {&material.emissiveTexture, "emissive"},

@@ -498,7 +498,8 @@ uint64_t worldSignature(const Scene& scene) {
         value(mat.alphaCutoff);
         value(mat.normalScale);
         value(mat.occlusionStrength);
-        for (const TextureSlot* slot : {&mat.baseColorTexture, &mat.specularTexture, &mat.metallicRoughnessTexture,
+        for (const TextureSlot* slot : {&mat.baseColorTexture, &mat.specularTexture, &mat.roughnessTexture,
+                                        &mat.shininessTexture, &mat.metallicRoughnessTexture,
                                         &mat.normalTexture, &mat.emissiveTexture, &mat.occlusionTexture}) {
             value(slot->texture.get());
             value(slot->sampler.wrapS);

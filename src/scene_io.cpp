@@ -337,6 +337,8 @@ Material combineMaterial(const MaterialOverrides& json, const FileMaterial& file
     m.alphaCutoff = json.alphaCutoff.value_or(file.alphaCutoff);
     m.baseColorTexture = json.baseColorTexture.value_or(file.baseColorTexture);
     if (phong && fileModel) m.specularTexture = file.specularTexture;
+    if (phong && fileModel) m.shininessTexture = file.shininessTexture;
+    m.roughnessTexture = file.roughnessTexture;
     if (!phong)
         m.metallicRoughnessTexture =
             json.metallicRoughnessTexture.value_or(fileModel ? file.metallicRoughnessTexture : TextureSlot{});

@@ -128,6 +128,13 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
         metallic *= t.z;  // glTF: blue holds metallic, green roughness
         roughness *= t.y;
     }
+    if (m.roughnessTexture) roughness *= lookup(m.roughnessTexture).x;
+    if (m.shininessTexture && m.model == MaterialModel::Phong) {
+        // MTL: the map multiplies the exponent Ns; roughness and Ns correspond as in phongExponent().
+        const float r = std::max(roughness, 1e-3f);
+        const float exponent = std::max(2.0f / (r * r) - 2.0f, 0.0f) * lookup(m.shininessTexture).x;
+        roughness = std::sqrt(2.0f / (exponent + 2.0f));
+    }
     SurfaceMaterial s = fromFactors(m, base, std::clamp(metallic, 0.0f, 1.0f), std::clamp(roughness, 0.0f, 1.0f));
     if (m.specularTexture && m.model == MaterialModel::Phong) s.specular *= glm::vec3(lookup(m.specularTexture));
     if (m.emissiveTexture) s.emission *= glm::vec3(lookup(m.emissiveTexture));

@@ -371,7 +371,7 @@ TEST_F(MeshIoTest, ObjMaps) {
     writeImage(height, dir_ / "height.png");
     write("m.mtl",
           "newmtl a\nKd 0.5 0.5 0.5\nKs 0.1 0.1 0.1\nNs 10\nmap_Kd kd.png\nmap_Ks kd.png\n"
-          "map_Bump normals.png\nmap_Ns kd.png\n"
+          "map_Bump normals.png\nmap_Ns height.png\nmap_Pr height.png\nmap_d kd.png\n"
           "newmtl b\nKd 0.5 0.5 0.5\nbump height.png\n");
     const fs::path obj =
         write("m.obj",
@@ -383,12 +383,14 @@ TEST_F(MeshIoTest, ObjMaps) {
     const FileMaterial& a = meshes[0].material.name == "a" ? meshes[0].material : meshes[1].material;
     const FileMaterial& b = meshes[0].material.name == "a" ? meshes[1].material : meshes[0].material;
     EXPECT_EQ(a.model, MaterialModel::Phong);
-    ASSERT_TRUE(a.baseColorTexture && a.specularTexture && a.normalTexture);
+    ASSERT_TRUE(a.baseColorTexture && a.specularTexture && a.normalTexture && a.shininessTexture &&
+                a.roughnessTexture);
+    EXPECT_EQ(a.shininessTexture.texture, a.roughnessTexture.texture);  // both linear scalar maps
     EXPECT_EQ(a.baseColorTexture.texture, a.specularTexture.texture);  // one file, one encoding: read once
     EXPECT_FALSE(b.normalTexture);                                     // a height map
     std::string all;
     for (const std::string& w : warnings) all += w + "\n";
-    expectContains(all, {"where: material 'a' of 'm.obj': a shininess map (map_Ns) ('kd.png') is ignored",
+    expectContains(all, {"where: material 'a' of 'm.obj': an opacity map (map_d) ('kd.png') is ignored",
                          "material 'b' of 'm.obj': the bump map", "is a height map"});
     // OBJ's vt orientation reaches the texture as glTF's: the image's top-left texel at the top-left corner.
     const TriangleMesh& mesh = meshes[0].material.name == "a" ? meshes[0].mesh : meshes[1].mesh;

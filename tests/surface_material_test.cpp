@@ -128,6 +128,18 @@ TEST(SurfaceMaterial, MetallicRoughnessTextureReadsBlueAndGreen) {
     expectNear(s.specular, glm::mix(glm::vec3(0.04f), m.albedo, 0.5f));
 }
 
+// MTL's scalar maps: map_Pr multiplies the roughness, map_Ns the Phong exponent.
+TEST(SurfaceMaterial, MtlRoughnessAndShininessMapsScaleTheLobe) {
+    Material m;
+    m.specular = glm::vec3(0.5f);
+    m.roughness = 0.5f;  // exponent 6
+    m.roughnessTexture.texture = textureOf(1, 1, {{0.4f, 0.4f, 0.4f, 1.0f}});
+    EXPECT_NEAR(materialAt(texturedQuad(m), {0, 0, 0}).roughness, 0.2f, kTolerance);
+    m.roughnessTexture = {};
+    m.shininessTexture.texture = textureOf(1, 1, {{0.5f, 0.5f, 0.5f, 1.0f}});
+    EXPECT_NEAR(materialAt(texturedQuad(m), {0, 0, 0}).phongExponent(), 3.0f, 1e-4f);
+}
+
 // A tangent-space normal map on the quad (normal +y, texture u along +x, v along +z): red tilts the normal
 // towards +u, green towards the image's top (-v: -z), as glTF defines it; with the shape's texture
 // coordinates alone (tangents derived from them) and with tangents given.

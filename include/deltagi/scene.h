@@ -58,6 +58,10 @@ struct Material {
     // `occlusionStrength`; it dims the indirect light only.
     TextureSlot baseColorTexture;
     TextureSlot specularTexture;
+    // OBJ/MTL's scalar maps (the red channel): map_Pr multiplies `roughness` (either model), map_Ns the
+    // Phong exponent Ns (Phong only; as the MTL specification defines it).
+    TextureSlot roughnessTexture;
+    TextureSlot shininessTexture;
     TextureSlot metallicRoughnessTexture;
     TextureSlot normalTexture;
     float normalScale = 1.0f;
@@ -67,8 +71,8 @@ struct Material {
 
     bool emits() const { return emission != glm::vec3(0.0f); }
     bool textured() const {
-        return baseColorTexture || specularTexture || metallicRoughnessTexture || normalTexture ||
-               emissiveTexture || occlusionTexture;
+        return baseColorTexture || specularTexture || roughnessTexture || shininessTexture ||
+               metallicRoughnessTexture || normalTexture || emissiveTexture || occlusionTexture;
     }
     // What the light volumes reflect: the diffuse and the glossy reflectance together. A voxel holds one
     // radiance for every direction, so a glossy surface's light goes in spread evenly over the hemisphere
