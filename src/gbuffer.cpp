@@ -44,7 +44,7 @@ void visibleObjectHits(const RayScene& all, glm::vec3 eye, std::span<const glm::
         for (size_t i = 0; i < directions.size(); ++i) hits[i] = visibleObjectHit(all, eye, directions[i]);
         return;
     }
-    all.intersectCoherent(eye, directions, hits, true);
+    all.intersectCoherent(eye, directions, hits, true, true);
     for (size_t i = 0; i < directions.size(); ++i)
         if (!hits[i].isVirtual || all.base()->intersect(eye, directions[i], 0.0f, hits[i].t).hit())
             hits[i] = {};
@@ -95,7 +95,7 @@ void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vec
         std::vector<RayHit> hits(directions.size());
         for (int x = 0; x < camera.width; ++x)
             directions[x] = glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f));
-        realOnly.intersectCoherent(eye, directions, hits);
+        realOnly.intersectCoherent(eye, directions, hits, false, true);
         for (int x = 0; x < camera.width; ++x)
             real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(hits[x], directions[x], pixelAngleOf(camera));
     });

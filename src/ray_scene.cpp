@@ -200,7 +200,7 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
 }
 
 void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
-                                 std::span<RayHit> hits, bool topLayerOnly) const {
+                                 std::span<RayHit> hits, bool topLayerOnly, bool texturesLater) const {
     if (meshes_.empty() || (base_ && !topLayerOnly)) {  // layers: one ray at a time
         for (size_t i = 0; i < directions.size(); ++i)
             hits[i] = topLayerOnly ? RayHit{} : intersect(origin, directions[i]);
@@ -238,12 +238,13 @@ void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> di
                 rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
                     ? RayHit{}
                     : hitOn(rh.hit.geomID[k], rh.hit.primID[k], {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
-                            {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin, directions[first + k]);
+                            {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin, directions[first + k],
+                            !texturesLater);
     }
 }
 
 RayHit RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
-                       glm::vec3 direction) const {
+                       glm::vec3 direction, bool lookUpTextures) const {
     RayHit result;
     const MeshRef& ref = meshes_[geomID];
     const TriangleMesh& mesh = *ref.mesh;
@@ -264,7 +265,7 @@ RayHit RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec
     result.mesh = &mesh;
     result.triangle = primID;
     result.barycentric = {u, v};
-    if (ref.varying) {
+    if (ref.varying && lookUpTextures) {
         lookUpMaterial(result, 0.0f);
     } else {
         result.surface = ref.surface;
@@ -279,7 +280,7 @@ void lookUpMaterial(RayHit& hit, float footprint) {
     const glm::uvec3 tri = mesh.triangles[hit.triangle];
     const float u = hit.barycentric.x, v = hit.barycentric.y;
     glm::vec3 n = interpolatedNormal(mesh, tri, u, v, hit.geometricNormal);
-    hit.surface = surfaceMaterialAt(mesh, hit.triangle, u, v, footprint, n);
+    hit.surface = surfaceMaterialAt(mesh, hit.triangle, u, v, footprint, &n);
     hit.normal = glm::dot(n, hit.geometricNormal) < 0.0f ? -n : n;
 }
 

@@ -71,9 +71,11 @@ class RayScene {
     // intersect() (or intersectTopLayer()) for many rays from one origin (camera rays), traced in packets:
     // hits[i] for directions[i] (unit length), t in (0, infinity). The same hits as one ray at a time: each
     // is computed again from its triangle (an edge shared by two triangles may be found on either, at the
-    // same point to rounding).
+    // same point to rounding). `texturesLater`: the caller looks the materials of textured meshes up
+    // itself (lookUpMaterial() with its footprint), so hits on them come with the material's factors and the
+    // unmapped normal instead of a lookup at the finest texels.
     void intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions, std::span<RayHit> hits,
-                           bool topLayerOnly = false) const;
+                           bool topLayerOnly = false, bool texturesLater = false) const;
     // Whether anything lies along origin + t * direction, t in (tMin, tMax): shadow rays (any hit, cheaper
     // than the closest). Of this layer and its base, or of this layer alone.
     bool occluded(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
@@ -87,7 +89,7 @@ class RayScene {
   private:
     // The hit on triangle `primID` of mesh `geomID` that Embree found at (u, v, t) with normal `ng`.
     RayHit hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
-                 glm::vec3 direction) const;
+                 glm::vec3 direction, bool lookUpTextures = true) const;
     struct Impl;
     std::unique_ptr<Impl> impl_;
     struct MeshRef {

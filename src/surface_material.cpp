@@ -101,7 +101,7 @@ glm::vec2 textureCoordinatesAt(const TriangleMesh& mesh, unsigned triangle, floa
 }
 
 SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, float footprint,
-                                  glm::vec3& normal) {
+                                  glm::vec3* normal) {
     const Material& m = mesh.material;
     if (!variesOverSurface(mesh)) return constantSurfaceMaterial(m);
     const glm::uvec3 tri = mesh.triangles[triangle];
@@ -138,10 +138,11 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
     SurfaceMaterial s = fromFactors(m, base, std::clamp(metallic, 0.0f, 1.0f), std::clamp(roughness, 0.0f, 1.0f));
     if (m.specularTexture && m.model == MaterialModel::Phong) s.specular *= glm::vec3(lookup(m.specularTexture));
     if (m.emissiveTexture) s.emission *= glm::vec3(lookup(m.emissiveTexture));
+    if (!normal) return s;
     if (m.occlusionTexture)
         s.occlusion = 1.0f + m.occlusionStrength * (lookup(m.occlusionTexture).x - 1.0f);
     if (m.normalTexture)
-        normal = mappedNormal(mesh, tri, u, v, normal, glm::vec3(lookup(m.normalTexture)), m.normalScale);
+        *normal = mappedNormal(mesh, tri, u, v, *normal, glm::vec3(lookup(m.normalTexture)), m.normalScale);
     return s;
 }
 

@@ -123,6 +123,7 @@ float reduceCoordinate(float u, TextureWrap wrap) {
 // glTF's wrap modes on a texel index (OpenGL 4.6, section 8.14.2): Repeat takes it modulo the size,
 // MirroredRepeat reflects every other period (-1 -> 0, n -> n - 1), ClampToEdge clamps to the edge texels.
 int wrapIndex(int i, int size, TextureWrap wrap) {
+    if (i >= 0 && i < size) return i;  // nearly every lookup: no division
     switch (wrap) {
         case TextureWrap::Repeat:
             i %= size;

@@ -220,9 +220,8 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
         // at the piece's centre, its textures filtered over the piece's size.
         auto materialOf = [&](const VoxelTriangle& t, glm::vec3 where, float a) {
             const glm::vec2 uv = barycentricOf(t, where);
-            glm::vec3 normal = t.normal;
             const SurfaceMaterial m =
-                surfaceMaterialAt(*t.varying, t.index, uv.x, uv.y, std::sqrt(a) * region.voxelSize(), normal);
+                surfaceMaterialAt(*t.varying, t.index, uv.x, uv.y, std::sqrt(a) * region.voxelSize(), nullptr);
             return std::pair{m.emission, m.volumeReflectance()};
         };
         auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a, glm::vec3 where) {

@@ -62,7 +62,7 @@ std::tuple<unsigned, float, float> locate(const TriangleMesh& mesh, glm::vec3 p)
 SurfaceMaterial materialAt(const TriangleMesh& mesh, glm::vec3 p, float footprint = 0.0f) {
     const auto [t, u, v] = locate(mesh, p);
     glm::vec3 normal(0, 1, 0);
-    return surfaceMaterialAt(mesh, t, u, v, footprint, normal);
+    return surfaceMaterialAt(mesh, t, u, v, footprint, &normal);
 }
 
 TEST(SurfaceMaterial, MetallicRoughnessFactorsGiveDiffuseAndF0) {
@@ -155,7 +155,7 @@ TEST(SurfaceMaterial, NormalMapTiltsTheNormalInTheTangentFrame) {
             quad.material.normalScale = scale;
             const auto [t, u, v] = locate(quad, {0.2f, 0, 0.3f});
             glm::vec3 n(0, 1, 0);
-            surfaceMaterialAt(quad, t, u, v, 0.0f, n);
+            surfaceMaterialAt(quad, t, u, v, 0.0f, &n);
             return n;
         };
         expectNear(mapped({1.0f, 0.5f, 1.0f, 1}, 1.0f), glm::normalize(glm::vec3(1, 1, 0)));
