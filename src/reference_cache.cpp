@@ -68,8 +68,59 @@ std::vector<fs::path> objMaterialFiles(const fs::path& obj, const std::string& t
     return files;
 }
 
+// The texture maps an MTL file names ("map_Kd -bm 1 wood.png": the last word), relative to its folder.
+std::vector<fs::path> mtlTextureFiles(const fs::path& mtl, const std::string& text) {
+    std::vector<fs::path> files;
+    std::istringstream lines(text);
+    std::string line;
+    while (std::getline(lines, line)) {
+        std::istringstream words(line);
+        std::string keyword, word, last;
+        if (!(words >> keyword)) continue;
+        if (keyword.rfind("map_", 0) != 0 && keyword != "bump" && keyword != "norm" && keyword != "disp") continue;
+        while (words >> word) last = word;
+        if (!last.empty()) files.push_back(mtl.parent_path() / last);
+    }
+    return files;
+}
+
+// The buffers and images a glTF file names by relative URI (not data: URIs, which are in the file itself).
+std::vector<fs::path> gltfResourceFiles(const fs::path& gltf, const std::string& text) {
+    std::vector<fs::path> files;
+    const nlohmann::json document = nlohmann::json::parse(text, nullptr, false);
+    if (!document.is_object()) return files;
+    for (const char* kind : {"buffers", "images"}) {
+        const auto list = document.find(kind);
+        if (list == document.end() || !list->is_array()) continue;
+        for (const auto& item : *list) {
+            const auto uri = item.is_object() ? item.find("uri") : item.end();
+            if (uri == item.end() || !uri->is_string()) continue;
+            const std::string name = uri->get<std::string>();
+            if (name.rfind("data:", 0) != 0) files.push_back(gltf.parent_path() / name);
+        }
+    }
+    return files;
+}
+
+// Adds a file the reference reads, and the files it reads in turn: an OBJ's MTL files, their texture maps, a
+// glTF file's buffers and images (so that changing a mesh's texture renders its reference again).
+void hashFile(const fs::path& path, const std::string& name, Hasher& hasher, std::set<fs::path>& seen) {
+    std::error_code error;
+    if (!fs::is_regular_file(path, error) || !seen.insert(path.lexically_normal()).second) return;
+    const std::string bytes = readBytes(path);
+    hasher.add(name);
+    hasher.add(bytes);
+    const fs::path extension = path.extension();
+    std::vector<fs::path> dependencies;
+    if (extension == ".obj" || extension == ".OBJ") dependencies = objMaterialFiles(path, bytes);
+    if (extension == ".mtl" || extension == ".MTL") dependencies = mtlTextureFiles(path, bytes);
+    if (extension == ".gltf" || extension == ".GLTF") dependencies = gltfResourceFiles(path, bytes);
+    for (const fs::path& dependency : dependencies)
+        hashFile(dependency, dependency.filename().string(), hasher, seen);
+}
+
 // Adds every file the document names: any string that is the path of a file relative to the scene's folder
-// (meshes, photo, environment map), and the MTL files of OBJ meshes.
+// (meshes, photo, environment map, textures), and the files those read (hashFile).
 void hashReferencedFiles(const nlohmann::json& value, const fs::path& folder, Hasher& hasher,
                          std::set<fs::path>& seen) {
     if (value.is_object() || value.is_array()) {
@@ -77,18 +128,7 @@ void hashReferencedFiles(const nlohmann::json& value, const fs::path& folder, Ha
         return;
     }
     if (!value.is_string() || value.get<std::string>().empty()) return;
-    const fs::path path = folder / value.get<std::string>();
-    std::error_code error;
-    if (!fs::is_regular_file(path, error) || !seen.insert(path.lexically_normal()).second) return;
-    const std::string bytes = readBytes(path);
-    hasher.add(value.get<std::string>());
-    hasher.add(bytes);
-    if (path.extension() == ".obj" || path.extension() == ".OBJ")
-        for (const fs::path& mtl : objMaterialFiles(path, bytes))
-            if (fs::is_regular_file(mtl, error) && seen.insert(mtl.lexically_normal()).second) {
-                hasher.add(mtl.filename().string());
-                hasher.add(readBytes(mtl));
-            }
+    hashFile(folder / value.get<std::string>(), value.get<std::string>(), hasher, seen);
 }
 
 // A reference's limited-bounce version: references whose paths roulette ends long before their bounce limit

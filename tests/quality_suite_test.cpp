@@ -266,6 +266,29 @@ TEST_F(QualitySuiteTest, TheKeyFollowsTheContentOfReferencedFiles) {
     EXPECT_EQ(referenceContentKey(file, {}), key);
 }
 
+TEST_F(QualitySuiteTest, TheKeyFollowsTheFilesAMeshFileReads) {
+    // A glTF file's buffer and images, and an MTL file's texture maps, are read by the path tracer too: a
+    // changed texture must render the reference again. The key only hashes, so the files need not be valid.
+    write("m.gltf", R"({"buffers": [{"uri": "m.bin"}, {"uri": "data:application/octet-stream;base64,AAAA"}],
+                        "images": [{"uri": "colour.png"}]})");
+    write("m.bin", "buffer 1");
+    write("colour.png", "image 1");
+    write("t.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+    write("t.mtl", "newmtl a\nKd 1 1 1\nmap_Kd -bm 1 wood.png\nnorm bumps.png\n");
+    write("wood.png", "wood 1");
+    write("bumps.png", "bumps 1");
+    json scene = tinyScene(0.5);
+    scene["virtual"] = json::array({{{"file", "m.gltf"}}, {{"file", "t.obj"}}});
+    const fs::path file = write("textured.json", scene.dump());
+    std::string key = referenceContentKey(file, {});
+    for (const char* name : {"m.bin", "colour.png", "wood.png", "bumps.png"}) {
+        write(name, "changed");
+        const std::string changed = referenceContentKey(file, {});
+        EXPECT_NE(changed, key) << name;
+        key = changed;
+    }
+}
+
 TEST_F(QualitySuiteTest, ABlackObjectOnAFloorChangesOnlyTheDirectLight) {
     // Nothing reaches the floor by way of a black box, and a plane does not light itself: the reference's
     // change is all shadow (direct light), the indirect share 0.
