@@ -312,7 +312,7 @@ class Painter:
         slope = 0.35 * self.belly_half * 2 * math.pi * 5 * math.cos(2 * math.pi * 5 * u)
         stem = abs(v - centre) / math.sqrt(1 + slope * slope)
         # A pair of pointed leaves at each crest of the stem, spread 35 degrees either side of the way out
-        # (u and v are near enough equal lengths on the belly: 0.47 and 0.42 m per unit).
+        # (in texture units: on the belly a unit of u is 0.50 m, one of v 0.33 m, so the leaves are drawn wide).
         leaf = 1e9
         for side, phase in ((1, 0.25), (-1, 0.75)):
             uc = (round(u * 5 - phase) + phase) / 5
