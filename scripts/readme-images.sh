@@ -20,5 +20,6 @@ render cornell-box delta
 "$deltagi" render examples/cornell-box.json --set 'virtual=[]' -o docs/images/cornell-box-background.png --quiet
 render cornell-box-glossy none
 render cornell-buddha none
+render cornell-textured none
 render field-bunny delta
-echo "readme-images.sh: wrote docs/images/{cornell-box,cornell-box-background,cornell-box-delta,cornell-box-glossy,cornell-buddha,field-bunny,field-bunny-delta}.png"
+echo "readme-images.sh: wrote docs/images/{cornell-box,cornell-box-background,cornell-box-delta,cornell-box-glossy,cornell-buddha,cornell-textured,field-bunny,field-bunny-delta}.png"
