@@ -200,7 +200,9 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                     const glm::vec3 dir = directions[next++];
                     if (!hit.hit()) continue;
                     ++virtualCount;
-                    out[sy * k + sx] = toSurfacePoint(hit, dir, pixelAngleOf(camera) / static_cast<float>(k));
+                    // Textures filtered over the whole pixel, as at its centre: the sub-samples' light is
+                    // averaged over the pixel anyway, and finer mip levels cost cache misses.
+                    out[sy * k + sx] = toSurfacePoint(hit, dir, pixelAngleOf(camera));
                     const float offset = ox * ox + oy * oy;
                     if (offset < bestOffset) {
                         bestOffset = offset;

@@ -216,12 +216,13 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     parallelFor(0, slabCount, 1, [&](int64_t s) {
         const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
         const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
-        // The emission and albedo of a textured triangle's piece `where` (voxel space) of area `a`: its material
-        // at the piece's centre, its textures filtered over the piece's size.
-        auto materialOf = [&](const VoxelTriangle& t, glm::vec3 where, float a) {
+        // The emission and albedo of a textured triangle's piece `where` (voxel space): its material at the
+        // piece's centre, its textures filtered over a voxel (the voxel averages all its pieces anyway; a
+        // piece's own, smaller footprint reads finer mip levels, for nothing but cache misses).
+        auto materialOf = [&](const VoxelTriangle& t, glm::vec3 where) {
             const glm::vec2 uv = barycentricOf(t, where);
             const SurfaceMaterial m =
-                surfaceMaterialAt(*t.varying, t.index, uv.x, uv.y, std::sqrt(a) * region.voxelSize(), nullptr);
+                surfaceMaterialAt(*t.varying, t.index, uv.x, uv.y, region.voxelSize(), nullptr);
             return std::pair{m.emission, m.volumeReflectance()};
         };
         auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a, glm::vec3 where) {
@@ -233,7 +234,7 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             v.w += t.normal.z * a;
             out.area[i] += a;
             if (t.varying && (emissive || withAlbedo)) {
-                const auto [emission, albedo] = materialOf(t, where, a);
+                const auto [emission, albedo] = materialOf(t, where);
                 if (emissive) out.emission[i] += emission * a;
                 if (withAlbedo) out.albedo[i] += albedo * a;
                 return;
