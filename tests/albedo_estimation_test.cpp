@@ -17,7 +17,7 @@
 #include "deltagi/error.h"
 #include "deltagi/reference.h"
 #include "deltagi/scene_io.h"
-#include "shapes.h"
+#include "scene/shapes.h"
 #include "test_files.h"
 #include "test_scene_json.h"
 #include "test_scenes.h"

@@ -1,6 +1,6 @@
 // Emitting surfaces as area lights of the DGI pipeline (options.shadow.method "rays"): their direct light
 // against the closed form of a rectangle's irradiance, and the shadow a virtual object casts from one.
-#include "area_light_rays.h"
+#include "pipeline/area_light_rays.h"
 
 #include <cmath>
 #include <numbers>

@@ -1,13 +1,13 @@
 // Multi-bounce light in the volumes (bounceLight) against the closed form of a furnace: inside a closed box
 // whose walls all leave radiance L and reflect albedo rho, each wall sees radiance L everywhere, so one more
 // bounce adds rho L, two add rho L + rho^2 L.
-#include "bounce_light.h"
+#include "pipeline/bounce_light.h"
 
 #include <gtest/gtest.h>
 
-#include "mipmap.h"
-#include "ray_scene.h"
-#include "shapes.h"
+#include "core/ray_scene.h"
+#include "pipeline/mipmap.h"
+#include "scene/shapes.h"
 #include "test_scenes.h"
 
 namespace deltagi {

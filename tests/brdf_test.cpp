@@ -1,12 +1,12 @@
 // The glossy lobe averaged over a sphere light's disk (phongLobeOverLight) against the average taken by
 // brute force over directions spread uniformly over the disk, as the path tracer's light samples spread.
-#include "brdf.h"
+#include "core/brdf.h"
 
 #include <cmath>
 
 #include <gtest/gtest.h>
 
-#include "brdf_sampling.h"
+#include "core/brdf_sampling.h"
 
 namespace deltagi {
 namespace {

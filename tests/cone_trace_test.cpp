@@ -1,11 +1,11 @@
-#include "cone_trace.h"
+#include "pipeline/cone_trace.h"
 
 #include <cmath>
 #include <numeric>
 
 #include <gtest/gtest.h>
 
-#include "mipmap.h"
+#include "pipeline/mipmap.h"
 
 namespace deltagi {
 namespace {

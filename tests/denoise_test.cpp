@@ -1,4 +1,4 @@
-#include "denoise.h"
+#include "pipeline/denoise.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "cone_trace.h"
+#include "pipeline/cone_trace.h"
 
 namespace deltagi {
 namespace {

@@ -6,12 +6,12 @@
 
 #include <gtest/gtest.h>
 
+#include "core/ray_scene.h"
 #include "deltagi/reference.h"
 #include "deltagi/renderer.h"
-#include "inject.h"
-#include "ray_scene.h"
+#include "pipeline/inject.h"
+#include "pipeline/voxelize.h"
 #include "test_scenes.h"
-#include "voxelize.h"
 
 namespace deltagi {
 namespace {

@@ -11,10 +11,10 @@
 
 #include <gtest/gtest.h>
 
+#include "core/environment.h"
 #include "deltagi/error.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
-#include "environment.h"
 #include "test_errors.h"
 
 namespace deltagi {

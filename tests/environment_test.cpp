@@ -1,7 +1,7 @@
 // Environment maps: projections, light extraction (median cut, variance minimization), the prefiltered sky
 // through the cones, the path tracer's environment sampling, and the renderer lit by a map. Maps are built in
 // code from closed-form skies; the shared light probes are used where present.
-#include "environment.h"
+#include "core/environment.h"
 
 #include <cmath>
 #include <filesystem>
@@ -13,8 +13,8 @@
 #include "deltagi/reference.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
-#include "light_extraction.h"
-#include "sky_light.h"
+#include "pipeline/light_extraction.h"
+#include "pipeline/sky_light.h"
 #include "test_scenes.h"
 
 namespace deltagi {

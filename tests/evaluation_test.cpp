@@ -1,6 +1,6 @@
 // The evaluation against the path tracer: the figures on images whose answer is known, the JSON keys that
 // tools read, and a regression bound on DGI's error on a small Cornell box.
-#include "evaluation.h"
+#include "evaluation/evaluation.h"
 
 #include <gtest/gtest.h>
 

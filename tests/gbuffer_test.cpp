@@ -1,6 +1,6 @@
 // The G-buffer's virtual half: coverage of the objects over each pixel's sub-samples, and the sub-samples'
 // surfaces that the objects' direct light is shaded over.
-#include "gbuffer.h"
+#include "pipeline/gbuffer.h"
 
 #include <gtest/gtest.h>
 

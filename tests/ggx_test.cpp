@@ -2,7 +2,7 @@
 // GGX keeps all the energy only when smooth), reciprocity, the visible-normal sampler's density against its
 // pdf and against its samples, the cone aperture against a numeric root, and the lobe widened for a sphere
 // light against the lobe averaged over the light's disk.
-#include "ggx.h"
+#include "core/ggx.h"
 
 #include <algorithm>
 #include <cmath>
@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include "cone_trace.h"
-#include "rng.h"
+#include "core/rng.h"
+#include "pipeline/cone_trace.h"
 
 namespace deltagi {
 namespace {

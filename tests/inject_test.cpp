@@ -1,9 +1,9 @@
 // Reflective shadow maps and light injection against closed-form irradiance.
-#include "inject.h"
-#include "mipmap.h"
-#include "reflective_shadow_map.h"
-#include "shading.h"
-#include "shapes.h"
+#include "pipeline/inject.h"
+#include "pipeline/mipmap.h"
+#include "pipeline/reflective_shadow_map.h"
+#include "pipeline/shading.h"
+#include "scene/shapes.h"
 
 #include <algorithm>
 #include <array>

@@ -1,7 +1,7 @@
-// The live session's message handler (src/live_session.h), without sockets: bad messages are refused with an
+// The live session's message handler (src/live/live_session.h), without sockets: bad messages are refused with an
 // error and change nothing; a drag rests the object on the surface under the cursor; the saved document
 // loads to the session's scene bit for bit.
-#include "live_session.h"
+#include "live/live_session.h"
 
 #include <pthread.h>
 #include <unistd.h>

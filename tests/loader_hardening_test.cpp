@@ -14,8 +14,8 @@
 
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
-#include "json_reader.h"
-#include "mesh_io.h"
+#include "scene/json_reader.h"
+#include "scene/mesh_io.h"
 #include "test_errors.h"
 
 namespace deltagi {

@@ -15,8 +15,8 @@
 #include "deltagi/image.h"
 #include "deltagi/scene_io.h"
 #include "deltagi/transforms.h"
-#include "image_encode.h"
-#include "mesh_io.h"
+#include "io/image_encode.h"
+#include "scene/mesh_io.h"
 #include "test_errors.h"
 #include "test_gltf.h"
 

@@ -1,4 +1,4 @@
-#include "mipmap.h"
+#include "pipeline/mipmap.h"
 
 #include <cmath>
 #include <cstring>

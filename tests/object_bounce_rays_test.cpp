@@ -1,15 +1,15 @@
 // The objects' light on real surfaces by rays (traceObjectBounceRays) against the closed form of a
 // uniformly bright sphere: a floor point at distance d under the centre of a sphere of radius r and radiance
 // L receives E = pi L (r / d)^2, so the diffuse cones' quantity E / pi is L (r / d)^2.
-#include "object_bounce_rays.h"
+#include "pipeline/object_bounce_rays.h"
 
 #include <gtest/gtest.h>
 
-#include "mipmap.h"
-#include "ray_scene.h"
-#include "shapes.h"
+#include "core/ray_scene.h"
+#include "pipeline/mipmap.h"
+#include "pipeline/voxelize.h"
+#include "scene/shapes.h"
 #include "test_scenes.h"
-#include "voxelize.h"
 
 namespace deltagi {
 namespace {

@@ -1,6 +1,6 @@
 // ObjectVolumes keeps the objects' volumes from frame to frame and redoes only what the objects change: every
 // level of every volume must be the one computed from scratch, bit for bit, whatever the objects do.
-#include "object_volumes.h"
+#include "pipeline/object_volumes.h"
 
 #include <cstring>
 

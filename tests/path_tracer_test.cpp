@@ -1,6 +1,6 @@
 // The reference path tracer against closed-form answers (white furnace, a point light over a plane), the BRDF
 // sampler against its own pdf and the lobe's energy, and the properties of the differential render.
-#include "path_tracer.h"
+#include "reference/path_tracer.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "brdf_sampling.h"
+#include "core/brdf_sampling.h"
 #include "deltagi/reference.h"
 #include "test_scenes.h"
 

@@ -1,7 +1,7 @@
 // The quality suite: the suite file, the reference cache (reused while nothing the path tracer reads changes,
 // rendered again when something does), the equal-error fit on numbers whose answer is known, the split of
 // the delta error, and the table; `deltagi eval --suite` end to end on a two-scene suite of tiny scenes.
-#include "quality_suite.h"
+#include "evaluation/quality_suite.h"
 
 #include <sys/wait.h>
 #include <unistd.h>

@@ -1,7 +1,7 @@
 // RayScene: closest hits over one layer or a layer over a base, and refitting a layer whose meshes moved.
 #include <gtest/gtest.h>
 
-#include "ray_scene.h"
+#include "core/ray_scene.h"
 #include "test_scenes.h"
 
 namespace deltagi {

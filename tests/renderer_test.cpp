@@ -10,7 +10,7 @@
 #include <tbb/global_control.h>
 
 #include "deltagi/atomic_file.h"
-#include "shapes.h"
+#include "scene/shapes.h"
 #include "test_scenes.h"
 
 namespace deltagi {

@@ -13,7 +13,7 @@
 
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
-#include "json_reader.h"
+#include "scene/json_reader.h"
 #include "test_errors.h"
 
 namespace deltagi {

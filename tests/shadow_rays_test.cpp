@@ -1,6 +1,6 @@
 // Shadow rays (options.shadow.method "rays") against closed forms: the umbra of a sphere under a point light,
 // and the penumbra of a disk light behind a straight edge.
-#include "shadow_rays.h"
+#include "pipeline/shadow_rays.h"
 
 #include <cmath>
 #include <numbers>

@@ -4,8 +4,8 @@
 
 #include <gtest/gtest.h>
 
-#include "mesh_io.h"
-#include "shapes.h"
+#include "scene/mesh_io.h"
+#include "scene/shapes.h"
 
 namespace deltagi {
 namespace {

@@ -6,13 +6,13 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "area_lights.h"
+#include "core/area_lights.h"
+#include "core/ray_scene.h"
+#include "core/surface_material.h"
 #include "deltagi/shapes.h"
-#include "gbuffer.h"
-#include "ray_scene.h"
-#include "surface_material.h"
+#include "pipeline/gbuffer.h"
+#include "pipeline/voxelize.h"
 #include "test_scenes.h"
-#include "voxelize.h"
 
 namespace deltagi {
 namespace {

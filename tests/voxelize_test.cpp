@@ -1,4 +1,4 @@
-#include "voxelize.h"
+#include "pipeline/voxelize.h"
 
 #include <algorithm>
 #include <array>
