@@ -15,6 +15,10 @@
 
 namespace deltagi {
 
+// Shadow and bounce rays start this fraction of the scene's extent off the surface, so that a surface does
+// not shadow itself through floating-point error.
+constexpr float kRayOffsetScale = 1e-4f;
+
 struct RayHit {
     float t = std::numeric_limits<float>::infinity();  // distance along the (unit) ray direction
     glm::vec3 position{0.0f};

@@ -7,7 +7,6 @@
 #include "core/brdf.h"
 #include "core/brdf_sampling.h"
 #include "pipeline/cone_trace.h"
-#include "reference/path_tracer.h"
 
 namespace deltagi {
 

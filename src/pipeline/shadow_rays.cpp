@@ -7,7 +7,6 @@
 
 #include "core/brdf_sampling.h"
 #include "core/lights.h"
-#include "reference/path_tracer.h"
 
 namespace deltagi {
 

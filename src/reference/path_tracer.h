@@ -19,10 +19,6 @@
 
 namespace deltagi {
 
-// Shadow and bounce rays start this fraction of the scene's extent off the surface, so that a surface does
-// not shadow itself through floating-point error.
-constexpr float kRayOffsetScale = 1e-4f;
-
 // One point on a light, as seen from p: like sampleLight(), but a point or spot light with a radius is a
 // sphere whose silhouette disk (facing p) is sampled uniformly by (u1, u2): averaging over many samples gives
 // the penumbra of a sphere light of the same intensity. Directional lights and lights without a radius ignore
@@ -32,7 +28,7 @@ LightSample sampleLightPoint(const Light& light, glm::vec3 p, float u1, float u2
 struct PathSettings {
     int rouletteStartBounce = 3;  // vertices from this index on (0 = first hit) continue with probability q
     int maxBounces = 256;         // a safety bound
-    float rayOffset = 1e-4f;      // world units; see kRayOffsetScale
+    float rayOffset = 1e-4f;      // world units; see kRayOffsetScale (core/ray_scene.h)
 };
 
 class PathTracer {
