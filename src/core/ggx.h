@@ -4,7 +4,7 @@
 //   f(wi, wo) = (1 - F(v.h)) * diffuseColor / pi + F(v.h) * D(n.h) * V(n.l, n.v),
 // with diffuseColor = base * (1 - metallic), F0 = mix(0.04, base, metallic), alpha = roughness^2.
 // Single scattering only: the lobe loses energy at high roughness (a white metal reflects 0.877 of the light
-// at alpha 0.3 and 0.307 at alpha 1, seen from above; tests/ggx_test.cpp has the figures). The path tracer
+// at alpha 0.3 and 0.307 at alpha 1, seen from above; tests/core/ggx_test.cpp has the figures). The path tracer
 // and the cone tracer are both to use it as it is, with no multiple-scattering compensation, so that they
 // stay comparable. glTF's mix, (1 - F(v.h)) under the diffuse, reflects more than 1 from a white dielectric
 // at grazing angles (1.39 at n.v = 0.1 and alpha 0.05): that is the specification's formula, kept.
@@ -109,7 +109,7 @@ inline glm::vec3 evalGltfBrdf(glm::vec3 diffuseColor, glm::vec3 f0, float alpha,
 // Not Karis 2013's "roughness widening" alpha + radius / (2 distance) with its energy factor
 // (alpha / alpha')^2: that is for his representative point, where the unwidened D is read at its peak; at
 // the light's centre, adding widths linearly dims a highlight 20 % where the disk barely changes it
-// (alpha 0.2, lightAngle 0.05), and the quadrature stays within 4 % there (tests/ggx_test.cpp).
+// (alpha 0.2, lightAngle 0.05), and the quadrature stays within 4 % there (tests/core/ggx_test.cpp).
 inline float ggxAlphaOverLight(float alpha, float lightAngle) {
     const float a = clampGgxAlpha(alpha);
     const float rho = 0.5f * std::max(lightAngle, 0.0f);
