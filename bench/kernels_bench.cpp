@@ -8,16 +8,16 @@
 #include <cmath>
 #include <numbers>
 
-#include "cone_trace.h"
+#include "core/ray_scene.h"
 #include "deltagi/transforms.h"
-#include "gbuffer.h"
-#include "inject.h"
-#include "mipmap.h"
-#include "object_volumes.h"
-#include "ray_scene.h"
-#include "reflective_shadow_map.h"
-#include "shapes.h"
-#include "voxelize.h"
+#include "pipeline/cone_trace.h"
+#include "pipeline/gbuffer.h"
+#include "pipeline/inject.h"
+#include "pipeline/mipmap.h"
+#include "pipeline/object_volumes.h"
+#include "pipeline/reflective_shadow_map.h"
+#include "pipeline/voxelize.h"
+#include "scene/shapes.h"
 
 namespace deltagi {
 namespace {

@@ -15,8 +15,8 @@
 
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
+#include "io/ply_writer.h"
 #include "outputs.h"
-#include "ply_writer.h"
 
 namespace fs = std::filesystem;
 using nlohmann::ordered_json;

@@ -30,7 +30,7 @@
 #include "deltagi/error.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
-#include "live_session.h"
+#include "live/live_session.h"
 #include "web_assets.h"
 
 namespace deltagi::cli {

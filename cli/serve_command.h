@@ -1,6 +1,6 @@
 // `deltagi serve SCENE.json [--port 8080] [--host 127.0.0.1]`: a live session in the browser (README, "Live
 // session"). A web server (civetweb) serves the page of web/, embedded at build time, and streams the
-// frames to it as JPEGs over a WebSocket; the page's messages change the scene (src/live_session.h).
+// frames to it as JPEGs over a WebSocket; the page's messages change the scene (src/live/live_session.h).
 #pragma once
 
 #include <filesystem>

@@ -12,7 +12,7 @@
 #include <string>
 
 #include "deltagi/error.h"
-#include "mesh_io.h"
+#include "scene/mesh_io.h"
 
 namespace {
 // Index = the first byte modulo the size; scripts/fuzz.sh uses the same order.

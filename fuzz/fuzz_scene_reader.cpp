@@ -11,7 +11,7 @@
 
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
-#include "json_reader.h"
+#include "scene/json_reader.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     static const std::filesystem::path kScene = [] {

@@ -4,9 +4,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/scene.h"
-#include "gbuffer.h"
-#include "mesh_io.h"
-#include "shapes.h"
+#include "pipeline/gbuffer.h"
+#include "scene/mesh_io.h"
+#include "scene/shapes.h"
 
 namespace deltagi::test {
 

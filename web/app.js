@@ -1,5 +1,5 @@
 // The live session's page (`deltagi serve`): shows the frames the server streams over a WebSocket and sends
-// it the user's changes as JSON messages (src/live_session.h lists them). window.deltagi holds what the
+// it the user's changes as JSON messages (src/live/live_session.h lists them). window.deltagi holds what the
 // browser test reads: the frames shown, their infos, the input-to-frame latencies.
 'use strict';
 

@@ -69,7 +69,7 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 // half of the G-buffer (redone where they were and are) and their BVH (refit when only their vertices moved).
 // The RSM texels the objects can change and the cones are redone every frame. The images are the same as
 // render()'s, bit for bit, but for one case: a refit BVH may find the other of two triangles that a ray meets
-// on their shared edge, at the same point to rounding (tests/ray_scene_test.cpp).
+// on their shared edge, at the same point to rounding (tests/core/ray_scene_test.cpp).
 class FrameRenderer {
   public:
     FrameRenderer();

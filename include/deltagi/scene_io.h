@@ -30,7 +30,7 @@ Scene loadScene(const nlohmann::json& document, const std::filesystem::path& fil
 // The options as JSON, every key with its value (the defaults where the scene did not set one).
 nlohmann::json optionsToJson(const Options& options);
 
-// ---- tracked camera sequences (src/sequence_io.cpp) -------------------------------------------------------
+// ---- tracked camera sequences (src/scene/sequence_io.cpp) -------------------------------------------------------
 // As capture tools write them: the nerfstudio / instant-ngp `transforms.json` that COLMAP, Polycam, Record3D,
 // Metashape and others are converted into. Intrinsics (fl_x fl_y cx cy w h, or camera_angle_x), the camera
 // model (PINHOLE, OPENCV with k1 k2 (k3) p1 p2, OPENCV_FISHEYE with k1..k4) globally or per frame; per frame

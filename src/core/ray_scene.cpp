@@ -1,0 +1,302 @@
+#include "core/ray_scene.h"
+
+#include <cstring>
+#include <deque>
+#include <optional>
+#include <stdexcept>
+
+#include <embree3/rtcore.h>
+
+namespace deltagi {
+
+struct RayScene::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    // The alpha-masked meshes, for their geometries' filter functions (a deque: the addresses stay).
+    std::deque<const TriangleMesh*> maskedMeshes;
+    ~Impl() {
+        if (scene) rtcReleaseScene(scene);
+        if (device) rtcReleaseDevice(device);
+    }
+};
+
+namespace {
+
+void initRay(RTCRay& ray, glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) {
+    ray.org_x = origin.x;
+    ray.org_y = origin.y;
+    ray.org_z = origin.z;
+    ray.dir_x = direction.x;
+    ray.dir_y = direction.y;
+    ray.dir_z = direction.z;
+    ray.tnear = tMin;
+    ray.tfar = tMax;
+    ray.time = 0.0f;
+    ray.mask = ~0u;
+    ray.id = 0;
+    ray.flags = 0;
+}
+
+// The hit of a ray on the triangle Embree found, computed again from the mesh's vertices (Moller-Trumbore in
+// double precision): the same bits whichever BVH found it, built afresh or refit. Embree's own figures
+// depend, in the last bits, on how its leaves store the triangle.
+struct TriangleHit {
+    float t, u, v;
+    glm::vec3 ng;  // the triangle's plane normal (e1 x e2), not normalized
+};
+std::optional<TriangleHit> recomputeHit(glm::vec3 origin, glm::vec3 direction, glm::vec3 a, glm::vec3 b,
+                                        glm::vec3 c) {
+    const glm::dvec3 o(origin), d(direction), v0(a);
+    const glm::dvec3 e1 = glm::dvec3(b) - v0, e2 = glm::dvec3(c) - v0;
+    const glm::dvec3 p = glm::cross(d, e2);
+    const double det = glm::dot(e1, p);
+    if (det == 0.0) return std::nullopt;
+    const double inv = 1.0 / det;
+    const glm::dvec3 s = o - v0;
+    const glm::dvec3 q = glm::cross(s, e1);
+    return TriangleHit{static_cast<float>(glm::dot(e2, q) * inv), static_cast<float>(glm::dot(s, p) * inv),
+                       static_cast<float>(glm::dot(d, q) * inv), glm::vec3(glm::cross(e1, e2))};
+}
+
+// Embree's filter for alpha-masked materials (glTF alphaMode MASK): a hit where the surface is cut away is
+// no hit, for closest-hit and shadow rays alike.
+void alphaMaskFilter(const RTCFilterFunctionNArguments* args) {
+    const TriangleMesh& mesh = **static_cast<const TriangleMesh* const*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        if (!surfacePresentAt(mesh, prim, RTCHitN_u(args->hit, args->N, i), RTCHitN_v(args->hit, args->N, i)))
+            args->valid[i] = 0;
+    }
+}
+
+// The mesh's normals interpolated at (u, v), unit length; `fallback` where they cancel.
+glm::vec3 interpolatedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v, glm::vec3 fallback) {
+    const glm::vec3 n = (1.0f - u - v) * mesh.normals[tri.x] + u * mesh.normals[tri.y] + v * mesh.normals[tri.z];
+    const float len = glm::length(n);
+    return len > 0.0f ? n / len : fallback;
+}
+
+// The shading normal of a two-sided surface: the interpolated normal turned to the side the ray came from,
+// the side `geometricNormal` (unit) already faces.
+glm::vec3 shadingNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v, glm::vec3 geometricNormal) {
+    const glm::vec3 n = interpolatedNormal(mesh, tri, u, v, geometricNormal);
+    return glm::dot(n, geometricNormal) < 0.0f ? -n : n;
+}
+
+}  // namespace
+
+RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* base)
+    : impl_(std::make_unique<Impl>()), content_(content), base_(base) {
+    impl_->device = rtcNewDevice(nullptr);
+    if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
+    impl_->scene = rtcNewScene(impl_->device);
+    // A layer of virtual objects moves every frame: a faster build for slightly slower rays, and a two-level
+    // structure (build quality low) whose meshes' BVHs can be refit (refit()).
+    const bool dynamic = content == SceneContent::VirtualOnly;
+    rtcSetSceneBuildQuality(impl_->scene, dynamic ? RTC_BUILD_QUALITY_LOW : RTC_BUILD_QUALITY_HIGH);
+    if (dynamic) rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_DYNAMIC);
+    if (base) bounds_ = base->bounds();
+    auto add = [&](const TriangleMesh& mesh, bool isVirtual) {
+        if (mesh.triangles.empty()) return;
+        RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        // Embree-owned, padded buffers (Embree reads vertices with 16-byte loads).
+        auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
+        std::memcpy(vertices, mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
+        auto* indices = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), mesh.triangles.size()));
+        std::memcpy(indices, mesh.triangles.data(), mesh.triangles.size() * sizeof(glm::uvec3));
+        if (dynamic) rtcSetGeometryBuildQuality(geom, RTC_BUILD_QUALITY_REFIT);
+        if (mesh.material.alphaMode == AlphaMode::Mask) {
+            impl_->maskedMeshes.push_back(&mesh);
+            rtcSetGeometryUserData(geom, &impl_->maskedMeshes.back());
+            rtcSetGeometryIntersectFilterFunction(geom, alphaMaskFilter);
+            rtcSetGeometryOccludedFilterFunction(geom, alphaMaskFilter);
+        }
+        rtcCommitGeometry(geom);
+        unsigned id = rtcAttachGeometry(impl_->scene, geom);
+        rtcReleaseGeometry(geom);
+        if (id != meshes_.size()) throw std::logic_error("Embree geometry IDs are not consecutive");
+        meshes_.push_back(
+            {&mesh, isVirtual, vertices, indices, mesh.positions.size(), mesh.triangles.size(),
+             mesh.material.alphaMode == AlphaMode::Mask, variesOverSurface(mesh),
+             constantSurfaceMaterial(mesh.material)});
+        bounds_.extend(mesh.bounds());
+    };
+    if (content != SceneContent::VirtualOnly)
+        for (const TriangleMesh& m : scene.real) add(m, false);
+    if (content != SceneContent::RealOnly)
+        for (const TriangleMesh& m : scene.virtuals) add(m, true);
+    rtcCommitScene(impl_->scene);
+}
+
+RayScene::~RayScene() = default;
+
+bool RayScene::refit(const Scene& scene) {
+    std::vector<const TriangleMesh*> meshes;
+    auto collect = [&](const std::vector<TriangleMesh>& list) {
+        for (const TriangleMesh& m : list)
+            if (!m.triangles.empty()) meshes.push_back(&m);
+    };
+    if (content_ != SceneContent::VirtualOnly) collect(scene.real);
+    if (content_ != SceneContent::RealOnly) collect(scene.virtuals);
+    if (meshes.size() != meshes_.size()) return false;
+    for (size_t g = 0; g < meshes.size(); ++g) {
+        const TriangleMesh& now = *meshes[g];
+        const MeshRef& built = meshes_[g];
+        if (now.positions.size() != built.vertexCount || now.triangles.size() != built.triangleCount ||
+            (now.material.alphaMode == AlphaMode::Mask) != built.masked ||
+            std::memcmp(built.indices, now.triangles.data(), now.triangles.size() * sizeof(glm::uvec3)) != 0)
+            return false;
+    }
+    bounds_ = base_ ? base_->bounds() : Bounds3f{};
+    size_t masked = 0;
+    for (size_t g = 0; g < meshes.size(); ++g) {
+        if (meshes_[g].masked) impl_->maskedMeshes[masked++] = meshes[g];
+        const TriangleMesh& mesh = *meshes[g];
+        std::memcpy(meshes_[g].vertices, mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3));
+        RTCGeometry geom = rtcGetGeometry(impl_->scene, static_cast<unsigned>(g));
+        rtcUpdateGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0);
+        rtcCommitGeometry(geom);
+        meshes_[g].mesh = &mesh;
+        meshes_[g].varying = variesOverSurface(mesh);
+        meshes_[g].surface = constantSurfaceMaterial(mesh.material);
+        bounds_.extend(mesh.bounds());
+    }
+    rtcCommitScene(impl_->scene);
+    return true;
+}
+
+void RayScene::updateMaterials() {
+    for (MeshRef& ref : meshes_) {
+        ref.varying = variesOverSurface(*ref.mesh);
+        ref.surface = constantSurfaceMaterial(ref.mesh->material);
+    }
+}
+
+RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    RayHit hit = intersectTopLayer(origin, direction, tMin, tMax);
+    if (base_) {
+        RayHit below = base_->intersect(origin, direction, tMin, hit.hit() ? hit.t : tMax);
+        if (below.hit()) hit = below;
+    }
+    return hit;
+}
+
+RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    RayHit result;
+    if (meshes_.empty()) return result;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    initRay(rh.ray, origin, direction, tMin, tMax);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return result;
+    return hitOn(rh.hit.geomID, rh.hit.primID, {rh.hit.u, rh.hit.v, rh.ray.tfar},
+                 {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, origin, direction);
+}
+
+void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
+                                 std::span<RayHit> hits, bool topLayerOnly, bool texturesLater) const {
+    if (meshes_.empty() || (base_ && !topLayerOnly)) {  // layers: one ray at a time
+        for (size_t i = 0; i < directions.size(); ++i)
+            hits[i] = topLayerOnly ? RayHit{} : intersect(origin, directions[i]);
+        return;
+    }
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    constexpr size_t kPacket = 8;
+    for (size_t first = 0; first < directions.size(); first += kPacket) {
+        alignas(32) RTCRayHit8 rh;
+        alignas(32) int valid[kPacket];
+        const size_t n = std::min(kPacket, directions.size() - first);
+        for (size_t k = 0; k < kPacket; ++k) {
+            const glm::vec3 d = directions[first + std::min(k, n - 1)];
+            valid[k] = k < n ? -1 : 0;
+            rh.ray.org_x[k] = origin.x;
+            rh.ray.org_y[k] = origin.y;
+            rh.ray.org_z[k] = origin.z;
+            rh.ray.dir_x[k] = d.x;
+            rh.ray.dir_y[k] = d.y;
+            rh.ray.dir_z[k] = d.z;
+            rh.ray.tnear[k] = 0.0f;
+            rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
+            rh.ray.time[k] = 0.0f;
+            rh.ray.mask[k] = ~0u;
+            rh.ray.id[k] = static_cast<unsigned>(k);
+            rh.ray.flags[k] = 0;
+            rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+            rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+        }
+        rtcIntersect8(valid, impl_->scene, &context, &rh);
+        for (size_t k = 0; k < n; ++k)
+            hits[first + k] =
+                rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
+                    ? RayHit{}
+                    : hitOn(rh.hit.geomID[k], rh.hit.primID[k], {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
+                            {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin, directions[first + k],
+                            !texturesLater);
+    }
+}
+
+RayHit RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
+                       glm::vec3 direction, bool lookUpTextures) const {
+    RayHit result;
+    const MeshRef& ref = meshes_[geomID];
+    const TriangleMesh& mesh = *ref.mesh;
+    const glm::uvec3 tri = mesh.triangles[primID];
+    float u = uvt.x, v = uvt.y, t = uvt.z;
+    if (const auto again = recomputeHit(origin, direction, mesh.positions[tri.x], mesh.positions[tri.y],
+                                        mesh.positions[tri.z])) {
+        t = again->t, u = again->u, v = again->v, ng = again->ng;
+    }
+    result.t = t;
+    // Interpolate the position on the triangle (more precise than origin + t * direction far away).
+    result.position =
+        (1.0f - u - v) * mesh.positions[tri.x] + u * mesh.positions[tri.y] + v * mesh.positions[tri.z];
+    // Two-sided: the normals face the side the ray came from.
+    if (glm::dot(ng, direction) > 0.0f) ng = -ng;
+    result.geometricNormal = glm::normalize(ng);
+    result.material = &mesh.material;
+    result.mesh = &mesh;
+    result.triangle = primID;
+    result.barycentric = {u, v};
+    if (ref.varying && lookUpTextures) {
+        lookUpMaterial(result, 0.0f);
+    } else {
+        result.surface = ref.surface;
+        result.normal = shadingNormal(mesh, tri, u, v, result.geometricNormal);
+    }
+    result.isVirtual = ref.isVirtual;
+    return result;
+}
+
+void lookUpMaterial(RayHit& hit, float footprint) {
+    const TriangleMesh& mesh = *hit.mesh;
+    const glm::uvec3 tri = mesh.triangles[hit.triangle];
+    const float u = hit.barycentric.x, v = hit.barycentric.y;
+    glm::vec3 n = interpolatedNormal(mesh, tri, u, v, hit.geometricNormal);
+    hit.surface = surfaceMaterialAt(mesh, hit.triangle, u, v, footprint, &n);
+    hit.normal = glm::dot(n, hit.geometricNormal) < 0.0f ? -n : n;
+}
+
+bool RayScene::occluded(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    return occludedTopLayer(origin, direction, tMin, tMax) ||
+           (base_ && base_->occluded(origin, direction, tMin, tMax));
+}
+
+bool RayScene::occludedTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    if (meshes_.empty()) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRay ray;
+    initRay(ray, origin, direction, tMin, tMax);
+    rtcOccluded1(impl_->scene, &context, &ray);
+    return ray.tfar < 0.0f;  // Embree sets tfar to -inf when the ray is occluded
+}
+
+}  // namespace deltagi

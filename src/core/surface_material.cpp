@@ -1,0 +1,175 @@
+#include "core/surface_material.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/ggx.h"
+
+namespace deltagi {
+
+namespace {
+
+
+template <typename T>
+T interpolate(const std::vector<T>& values, glm::uvec3 tri, float u, float v) {
+    return (1.0f - u - v) * values[tri.x] + u * values[tri.y] + v * values[tri.z];
+}
+
+SurfaceMaterial fromFactors(const Material& m, glm::vec3 base, float metallic, float roughness) {
+    SurfaceMaterial s;
+    s.model = m.model;
+    s.roughness = roughness;
+    s.emission = m.emission;
+    if (m.model == MaterialModel::MetallicRoughness) {
+        s.diffuse = base * (1.0f - metallic);
+        s.specular = glm::mix(glm::vec3(kGltfDielectricF0), base, metallic);
+    } else {
+        s.diffuse = base;
+        s.specular = m.specular;
+    }
+    return s;
+}
+
+// The tangent-space normal map's normal at a point, in the frame of the shading normal `n`: the mesh's
+// tangents where it has them, else the triangle's texture-coordinate derivative dp/du.
+glm::vec3 mappedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v, glm::vec3 n,
+                       glm::vec3 texel, float scale) {
+    glm::vec3 tangent;
+    float handedness = 1.0f;
+    if (!mesh.tangents.empty()) {
+        const glm::vec4 t = interpolate(mesh.tangents, tri, u, v);
+        tangent = glm::vec3(t);
+        handedness = t.w < 0.0f ? -1.0f : 1.0f;
+    } else {
+        const int set = mesh.material.normalTexture.texCoord == 1 && !mesh.uvs1.empty() ? 1 : 0;
+        const std::vector<glm::vec2>& uvs = set == 1 ? mesh.uvs1 : mesh.uvs;
+        const glm::vec3 e1 = mesh.positions[tri.y] - mesh.positions[tri.x];
+        const glm::vec3 e2 = mesh.positions[tri.z] - mesh.positions[tri.x];
+        const glm::vec2 d1 = uvs[tri.y] - uvs[tri.x], d2 = uvs[tri.z] - uvs[tri.x];
+        const float det = d1.x * d2.y - d2.x * d1.y;
+        if (!(std::abs(det) > 1e-20f)) return n;
+        tangent = (e1 * d2.y - e2 * d1.y) / det;
+        const glm::vec3 bitangent = (e2 * d1.x - e1 * d2.x) / det;
+        // glTF's v runs down the image while its bitangent points up (+v in OpenGL's convention): the
+        // texture's green channel points towards -dp/dv.
+        handedness = glm::dot(glm::cross(n, tangent), -bitangent) < 0.0f ? -1.0f : 1.0f;
+    }
+    tangent -= n * glm::dot(n, tangent);
+    const float length = glm::length(tangent);
+    if (!(length > 1e-12f)) return n;
+    tangent /= length;
+    const glm::vec3 bitangent = handedness * glm::cross(n, tangent);
+    glm::vec3 local = texel * 2.0f - 1.0f;
+    local.x *= scale;
+    local.y *= scale;
+    const glm::vec3 mapped = local.x * tangent + local.y * bitangent + local.z * n;
+    const float mappedLength = glm::length(mapped);
+    return mappedLength > 1e-12f && std::isfinite(mappedLength) ? mapped / mappedLength : n;
+}
+
+}  // namespace
+
+float SurfaceMaterial::phongExponent() const {
+    // GGX: the exponent whose cos^n falls to half at the GGX lobe's half-maximum (ggx.h).
+    if (model == MaterialModel::MetallicRoughness) return ggxPhongExponent(roughness * roughness);
+    // Phong: the Blinn-Phong/Beckmann correspondence n = 2/r^2 - 2 (Material::phongExponent).
+    const float r = std::max(roughness, 1e-3f);
+    return std::max(2.0f / (r * r) - 2.0f, 0.0f);
+}
+
+glm::vec3 SurfaceMaterial::specularReflectance(float nDotV) const {
+    if (model != MaterialModel::MetallicRoughness) return specular;
+    const glm::vec4 c0(-1.0f, -0.0275f, -0.572f, 0.022f), c1(1.0f, 0.0425f, 1.04f, -0.04f);
+    const glm::vec4 r = roughness * c0 + c1;
+    const float a004 = std::min(r.x * r.x, std::exp2(-9.28f * std::clamp(nDotV, 0.0f, 1.0f))) * r.x + r.y;
+    const float scale = -1.04f * a004 + r.z, bias = 1.04f * a004 + r.w;
+    return glm::clamp(specular * scale + bias, glm::vec3(0.0f), glm::vec3(1.0f));
+}
+
+SurfaceMaterial constantSurfaceMaterial(const Material& m) {
+    return fromFactors(m, m.albedo, m.metallic, m.roughness);
+}
+
+bool variesOverSurface(const TriangleMesh& mesh) {
+    return !mesh.colors.empty() || (mesh.material.textured() && !mesh.uvs.empty());
+}
+
+glm::vec2 textureCoordinatesAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, int set) {
+    const std::vector<glm::vec2>& uvs = set == 1 && !mesh.uvs1.empty() ? mesh.uvs1 : mesh.uvs;
+    if (uvs.empty()) return glm::vec2(0.0f);
+    return interpolate(uvs, mesh.triangles[triangle], u, v);
+}
+
+SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, float footprint,
+                                  glm::vec3* normal) {
+    const Material& m = mesh.material;
+    if (!variesOverSurface(mesh)) return constantSurfaceMaterial(m);
+    const glm::uvec3 tri = mesh.triangles[triangle];
+    glm::vec3 base = m.albedo;
+    if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
+    if (!m.textured() || mesh.uvs.empty()) return fromFactors(m, base, m.metallic, m.roughness);
+
+    // The footprint in texture coordinates: world units times the triangle's texture-coordinate density.
+    float uvFootprint = 0.0f;
+    if (footprint > 0.0f) {
+        const glm::vec3 a = mesh.positions[tri.x];
+        const float worldArea = glm::length(glm::cross(mesh.positions[tri.y] - a, mesh.positions[tri.z] - a));
+        const glm::vec2 d1 = mesh.uvs[tri.y] - mesh.uvs[tri.x], d2 = mesh.uvs[tri.z] - mesh.uvs[tri.x];
+        const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
+        if (worldArea > 0.0f) uvFootprint = footprint * std::sqrt(uvArea / worldArea);
+    }
+    auto lookup = [&](const TextureSlot& slot) {
+        return slot.sample(textureCoordinatesAt(mesh, triangle, u, v, slot.texCoord), uvFootprint);
+    };
+    float metallic = m.metallic, roughness = m.roughness;
+    if (m.baseColorTexture) base *= glm::vec3(lookup(m.baseColorTexture));
+    if (m.metallicRoughnessTexture) {
+        const glm::vec4 t = lookup(m.metallicRoughnessTexture);
+        metallic *= t.z;  // glTF: blue holds metallic, green roughness
+        roughness *= t.y;
+    }
+    if (m.roughnessTexture) roughness *= lookup(m.roughnessTexture).x;
+    if (m.shininessTexture && m.model == MaterialModel::Phong) {
+        // MTL: the map multiplies the exponent Ns; roughness and Ns correspond as in phongExponent().
+        const float r = std::max(roughness, 1e-3f);
+        const float exponent = std::max(2.0f / (r * r) - 2.0f, 0.0f) * lookup(m.shininessTexture).x;
+        roughness = std::sqrt(2.0f / (exponent + 2.0f));
+    }
+    SurfaceMaterial s = fromFactors(m, base, std::clamp(metallic, 0.0f, 1.0f), std::clamp(roughness, 0.0f, 1.0f));
+    if (m.specularTexture && m.model == MaterialModel::Phong) s.specular *= glm::vec3(lookup(m.specularTexture));
+    if (m.emissiveTexture) s.emission *= glm::vec3(lookup(m.emissiveTexture));
+    if (!normal) return s;
+    if (m.occlusionTexture)
+        s.occlusion = 1.0f + m.occlusionStrength * (lookup(m.occlusionTexture).x - 1.0f);
+    if (m.normalTexture)
+        *normal = mappedNormal(mesh, tri, u, v, *normal, glm::vec3(lookup(m.normalTexture)), m.normalScale);
+    return s;
+}
+
+glm::vec3 triangleEmission(const TriangleMesh& mesh, unsigned triangle) {
+    const Material& m = mesh.material;
+    if (!m.emissiveTexture || mesh.uvs.empty()) return m.emission;
+    const glm::uvec3 tri = mesh.triangles[triangle];
+    const glm::vec3 a = mesh.positions[tri.x];
+    const float area = 0.5f * glm::length(glm::cross(mesh.positions[tri.y] - a, mesh.positions[tri.z] - a));
+    const glm::vec2 uv = textureCoordinatesAt(mesh, triangle, 1.0f / 3.0f, 1.0f / 3.0f, m.emissiveTexture.texCoord);
+    float uvFootprint = 0.0f;
+    if (area > 0.0f) {
+        const glm::vec2 d1 = mesh.uvs[tri.y] - mesh.uvs[tri.x], d2 = mesh.uvs[tri.z] - mesh.uvs[tri.x];
+        uvFootprint = std::sqrt(0.5f * std::abs(d1.x * d2.y - d2.x * d1.y));
+    }
+    return m.emission * glm::vec3(m.emissiveTexture.sample(uv, uvFootprint));
+}
+
+bool surfacePresentAt(const TriangleMesh& mesh, unsigned triangle, float u, float v) {
+    const Material& m = mesh.material;
+    if (m.alphaMode != AlphaMode::Mask) return true;
+    float alpha = m.opacity;
+    if (m.baseColorTexture && !mesh.uvs.empty())
+        alpha *= m.baseColorTexture.sample(textureCoordinatesAt(mesh, triangle, u, v, m.baseColorTexture.texCoord),
+                                           0.0f)
+                     .w;
+    return alpha >= m.alphaCutoff;
+}
+
+}  // namespace deltagi

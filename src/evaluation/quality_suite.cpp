@@ -1,0 +1,389 @@
+// The quality suite (include/deltagi/quality_suite.h): the suite file, one scene's figures against its
+// cached references, and the table (JSON and Markdown). Definitions: docs/ground-truth.md#the-quality-suite.
+#include "evaluation/quality_suite.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "deltagi/error.h"
+#include "deltagi/scene_io.h"
+#include "scene/json_reader.h"
+
+namespace deltagi {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kMaxSuiteSamples = 1 << 20;  // as `deltagi reference --spp`
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+SuiteScene readSuiteScene(const JsonNode& node, const fs::path& folder) {
+    node.requireObject();
+    node.allowKeys({"name", "scene", "spp", "direct_spp", "set"});
+    SuiteScene entry;
+    entry.file = inputFile(node.child("scene"), folder);
+    entry.name = entry.file.stem().string();
+    if (auto n = node.find("name")) entry.name = n->string();
+    if (auto n = node.find("spp")) entry.samplesPerPixel = n->integer(1, kMaxSuiteSamples);
+    if (auto n = node.find("direct_spp")) entry.directSamplesPerPixel = n->integer(1, entry.samplesPerPixel);
+    if (auto n = node.find("set")) {
+        n->requireArray();
+        for (size_t i = 0; i < n->size(); ++i) {
+            const JsonNode item = n->element(i);
+            std::string text = item.string();
+            if (text.find('=') == std::string::npos)
+                item.fail("expected \"KEY=VALUE\" (as --set), e.g. \"options.volume.resolution=64\"");
+            entry.overrides.push_back(std::move(text));
+        }
+    }
+    return entry;
+}
+
+QualitySuite readSuiteFile(const fs::path& file) {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(file.string(), "cannot open suite file");
+    nlohmann::json document;
+    try {
+        document = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw InputError(file.string(), std::string("not valid JSON: ") + e.what());
+    }
+    const JsonNode root(document, file.string());
+    root.requireObject();
+    root.allowKeys({"description", "seed", "fit_spp", "scenes"});
+    QualitySuite suite;
+    suite.file = file;
+    if (auto n = root.find("description")) n->string();
+    if (auto n = root.find("seed")) {
+        const int64_t seed = n->integer64();
+        if (seed < 0) n->fail(fmt::format("expected an integer >= 0, got {}", seed));
+        suite.seed = static_cast<uint64_t>(seed);
+    }
+    if (auto n = root.find("fit_spp")) {
+        n->requireArray();
+        suite.fitSamples.clear();
+        for (size_t i = 0; i < n->size(); ++i)
+            suite.fitSamples.push_back(n->element(i).integer(1, kMaxSuiteSamples));
+        if (suite.fitSamples.empty()) n->fail("expected at least one number of samples, e.g. [1, 4, 16]");
+    }
+    const JsonNode scenes = root.child("scenes");
+    scenes.requireArray();
+    if (scenes.size() == 0) scenes.fail("expected at least one scene");
+    for (size_t i = 0; i < scenes.size(); ++i)
+        suite.scenes.push_back(readSuiteScene(scenes.element(i), file.parent_path()));
+    return suite;
+}
+
+// The pixels whose change the delta figures judge.
+bool isReal(PixelClass c) {
+    return c == PixelClass::RealLit || c == PixelClass::RealShadowed;
+}
+
+// The change of a composite over the background it was made on, at pixel (x, y).
+glm::dvec3 change(const Image& composite, const Image& background, int x, int y) {
+    return glm::dvec3(composite.rgb(x, y)) - glm::dvec3(background.rgb(x, y));
+}
+
+std::string settingsFolder(const char* kind, int samples, uint64_t seed) {
+    return fmt::format("{}-{}spp-seed{}", kind, samples, seed);
+}
+
+void log(const SuiteRunOptions& options, const std::string& line) {
+    if (options.log) options.log(line);
+}
+
+}  // namespace
+
+Image onBackground(const ReferenceOutput& reference, const Image& background) {
+    Image out = reference.composite;
+    for (int y = 0; y < out.height(); ++y)
+        for (int x = 0; x < out.width(); ++x) {
+            const float real = 1.0f - reference.objectMask.at(x, y, 0);
+            out.setRgb(x, y, out.rgb(x, y) + real * (background.rgb(x, y) - reference.background.rgb(x, y)));
+        }
+    return out;
+}
+
+namespace {
+
+double ratioOrZero(double a, double b) {
+    if (b > 0.0) return std::sqrt(a / b);
+    return a > 0.0 ? std::numeric_limits<double>::infinity() : 0.0;
+}
+
+}  // namespace
+
+DeltaSplit splitDeltaError(const Evaluation& e, const ReferenceOutput& direct) {
+    const Image& background = e.reference.background;
+    double shadow = 0.0, indirect = 0.0, reference = 0.0, referenceShadow = 0.0, referenceIndirect = 0.0;
+    for (int y = 0; y < background.height(); ++y)
+        for (int x = 0; x < background.width(); ++x) {
+            if (!isReal(e.classes.classes[static_cast<size_t>(y) * background.width() + x])) continue;
+            const glm::dvec3 dgi = change(e.dgiRender.composite, background, x, y);
+            const glm::dvec3 dgiShadow = change(e.shadowOnlyComposite, background, x, y);
+            const glm::dvec3 ref = change(e.reference.composite, background, x, y);
+            const glm::dvec3 refShadow = change(direct.composite, direct.background, x, y);
+            const glm::dvec3 shadowError = dgiShadow - refShadow;
+            const glm::dvec3 indirectError = (dgi - dgiShadow) - (ref - refShadow);
+            shadow += glm::dot(shadowError, shadowError);
+            indirect += glm::dot(indirectError, indirectError);
+            reference += glm::dot(ref, ref);
+            referenceShadow += glm::dot(refShadow, refShadow);
+            referenceIndirect += glm::dot(ref - refShadow, ref - refShadow);
+        }
+    return {ratioOrZero(shadow, reference), ratioOrZero(indirect, reference),
+            ratioOrZero(referenceShadow, reference), ratioOrZero(referenceIndirect, reference)};
+}
+
+QualitySuite loadSuite(const fs::path& fileOrFolder) {
+    std::error_code error;
+    if (!fs::is_directory(fileOrFolder, error)) {
+        if (!fs::exists(fileOrFolder, error))
+            throw InputError(fileOrFolder.string(),
+                             "suite not found: expected a suite file (.json) or a folder of scene files");
+        return readSuiteFile(fileOrFolder);
+    }
+    QualitySuite suite;
+    suite.file = fileOrFolder;
+    std::vector<fs::path> files;
+    for (const fs::directory_entry& entry : fs::directory_iterator(fileOrFolder, error))
+        if (entry.is_regular_file() && entry.path().extension() == ".json") files.push_back(entry.path());
+    if (error) throw InputError(fileOrFolder.string(), "cannot read folder: " + error.message());
+    std::sort(files.begin(), files.end());
+    if (files.empty()) throw InputError(fileOrFolder.string(), "no scene files (*.json) in the suite folder");
+    for (const fs::path& file : files) {
+        SuiteScene entry;
+        entry.file = file;
+        entry.name = file.stem().string();
+        suite.scenes.push_back(std::move(entry));
+    }
+    return suite;
+}
+
+double fitNoiseConstant(std::span<const int> samples, std::span<const double> errors, int referenceSpp) {
+    double sumLog = 0.0;
+    int count = 0;
+    for (size_t i = 0; i < std::min(samples.size(), errors.size()); ++i) {
+        const double n = samples[i], e = errors[i];
+        if (!(n < referenceSpp) || !(n >= 1.0) || !std::isfinite(e) || !(e > 0.0)) continue;
+        // log e = log c + 0.5 log(1/n - 1/N): with the slope fixed, least squares gives the mean of log c.
+        sumLog += std::log(e) - 0.5 * std::log(1.0 / n - 1.0 / referenceSpp);
+        ++count;
+    }
+    return count > 0 ? std::exp(sumLog / count) : kNaN;
+}
+
+double equalErrorSamples(double c, double error, int referenceSpp) {
+    if (!std::isfinite(c) || !(c > 0.0) || !std::isfinite(error)) return kNaN;
+    const double referenceNoise = c * c / std::max(referenceSpp, 1);
+    const double ownSquare = error * error - referenceNoise;
+    if (!(ownSquare > 0.0)) return std::numeric_limits<double>::infinity();
+    return c * c / ownSquare;
+}
+
+SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& entry,
+                                const SuiteRunOptions& options) {
+    SceneQuality q;
+    q.name = entry.name;
+    q.file = entry.file;
+    q.overrides = entry.overrides;
+    q.overrides.insert(q.overrides.end(), options.overrides.begin(), options.overrides.end());
+    const Scene scene = loadScene(entry.file, q.overrides);
+    q.warnings = scene.warnings;
+    q.key = referenceContentKey(entry.file, q.overrides);
+    const fs::path cache = options.cacheFolder / q.key;
+    const uint64_t seed = options.seed.value_or(suite.seed);
+    q.referenceSpp = options.samplesPerPixel.value_or(entry.samplesPerPixel);
+    q.directSpp = options.samplesPerPixel || entry.directSamplesPerPixel == 0
+                      ? std::max(q.referenceSpp / kDirectSamplesDivisor, 1)
+                      : std::min(entry.directSamplesPerPixel, q.referenceSpp);
+
+    auto reference = [&](const char* kind, int samples, int maxBounces) {
+        ReferenceOptions settings;
+        settings.samplesPerPixel = samples;
+        settings.seed = seed;
+        if (maxBounces > 0) settings.maxBounces = maxBounces;
+        const fs::path folder = cache / settingsFolder(kind, samples, seed);
+        std::error_code error;
+        if (!fs::exists(folder / "reference.json", error))
+            log(options, fmt::format("  {}: rendering the {} reference, {} spp", q.name, kind, samples));
+        CachedReference r = cachedReference(scene, settings, folder, options.onPass);
+        log(options,
+            fmt::format("  {}: {} reference, {} spp: {} {}", q.name, kind, samples,
+                        r.hit ? "cache hit" : fmt::format("rendered in {:.1f} s,", r.output.totalMs / 1000.0),
+                        r.hit ? r.folder.string() : "stored in " + r.folder.string()));
+        ++(r.hit ? q.cacheHits : q.cacheMisses);
+        return std::move(r.output);
+    };
+
+    // The full reference, DGI and its baselines (evaluate()).
+    const Evaluation e = evaluate(scene, reference("full", q.referenceSpp, 0));
+    q.dgi = e.dgi;
+    q.shadowOnly = e.shadowOnly;
+    q.noRelight = e.noRelight;
+    q.dgiMs = e.dgiMs;
+    q.referenceMs = e.referenceMs;
+    log(options, fmt::format("  {}: DGI {:.0f} ms, delta_rel_error {:.4f}, object_rel_rmse {:.4f}", q.name,
+                             q.dgiMs, q.dgi.deltaRelError, q.dgi.objectRelRmse));
+
+    // Direct light only (the first vertex of the same paths, the first directSpp of them): the object's
+    // shadow in the reference.
+    const DeltaSplit split = splitDeltaError(e, reference("direct", q.directSpp, 1));
+    q.shadowPart = split.shadowPart;
+    q.indirectPart = split.indirectPart;
+    q.referenceShadowShare = split.referenceShadowShare;
+    q.referenceIndirectShare = split.referenceIndirectShare;
+
+    // The path tracer's noise, from its first n samples against all of them.
+    for (const int n : suite.fitSamples) {
+        if (n >= q.referenceSpp) continue;
+        const ReferenceOutput low = reference("full", n, 0);
+        const DeltaFigures f = deltaFigures(onBackground(low, e.reference.background), e.reference.composite,
+                                            e.reference.background, e.classes);
+        q.fitSamples.push_back(n);
+        q.fitDeltaErrors.push_back(f.deltaRelError);
+        q.fitObjectErrors.push_back(f.objectRelRmse);
+    }
+    q.noiseConstant = fitNoiseConstant(q.fitSamples, q.fitDeltaErrors, q.referenceSpp);
+    q.objectNoiseConstant = fitNoiseConstant(q.fitSamples, q.fitObjectErrors, q.referenceSpp);
+    q.referenceNoise = q.noiseConstant / std::sqrt(q.referenceSpp);
+    q.objectReferenceNoise = q.objectNoiseConstant / std::sqrt(q.referenceSpp);
+    q.equalErrorSpp = equalErrorSamples(q.noiseConstant, q.dgi.deltaRelError, q.referenceSpp);
+    q.equalErrorMs = q.equalErrorSpp * q.referenceMs / q.referenceSpp;
+
+    const auto checkNoise = [&](const char* what, double noise, double figure) {
+        if (std::isfinite(noise) && noise > kMaxReferenceNoiseShare * figure)
+            q.warnings.push_back(fmt::format(
+                "{}: the reference's noise in {} is {:.4f}, {:.1f} % of DGI's {:.4f} (more than {:.0f} %): "
+                "give the scene more samples (\"spp\", now {}; the noise falls as 1/sqrt(spp))",
+                entry.file.string(), what, noise, 100.0 * noise / figure, figure,
+                100.0 * kMaxReferenceNoiseShare, q.referenceSpp));
+    };
+    if (std::isnan(q.noiseConstant))
+        q.warnings.push_back(
+            fmt::format("{}: no reference noise estimate: every fit_spp is at least the "
+                        "scene's spp ({})",
+                        entry.file.string(), q.referenceSpp));
+    checkNoise("delta_rel_error", q.referenceNoise, q.dgi.deltaRelError);
+    checkNoise("object_rel_rmse", q.objectReferenceNoise, q.dgi.objectRelRmse);
+    return q;
+}
+
+namespace {
+
+nlohmann::ordered_json sceneJson(const SceneQuality& q) {
+    nlohmann::ordered_json j;
+    j["name"] = q.name;
+    j["scene"] = q.file.string();
+    j["set"] = q.overrides;
+    j["key"] = q.key;
+    const nlohmann::ordered_json dgi = figuresJson(q.dgi);
+    for (const auto& [key, value] : dgi.items()) j[key] = value;
+    j["baselines"] = {{"shadow_only", figuresJson(q.shadowOnly)}, {"no_relight", figuresJson(q.noRelight)}};
+    j["split"] = {{"shadow_part", q.shadowPart},
+                  {"indirect_part", q.indirectPart},
+                  {"reference_shadow_share", q.referenceShadowShare},
+                  {"reference_indirect_share", q.referenceIndirectShare}};
+    j["dgi_ms"] = q.dgiMs;
+    nlohmann::ordered_json fit = nlohmann::ordered_json::array();
+    for (size_t i = 0; i < q.fitSamples.size(); ++i)
+        fit.push_back({{"spp", q.fitSamples[i]},
+                       {"delta_rel_error", q.fitDeltaErrors[i]},
+                       {"object_rel_rmse", q.fitObjectErrors[i]}});
+    j["reference"] = {{"spp", q.referenceSpp},
+                      {"direct_spp", q.directSpp},
+                      {"ms", q.referenceMs},
+                      {"ms_per_spp", q.referenceMs / q.referenceSpp},
+                      {"noise_constant", q.noiseConstant},
+                      {"object_noise_constant", q.objectNoiseConstant},
+                      {"noise", q.referenceNoise},
+                      {"object_noise", q.objectReferenceNoise},
+                      {"noise_share", q.referenceNoise / q.dgi.deltaRelError},
+                      {"object_noise_share", q.objectReferenceNoise / q.dgi.objectRelRmse},
+                      {"fit", fit}};
+    j["equal_error"] = {{"spp", q.equalErrorSpp},
+                        {"ms", q.equalErrorMs},
+                        {"ms_over_dgi_ms", q.dgiMs > 0.0 ? q.equalErrorMs / q.dgiMs : kNaN}};
+    j["cache"] = {{"hits", q.cacheHits}, {"misses", q.cacheMisses}};
+    j["warnings"] = q.warnings;
+    return j;
+}
+
+// Numbers for the table: NaN as "n/a", infinity as "∞".
+std::string cell(double value, const char* format = "{:.4f}") {
+    if (std::isnan(value)) return "n/a";
+    if (std::isinf(value)) return "∞";
+    return fmt::format(fmt::runtime(format), value);
+}
+
+std::string count(double value) {
+    if (!std::isfinite(value)) return cell(value);
+    return value >= 100.0 ? fmt::format("{:.0f}", value) : fmt::format("{:.3g}", value);
+}
+
+}  // namespace
+
+nlohmann::ordered_json suiteToJson(std::span<const SceneQuality> scenes, const std::string& command) {
+    nlohmann::ordered_json j;
+    j["command"] = command;
+    j["scenes"] = nlohmann::ordered_json::array();
+    for (const SceneQuality& q : scenes) j["scenes"].push_back(sceneJson(q));
+    return j;
+}
+
+std::string suiteMarkdown(std::span<const SceneQuality> scenes, const std::string& command) {
+    std::string md =
+        "# Quality suite\n\n"
+        "DGI against the path-traced ground truth over the suite's scenes, made by\n\n"
+        "```sh\n" +
+        command +
+        "\n```\n\n"
+        "Definitions of every column: [ground-truth.md](ground-truth.md#the-quality-suite). Errors are over "
+        "the "
+        "real pixels (Δ) or the object's pixels, relative to the reference's norm there: 0 is perfect, "
+        "`no_relight` (Δ = 0) is 1. Times are wall-clock on the machine that ran the command.\n\n";
+    md +=
+        "| scene | delta_rel_error | object_rel_rmse | shadow_only | no_relight | shadow part | indirect "
+        "part | "
+        "DGI ms | equal-error spp | equal-error PT ms | PT / DGI time | reference spp | reference noise (Δ, "
+        "share) |\n"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+    for (const SceneQuality& q : scenes)
+        md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {:.0f} | {} | {} | {} | {} | {} ({}) |\n",
+                          q.name, cell(q.dgi.deltaRelError), cell(q.dgi.objectRelRmse),
+                          cell(q.shadowOnly.deltaRelError), cell(q.noRelight.deltaRelError),
+                          cell(q.shadowPart), cell(q.indirectPart), q.dgiMs, count(q.equalErrorSpp),
+                          count(q.equalErrorMs), q.dgiMs > 0.0 ? count(q.equalErrorMs / q.dgiMs) : "n/a",
+                          q.referenceSpp, cell(q.referenceNoise),
+                          cell(100.0 * q.referenceNoise / q.dgi.deltaRelError, "{:.1f} %"));
+    md +=
+        "\n## The references\n\n"
+        "| scene | spp | ms | ms / spp | shadow share of Δref | indirect share of Δref | c (Δ) | c (object) "
+        "| "
+        "object noise (share) | fit: spp → delta_rel_error | cache key |\n"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
+    for (const SceneQuality& q : scenes) {
+        std::string fit;
+        for (size_t i = 0; i < q.fitSamples.size(); ++i)
+            fit +=
+                fmt::format("{}{} → {}", fit.empty() ? "" : ", ", q.fitSamples[i], cell(q.fitDeltaErrors[i]));
+        md += fmt::format("| {} | {} | {:.0f} | {:.0f} | {} | {} | {} | {} | {} ({}) | {} | `{}` |\n", q.name,
+                          q.referenceSpp, q.referenceMs, q.referenceMs / q.referenceSpp,
+                          cell(q.referenceShadowShare), cell(q.referenceIndirectShare), cell(q.noiseConstant),
+                          cell(q.objectNoiseConstant), cell(q.objectReferenceNoise),
+                          cell(100.0 * q.objectReferenceNoise / q.dgi.objectRelRmse, "{:.1f} %"),
+                          fit.empty() ? "none" : fit, q.key);
+    }
+    std::string warnings;
+    for (const SceneQuality& q : scenes)
+        for (const std::string& w : q.warnings) warnings += "* " + w + "\n";
+    if (!warnings.empty()) md += "\n## Warnings\n\n" + warnings;
+    return md;
+}
+
+}  // namespace deltagi

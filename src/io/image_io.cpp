@@ -1,0 +1,314 @@
+// Image pixels and image files (OpenImageIO). Files hold sRGB-encoded 8/16-bit or linear float pixels; in
+// memory every image is linear float.
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include "deltagi/atomic_file.h"
+#include "deltagi/error.h"
+#include "deltagi/image.h"
+#include "io/image_encode.h"
+#include "io/quiet_stderr.h"
+
+namespace deltagi {
+
+glm::vec3 Image::rgb(int x, int y) const {
+    if (channels_ < 3) return glm::vec3(at(x, y, 0));
+    return {at(x, y, 0), at(x, y, 1), at(x, y, 2)};
+}
+
+// A 1-channel image stores the mean of the three (the inverse of rgb() for grey values).
+void Image::setRgb(int x, int y, glm::vec3 v) {
+    if (channels_ < 3) {
+        at(x, y, 0) = (v.x + v.y + v.z) / 3.0f;
+        return;
+    }
+    at(x, y, 0) = v.x;
+    at(x, y, 1) = v.y;
+    at(x, y, 2) = v.z;
+}
+
+namespace {
+
+// The sRGB transfer functions (IEC 61966-2-1), exact piecewise forms.
+float srgbToLinear(float c) {
+    return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+}
+float linearToSrgb(float c) {
+    return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.0f / 2.4f) - 0.055f;
+}
+
+const std::array<float, 256>& srgb8ToLinearTable() {
+    static const std::array<float, 256> table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) t[i] = srgbToLinear(static_cast<float>(i) / 255.0f);
+        return t;
+    }();
+    return table;
+}
+
+bool isFloatFormat(OIIO::TypeDesc format) {
+    return format.basetype == OIIO::TypeDesc::FLOAT || format.basetype == OIIO::TypeDesc::HALF ||
+           format.basetype == OIIO::TypeDesc::DOUBLE;
+}
+
+// Copies `channels` interleaved channels to 3, expanding grey (1 or 2 channels: grey + alpha) and dropping
+// alpha and any further channels.
+Image toRgb(std::span<const float> pixels, int width, int height, int channels) {
+    Image image(width, height, 3);
+    std::span<float> out = image.data();
+    for (size_t p = 0; p < image.pixelCount(); ++p) {
+        const float* in = &pixels[p * channels];
+        for (int c = 0; c < 3; ++c) out[p * 3 + c] = channels >= 3 ? in[c] : in[0];
+    }
+    return image;
+}
+
+std::string lowerExtension(const std::filesystem::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    return ext;
+}
+
+}  // namespace
+
+std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& path) {
+    QuietStderr quiet;
+    auto input = OIIO::ImageInput::open(path.string());
+    if (!input) {
+        OIIO::geterror();  // cleared, not to show up in a later message
+        return std::nullopt;
+    }
+    return std::pair{input->spec().width, input->spec().height};
+}
+
+ImageFile readImageFile(const std::filesystem::path& path) {
+    QuietStderr quiet;
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha",
+                     1);  // keep colours as stored: alpha is dropped, not multiplied
+    auto input = OIIO::ImageInput::open(path.string(), &config);
+    if (!input) throw InputError(path.string(), "cannot read image: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = input->spec();
+    int width = spec.width, height = spec.height, channels = spec.nchannels;
+    if (width <= 0 || height <= 0 || channels <= 0)
+        throw InputError(path.string(), fmt::format("cannot read image: it is {}x{} with {} channels", width,
+                                                    height, channels));
+    size_t count = static_cast<size_t>(width) * height * channels;
+    std::vector<float> pixels(count);
+    // Integer pixels are sRGB-encoded (PNG, JPEG); float pixels are linear (EXR, HDR).
+    if (spec.format == OIIO::TypeDesc::UINT8) {
+        std::vector<uint8_t> bytes(count);
+        if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, bytes.data()))
+            throw InputError(path.string(), "cannot read image: " + input->geterror());
+        const auto& table = srgb8ToLinearTable();
+        for (size_t i = 0; i < count; ++i) pixels[i] = table[bytes[i]];
+    } else {
+        if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
+            throw InputError(path.string(), "cannot read image: " + input->geterror());
+        if (!isFloatFormat(spec.format))
+            for (float& v : pixels) v = srgbToLinear(v);
+    }
+    input->close();
+    return {toRgb(pixels, width, height, channels), isFloatFormat(spec.format)};
+}
+
+Image readImage(const std::filesystem::path& path) {
+    Image image = readImageFile(path).image;
+    size_t bad = 0;
+    for (size_t p = 0; p < image.pixelCount(); ++p) {
+        const float* v = &image.data()[p * 3];
+        if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) ++bad;
+    }
+    if (bad > 0)
+        throw InputError(path.string(),
+                         fmt::format("{} of {} pixels are NaN or infinite", bad, image.pixelCount()));
+    return image;
+}
+
+namespace {
+
+float finiteOrZero(float v) {
+    return std::isfinite(v) ? v : 0.0f;
+}
+
+}  // namespace
+
+std::vector<uint8_t> encodeSrgb8(const Image& image) {
+    std::vector<uint8_t> bytes(image.data().size());
+    for (size_t i = 0; i < bytes.size(); ++i) {
+        float linear = std::clamp(finiteOrZero(image.data()[i]), 0.0f, 1.0f);
+        bool isAlpha = image.channels() == 4 && i % 4 == 3;  // alpha is stored linear
+        float encoded = isAlpha ? linear : linearToSrgb(linear);
+        bytes[i] = static_cast<uint8_t>(std::lround(encoded * 255.0f));
+    }
+    return bytes;
+}
+
+float linearToSrgbValue(float linear) {
+    return linearToSrgb(linear);
+}
+
+float srgbToLinearValue(float encoded) {
+    return srgbToLinear(encoded);
+}
+
+const std::array<float, 256>& srgb8ToLinearValues() {
+    return srgb8ToLinearTable();
+}
+
+namespace {
+
+void checkImagePath(const Image& image, const std::filesystem::path& path) {
+    std::string ext = lowerExtension(path);
+    if (ext != ".png" && ext != ".exr" && ext != ".hdr")
+        throw InputError(
+            path.string(),
+            fmt::format("cannot write image: unsupported extension '{}'; use .png, .exr or .hdr", ext));
+    if (image.empty()) throw InputError(path.string(), "cannot write image: the image is empty");
+}
+
+}  // namespace
+
+void writeImage(const Image& image, const std::filesystem::path& path) {
+    checkImagePath(image, path);
+    std::filesystem::path folder = path.parent_path();
+    if (!folder.empty() && !std::filesystem::is_directory(folder))
+        throw InputError(path.string(),
+                         fmt::format("cannot write image: folder '{}' does not exist", folder.string()));
+    AtomicFile file(path);
+    writeImage(image, file);
+    file.commit();
+}
+
+void writeImage(const Image& image, AtomicFile& file) {
+    const std::filesystem::path& path = file.destination();
+    checkImagePath(image, path);
+    const std::string ext = lowerExtension(path);
+
+    // Radiance HDR holds RGB only: grey is expanded and alpha dropped.
+    Image rgbForHdr;
+    const Image* source = &image;
+    if (ext == ".hdr" && image.channels() != 3) {
+        rgbForHdr = toRgb(image.data(), image.width(), image.height(), image.channels());
+        source = &rgbForHdr;
+    }
+    int channels = source->channels();
+    OIIO::ImageSpec spec(source->width(), source->height(), channels,
+                         ext == ".png" ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
+    if (channels == 1) spec.channelnames = {"Y"};
+    if (channels == 4) spec.alpha_channel = 3;
+
+    // OpenImageIO writes by name, to the temporary that keeps the extension (it picks the format by it).
+    const std::string temporary = file.temporaryPath().string();
+    auto output = OIIO::ImageOutput::create(temporary);
+    if (!output || !output->open(temporary, spec))
+        throw InputError(path.string(),
+                         "cannot write image: " + (output ? output->geterror() : OIIO::geterror()));
+    bool ok;
+    if (ext == ".png") {
+        std::vector<uint8_t> bytes = encodeSrgb8(*source);
+        ok = output->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+    } else {
+        std::vector<float> pixels(source->data().begin(), source->data().end());
+        for (float& v : pixels) v = finiteOrZero(v);
+        if (ext == ".hdr")
+            for (float& v : pixels) v = std::max(v, 0.0f);  // RGBE has no sign
+        ok = output->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
+    }
+    ok = output->close() && ok;
+    if (!ok) throw InputError(path.string(), "cannot write image: " + output->geterror());
+    file.close();
+}
+
+void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file) {
+    const std::filesystem::path& path = file.destination();
+    if (lowerExtension(path) != ".exr")
+        throw InputError(path.string(), "cannot write layers: they are written to OpenEXR files (.exr) only");
+    if (layers.empty() || !layers[0].image || layers[0].image->empty())
+        throw InputError(path.string(), "cannot write layers: there are none");
+    const int width = layers[0].image->width(), height = layers[0].image->height();
+    std::vector<std::string> names;
+    for (const ImageLayer& layer : layers) {
+        if (!layer.image || layer.image->width() != width || layer.image->height() != height ||
+            static_cast<int>(layer.channels.size()) != layer.image->channels())
+            throw InputError(path.string(), fmt::format("cannot write layers: layer '{}' is {}x{} with {} "
+                                                        "channels, not {}x{} with {}",
+                                                        layer.name, layer.image ? layer.image->width() : 0,
+                                                        layer.image ? layer.image->height() : 0,
+                                                        layer.image ? layer.image->channels() : 0, width,
+                                                        height, layer.channels.size()));
+        for (const std::string& channel : layer.channels) names.push_back(layer.name + "." + channel);
+    }
+    const int channels = static_cast<int>(names.size());
+    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::FLOAT);
+    spec.channelnames = names;
+    spec.attribute("compression", "zip");
+    // Interleaved, layer after layer within each pixel.
+    std::vector<float> pixels(static_cast<size_t>(width) * height * channels);
+    for (size_t p = 0, c0 = 0; p < static_cast<size_t>(width) * height; ++p) {
+        c0 = p * channels;
+        for (const ImageLayer& layer : layers) {
+            const int n = layer.image->channels();
+            for (int k = 0; k < n; ++k) {
+                const float v = layer.image->data()[p * n + k];
+                pixels[c0++] = std::isnan(v) ? 0.0f : v;
+            }
+        }
+    }
+    const std::string temporary = file.temporaryPath().string();
+    auto output = OIIO::ImageOutput::create(temporary);
+    if (!output || !output->open(temporary, spec))
+        throw InputError(path.string(),
+                         "cannot write layers: " + (output ? output->geterror() : OIIO::geterror()));
+    bool ok = output->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
+    ok = output->close() && ok;
+    if (!ok) throw InputError(path.string(), "cannot write layers: " + output->geterror());
+    file.close();
+}
+
+std::vector<NamedImage> readLayers(const std::filesystem::path& path) {
+    QuietStderr quiet;
+    auto input = OIIO::ImageInput::open(path.string());
+    if (!input) throw InputError(path.string(), "cannot read image: " + OIIO::geterror());
+    const OIIO::ImageSpec spec = input->spec();
+    const int width = spec.width, height = spec.height, channels = spec.nchannels;
+    if (width <= 0 || height <= 0 || channels <= 0)
+        throw InputError(path.string(), "cannot read image: it has no pixels");
+    std::vector<float> pixels(static_cast<size_t>(width) * height * channels);
+    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
+        throw InputError(path.string(), "cannot read image: " + input->geterror());
+    input->close();
+    // Channel c's layer and name.
+    std::vector<NamedImage> layers;
+    std::vector<std::pair<size_t, int>> where(channels);  // (layer, channel within it)
+    for (int c = 0; c < channels; ++c) {
+        const std::string full =
+            c < static_cast<int>(spec.channelnames.size()) ? spec.channelnames[c] : fmt::format("{}", c);
+        const size_t dot = full.rfind('.');
+        const std::string layer = dot == std::string::npos ? full : full.substr(0, dot);
+        const std::string channel = dot == std::string::npos ? full : full.substr(dot + 1);
+        auto it =
+            std::find_if(layers.begin(), layers.end(), [&](const NamedImage& l) { return l.name == layer; });
+        if (it == layers.end()) it = layers.insert(layers.end(), NamedImage{layer, Image(), {}});
+        where[c] = {static_cast<size_t>(it - layers.begin()), static_cast<int>(it->channels.size())};
+        it->channels.push_back(channel);
+    }
+    for (NamedImage& layer : layers)
+        layer.image = Image(width, height, static_cast<int>(layer.channels.size()));
+    for (size_t p = 0; p < static_cast<size_t>(width) * height; ++p)
+        for (int c = 0; c < channels; ++c) {
+            NamedImage& layer = layers[where[c].first];
+            layer.image.data()[p * layer.channels.size() + where[c].second] = pixels[p * channels + c];
+        }
+    return layers;
+}
+
+}  // namespace deltagi

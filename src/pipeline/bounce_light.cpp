@@ -1,0 +1,224 @@
+#include "pipeline/bounce_light.h"
+
+#include "core/brdf_sampling.h"
+#include "core/parallel.h"
+#include "pipeline/cone_trace.h"
+#include "pipeline/mipmap.h"
+#include "pipeline/object_bounce_rays.h"
+#include "pipeline/shadow_rays.h"
+
+namespace deltagi {
+
+namespace {
+
+// A mean normal shorter than this (surfaces facing several ways in one voxel) gathers nothing: its
+// hemisphere is not defined.
+constexpr float kMinCoherence = 0.2f;
+// The mip level whose voxels gather (1: each gathers for 2 x 2 x 2 level-0 voxels).
+constexpr int kGatherLevel = 1;
+constexpr uint32_t kBounceStream = 9000;  // hashToUnit streams of the cones' jitter
+
+// Surfaces are two-sided and the winding of a reconstruction is not reliable: the side of a voxel that
+// gathers is the one facing the viewpoint; true where that is the side against its mean normal.
+bool facesAway(glm::vec3 meanNormal, glm::vec3 centre, glm::vec3 viewpoint) {
+    return glm::dot(meanNormal, viewpoint - centre) < 0.0f;
+}
+
+// The diffuse cones' light (cosine-weighted, so that albedo times it is the reflected radiance) gathered at a
+// coarse voxel of `size` (world units) around `normal`, from the voxel's face along the normal so that its
+// own surfaces do not occlude; jittered by the voxel's `index`.
+glm::vec3 gatherAtVoxel(glm::vec3 centre, glm::vec3 normal, float size, size_t index, const MipVolume& light,
+                        const VisibilityVolumes& occluders, const DiffuseConeSet& cones,
+                        const ConeTraceSettings& settings) {
+    const glm::mat3 frame = frameAround(normal);
+    glm::vec3 sum(0.0f);
+    for (size_t k = 0; k < cones.directions.size(); ++k) {
+        Cone cone;
+        cone.direction = frame * cones.directions[k];
+        cone.origin =
+            coneOrigin(centre + (0.5f * size) * normal, normal, cone.direction, light.region(), settings);
+        cone.tanHalfAngle = cones.tanHalfAngle;
+        cone.jitter = hashToUnit(index, kBounceStream + static_cast<uint32_t>(k));
+        sum += cones.weights[k] * traceLightCone(cone, light, occluders, settings);
+    }
+    return sum;
+}
+
+}  // namespace
+
+Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
+                  const Options& options, int bounces, glm::vec3 viewpoint) {
+    const int n = direct.resolution();
+    Grid3 indirect(n);
+    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= kGatherLevel) return indirect;
+    const VolumeRegion& region = visibility.region();
+    const Grid3& coarse = visibility.level(kGatherLevel);
+    const int m = coarse.resolution();
+    const int factor = n / m;  // level-0 voxels per coarse voxel along each axis
+    const float coarseSize = region.voxelSize() * static_cast<float>(factor);
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const VisibilityVolumes occluders{&visibility, nullptr, VisibilityVolumes::Self::Scene};
+    std::vector<glm::vec3> gathered(coarse.size());
+    for (int bounce = 0; bounce < bounces; ++bounce) {
+        // The light so far: direct plus the bounces gathered before.
+        Grid3 total = direct.clone();
+        for (size_t i = 0; i < total.size(); ++i) total[i] += indirect[i];
+        const MipVolume light = buildMipChain(region, std::move(total));
+        // Gather at each surface voxel of the coarse level.
+        parallelFor(0, static_cast<int64_t>(m) * m, 4, [&](int64_t row) {
+            const int z = static_cast<int>(row / m), y = static_cast<int>(row % m);
+            for (int x = 0; x < m; ++x) {
+                const size_t i = coarse.index(x, y, z);
+                const glm::vec4 v = coarse[i];
+                gathered[i] = glm::vec3(0.0f);
+                if (v.x <= 0.0f) continue;
+                const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / v.x;
+                const float coherence = glm::length(meanNormal);
+                if (coherence < kMinCoherence) continue;
+                const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+                const glm::vec3 normal =
+                    (facesAway(meanNormal, centre, viewpoint) ? -1.0f : 1.0f) * meanNormal / coherence;
+                gathered[i] = gatherAtVoxel(centre, normal, coarseSize, i, light, occluders, cones, settings);
+            }
+        });
+        // Reflect it at every surface voxel of level 0 by the voxel's albedo.
+        parallelFor(0, static_cast<int64_t>(n) * n, 16, [&](int64_t row) {
+            const int z = static_cast<int>(row / n), y = static_cast<int>(row % n);
+            for (int x = 0; x < n; ++x) {
+                const size_t i = direct.index(x, y, z);
+                const float occupancy = geometry.visibility[i].x;
+                if (occupancy <= 0.0f) continue;
+                const glm::vec3 g = gathered[coarse.index(x / factor, y / factor, z / factor)];
+                indirect[i] = glm::vec4(geometry.albedo[i] * g * occupancy, 0.0f);
+            }
+        });
+    }
+    return indirect;
+}
+
+std::vector<bool> bounceViewSides(const MipVolume& visibility, glm::vec3 viewpoint) {
+    if (visibility.levelCount() <= kGatherLevel) return {};
+    const VolumeRegion& region = visibility.region();
+    const Grid3& coarse = visibility.level(kGatherLevel);
+    const int m = coarse.resolution();
+    const float coarseSize = region.voxelSize() * static_cast<float>(region.resolution / m);
+    std::vector<bool> sides(coarse.size(), false);
+    for (int z = 0; z < m; ++z)
+        for (int y = 0; y < m; ++y)
+            for (int x = 0; x < m; ++x) {
+                const size_t i = coarse.index(x, y, z);
+                const glm::vec4 v = coarse[i];
+                if (v.x <= 0.0f) continue;
+                const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+                sides[i] = facesAway(glm::vec3(v.y, v.z, v.w) / v.x, centre, viewpoint);
+            }
+    return sides;
+}
+
+namespace {
+
+// Reflects the light `gathered` at each mip-`level` voxel over `box` (coarse voxels lo..hi, row by row) at
+// its level-0 voxels by their albedo: gatherObjectBounce's result.
+std::vector<glm::vec3> reflectAtObjectVoxels(const VoxelGeometry& objects, const VoxelBox& box, int factor,
+                                             glm::ivec3 lo, glm::ivec3 size,
+                                             const std::vector<glm::vec3>& gathered) {
+    std::vector<glm::vec3> added(box.count(), glm::vec3(0.0f));
+    const glm::ivec3 extent = box.hi - box.lo;
+    parallelFor(0, static_cast<int64_t>(extent.y) * extent.z, 4, [&](int64_t row) {
+        const int z = box.lo.z + static_cast<int>(row / extent.y),
+                  y = box.lo.y + static_cast<int>(row % extent.y);
+        for (int x = box.lo.x; x < box.hi.x; ++x) {
+            const size_t i = objects.visibility.index(x, y, z);
+            const float occupancy = objects.visibility[i].x;
+            if (occupancy <= 0.0f) continue;
+            const glm::ivec3 c = glm::ivec3(x, y, z) / factor - lo;
+            const glm::vec3 g = gathered[(static_cast<size_t>(c.z) * size.y + c.y) * size.x + c.x];
+            added[(static_cast<size_t>(z - box.lo.z) * extent.y + (y - box.lo.y)) * extent.x +
+                  (x - box.lo.x)] = objects.albedo[i] * g * occupancy;
+        }
+    });
+    return added;
+}
+
+// Calls gather(x, y, z, centre, normal, size) for every coherent mip-`level` voxel of the objects over `box`,
+// in parallel, and returns reflectAtObjectVoxels of what it gives.
+template <typename Gather>
+std::vector<glm::vec3> gatherAtObjectVoxels(const VoxelGeometry& objects, const MipVolume& objectVisibility,
+                                            const VoxelBox& box, int level, Gather&& gather) {
+    if (box.empty() || objects.albedo.empty() || objectVisibility.levelCount() <= level)
+        return std::vector<glm::vec3>(box.empty() ? 0 : box.count(), glm::vec3(0.0f));
+    const VolumeRegion& region = objectVisibility.region();
+    const Grid3& coarse = objectVisibility.level(level);
+    const int factor = region.resolution / coarse.resolution();
+    const float coarseSize = region.voxelSize() * static_cast<float>(factor);
+    // The coarse voxels over the box, gathered once each.
+    const glm::ivec3 lo = box.lo / factor, hi = (box.hi + factor - 1) / factor;
+    const glm::ivec3 size = hi - lo;
+    std::vector<glm::vec3> gathered(static_cast<size_t>(size.x) * size.y * size.z, glm::vec3(0.0f));
+    parallelFor(0, static_cast<int64_t>(size.y) * size.z, 1, [&](int64_t row) {
+        const int z = lo.z + static_cast<int>(row / size.y), y = lo.y + static_cast<int>(row % size.y);
+        for (int x = lo.x; x < hi.x; ++x) {
+            const glm::vec4 v = coarse.at(x, y, z);
+            if (v.x <= 0.0f) continue;
+            const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / v.x;
+            const float coherence = glm::length(meanNormal);
+            if (coherence < kMinCoherence) continue;
+            const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+            gathered[(static_cast<size_t>(z - lo.z) * size.y + (y - lo.y)) * size.x + (x - lo.x)] =
+                gather(coarse.index(x, y, z), centre, meanNormal / coherence, coarseSize);
+        }
+    });
+    return reflectAtObjectVoxels(objects, box, factor, lo, size, gathered);
+}
+
+}  // namespace
+
+std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeometry& objects,
+                                          const MipVolume& objectVisibility, const MipVolume& sceneVisibility,
+                                          const Options& options, const VoxelBox& box, int level) {
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
+    return gatherAtObjectVoxels(objects, objectVisibility, box, level,
+                                [&](size_t index, glm::vec3 centre, glm::vec3 normal, float size) {
+                                    return gatherAtVoxel(centre, normal, size, index, light, occluders, cones,
+                                                         settings);
+                                });
+}
+
+std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const VoxelGeometry& objects,
+                                                const MipVolume& objectVisibility,
+                                                const MipVolume& sceneVisibility, const RayScene& scene,
+                                                const Options& options, const VoxelBox& box, int level) {
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
+    const float offset = shadowRayOffset(scene);
+    const int count = squareSampleCount(std::max(options.diffuse.objectRays, 1));
+    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
+    return gatherAtObjectVoxels(
+        objects, objectVisibility, box, level,
+        [&](size_t index, glm::vec3 centre, glm::vec3 normal, float size) {
+            // The objects' outer surface in the voxel: the first one met coming in along the normal.
+            const RayHit surface =
+                scene.intersectTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
+            if (!surface.hit())
+                return gatherAtVoxel(centre, normal, size, index, light, occluders, cones, settings);
+            const glm::vec3 origin = surface.position + offset * normal;
+            const glm::mat3 frame = frameAround(normal);
+            const float jitterU = hashToUnit(index, kBounceStream + 100),
+                        jitterV = hashToUnit(index, kBounceStream + 101);
+            glm::vec3 sum(0.0f);
+            for (int k = 0; k < count; ++k) {
+                const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
+                const glm::vec3 wi = frame * sampleCosineHemisphere(u1, u2);
+                const RayHit hit = scene.intersect(origin, wi, offset);
+                if (!hit.hit()) continue;
+                sum += volumeRadianceAt(light, hit);
+            }
+            return sum / static_cast<float>(count);
+        });
+}
+
+}  // namespace deltagi

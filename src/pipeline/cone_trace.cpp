@@ -1,0 +1,343 @@
+#include "pipeline/cone_trace.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+namespace deltagi {
+
+ConeTraceSettings coneTraceSettings(const TraceOptions& o) {
+    return {o.stepScale,      o.startOffset, o.maxOcclusion,           o.normalWeight,
+            o.backfaceWeight, o.jitter,      o.accumulation == "paper"};
+}
+
+float hashToUnit(uint64_t index, uint32_t stream) {
+    // SplitMix64 finalizer over the index and stream.
+    uint64_t z =
+        index * 0x9E3779B97F4A7C15ull + (static_cast<uint64_t>(stream) << 32) + 0x632BE59BD9B4E019ull;
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    z ^= z >> 31;
+    return static_cast<float>(z >> 40) * (1.0f / static_cast<float>(1ull << 24));
+}
+
+glm::vec3 coneOrigin(glm::vec3 position, glm::vec3 normal, glm::vec3 direction, const VolumeRegion& region,
+                     const ConeTraceSettings& settings) {
+    const float offset = settings.startOffset * region.voxelSize();
+    // Along the normal, so the start leaves the surface's voxel; a little along the axis for grazing cones.
+    return position + offset * normal + 0.5f * offset * direction;
+}
+
+namespace {
+
+// The part [tEnter, tExit] of a ray inside the volume [0, n]^3 (voxel units); empty when tEnter >= tExit.
+std::pair<float, float> clipToVolume(glm::vec3 origin, glm::vec3 dir, float n) {
+    float tEnter = 0.0f, tExit = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(dir[a]) < 1e-12f) {
+            if (origin[a] < 0.0f || origin[a] > n) return {1.0f, 0.0f};
+            continue;
+        }
+        float inv = 1.0f / dir[a];
+        float t0 = (0.0f - origin[a]) * inv, t1 = (n - origin[a]) * inv;
+        if (t0 > t1) std::swap(t0, t1);
+        tEnter = std::max(tEnter, t0);
+        tExit = std::min(tExit, t1);
+    }
+    return {tEnter, tExit};
+}
+
+// Occlusion of a visibility sample seen along `dir` at mip `level`.
+//
+// Voxelization records surfaces, one voxel thick, so the occlusion of a coarse voxel (the fraction of filled
+// sub-voxels, §3.2) of a surface crossing it is only 2^-level: read as an opacity, every thin wall would turn
+// transparent at coarse levels and light would leak through it. The fraction is therefore scaled back by
+// 2^level to the surface's coverage of the voxel's cross-section, and weighted by how the surface faces the
+// cone (§3.1: "the occlusion value is thereby adapted with the normal stored in the volume"):
+//   coherent normals (|mean normal| near 1): 1 for a surface facing the cone (seen obliquely, a surface
+//     covers the cone's cross-section as well: the cone crosses more of its voxels), 1 - backface_weight
+//     for one the cone leaves through its back (so that a convex surface does not shadow itself at grazing
+//     angles);
+//   incoherent normals (both sides of a thin part, a whole small object in one coarse voxel): the mean
+//     projected area of randomly oriented surface, kIsotropicCoverage.
+// normal_weight blends from the isotropic model (0) to the normal-adapted one (1).
+constexpr float kIsotropicCoverage = 0.5f;
+// A back face counts fully as one once cos(back) >= 1/kBackfaceRamp: the neighbours of a point on a convex
+// surface face a grazing cone slightly from behind.
+constexpr float kBackfaceRamp = 16.0f;
+inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float levelScale, const ConeTraceSettings& s,
+                              float backfaceWeight) {
+    const float occupancy = v.x;
+    if (occupancy <= 1e-6f) return 0.0f;
+    const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / occupancy;
+    const float coherence = std::min(glm::length(meanNormal), 1.0f);
+    const float facing = coherence > 1e-6f ? glm::dot(meanNormal, dir) / coherence : 0.0f;  // cos; > 0: back
+    const float directional =
+        facing > 0.0f ? 1.0f - backfaceWeight * std::min(1.0f, kBackfaceRamp * facing) : 1.0f;
+    const float adapted = (1.0f - coherence) * kIsotropicCoverage + coherence * directional;
+    const float weight = (1.0f - s.normalWeight) * kIsotropicCoverage + s.normalWeight * adapted;
+    return std::clamp(occupancy * levelScale * weight, 0.0f, 1.0f);
+}
+
+// log2 of x >= 1 to within 3e-5 (the exponent, and a quintic in the mantissa m - 1, a least-squares fit over
+// [1, 2] that is 0 at m = 1): std::log2 is a noticeable share of a cone step.
+inline float fastLog2(float x) {
+    uint32_t bits;
+    std::memcpy(&bits, &x, sizeof(bits));
+    const float exponent = static_cast<float>(static_cast<int>(bits >> 23) - 127);
+    bits = (bits & 0x007FFFFFu) | 0x3F800000u;
+    float m;
+    std::memcpy(&m, &bits, sizeof(m));
+    const float u = m - 1.0f;
+    const float p =
+        ((((0.04587075f * u - 0.19439043f) * u + 0.41539777f) * u - 0.70867494f) * u + 1.44182512f) * u;
+    return exponent + p;
+}
+
+// Opacity of a sample that covers a segment as long as the cone is wide, applied over a shorter step.
+inline float stepOpacity(float alpha, float stepScale) {
+    const float transmittance = std::max(1.0f - alpha, 0.0f);
+    if (stepScale == 0.5f) return 1.0f - std::sqrt(transmittance);  // the default, without pow
+    return stepScale == 1.0f ? alpha : 1.0f - std::pow(transmittance, stepScale);
+}
+
+// Marches the cone through the region of `reference` and calls visit(position, level, levelScale) at each
+// step until visit returns false: the position in level-0 voxel units, the fractional mip level, 2^level.
+template <typename Visit>
+void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSettings& settings,
+               Visit&& visit) {
+    const VolumeRegion& region = reference.region();
+    const float invVoxel = 1.0f / region.voxelSize();
+    const glm::vec3 origin = (cone.origin - region.origin) * invVoxel;
+    const float n = static_cast<float>(region.resolution);
+    auto [tEnter, tExit] = clipToVolume(origin, cone.direction, n);
+    tExit = std::min(tExit, cone.maxDistance * invVoxel);
+    const float maxLevel = std::log2(n);
+    // The first step is jittered: regular steps would alias into bands across neighbouring pixels.
+    const float firstDiameter = std::max(1.0f, 2.0f * tEnter * cone.tanHalfAngle);
+    for (float t = tEnter + cone.jitter * settings.jitter * firstDiameter * settings.stepScale; t < tExit;) {
+        const float diameter = std::max(1.0f, 2.0f * t * cone.tanHalfAngle);
+        const float level = std::min(fastLog2(diameter), maxLevel);
+        // 2^level, the level's voxel width in level-0 voxels.
+        const float levelScale = std::min(diameter, n);
+        if (!visit(origin + t * cone.direction, level, levelScale)) return;
+        t += diameter * settings.stepScale;
+    }
+}
+
+const MipVolume& referenceOf(const MipVolume* a, const MipVolume* b) {
+    return a ? *a : *b;
+}
+
+// The back-face weights of the scene and the object volume: only the starting surface's own volume gets one.
+std::pair<float, float> backfaceWeights(const VisibilityVolumes& v, const ConeTraceSettings& s) {
+    const bool sceneIsSelf = v.self == VisibilityVolumes::Self::Scene;
+    return {sceneIsSelf ? s.backfaceWeight : 0.0f, sceneIsSelf ? 0.0f : s.backfaceWeight};
+}
+
+}  // namespace
+
+glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const VisibilityVolumes& visibility,
+                         const ConeTraceSettings& settings, int64_t* steps) {
+    glm::vec3 lightAcc(0.0f);
+    float occlusionAcc = 0.0f;
+    const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
+    marchCone(cone, light, settings, [&](glm::vec3 position, float level, float levelScale) {
+        // One set of corners for all the volumes of the region.
+        const VolumeLookup at = light.lookup(position, level);
+        if (steps) ++*steps;
+        float transmittance = 1.0f;
+        if (visibility.scene)
+            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
+                                                     settings, sceneBackface);
+        if (visibility.object)
+            transmittance *= 1.0f - adaptedOcclusion(visibility.object->gather(at), cone.direction,
+                                                     levelScale, settings, objectBackface);
+        const float occlusionLocal = stepOpacity(1.0f - transmittance, settings.stepScale);
+        if (occlusionLocal > 0.0f) {
+            const glm::vec4 l = light.gather(at);
+            const glm::vec3 lightLocal = l.w > 1e-6f ? glm::vec3(l) / l.w : glm::vec3(0.0f);
+            // §3.1: light_acc = light_acc*occ_acc + light_local*occ_local*(1 - occ_acc) (as printed), or the
+            // usual front-to-back compositing light_acc += light_local*occ_local*(1 - occ_acc).
+            const glm::vec3 contribution = lightLocal * (occlusionLocal * (1.0f - occlusionAcc));
+            lightAcc =
+                settings.paperAccumulation ? lightAcc * occlusionAcc + contribution : lightAcc + contribution;
+            occlusionAcc += occlusionLocal * (1.0f - occlusionAcc);
+        }
+        return occlusionAcc < settings.maxOcclusion;
+    });
+    return lightAcc;
+}
+
+glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, const MipVolume& deltaLight,
+                               const VisibilityVolumes& visibility, const ConeTraceSettings& settings,
+                               const MipVolume* objectLight) {
+    // With the objects (a) and without them (b).
+    glm::vec3 lightA(0.0f), lightB(0.0f);
+    float occlusionA = 0.0f, occlusionB = 0.0f;
+    const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
+    // `emitted`: the step's light times its opacity.
+    auto composite = [&](glm::vec3& light, float& occlusion, glm::vec3 emitted, float opacity) {
+        const glm::vec3 contribution = emitted * (1.0f - occlusion);
+        light = settings.paperAccumulation ? light * occlusion + contribution : light + contribution;
+        occlusion += opacity * (1.0f - occlusion);
+    };
+    marchCone(cone, fullLight, settings, [&](glm::vec3 position, float level, float levelScale) {
+        const VolumeLookup at = fullLight.lookup(position, level);
+        const glm::vec4 sceneVisibility = visibility.scene ? visibility.scene->gather(at) : glm::vec4(0.0f);
+        const float scene =
+            adaptedOcclusion(sceneVisibility, cone.direction, levelScale, settings, sceneBackface);
+        const float object = visibility.object
+                                 ? adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
+                                                    settings, objectBackface)
+                                 : 0.0f;
+        const float opacityA = stepOpacity(scene + object - scene * object, settings.stepScale);
+        const float opacityB = stepOpacity(scene, settings.stepScale);
+        if (opacityA > 0.0f) {
+            const glm::vec4 full = fullLight.gather(at);
+            const glm::vec4 delta = deltaLight.gather(at);
+            // The volumes hold radiance times occupancy (inject.cpp): the full volume's by the occupancy of
+            // both visibility volumes, the scene's alone (full - delta) by the scene's. Dividing the scene's
+            // light by the objects' occupancy too would dim it in every coarse voxel the objects share, while
+            // its opacity (B) does not count them: B would fall short of A far from the objects.
+            if (objectLight) {
+                // The scene's surfaces (with the objects' effect on them) through the scene's opacity, the
+                // objects' own light through the opacity they add.
+                const glm::vec4 objects = objectLight->gather(at);
+                const glm::vec4 sceneWith = full - objects;
+                const glm::vec3 sceneRadiance =
+                    sceneWith.w > 1e-6f ? glm::vec3(sceneWith) / sceneWith.w : glm::vec3(0.0f);
+                const glm::vec3 objectRadiance =
+                    objects.w > 1e-6f ? glm::vec3(objects) / objects.w : glm::vec3(0.0f);
+                const glm::vec3 emitted =
+                    settings.objectLightByRays
+                        ? sceneRadiance * opacityB
+                        : sceneRadiance * opacityB + objectRadiance * (opacityA - opacityB);
+                composite(lightA, occlusionA, emitted, opacityA);
+            } else if (full.w > 1e-6f) {
+                composite(lightA, occlusionA, glm::vec3(full) / full.w * opacityA, opacityA);
+            }
+            if (opacityB > 0.0f && sceneVisibility.x > 1e-6f)
+                composite(lightB, occlusionB, glm::vec3(full - delta) / sceneVisibility.x * opacityB,
+                          opacityB);
+        }
+        return occlusionA < settings.maxOcclusion || occlusionB < settings.maxOcclusion;
+    });
+    return lightA - lightB;
+}
+
+ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
+                                const ConeTraceSettings& settings, int64_t* steps) {
+    ShadowOcclusion acc;
+    if (!visibility.scene && !visibility.object) return acc;
+    const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
+    const MipVolume& reference = referenceOf(visibility.scene, visibility.object);
+    marchCone(cone, reference, settings, [&](glm::vec3 position, float level, float levelScale) {
+        const VolumeLookup at = reference.lookup(position, level);
+        if (steps) ++*steps;
+        float scene = 0.0f, object = 0.0f;
+        if (visibility.scene)
+            scene = stepOpacity(adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
+                                                 settings, sceneBackface),
+                                settings.stepScale);
+        if (visibility.object)
+            object = stepOpacity(adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
+                                                  settings, objectBackface),
+                                 settings.stepScale);
+        const float combined = scene + object - scene * object;  // exactly `scene` without objects
+        acc.scene += scene * (1.0f - acc.scene);
+        acc.object += object * (1.0f - acc.object);
+        acc.combined += combined * (1.0f - acc.combined);
+        // Stop once nothing more can change: the combined and the scene-only occlusion are both saturated.
+        return acc.combined < settings.maxOcclusion || acc.scene < settings.maxOcclusion;
+    });
+    return acc;
+}
+
+namespace {
+
+// Occlusion accumulated along the cone by `volume` alone; `sparse`: skip the steps that cannot read a
+// non-zero voxel.
+float traceOneVolume(const Cone& cone, const MipVolume& volume, float backface, bool sparse,
+                     const ConeTraceSettings& settings) {
+    float acc = 0.0f;
+    marchCone(cone, volume, settings, [&](glm::vec3 position, float level, float levelScale) {
+        if (sparse && !volume.mayReadNonZero(position, static_cast<int>(level))) return true;
+        const float local = stepOpacity(adaptedOcclusion(volume.gather(volume.lookup(position, level)),
+                                                         cone.direction, levelScale, settings, backface),
+                                        settings.stepScale);
+        acc += local * (1.0f - acc);
+        return acc < settings.maxOcclusion;
+    });
+    return acc;
+}
+
+}  // namespace
+
+float traceSceneOcclusion(const Cone& cone, const VisibilityVolumes& visibility,
+                          const ConeTraceSettings& settings) {
+    if (!visibility.scene) return 0.0f;
+    return traceOneVolume(cone, *visibility.scene, backfaceWeights(visibility, settings).first, false,
+                          settings);
+}
+
+float traceObjectOcclusion(const Cone& cone, const VisibilityVolumes& visibility,
+                           const ConeTraceSettings& settings) {
+    if (!visibility.object) return 0.0f;
+    return traceOneVolume(cone, *visibility.object, backfaceWeights(visibility, settings).second, true,
+                          settings);
+}
+
+bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibility,
+                            const ConeTraceSettings& settings) {
+    if (!visibility.object) return false;
+    const MipVolume& objects = *visibility.object;
+    const float backface = backfaceWeights(visibility, settings).second;
+    bool meets = false;
+    marchCone(cone, objects, settings, [&](glm::vec3 position, float level, float levelScale) {
+        if (!objects.mayReadNonZero(position, static_cast<int>(level))) return true;
+        const glm::vec4 v = objects.gather(objects.lookup(position, level));
+        meets = adaptedOcclusion(v, cone.direction, levelScale, settings, backface) > 0.0f;
+        return !meets;
+    });
+    return meets;
+}
+
+DiffuseConeSet makeDiffuseCones(int count, float apertureDeg) {
+    DiffuseConeSet set;
+    count = std::max(count, 1);
+    constexpr float kMaxHalfAngle = std::numbers::pi_v<float> / 3.0f;  // 60 degrees: wider cones over-blur
+    float halfAngle = apertureDeg > 0.0f ? 0.5f * glm::radians(apertureDeg)
+                                         : std::acos(1.0f - 1.0f / static_cast<float>(count));
+    set.tanHalfAngle = std::tan(std::min(halfAngle, kMaxHalfAngle));
+    if (count == 1) {
+        set.directions = {glm::vec3(0, 0, 1)};
+        set.weights = {1.0f};
+        return set;
+    }
+    // Equal-area bands in cos(theta), each cone at its band's centre; azimuths by the golden angle.
+    const float goldenAngle = std::numbers::pi_v<float> * (3.0f - std::sqrt(5.0f));
+    float weightSum = 0.0f;
+    for (int i = 0; i < count; ++i) {
+        const float cosTheta = 1.0f - (static_cast<float>(i) + 0.5f) / static_cast<float>(count);
+        const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
+        const float phi = goldenAngle * static_cast<float>(i);
+        set.directions.emplace_back(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta);
+        set.weights.push_back(cosTheta);  // equal solid angles: the cosine is the whole irradiance weight
+        weightSum += cosTheta;
+    }
+    for (float& w : set.weights) w /= weightSum;
+    return set;
+}
+
+float specularConeTanHalfAngle(float phongExponent, float minApertureDeg, float maxApertureDeg) {
+    // cos^n(theta) = 1/2 at the cone's edge.
+    float halfAngle = phongExponent > 0.0f ? std::acos(std::pow(0.5f, 1.0f / phongExponent))
+                                           : std::numbers::pi_v<float> / 2.0f;
+    halfAngle =
+        std::clamp(halfAngle, 0.5f * glm::radians(minApertureDeg), 0.5f * glm::radians(maxApertureDeg));
+    return std::tan(std::min(halfAngle, glm::radians(89.0f)));
+}
+
+}  // namespace deltagi

@@ -1,0 +1,379 @@
+#include "pipeline/denoise.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "core/parallel.h"
+
+namespace deltagi {
+
+namespace {
+
+float powInt(float x, int n) {
+    float r = 1.0f;
+    for (; n > 0; n >>= 1, x *= x)
+        if (n & 1) r *= x;
+    return r;
+}
+
+// The samples (every stride-th pixel of every stride-th row) packed together, for the cache.
+struct Sample {
+    glm::vec3 position, normal;
+    bool valid;
+};
+
+// Everything one filter pass reads, shared by its rows.
+struct FilterPass {
+    std::span<float> values;
+    int channels;
+    std::span<const SurfacePoint> points;
+    int width, height;
+    glm::vec3 eye;
+    float pixelAngle;
+    const DenoiseSettings& s;
+    int r, stride, reach, side, sw, sh;
+    std::vector<float> spatial{};       // (2r+1)^2 window weights
+    std::vector<float> offsetLength{};  // sqrt(px^2 + py^2 + 1) for every pixel offset a window can have
+    std::vector<Sample> samples{};
+    std::vector<float> sampleValues{};
+    // Per window centre ((sw + 1) x (sh + 1): a centre may lie one past the last sample): whether any sample
+    // of its window holds a non-zero value. A window of zeros filters to zero, whatever its weights.
+    std::vector<uint8_t> windowHasValue{};
+};
+
+// Whether sample k is a usable neighbour of pixel p: on the same side, near p's tangent plane. Returns its
+// weight (0: not usable) without the spatial factor.
+inline float neighbourWeight(const FilterPass& f, const SurfacePoint& p, const Sample& q, float allowance) {
+    if (!q.valid) return 0.0f;
+    const float cosN = glm::dot(p.normal, q.normal);
+    if (cosN <= 0.0f) return 0.0f;
+    // Off the tangent plane by more than the allowance: another surface (a depth edge).
+    if (std::abs(glm::dot(p.normal, q.position - p.position)) > allowance) return 0.0f;
+    return powInt(cosN, f.s.normalPower);
+}
+
+// The edge-aware filter at pixel (x, y), whose surface is p, from the samples of its window, into `dst`.
+// Returns false, leaving `dst` alone, when no sample is usable (a hole). C is the channel count when known at
+// compile time (0: f.channels).
+template <int C>
+bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float* dst) {
+    const int channels = C > 0 ? C : f.channels;
+    std::array<float, (C > 0 ? C : 1)> fixedSum{};
+    std::vector<float> dynamicSum(C > 0 ? 0 : channels);
+    float* sum = C > 0 ? fixedSum.data() : dynamicSum.data();
+    const int r = f.r, stride = f.stride;
+    // The samples nearest to the pixel (below and right of it when between two): the window's centre.
+    const int xCentre = (x + stride / 2) / stride, yCentre = (y + stride / 2) / stride;
+    const int sxBegin = std::max(xCentre - r, 0), sxEnd = std::min(xCentre + r, f.sw - 1);
+    const int syBegin = std::max(yCentre - r, 0), syEnd = std::min(yCentre + r, f.sh - 1);
+    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    auto allowance = [&](int sx, int sy) {
+        return planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
+                                               sx * stride - x + f.reach];
+    };
+    if (!f.windowHasValue[static_cast<size_t>(yCentre) * (f.sw + 1) + xCentre]) {
+        // All zeros: the result is zero if any sample is usable, else the pixel is a hole.
+        for (int sy = syBegin; sy <= syEnd; ++sy)
+            for (int sx = sxBegin; sx <= sxEnd; ++sx)
+                if (neighbourWeight(f, p, f.samples[static_cast<size_t>(sy) * f.sw + sx], allowance(sx, sy)) >
+                    0.0f) {
+                    std::fill_n(dst, channels, 0.0f);
+                    return true;
+                }
+        return false;
+    }
+    std::fill_n(sum, channels, 0.0f);
+    float weightSum = 0.0f;
+    for (int sy = syBegin; sy <= syEnd; ++sy) {
+        const float* spatialRow = &f.spatial[static_cast<size_t>(sy - yCentre + r) * (2 * r + 1)];
+        for (int sx = sxBegin; sx <= sxEnd; ++sx) {
+            const size_t k = static_cast<size_t>(sy) * f.sw + sx;
+            float w = neighbourWeight(f, p, f.samples[k], allowance(sx, sy));
+            if (w == 0.0f) continue;
+            w *= spatialRow[sx - xCentre + r];
+            const float* v = &f.sampleValues[k * channels];
+            for (int c = 0; c < channels; ++c) sum[c] += v[c] * w;
+            weightSum += w;
+        }
+    }
+    if (!(weightSum > 0.0f)) return false;
+    for (int c = 0; c < channels; ++c) dst[c] = sum[c] / weightSum;
+    return true;
+}
+
+// Stride > 1, the interpolation weights of pixel (x, y), whose surface is p, over the (up to) 4 samples
+// around it: bilinear, and like the filter's only for the samples on the pixel's surface; normalized, in
+// InterpolationPlan's order. All zero when none of them is on its surface.
+std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const Sample> samples, int x, int y,
+                                          const SurfacePoint& p) {
+    const int stride = f.stride;
+    const int sx0 = x / stride, sy0 = y / stride;
+    const float fx = static_cast<float>(x - sx0 * stride) / static_cast<float>(stride);
+    const float fy = static_cast<float>(y - sy0 * stride) / static_cast<float>(stride);
+    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    // A small floor under the bilinear weight: a pixel on a sample's row still reads the row below when the
+    // sample is on another surface.
+    constexpr float kMinBilinear = 1e-3f;
+    std::array<float, 4> weights{};
+    float weightSum = 0.0f;
+    for (int n = 0; n < 4; ++n) {
+        const int dx = n & 1, dy = n >> 1;
+        const int sx = sx0 + dx, sy = sy0 + dy;
+        if (sx >= f.sw || sy >= f.sh) continue;
+        const float allowance =
+            planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
+                                            sx * stride - x + f.reach];
+        float w = neighbourWeight(f, p, samples[static_cast<size_t>(sy) * f.sw + sx], allowance);
+        if (w == 0.0f) continue;
+        w *= std::max((dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy), kMinBilinear);
+        weights[n] = w;
+        weightSum += w;
+    }
+    if (weightSum > 0.0f)
+        for (float& w : weights) w /= weightSum;
+    return weights;
+}
+
+// Stride > 1, without a plan: whether pixel (x, y), whose surface is p, is zero without its weights — the
+// filtered samples around it are all zero and the first of them, (x / stride, y / stride), lies on its
+// surface, so interpolatePixel would give zero (most of a shadow's change is zero: this saves computing the
+// other weights there).
+bool zeroAround(const FilterPass& f, std::span<const uint8_t> filteredNonZero, int x, int y, size_t k00,
+                const SurfacePoint& p) {
+    const int sx0 = x / f.stride, sy0 = y / f.stride;
+    const bool right = sx0 + 1 < f.sw, below = sy0 + 1 < f.sh;
+    if (filteredNonZero[k00] || (right && filteredNonZero[k00 + 1]) ||
+        (below && filteredNonZero[k00 + f.sw]) || (right && below && filteredNonZero[k00 + f.sw + 1]))
+        return false;
+    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    const float allowance =
+        planeAllowance * f.offsetLength[static_cast<size_t>(sy0 * f.stride - y + f.reach) * f.side +
+                                        sx0 * f.stride - x + f.reach];
+    return neighbourWeight(f, p, f.samples[k00], allowance) > 0.0f;
+}
+
+// Stride > 1, the pixels between the samples: the filtered values of the (up to) 4 samples around the pixel
+// with `weights` (interpolationWeights); k00 is the first of them, (x / stride, y / stride). A pixel with
+// none of them on its surface (an edge between samples) takes the full filter over its window. Returns false
+// for a hole.
+template <int C>
+bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
+                      std::span<const uint8_t> filteredNonZero, int x, int y, size_t k00,
+                      const SurfacePoint* p, const std::array<float, 4>& weights, float* dst) {
+    const int channels = C > 0 ? C : f.channels;
+    const size_t keys[4] = {k00, k00 + 1, k00 + f.sw, k00 + f.sw + 1};
+    bool any = false, anyNonZero = false;
+    for (int n = 0; n < 4; ++n)
+        if (weights[n] > 0.0f) {
+            any = true;
+            anyNonZero = anyNonZero || filteredNonZero[keys[n]];
+        }
+    if (!any) return filterPixel<C>(f, x, y, p ? *p : f.points[static_cast<size_t>(y) * f.width + x], dst);
+    std::fill_n(dst, channels, 0.0f);
+    if (!anyNonZero) return true;  // zeros all around (most of a shadow's change)
+    for (int n = 0; n < 4; ++n) {
+        if (weights[n] == 0.0f) continue;
+        const float* v = &filtered[keys[n] * channels];
+        for (int c = 0; c < channels; ++c) dst[c] += v[c] * weights[n];
+    }
+    return true;
+}
+
+// The plan's weights for f's stride and settings, from its surfaces (built when it has none for them).
+void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
+    const size_t pixels = static_cast<size_t>(f.width) * f.height;
+    if (plan.stride == f.stride && plan.weights.size() == pixels) return;
+    std::vector<Sample> samples(static_cast<size_t>(f.sw) * f.sh);
+    parallelFor(0, f.sh, 16, [&](int64_t sy) {
+        for (int sx = 0; sx < f.sw; ++sx) {
+            const SurfacePoint& q = plan.surfaces[static_cast<size_t>(sy) * f.stride * f.width +
+                                                  static_cast<size_t>(sx) * f.stride];
+            samples[static_cast<size_t>(sy) * f.sw + sx] = {q.position, q.normal, q.valid()};
+        }
+    });
+    plan.stride = f.stride;
+    plan.weights.resize(pixels);
+    parallelFor(0, f.height, 4, [&](int64_t y) {
+        for (int x = 0; x < f.width; ++x) {
+            const size_t i = static_cast<size_t>(y) * f.width + x;
+            const SurfacePoint& p = plan.surfaces[i];
+            plan.weights[i] = p.valid() ? interpolationWeights(f, samples, x, static_cast<int>(y), p)
+                                        : std::array<float, 4>{-1.0f, 0.0f, 0.0f, 0.0f};  // no surface
+        }
+    });
+}
+
+// The whole pass for C channels: every pixel filtered, or (settings.interpolate) the samples filtered and the
+// pixels between interpolated from them.
+template <int C>
+void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> out,
+                 std::vector<std::vector<size_t>>& rowHoles) {
+    const int channels = C > 0 ? C : f.channels;
+    std::vector<float> filtered;
+    std::vector<uint8_t> filteredNonZero;
+    const bool interpolate = f.stride > 1 && f.s.interpolate;
+    if (interpolate) {
+        filtered.assign(f.samples.size() * channels, 0.0f);
+        filteredNonZero.assign(f.samples.size(), 0);
+        // Samples at valid points, which lie inside the rectangle.
+        const int sx0 = (rect.x0 + f.stride - 1) / f.stride, sx1 = (rect.x1 + f.stride - 1) / f.stride;
+        const int sy0 = (rect.y0 + f.stride - 1) / f.stride, sy1 = (rect.y1 + f.stride - 1) / f.stride;
+        parallelFor(sy0, sy1, 4, [&](int64_t sy) {
+            for (int sx = sx0; sx < sx1; ++sx) {
+                const size_t k = static_cast<size_t>(sy) * f.sw + sx;
+                if (!f.samples[k].valid) continue;
+                const size_t i =
+                    static_cast<size_t>(sy) * f.stride * f.width + static_cast<size_t>(sx) * f.stride;
+                float* v = &filtered[k * channels];
+                filterPixel<C>(f, sx * f.stride, static_cast<int>(sy) * f.stride, f.points[i], v);
+                filteredNonZero[k] = std::any_of(v, v + channels, [](float c) { return c != 0.0f; });
+            }
+        });
+    }
+    InterpolationPlan* plan =
+        interpolate && f.s.plan && f.s.plan->surfaces.size() == f.points.size() ? f.s.plan : nullptr;
+    if (plan) buildPlan(f, *plan);
+    // With a plan: the pixels whose points, or the samples around them, may differ from the plan's surfaces.
+    const PixelRect changed = f.s.planChanged;
+    const int stride = f.stride;
+    parallelFor(rect.y0, rect.y1, 4, [&](int64_t y64) {
+        const int y = static_cast<int>(y64);
+        // Pixels by cell of samples, [cx, cx + stride] x [cy, cy + stride]: with a plan, those whose cell
+        // misses `changed` read it.
+        const int sy = y / stride, cy = sy * stride;
+        const bool rowMisses = changed.empty() || cy + stride < changed.y0 || cy >= changed.y1;
+        for (int x = rect.x0; x < rect.x1;) {
+            const int sx = x / stride, cx = sx * stride, cellEnd = std::min(cx + stride, rect.x1);
+            const bool cellPlan = plan && (rowMisses || cx + stride < changed.x0 || cx >= changed.x1);
+            const size_t k00 = static_cast<size_t>(sy) * f.sw + sx;
+            for (; x < cellEnd; ++x) {
+                const size_t i = static_cast<size_t>(y) * f.width + x;
+                bool ok;
+                if (cellPlan) {
+                    const std::array<float, 4>& w = plan->weights[i];
+                    if (w[0] < 0.0f) continue;  // no surface
+                    ok = interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, nullptr, w,
+                                             &out[i * channels]);
+                } else {
+                    const SurfacePoint& p = f.points[i];
+                    if (!p.valid()) continue;
+                    if (interpolate && zeroAround(f, filteredNonZero, x, y, k00, p)) {
+                        std::fill_n(&out[i * channels], channels, 0.0f);
+                        continue;
+                    }
+                    ok = interpolate ? interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, &p,
+                                                           interpolationWeights(f, f.samples, x, y, p),
+                                                           &out[i * channels])
+                                     : filterPixel<C>(f, x, y, p, &out[i * channels]);
+                }
+                if (!ok) rowHoles[y].push_back(i);
+            }
+        }
+    });
+}
+
+}  // namespace
+
+std::vector<float> denoise(std::span<const float> values, int channels, std::span<const SurfacePoint> points,
+                           int width, int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& s,
+                           std::vector<size_t>* holes) {
+    std::vector<float> out(values.begin(), values.end());
+    denoiseInto(out, channels, points, width, height, eye, pixelAngle, s, holes);
+    return out;
+}
+
+void denoiseInto(std::span<float> values, int channels, std::span<const SurfacePoint> points, int width,
+                 int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& s,
+                 std::vector<size_t>* holes, const PixelRect* bounds) {
+    if (s.radius <= 0 || channels <= 0) return;
+    const PixelRect rect = bounds ? *bounds : PixelRect{0, 0, width, height};
+    if (rect.empty()) return;
+    const int r = s.radius, stride = std::max(s.stride, 1);
+    const int reach = (r + 1) * stride;
+    FilterPass f{values,
+                 channels,
+                 points,
+                 width,
+                 height,
+                 eye,
+                 pixelAngle,
+                 s,
+                 r,
+                 stride,
+                 reach,
+                 2 * reach + 1,
+                 (width + stride - 1) / stride,
+                 (height + stride - 1) / stride};
+    const int window = 2 * r + 1;
+    std::vector<float> spatial1d(window);
+    for (int d = -r; d <= r; ++d)
+        spatial1d[d + r] = std::exp(-0.5f * d * d / (s.spatialSigma * s.spatialSigma));
+    f.spatial.resize(static_cast<size_t>(window) * window);
+    for (int dy = 0; dy < window; ++dy)
+        for (int dx = 0; dx < window; ++dx) f.spatial[dy * window + dx] = spatial1d[dy] * spatial1d[dx];
+    f.offsetLength.resize(static_cast<size_t>(f.side) * f.side);
+    for (int py = -reach; py <= reach; ++py)
+        for (int px = -reach; px <= reach; ++px)
+            f.offsetLength[static_cast<size_t>(py + reach) * f.side + px + reach] =
+                std::sqrt(static_cast<float>(px * px + py * py + 1));
+
+    const int sw = f.sw, sh = f.sh;
+    f.samples.resize(static_cast<size_t>(sw) * sh);
+    f.sampleValues.resize(f.samples.size() * channels);
+    std::vector<uint8_t> nonZero(f.samples.size());
+    // Only samples inside the rectangle can be valid; the others stay invalid.
+    const int sx0 = (rect.x0 + stride - 1) / stride, sx1 = (rect.x1 + stride - 1) / stride;
+    const int sy0 = (rect.y0 + stride - 1) / stride, sy1 = (rect.y1 + stride - 1) / stride;
+    parallelFor(sy0, sy1, 16, [&](int64_t sy) {
+        for (int sx = sx0; sx < sx1; ++sx) {
+            const size_t j = static_cast<size_t>(sy) * stride * width + static_cast<size_t>(sx) * stride;
+            const size_t k = static_cast<size_t>(sy) * sw + sx;
+            f.samples[k] = {points[j].position, points[j].normal, points[j].valid()};
+            const float* v = &values[j * channels];
+            std::copy_n(v, channels, &f.sampleValues[k * channels]);
+            nonZero[k] =
+                f.samples[k].valid && std::any_of(v, v + channels, [](float c) { return c != 0.0f; });
+        }
+    });
+    // Dilate the non-zero samples by the window (rows, then columns) onto the window centres, with running
+    // counts: a centre's window holds a value when the count over its span is not zero.
+    std::vector<uint8_t> rows(static_cast<size_t>(sw + 1) * sh);
+    parallelFor(0, sh, 16, [&](int64_t sy) {
+        std::vector<uint32_t> prefix(sw + 1, 0);
+        const uint8_t* row = &nonZero[static_cast<size_t>(sy) * sw];
+        for (int sx = 0; sx < sw; ++sx) prefix[sx + 1] = prefix[sx] + row[sx];
+        for (int cx = 0; cx <= sw; ++cx)
+            rows[static_cast<size_t>(sy) * (sw + 1) + cx] =
+                prefix[std::min(cx + r, sw - 1) + 1] != prefix[std::max(cx - r, 0)];
+    });
+    f.windowHasValue.assign(static_cast<size_t>(sw + 1) * (sh + 1), 0);
+    parallelFor(0, sw + 1, 16, [&](int64_t cx) {
+        std::vector<uint32_t> prefix(sh + 1, 0);
+        for (int sy = 0; sy < sh; ++sy)
+            prefix[sy + 1] = prefix[sy] + rows[static_cast<size_t>(sy) * (sw + 1) + cx];
+        for (int cy = 0; cy <= sh; ++cy)
+            f.windowHasValue[static_cast<size_t>(cy) * (sw + 1) + cx] =
+                prefix[std::min(cy + r, sh - 1) + 1] != prefix[std::max(cy - r, 0)];
+    });
+
+    std::vector<std::vector<size_t>> rowHoles(height);
+    switch (channels) {
+        case 1:
+            filterImage<1>(f, rect, values, rowHoles);
+            break;
+        case 3:
+            filterImage<3>(f, rect, values, rowHoles);
+            break;
+        case 6:
+            filterImage<6>(f, rect, values, rowHoles);
+            break;
+        default:
+            filterImage<0>(f, rect, values, rowHoles);
+            break;
+    }
+    if (holes)
+        for (const std::vector<size_t>& row : rowHoles) holes->insert(holes->end(), row.begin(), row.end());
+}
+
+}  // namespace deltagi

@@ -1,0 +1,85 @@
+// An edge-aware (joint bilateral) filter over per-pixel cone results.
+//
+// Cones start their march at a random fraction of a step (options.trace.jitter) so that regular steps do not
+// alias into bands; this filter averages that noise over a few neighbouring pixels of the same surface. It is
+// guided by the G-buffer: a neighbour counts only if it lies near the pixel's tangent plane and shares its
+// normal, so shadow and object edges stay sharp. It filters occlusion and gathered radiance, never the BRDF
+// or the photo, so textures and highlights are untouched.
+#pragma once
+
+#include <array>
+#include <span>
+#include <type_traits>
+#include <vector>
+
+#include "deltagi/scene.h"
+#include "pipeline/gbuffer.h"
+
+namespace deltagi {
+
+struct InterpolationPlan;
+
+struct DenoiseSettings {
+    int radius = 2;             // samples: a (2r+1)^2 window of them; 0 disables the filter
+    float spatialSigma = 1.5f;  // samples
+    // Only the pixels with x and y multiples of `stride` hold values (1: all of them): the filter then
+    // interpolates every valid pixel from its (2r+1)^2 nearest such samples, spaced `stride` pixels apart.
+    int stride = 1;
+    // With stride > 1: filter only the samples, and give each pixel between them the bilinear blend of the
+    // (up to 4) filtered samples around it that lie on its surface (the full filter where none does). About
+    // 6 times cheaper for a 5x5 window; smoother, so for slowly varying values (the real surfaces' change).
+    bool interpolate = false;
+    int normalPower = 16;        // weight dot(n_i, n_j)^power
+    float planeDistance = 1.0f;  // how far a neighbour may lie off the tangent plane, in its pixel distances
+    // With interpolate: the weights of each pixel between the samples, kept for surfaces that stay the same
+    // from pass to pass (see InterpolationPlan); null: computed every time.
+    InterpolationPlan* plan = nullptr;
+    // The pixels whose points may differ from the plan's surfaces (made invalid): they, and the pixels whose
+    // samples lie in it, are computed without the plan. Empty: none.
+    PixelRect planChanged;
+};
+
+// The interpolation weights (DenoiseSettings::interpolate) of every pixel of a fixed set of surfaces, such as
+// the real scene's G-buffer, which does not change while only the objects move: a pass reads them instead of
+// testing the samples around each pixel again. A pass whose points are these surfaces with some made invalid
+// (the real surfaces the objects hide) uses a pixel's weights when the samples they weight are all still
+// valid, and computes the pixel as without a plan otherwise: the result is the same bits either way.
+struct InterpolationPlan {
+    std::span<const SurfacePoint> surfaces;  // the fixed surfaces (must outlive the plan)
+    // Built by the first pass that uses the plan, for its stride and settings:
+    int stride = 0;
+    // Per pixel, the normalized weights of the samples (sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)
+    // with sx = x / stride, sy = y / stride; all zero: none of them lies on the pixel's surface.
+    std::vector<std::array<float, 4>> weights;
+};
+
+// Filters `values`, `channels` floats per pixel of `points` (width x height, row-major), returning the
+// result. Invalid points keep their values and are never used as neighbours. `eye` is the camera position and
+// `pixelAngle` the angle one pixel subtends (1 / fy), which together give a pixel's size on a surface.
+// With settings.stride > 1, valid pixels without any usable sample in their window keep their value and are
+// listed in `holes` (if given), in pixel order.
+std::vector<float> denoise(std::span<const float> values, int channels, std::span<const SurfacePoint> points,
+                           int width, int height, glm::vec3 eye, float pixelAngle,
+                           const DenoiseSettings& settings, std::vector<size_t>* holes = nullptr);
+// The same in place, where the valid points all lie inside `bounds` (nullptr: anywhere).
+void denoiseInto(std::span<float> values, int channels, std::span<const SurfacePoint> points, int width,
+                 int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& settings,
+                 std::vector<size_t>* holes = nullptr, const PixelRect* bounds = nullptr);
+
+// In place, for the cone passes' per-pixel results: `perPixel` values of T (made of floats: glm::vec3,
+// ShadowOcclusion) per pixel of the camera's image. Empty vectors are left alone.
+template <typename T>
+void denoiseInPlace(std::vector<T>& values, int perPixel, std::span<const SurfacePoint> points,
+                    const Camera& camera, const DenoiseSettings& settings,
+                    std::vector<size_t>* holes = nullptr, const PixelRect* bounds = nullptr) {
+    static_assert(sizeof(T) % sizeof(float) == 0 && std::is_trivially_copyable_v<T> &&
+                  std::is_standard_layout_v<T>);
+    if (values.empty() || settings.radius <= 0) return;
+    const int channels = perPixel * static_cast<int>(sizeof(T) / sizeof(float));
+    const std::span<float> flat(reinterpret_cast<float*>(values.data()),
+                                values.size() * sizeof(T) / sizeof(float));
+    denoiseInto(flat, channels, points, camera.width, camera.height, camera.position(), 1.0f / camera.fy,
+                settings, holes, bounds);
+}
+
+}  // namespace deltagi

@@ -1,0 +1,219 @@
+#include "pipeline/gbuffer.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "core/parallel.h"
+
+namespace deltagi {
+
+namespace {
+
+// The smallest cosine between a camera ray and the surface it meets that widens a pixel's texture
+// footprint: grazing surfaces are filtered as at about 84 degrees rather than over the whole image.
+constexpr float kMinFootprintCosine = 0.1f;
+
+// `pixelAngle`: the angle (radians) a pixel subtends, for the textures' filter footprint.
+SurfacePoint toSurfacePoint(const RayHit& hit, glm::vec3 rayDir, float pixelAngle) {
+    if (!hit.hit()) return {};
+    if (variesOverSurface(*hit.mesh)) {
+        RayHit filtered = hit;
+        const float cosine = std::max(std::abs(glm::dot(hit.geometricNormal, rayDir)), kMinFootprintCosine);
+        lookUpMaterial(filtered, hit.t * pixelAngle / cosine);
+        return {filtered.position, filtered.normal, -rayDir, filtered.material, filtered.surface};
+    }
+    return {hit.position, hit.normal, -rayDir, hit.material, hit.surface};
+}
+
+float pixelAngleOf(const Camera& camera) { return 1.0f / std::max(camera.fy, 1e-6f); }
+
+// The first surface along a camera ray if it is virtual. With the objects in a layer of their own, the real
+// scene below is traced only for rays that meet an object, up to it (most rays near an object miss it).
+RayHit visibleObjectHit(const RayScene& all, glm::vec3 eye, glm::vec3 dir) {
+    const RayHit hit = all.base() ? all.intersectTopLayer(eye, dir) : all.intersect(eye, dir);
+    if (!hit.isVirtual) return {};
+    if (all.base() && all.base()->intersect(eye, dir, 0.0f, hit.t).hit()) return {};
+    return hit;
+}
+
+// visibleObjectHit for many rays: the objects' layer in packets.
+void visibleObjectHits(const RayScene& all, glm::vec3 eye, std::span<const glm::vec3> directions,
+                       std::span<RayHit> hits) {
+    if (!all.base()) {
+        for (size_t i = 0; i < directions.size(); ++i) hits[i] = visibleObjectHit(all, eye, directions[i]);
+        return;
+    }
+    all.intersectCoherent(eye, directions, hits, true, true);
+    for (size_t i = 0; i < directions.size(); ++i)
+        if (!hits[i].isVirtual || all.base()->intersect(eye, directions[i], 0.0f, hits[i].t).hit())
+            hits[i] = {};
+}
+
+// The pixel rows and columns [x0, x1] x [y0, y1] whose rays may meet the box `b` (its corners' projections,
+// with a margin for the sub-samples); the whole image when the box reaches behind the camera.
+std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
+    const std::array<int, 4> all = {0, camera.width - 1, 0, camera.height - 1};
+    if (b.empty()) return {0, -1, 0, -1};
+    // Through a lens' distortion the box's corners do not bound its image (a polynomial model may even fold
+    // back outside the image): every pixel may see it.
+    if (!camera.distortion.none()) return all;
+    const glm::mat4 cameraFromWorld = glm::inverse(camera.worldFromCamera);
+    float xMin = INFINITY, xMax = -INFINITY, yMin = INFINITY, yMax = -INFINITY;
+    for (int c = 0; c < 8; ++c) {
+        const glm::vec3 p(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y, c & 4 ? b.max.z : b.min.z);
+        const glm::vec3 q = glm::vec3(cameraFromWorld * glm::vec4(p, 1.0f));
+        if (q.z > -1e-6f) return all;  // at or behind the camera plane
+        const float x = camera.cx + camera.fx * (q.x / -q.z), y = camera.cy - camera.fy * (q.y / -q.z);
+        xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y),
+        yMax = std::max(yMax, y);
+    }
+    constexpr float kMargin = 2.0f;
+    auto clampTo = [](float v, int hi) {
+        return static_cast<int>(std::clamp(v, -1.0f, static_cast<float>(hi) + 1.0f));
+    };
+    return {std::max(clampTo(std::floor(xMin - kMargin), camera.width), 0),
+            std::min(clampTo(std::ceil(xMax + kMargin), camera.width), camera.width - 1),
+            std::max(clampTo(std::floor(yMin - kMargin), camera.height), 0),
+            std::min(clampTo(std::ceil(yMax + kMargin), camera.height), camera.height - 1)};
+}
+
+}  // namespace
+
+std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly) {
+    std::vector<SurfacePoint> real;
+    renderRealSurfaces(camera, realOnly, real);
+    return real;
+}
+
+void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vector<SurfacePoint>& real) {
+    real.resize(static_cast<size_t>(camera.width) * camera.height);
+    const glm::vec3 eye = camera.position();
+    parallelFor(0, camera.height, 2, [&](int64_t y) {
+        // A row's rays in packets.
+        std::vector<glm::vec3> directions(static_cast<size_t>(camera.width));
+        std::vector<RayHit> hits(directions.size());
+        for (int x = 0; x < camera.width; ++x)
+            directions[x] = glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f));
+        realOnly.intersectCoherent(eye, directions, hits, false, true);
+        for (int x = 0; x < camera.width; ++x)
+            real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(hits[x], directions[x], pixelAngleOf(camera));
+    });
+}
+
+void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
+                          int samplesPerPixel, GBuffer& g) {
+    const int width = camera.width, height = camera.height;
+    const size_t count = static_cast<size_t>(width) * height;
+    if (g.object.size() == count && g.coverage.size() == count && g.width == width && g.height == height) {
+        const PixelRect& w = g.written;
+        for (int y = w.y0; y < w.y1; ++y) {
+            const size_t row = static_cast<size_t>(y) * width;
+            std::fill(g.object.begin() + row + w.x0, g.object.begin() + row + w.x1, SurfacePoint{});
+            std::fill(g.coverage.begin() + row + w.x0, g.coverage.begin() + row + w.x1, 0.0f);
+        }
+    } else {  // a new camera: 15 MiB at 640 x 480, cleared in parallel
+        g.object.resize(count);
+        g.coverage.resize(count);
+        parallelFor(0, height, 16, [&](int64_t y) {
+            const size_t row = static_cast<size_t>(y) * width;
+            std::fill(g.object.begin() + row, g.object.begin() + row + width, SurfacePoint{});
+            std::fill(g.coverage.begin() + row, g.coverage.begin() + row + width, 0.0f);
+        });
+    }
+    g.width = width;
+    g.height = height;
+    const glm::vec3 eye = camera.position();
+    const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<float>(samplesPerPixel)))));
+
+    // Pixel centres first, where the objects can be.
+    const auto [x0, x1, y0, y1] = pixelsCovering(camera, objectBounds);
+    g.written = x1 < x0 || y1 < y0 ? PixelRect{} : PixelRect{x0, y0, x1 + 1, y1 + 1};
+    parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
+        std::vector<glm::vec3> directions;
+        for (int x = x0; x <= x1; ++x)
+            directions.push_back(glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f)));
+        std::vector<RayHit> hits(directions.size());
+        visibleObjectHits(all, eye, directions, hits);
+        for (int x = x0; x <= x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * width + x;
+            g.object[i] = toSurfacePoint(hits[x - x0], directions[x - x0], pixelAngleOf(camera));
+            g.coverage[i] = g.object[i].valid() ? 1.0f : 0.0f;
+        }
+    });
+    g.objectSamples.perPixel = 0;
+    g.objectSamples.points.clear();
+    if (k == 1) return;
+
+    // Then the sub-samples of silhouette pixels (decided from the centres alone, so the pass is
+    // deterministic).
+    std::vector<uint8_t> silhouette(count, 0);
+    parallelFor(y0, y1 + 1, 8, [&](int64_t y) {
+        for (int x = x0; x <= x1; ++x) {
+            const bool centre = g.object[static_cast<size_t>(y) * width + x].valid();
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int xx = x + dx, yy = static_cast<int>(y) + dy;
+                    if (xx < 0 || yy < 0 || xx >= width || yy >= height) continue;
+                    if (g.object[static_cast<size_t>(yy) * width + xx].valid() != centre)
+                        silhouette[static_cast<size_t>(y) * width + x] = 1;
+                }
+        }
+    });
+    // Every pixel that shows an object or lies on a silhouette takes k x k sub-samples: the coverage, and
+    // the surfaces its direct light is shaded over.
+    PixelSamples& samples = g.objectSamples;
+    samples.perPixel = k * k;
+    samples.rect = g.written;
+    const int rectWidth = samples.rect.x1 - samples.rect.x0;
+    samples.points.assign(
+        static_cast<size_t>(std::max(rectWidth, 0)) * std::max(samples.rect.y1 - samples.rect.y0, 0) * k * k,
+        SurfacePoint{});
+    parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
+        // The row's sub-sample rays, in packets.
+        std::vector<glm::vec3> directions;
+        for (int x = x0; x <= x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * width + x;
+            if (!silhouette[i] && !g.object[i].valid()) continue;
+            for (int sy = 0; sy < k; ++sy)
+                for (int sx = 0; sx < k; ++sx) {
+                    const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
+                    directions.push_back(glm::normalize(
+                        camera.rayDirection(x + 0.5f + ox, static_cast<float>(y) + 0.5f + oy)));
+                }
+        }
+        std::vector<RayHit> hits(directions.size());
+        visibleObjectHits(all, eye, directions, hits);
+        size_t next = 0;
+        for (int x = x0; x <= x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * width + x;
+            if (!silhouette[i] && !g.object[i].valid()) continue;
+            SurfacePoint* out = samples.points.data() +
+                                (static_cast<size_t>(y - samples.rect.y0) * rectWidth + (x - x0)) * k * k;
+            int virtualCount = 0;
+            float bestOffset = g.object[i].valid() ? 0.0f : INFINITY;
+            SurfacePoint nearest = g.object[i];
+            for (int sy = 0; sy < k; ++sy)
+                for (int sx = 0; sx < k; ++sx) {
+                    const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
+                    const RayHit& hit = hits[next];
+                    const glm::vec3 dir = directions[next++];
+                    if (!hit.hit()) continue;
+                    ++virtualCount;
+                    // Textures filtered over the whole pixel, as at its centre: the sub-samples' light is
+                    // averaged over the pixel anyway, and finer mip levels cost cache misses.
+                    out[sy * k + sx] = toSurfacePoint(hit, dir, pixelAngleOf(camera));
+                    const float offset = ox * ox + oy * oy;
+                    if (offset < bestOffset) {
+                        bestOffset = offset;
+                        nearest = out[sy * k + sx];
+                    }
+                }
+            if (!silhouette[i]) continue;  // inside an object: the centre stays, coverage 1
+            g.object[i] = virtualCount > 0 ? nearest : SurfacePoint{};
+            g.coverage[i] = static_cast<float>(virtualCount) / static_cast<float>(k * k);
+        }
+    });
+}
+
+}  // namespace deltagi

@@ -1,0 +1,93 @@
+// Stage 5: the G-buffer from the camera: per pixel, the real surface the photo shows (a ray against the real
+// scene alone), the virtual surface in front of it if any, and the coverage of virtual objects over the
+// pixel's sub-samples, which anti-aliases the silhouette in the composite. Depth comparison decides which
+// pixels are virtual (§3.3).
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "core/parallel.h"
+#include "core/ray_scene.h"
+#include "deltagi/scene.h"
+
+namespace deltagi {
+
+struct SurfacePoint {
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};              // unit, facing the camera
+    glm::vec3 toEye{0.0f};               // unit, from the surface to the camera
+    const Material* material = nullptr;  // null: no surface
+    SurfaceMaterial surface;             // the material at this point (textures filtered over the pixel)
+    bool valid() const { return material != nullptr; }
+};
+
+// A rectangle of pixels [x0, x1) x [y0, y1) that holds every valid point of a pass (the others are skipped).
+struct PixelRect {
+    int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    bool empty() const { return x0 >= x1 || y0 >= y1; }
+};
+// Calls body(i) in parallel for the valid points among `pixels` (indices into `points`), or among all points
+// when `pixels` is empty: how the cone passes visit a sparse subset of the image (`grain` points per task).
+template <typename Body>
+void forEachValidPoint(std::span<const SurfacePoint> points, std::span<const uint32_t> pixels, int64_t grain,
+                       Body&& body) {
+    if (pixels.empty()) {
+        parallelFor(0, static_cast<int64_t>(points.size()), grain, [&](int64_t i) {
+            if (points[i].valid()) body(i);
+        });
+        return;
+    }
+    parallelFor(0, static_cast<int64_t>(pixels.size()), grain, [&](int64_t k) {
+        const int64_t i = pixels[k];
+        if (points[i].valid()) body(i);
+    });
+}
+
+// The surfaces seen through a k x k grid of sub-pixel positions in every pixel of a rectangle: what the
+// objects' direct light is shaded over, so that a pixel shows the mean of its area as the path tracer's
+// does (a shadow edge or a fold inside a pixel), not the light at its centre alone.
+struct PixelSamples {
+    int perPixel = 0;                  // k * k; 0: none
+    PixelRect rect;                    // the pixels that have them
+    std::vector<SurfacePoint> points;  // perPixel per pixel of `rect`, row by row; invalid: no object there
+    // The samples of image pixel `i` (of an image `width` wide), empty outside the rectangle.
+    std::span<const SurfacePoint> of(size_t i, int width) const {
+        if (perPixel == 0) return {};
+        const int x = static_cast<int>(i % static_cast<size_t>(width)), y = static_cast<int>(i / width);
+        if (x < rect.x0 || x >= rect.x1 || y < rect.y0 || y >= rect.y1) return {};
+        const size_t k = static_cast<size_t>(y - rect.y0) * (rect.x1 - rect.x0) + (x - rect.x0);
+        return std::span<const SurfacePoint>(points).subspan(k * perPixel, perPixel);
+    }
+};
+
+// The virtual half of the G-buffer; the real half (renderRealSurfaces) is kept apart, since it does not
+// change while only the objects move.
+struct GBuffer {
+    int width = 0, height = 0;
+    std::vector<SurfacePoint> object;  // the virtual surface seen in the pixel, where coverage > 0
+    std::vector<float> coverage;       // fraction of sub-samples that see a virtual object first
+    // The pixels that renderObjectSurfaces wrote: outside them object and coverage are empty, so they hold
+    // every virtual point, and a G-buffer kept from frame to frame is cleared there only.
+    PixelRect written;
+    // The virtual surfaces at the sub-samples of every pixel that shows an object (samplesPerPixel > 1).
+    PixelSamples objectSamples;
+};
+
+// The real surfaces behind the pixel centres (what the photo shows): rays against the real scene alone. They
+// do not change while only the virtual objects move, so FrameRenderer keeps them between frames.
+std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly);
+// The same into `real` (resized; its memory is reused from frame to frame as the camera moves).
+void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vector<SurfacePoint>& real);
+
+// The virtual half of `g` (object, coverage): `all` holds the real and the virtual surfaces (the virtual
+// objects' layer over the real scene's, see RayScene), whose virtual objects lie inside `objectBounds`: only
+// pixels near the bounds' projection can see them. One ray per pixel centre decides which pixels are virtual;
+// pixels on a silhouette (whose 3x3 neighbourhood has both kinds) take `samplesPerPixel` sub-samples on a
+// regular k x k grid for their coverage. The virtual surface nearest the pixel centre represents the pixel.
+// Every pixel with a virtual point keeps the virtual surfaces of its k x k sub-samples (g.objectSamples).
+// `g` may hold an earlier frame's (of the same camera): only its written pixels are cleared.
+void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
+                          int samplesPerPixel, GBuffer& g);
+
+}  // namespace deltagi

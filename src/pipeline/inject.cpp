@@ -1,0 +1,310 @@
+#include "pipeline/inject.h"
+
+#include <algorithm>
+#include <cassert>
+#include <cstring>
+#include <numbers>
+#include <tuple>
+
+#include "core/parallel.h"
+
+namespace deltagi {
+
+namespace {
+// Texel footprints tile a lit surface only up to the RSM's sampling: a fully lit voxel collects between about
+// (k-1)^2 and (k+1)^2 texels of k^2. A voxel whose footprints cover this fraction of its area counts as fully
+// lit; below it, the radiance is scaled by the covered fraction (partly shadowed voxels).
+constexpr float kFullCoverage = 0.75f;
+
+// The surface area of `geometry` in voxel i (world units^2).
+[[gnu::always_inline]] inline float geometryArea(std::span<const VoxelGeometry* const> geometry, size_t i) {
+    float area = 0.0f;
+    for (const VoxelGeometry* g : geometry) area += g->area[i];
+    return area;
+}
+
+// The radiance one light's texels give a voxel from their summed (reflected flux, footprint area) and the
+// geometry's `area` in it: the mean radiance of the lit texels (reflected flux / (pi * footprint area)),
+// times the lit fraction of the voxel's surface. Each light's is computed apart and the lights' are summed: a
+// voxel lit fully by two lights has the radiance of both, not their mean.
+[[gnu::always_inline]] inline glm::vec3 lightRadiance(glm::vec4 texelSum, float area) {
+    if (!(texelSum.w > 0.0f)) return glm::vec3(0.0f);
+    const float litFraction = area > 0.0f ? std::min(1.0f, texelSum.w / (kFullCoverage * area)) : 1.0f;
+    return glm::vec3(texelSum) * (litFraction / (std::numbers::pi_v<float> * texelSum.w));
+}
+
+// The texels of one voxel as they arrive in light and texel order: each light's sum is turned into its
+// radiance (lightRadiance) when the next light's texels start, and the lights' radiances are summed in light
+// order. injectLight and reinjectLight add the same numbers in the same order.
+struct VoxelTexels {
+    float area = 0.0f;         // of the geometry in the voxel
+    glm::vec3 radiance{0.0f};  // of the lights finished
+    glm::vec4 current{0.0f};   // the current light's (reflected flux, footprint area)
+    uint32_t light = 0;
+    bool lit = false;  // any texel at all
+    void add(uint32_t l, const RsmTexel& t) {
+        if (lit && l != light) finishLight();
+        light = l;
+        lit = true;
+        current += glm::vec4(t.flux, t.area);
+    }
+    void finishLight() {
+        radiance += lightRadiance(current, area);
+        current = glm::vec4(0.0f);
+    }
+};
+
+// Voxel i of the light volume from its texels' radiance (`lit`: any texel landed in it) and the geometry in
+// it.
+[[gnu::always_inline]] inline glm::vec4 voxelLight(glm::vec3 reflected, bool lit,
+                                                   std::span<const VoxelGeometry* const> geometry, size_t i) {
+    float occupancy = 0.0f, area = 0.0f;
+    glm::vec3 emitted(0.0f);  // radiance times area
+    for (const VoxelGeometry* g : geometry) {
+        occupancy = std::max(occupancy, g->visibility[i].x);
+        area += g->area[i];
+        if (!g->emission.empty()) emitted += g->emission[i];
+    }
+    glm::vec3 radiance(0.0f);
+    if (lit) {
+        occupancy = 1.0f;
+        radiance = reflected;
+    }
+    // Emissive surfaces add their own radiance, averaged over all the surface area in the voxel.
+    if (area > 0.0f && emitted != glm::vec3(0.0f)) radiance += emitted / area;
+    return glm::vec4(radiance * occupancy, occupancy);
+}
+
+[[gnu::always_inline]] inline glm::vec4 deltaVoxel(glm::vec4 full, glm::vec4 sceneOnly) {
+    return glm::vec4(full.x - sceneOnly.x, full.y - sceneOnly.y, full.z - sceneOnly.z, full.w);
+}
+
+}  // namespace
+
+Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
+                  std::span<const VoxelGeometry* const> geometry) {
+    const int n = region.resolution;
+
+    // Per voxel: the lights' summed radiance, and (w) 1 where any texel landed.
+    Grid3 reflected(n);
+    // One light at a time: its texels' (reflected flux, footprint area) per voxel, then their radiance.
+    Grid3 accum(n);
+    const TexelVoxels texelVoxel(region);
+    const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
+    std::vector<uint32_t> voxels;
+    for (const ReflectiveShadowMap& rsm : rsms) {
+        voxels.resize(rsm.texels.size());
+        for (size_t t = 0; t < rsm.texels.size(); ++t) voxels[t] = texelVoxel.index(rsm.texels[t].position);
+        const SlabBins bins = binBySlab(voxels.size(), slabCount, [&](size_t t) {
+            const int s = static_cast<int>(voxels[t] / (static_cast<size_t>(n) * n)) / kSlabThickness;
+            return std::pair{s, s};
+        });
+        parallelFor(0, slabCount, 1, [&](int64_t s) {
+            for (uint32_t t : bins.slab(s))
+                accum[voxels[t]] += glm::vec4(rsm.texels[t].flux, rsm.texels[t].area);
+            // Each voxel of the slab once (at its first texel), in the slab's order.
+            for (uint32_t t : bins.slab(s)) {
+                glm::vec4& sum = accum[voxels[t]];
+                if (!(sum.w > 0.0f)) continue;
+                reflected[voxels[t]] +=
+                    glm::vec4(lightRadiance(sum, geometryArea(geometry, voxels[t])), 0.0f);
+                reflected[voxels[t]].w = 1.0f;
+                sum = glm::vec4(0.0f);
+            }
+        });
+    }
+
+    Grid3 light(n);
+    parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) {
+        light[i] = voxelLight(glm::vec3(reflected[i]), reflected[i].w > 0.0f, geometry, i);
+    });
+    return light;
+}
+
+Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {
+    Grid3 delta(full.resolution());
+    parallelFor(0, static_cast<int64_t>(delta.size()), 1 << 14,
+                [&](int64_t i) { delta[i] = deltaVoxel(full[i], sceneOnly[i]); });
+    return delta;
+}
+
+TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region) {
+    const int n = region.resolution;
+    TexelBins bins;
+    bins.resolution = n;
+    // A counting sort by row, which keeps injectLight's order inside each row, then each row by x.
+    const TexelVoxels texelVoxel(region);
+    std::vector<uint32_t> rowOf;
+    bins.rowStart.assign(static_cast<size_t>(n) * n + 1, 0);
+    for (const ReflectiveShadowMap& rsm : rsms)
+        for (const RsmTexel& t : rsm.texels) {
+            const glm::ivec3 v = texelVoxel(t.position);
+            rowOf.push_back(static_cast<uint32_t>(v.z * n + v.y));
+            ++bins.rowStart[rowOf.back() + 1];
+        }
+    for (size_t r = 0; r + 1 < bins.rowStart.size(); ++r) bins.rowStart[r + 1] += bins.rowStart[r];
+    bins.entries.resize(rowOf.size());
+    std::vector<uint32_t> cursor(bins.rowStart.begin(), bins.rowStart.end() - 1);
+    size_t k = 0;
+    for (size_t l = 0; l < rsms.size(); ++l)
+        for (size_t t = 0; t < rsms[l].texels.size(); ++t, ++k) {
+            const int x = texelVoxel(rsms[l].texels[t].position).x;
+            bins.entries[cursor[rowOf[k]]++] = {static_cast<uint16_t>(x), static_cast<uint16_t>(l),
+                                                static_cast<uint32_t>(t)};
+        }
+    parallelFor(0, static_cast<int64_t>(n) * n, 64, [&](int64_t r) {
+        std::stable_sort(bins.entries.begin() + bins.rowStart[r], bins.entries.begin() + bins.rowStart[r + 1],
+                         [](const TexelBins::Entry& a, const TexelBins::Entry& b) { return a.x < b.x; });
+    });
+    return bins;
+}
+
+RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone, std::span<const RsmUpdate> updates,
+                       const VolumeRegion& region) {
+    // Texels are compared as bytes: a copy is the same bytes.
+    static_assert(sizeof(RsmTexel) == 11 * sizeof(float), "RsmTexel has padding");
+    const int n = region.resolution;
+    const TexelVoxels texelVoxel(region);
+    auto voxelIndex = [&](const RsmTexel& t) { return texelVoxel.index(t.position); };
+    // One piece of work per range, in light and texel order.
+    struct Piece {
+        uint32_t light;
+        TexelRange range;
+        std::vector<RsmChanges::Texel> removed, added;
+    };
+    std::vector<Piece> pieces;
+    for (size_t l = 0; l < updates.size(); ++l)
+        for (const TexelRange& r : updates[l].retraced)
+            pieces.push_back({static_cast<uint32_t>(l), r, {}, {}});
+    auto byIndex = [](const RsmTexel& t, uint32_t index) { return t.index < index; };
+    parallelFor(0, static_cast<int64_t>(pieces.size()), 1, [&](int64_t p) {
+        Piece& piece = pieces[p];
+        const std::vector<RsmTexel>& before = sceneAlone[piece.light].texels;
+        const std::vector<RsmTexel>& after = updates[piece.light].texels;
+        auto b = std::lower_bound(before.begin(), before.end(), piece.range.first, byIndex);
+        auto a = std::lower_bound(after.begin(), after.end(), piece.range.first, byIndex);
+        auto removed = [&](std::vector<RsmTexel>::const_iterator t) {
+            piece.removed.push_back(
+                {voxelIndex(*t), piece.light, &*t, static_cast<uint32_t>(t - before.begin())});
+        };
+        auto added = [&](std::vector<RsmTexel>::const_iterator t) {
+            piece.added.push_back(
+                {voxelIndex(*t), piece.light, &*t, static_cast<uint32_t>(t - after.begin())});
+        };
+        const uint32_t last = piece.range.last;
+        while (true) {
+            const bool bIn = b != before.end() && b->index < last, aIn = a != after.end() && a->index < last;
+            if (!bIn && !aIn) break;
+            if (bIn && aIn && b->index == a->index) {
+                if (std::memcmp(&*b, &*a, sizeof(RsmTexel)) != 0) {
+                    removed(b);
+                    added(a);
+                }
+                ++b, ++a;
+            } else if (bIn && (!aIn || b->index < a->index)) {
+                removed(b++);
+            } else {
+                added(a++);
+            }
+        }
+    });
+    RsmChanges changes;
+    for (Piece& piece : pieces) {
+        changes.removed.insert(changes.removed.end(), piece.removed.begin(), piece.removed.end());
+        changes.added.insert(changes.added.end(), piece.added.begin(), piece.added.end());
+    }
+    std::sort(changes.added.begin(), changes.added.end(), [](const auto& a, const auto& b) {
+        return std::tuple(a.voxel, a.light, a.texel->index) < std::tuple(b.voxel, b.light, b.texel->index);
+    });
+    for (const auto* list : {&changes.removed, &changes.added})
+        for (const RsmChanges::Texel& t : *list) {
+            const uint32_t x = t.voxel % n, y = t.voxel / n % n, z = t.voxel / n / n;
+            changes.bounds.extend(VoxelBox::voxel(glm::ivec3(x, y, z)));
+        }
+    return changes;
+}
+
+namespace {
+
+// The scene's texels that the objects removed or changed, as positions in `bins.entries` (increasing).
+std::vector<uint32_t> goneEntries(const TexelBins& bins, const RsmChanges& changes) {
+    const uint32_t n = static_cast<uint32_t>(bins.resolution);
+    std::vector<uint32_t> gone;
+    gone.reserve(changes.removed.size());
+    for (const RsmChanges::Texel& t : changes.removed) {
+        const uint32_t row = t.voxel / n, x = t.voxel % n;
+        const auto rowEnd = bins.entries.begin() + bins.rowStart[row + 1];
+        auto e = std::lower_bound(bins.entries.begin() + bins.rowStart[row], rowEnd, x,
+                                  [](const TexelBins::Entry& e, uint32_t x) { return e.x < x; });
+        while (e != rowEnd && (e->light != t.light || e->texel != t.position)) ++e;  // its voxel's few
+        assert(e != rowEnd && e->x == x);  // every texel of the scene's maps is binned
+        if (e != rowEnd) gone.push_back(static_cast<uint32_t>(e - bins.entries.begin()));
+    }
+    std::sort(gone.begin(), gone.end());
+    return gone;
+}
+
+// Per voxel x0 <= x < x1 of row (y, z), its texels with the objects (VoxelTexels, finished): the scene's
+// texels that are not gone and the added ones, merged into injectLight's order (map, then texel) so that the
+// sums add the same numbers in the same order, and round the same.
+std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelBins& bins,
+                                      std::span<const ReflectiveShadowMap> sceneAlone,
+                                      std::span<const uint32_t> gone, const RsmChanges& changes,
+                                      std::span<const VoxelGeometry* const> geometry) {
+    const int n = bins.resolution;
+    const size_t row = static_cast<size_t>(z) * n + y;
+    const uint32_t rowVoxel = static_cast<uint32_t>(row * n);  // the index of voxel (0, y, z)
+    const std::vector<TexelBins::Entry>& entries = bins.entries;
+    auto e = std::lower_bound(entries.begin() + bins.rowStart[row], entries.begin() + bins.rowStart[row + 1],
+                              x0, [](const TexelBins::Entry& e, int x) { return e.x < x; });
+    const auto eEnd = entries.begin() + bins.rowStart[row + 1];
+    auto g = std::lower_bound(gone.begin(), gone.end(), static_cast<uint32_t>(e - entries.begin()));
+    auto a = std::lower_bound(changes.added.begin(), changes.added.end(), rowVoxel + x0,
+                              [](const RsmChanges::Texel& t, uint32_t v) { return t.voxel < v; });
+    std::vector<VoxelTexels> sums(x1 - x0);
+    for (int x = x0; x < x1; ++x)
+        sums[x - x0].area = geometryArea(geometry, rowVoxel + static_cast<uint32_t>(x));
+    while (true) {
+        const bool eIn = e != eEnd && e->x < x1;
+        const bool aIn = a != changes.added.end() && a->voxel < rowVoxel + x1;
+        if (!eIn && !aIn) break;
+        const RsmTexel* sceneTexel = eIn ? &sceneAlone[e->light].texels[e->texel] : nullptr;
+        if (eIn && (!aIn || std::tuple(rowVoxel + e->x, uint32_t{e->light}, sceneTexel->index) <
+                                std::tuple(a->voxel, a->light, a->texel->index))) {
+            if (g != gone.end() && *g == static_cast<uint32_t>(e - entries.begin()))
+                ++g;  // removed or changed by the objects
+            else
+                sums[e->x - x0].add(e->light, *sceneTexel);
+            ++e;
+        } else {
+            sums[a->voxel - rowVoxel - x0].add(a->light, *a->texel);
+            ++a;
+        }
+    }
+    for (VoxelTexels& texels : sums)
+        if (texels.lit) texels.finishLight();
+    return sums;
+}
+
+}  // namespace
+
+void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
+                   std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
+                   std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight, Grid3& fullLight,
+                   Grid3& deltaLight, const Grid3* bounce) {
+    const std::vector<uint32_t> gone = goneEntries(sceneTexels, changes);
+    forEachRow(box, [&](int y, int z) {
+        const std::vector<VoxelTexels> sums =
+            rowTexelSums(y, z, box.lo.x, box.hi.x, sceneTexels, sceneAlone, gone, changes, geometry);
+        for (int x = box.lo.x; x < box.hi.x; ++x) {
+            const size_t i = fullLight.index(x, y, z);
+            const VoxelTexels& texels = sums[x - box.lo.x];
+            glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, i);
+            if (bounce) light += (*bounce)[i];
+            fullLight[i] = light;
+            deltaLight[i] = deltaVoxel(light, sceneLight[i]);
+        }
+    });
+}
+
+}  // namespace deltagi

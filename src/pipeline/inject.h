@@ -1,0 +1,96 @@
+// Stage 3: light injection (§3.2). The reflective shadow maps' texels are scattered into a light volume that
+// stores, per voxel, the radiance its surfaces reflect diffusely. The delta volume is the full light volume
+// (real scene + virtual objects) minus the real-scene-only one: negative where a virtual object now blocks
+// light that reached real surfaces, positive on the lit virtual objects.
+#pragma once
+
+#include <span>
+
+#include "pipeline/reflective_shadow_map.h"
+#include "pipeline/voxelize.h"
+
+namespace deltagi {
+
+// Radiance of a voxel = the mean radiance of the texels that landed in it (reflected flux / (pi * footprint
+// area)), times the lit fraction of the geometry's surface area in the voxel (footprint / area, saturating at
+// kFullCoverage in inject.cpp, which absorbs the RSM's sampling jitter). Voxels are (radiance * occupancy,
+// occupancy), with occupancy 1 where any of `geometry` touches the voxel. Emissive geometry adds its emitted
+// radiance, averaged over the voxel's surface area: the cones then carry the light of emitters (one bounce of
+// it: emitted light is not reflected into the volume again). Deterministic for any thread count.
+Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
+                  std::span<const VoxelGeometry* const> geometry);
+
+// full - sceneOnly in the radiance channels; the occupancy of `full` (which covers both).
+Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly);
+
+// The level-0 voxel that a texel at a position is injected into (the region's far faces count to the last
+// voxel).
+class TexelVoxels {
+  public:
+    explicit TexelVoxels(const VolumeRegion& region)
+        : origin_(region.origin), invVoxel_(1.0f / region.voxelSize()), n_(region.resolution) {}
+    glm::ivec3 operator()(glm::vec3 position) const {
+        return glm::clamp(glm::ivec3(glm::floor((position - origin_) * invVoxel_)), glm::ivec3(0),
+                          glm::ivec3(n_ - 1));
+    }
+    // Its index in the level-0 grid.
+    uint32_t index(glm::vec3 position) const {
+        const glm::ivec3 v = (*this)(position);
+        return static_cast<uint32_t>((static_cast<size_t>(v.z) * n_ + v.y) * n_ + v.x);
+    }
+
+  private:
+    glm::vec3 origin_;
+    float invVoxel_;
+    int n_;
+};
+
+// ---- Injecting again where the objects change the light, frame after frame (FrameRenderer) ----
+//
+// With the objects, the RSMs differ from the real scene's own only in a few texels, and the full light volume
+// differs from the scene's only in the voxels those texels land in (before and after) and in the objects'
+// voxels; the delta volume is (0, 0, 0, scene occupancy) everywhere else. So a frame re-injects a box of
+// voxels around them, each from all the texels that land in it, summed in the order injectLight sums them:
+// the voxels are injectLight's bit for bit (no differences of sums, which would round differently).
+
+// The texels of the real scene's RSMs, binned by row of voxels (built once, kept while the maps are): the
+// texels of any voxel are found without going through the maps.
+struct TexelBins {
+    struct Entry {
+        uint16_t x, light;  // the voxel's x, the map
+        uint32_t texel;     // position in the map's texels
+    };
+    int resolution = 0;
+    std::vector<uint32_t> rowStart;  // resolution^2 + 1 offsets into entries; row (y, z) is z * n + y
+    std::vector<Entry> entries;      // each row's texels by x, then in injectLight's order (map, texel)
+};
+TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region);
+
+// Where the maps with the objects differ from the real scene's own: the scene's texels that are gone or
+// changed, and the texels that are new or changed.
+struct RsmChanges {
+    struct Texel {
+        uint32_t voxel;  // index in the level-0 grid
+        uint32_t light;
+        const RsmTexel* texel;  // into the scene's maps (removed) or the updates (added)
+        uint32_t position;      // removed: in its map's texels
+    };
+    std::vector<Texel> removed;  // by light and texel
+    std::vector<Texel> added;    // by voxel, light and texel: injectLight's order in each voxel
+    VoxelBox bounds;             // the voxels all of them land in
+};
+// Compares each map of `sceneAlone` with its update for the objects (traceRsmUpdate, one per light) in the
+// texels the update traced again: the others are the same. Added texels point into the updates.
+RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone, std::span<const RsmUpdate> updates,
+                       const VolumeRegion& region);
+
+// injectLight(withObjects, region, geometry) and deltaVolume(it, sceneLight), written into `fullLight` and
+// `deltaLight` inside `box` only, where withObjects = the maps of `sceneTexels` (binTexels of `sceneAlone`)
+// with `changes`. The result there is bit for bit the same as those functions'. `bounce` (the real scene's
+// further bounces, if any) is added to the full volume, as to the scene's light.
+void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
+                   std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
+                   std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight, Grid3& fullLight,
+                   Grid3& deltaLight, const Grid3* bounce = nullptr);
+
+}  // namespace deltagi

@@ -1,0 +1,77 @@
+#include "pipeline/object_bounce_rays.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "core/brdf_sampling.h"
+#include "pipeline/cone_trace.h"
+
+namespace deltagi {
+
+namespace {
+constexpr int64_t kPointGrain = 64;
+constexpr uint32_t kBounceStream = 7200;
+}  // namespace
+
+glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit) {
+    const VolumeRegion& region = light.region();
+    const float invVoxel = 1.0f / region.voxelSize();
+    const glm::vec4 l = light.sample(
+        (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) * invVoxel, 0.0f);
+    return l.w > 1e-6f ? glm::vec3(l) / l.w : glm::vec3(0.0f);
+}
+
+std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> points,
+                                             const MipVolume& objectLight, const ShadowRayScenes& rays,
+                                             const Options& options, std::span<const uint32_t> pixels) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    if (!rays.scene || !rays.objects || rays.objectBounds.empty()) return out;
+    const float offset = shadowRayOffset(*rays.scene);
+    const glm::vec3 centre = rays.objectBounds.center();
+    const float radius = rays.boundingRadius();
+    const int count = squareSampleCount(options.diffuse.objectRays);
+    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
+    constexpr float kPi = std::numbers::pi_v<float>;
+
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        if (p.surface.diffuse == glm::vec3(0.0f)) return;
+        const glm::vec3 origin = p.position + offset * p.normal;
+        const glm::vec3 toCentre = centre - origin;
+        const float distance = glm::length(toCentre);
+        // The objects wholly behind the surface send it nothing.
+        if (distance > radius && glm::dot(toCentre, p.normal) < -radius) return;
+        // Inside the bounding sphere every direction may meet them: the cosine-weighted hemisphere.
+        const bool inside = distance <= radius * 1.0001f;
+        const float cosMax =
+            inside ? 0.0f : std::sqrt(std::max(0.0f, 1.0f - (radius * radius) / (distance * distance)));
+        const glm::mat3 frame = frameAround(inside ? p.normal : toCentre / distance);
+        const float jitterU = hashToUnit(i, kBounceStream), jitterV = hashToUnit(i, kBounceStream + 1);
+        glm::vec3 sum(0.0f);
+        for (int k = 0; k < count; ++k) {
+            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
+            glm::vec3 wi;
+            float weight;  // cos / (pi pdf)
+            if (inside) {
+                wi = frame * sampleCosineHemisphere(u1, u2);
+                weight = 1.0f;
+            } else {
+                const float cosTheta = 1.0f - u1 * (1.0f - cosMax);
+                const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
+                const float phi = 2.0f * kPi * u2;
+                wi = frame * glm::vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta);
+                const float cosSurface = glm::dot(wi, p.normal);
+                if (cosSurface <= 0.0f) continue;
+                weight = cosSurface * 2.0f * (1.0f - cosMax);  // cos / (pi * 1 / (2 pi (1 - cosMax)))
+            }
+            const RayHit hit = rays.objects->intersectTopLayer(origin, wi);
+            if (!hit.hit()) continue;
+            if (rays.scene->occluded(origin, wi, 0.0f, hit.t)) continue;
+            sum += volumeRadianceAt(objectLight, hit) * weight;
+        }
+        out[i] = sum / static_cast<float>(count);
+    });
+    return out;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,149 @@
+#include "pipeline/object_volumes.h"
+
+#include "pipeline/bounce_light.h"
+
+#include <algorithm>
+
+namespace deltagi {
+
+namespace {
+
+// A frame whose changed box holds more than this fraction of the voxels injects every voxel instead: the
+// box's share of the texels would then cost more to gather than to scatter them all.
+constexpr size_t kFreshInjectionFraction = 4;  // 1/4
+
+bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
+    return a.origin == b.origin && a.size == b.size && a.resolution == b.resolution;
+}
+
+}  // namespace
+
+void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region,
+                             bool withEmission, bool withAlbedo) {
+    if (objectVisibility_.empty() || !sameRegion(region, region_)) {
+        *this = ObjectVolumes{};
+        region_ = region;
+        objects_ = deltagi::voxelize(objects, region, withEmission, withAlbedo);
+        objectsChanged_ = VoxelBox::all(region.resolution);
+        return;
+    }
+    objectsChanged_ = revoxelize(objects_, objects, region, withEmission);
+    objectsChanged_.extend(objects_.bounds);
+}
+
+void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates) {
+    const RsmChanges changes = compareRsms(real.rsms, updates, region_);
+    const VoxelGeometry* both[] = {&real.geometry, &objects_};
+    VoxelBox differs = objects_.bounds;
+    differs.extend(changes.bounds);
+    VoxelBox changed = differs;
+    changed.extend(lightDiffers_);
+    lightDiffers_ = differs;
+    const size_t voxels = VoxelBox::all(region_.resolution).count();
+    if (fullLight_.empty() || changed.count() > voxels / kFreshInjectionFraction) {
+        std::vector<ReflectiveShadowMap> withObjects;
+        for (size_t l = 0; l < updates.size(); ++l)
+            withObjects.push_back(applyRsmUpdate(real.rsms[l], updates[l]));
+        freshFull_ = injectLight(withObjects, region_, both);
+        if (real.bounce)
+            for (size_t i = 0; i < freshFull_->size(); ++i) (*freshFull_)[i] += (*real.bounce)[i];
+        freshDelta_ = deltaVolume(*freshFull_, real.light);
+        lightChanged_ = VoxelBox::all(region_.resolution);
+        return;
+    }
+    if (!sceneTexels_) sceneTexels_ = binTexels(real.rsms, region_);
+    if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, VoxelBox::all(region_.resolution));
+    reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, fullLight_.levelForUpdate(0),
+                  deltaLight_.levelForUpdate(0), real.bounce);
+    lightChanged_ = changed;
+}
+
+namespace {
+
+// The mip level at which the objects gather their further bounce: voxels of 4 level-0 voxels, a few hundred
+// for a statue at 128^3 (a few milliseconds a frame).
+constexpr int kObjectBounceLevel = 2;
+
+VoxelBox unionOf(VoxelBox a, const VoxelBox& b) {
+    if (a.empty()) return b;
+    if (!b.empty()) a.extend(b);
+    return a;
+}
+
+}  // namespace
+
+void ObjectVolumes::updateObjectLight(const VoxelBox& box) {
+    const Grid3& full = fullLight_.level(0);
+    if (objectLight_.empty()) {
+        Grid3 level0(region_.resolution);
+        for (size_t i = 0; i < level0.size(); ++i)
+            if (objects_.visibility[i].x > 0.0f) level0[i] = full[i];
+        objectLight_ = buildMipChain(region_, std::move(level0));
+        return;
+    }
+    Grid3& level0 = objectLight_.levelForUpdate(0);
+    forEachRow(box, [&](int y, int z) {
+        for (size_t i = full.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i)
+            level0[i] = objects_.visibility[i].x > 0.0f ? full[i] : glm::vec4(0.0f);
+    });
+    updateMipChain(objectLight_, box, nonZeroBounds(level0, box));
+}
+
+void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* options, const RayScene* rays) {
+    buildLightMips();
+    // The objects' light is non-zero only where they are and were: inside what this frame's injection
+    // rewrote.
+    updateObjectLight(lightChanged_);
+    if (!sceneVisibility || !options || objects_.albedo.empty()) return;
+    const VoxelBox& box = objects_.bounds;
+    if (box.empty()) return;
+    const std::vector<glm::vec3> added =
+        rays && options->diffuse.objectRays > 0
+            ? gatherObjectBounceByRays(fullLight_, objects_, objectVisibility_, *sceneVisibility, *rays,
+                                       *options, box, kObjectBounceLevel)
+            : gatherObjectBounce(fullLight_, objects_, objectVisibility_, *sceneVisibility, *options, box,
+                                 kObjectBounceLevel);
+    Grid3& full = fullLight_.levelForUpdate(0);
+    Grid3& delta = deltaLight_.levelForUpdate(0);
+    const glm::ivec3 extent = box.hi - box.lo;
+    forEachRow(box, [&](int y, int z) {
+        size_t k = (static_cast<size_t>(z - box.lo.z) * extent.y + (y - box.lo.y)) * extent.x;
+        for (size_t i = full.index(box.lo.x, y, z), end = i + extent.x; i < end; ++i, ++k) {
+            full[i] += glm::vec4(added[k], 0.0f);
+            delta[i] += glm::vec4(added[k], 0.0f);
+        }
+    });
+    updateMipChain(fullLight_, box, unionOf(fullLight_.occupiedBounds(), box));
+    updateMipChain(deltaLight_, box, unionOf(deltaLight_.occupiedBounds(), box));
+    updateObjectLight(box);
+}
+
+void ObjectVolumes::buildLightMips() {
+    if (objectVisibility_.empty()) {
+        objectVisibility_ = buildMipChain(region_, objects_.visibility.clone());
+    } else {
+        // Level 0 is the objects' voxels again: copy the box that changed.
+        Grid3& level0 = objectVisibility_.levelForUpdate(0);
+        const VoxelBox& box = objectsChanged_;
+        forEachRow(box, [&](int y, int z) {
+            const size_t first = level0.index(box.lo.x, y, z);
+            std::copy_n(&objects_.visibility[first], box.hi.x - box.lo.x, &level0[first]);
+        });
+        updateMipChain(objectVisibility_, box, nonZeroBounds(level0, objects_.bounds));
+    }
+    if (freshFull_) {
+        fullLight_ = buildMipChain(region_, std::move(*freshFull_));
+        deltaLight_ = buildMipChain(region_, std::move(*freshDelta_));
+        freshFull_.reset();
+        freshDelta_.reset();
+        return;
+    }
+    // Outside lightDiffers_ both are non-zero only where the scene's light is.
+    for (MipVolume* volume : {&fullLight_, &deltaLight_}) {
+        VoxelBox occupied = *sceneLightBounds_;
+        occupied.extend(nonZeroBounds(volume->level(0), lightDiffers_));
+        updateMipChain(*volume, lightChanged_, occupied);
+    }
+}
+
+}  // namespace deltagi

@@ -1,0 +1,81 @@
+// The volumes that depend on the virtual objects (§3.2): their visibility volume, the full light volume and
+// the delta volume, mip-mapped; kept from one frame to the next and, as the objects move, redone only where
+// they change them, with the same bits as computing them from scratch:
+//   1. voxelize: the objects are voxelized again into their box, their old box cleared (revoxelize);
+//   3. inject: outside the objects' voxels and the voxels of the RSM texels they change (where each texel
+//      landed without them and where it lands with them), the full light volume is the real scene's own and
+//      the delta volume is (0, 0, 0, occupancy); the box around those voxels is injected again
+//      (reinjectLight), together with last frame's box, which puts the scene's light back where the objects
+//      have left;
+//   4. mipmap: every level is recomputed above the changed boxes only (updateMipChain).
+// The first frame, and one in which the changes cover a large part of the volume, computes them as render()
+// does.
+#pragma once
+
+#include <optional>
+#include <span>
+
+#include "core/ray_scene.h"
+#include "deltagi/options.h"
+#include "pipeline/inject.h"
+#include "pipeline/mipmap.h"
+#include "pipeline/voxelize.h"
+
+namespace deltagi {
+
+// The real scene's share of the volumes (kept by the renderer). The same from frame to frame: a changed real
+// scene, light or region needs a new ObjectVolumes (the renderer keeps both in one place and drops both).
+struct RealSceneVolumes {
+    const VoxelGeometry& geometry;
+    std::span<const ReflectiveShadowMap> rsms;  // of the real scene alone, one per light
+    const Grid3& light;                         // injected from rsms, plus `bounce`
+    // The real scene's further bounces of light (bounceLight), added to the full light volume as well; null:
+    // none.
+    const Grid3* bounce = nullptr;
+};
+
+class ObjectVolumes {
+  public:
+    // Stage 1: the objects' voxels, over `region` (a new region starts afresh).
+    void voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region, bool withEmission = true,
+                  bool withAlbedo = false);
+    // Stage 3: the full and delta light volumes (level 0). `updates` are the real scene's RSMs' updates for
+    // the objects (traceRsmUpdate), one per light.
+    void inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates);
+    // Stage 4: the mip chains of the three volumes. With `sceneVisibility` and the objects voxelized with
+    // albedo, the objects' own further bounce is added to the full and delta volumes (gatherObjectBounce):
+    // they reflect the light of the room they receive, not only their direct light.
+    // With `rays` (the objects' layer over the real scene) and options.diffuse.object_rays > 0 the bounce is
+    // gathered by rays (gatherObjectBounceByRays).
+    void mipmap(const MipVolume* sceneVisibility = nullptr, const Options* options = nullptr,
+                const RayScene* rays = nullptr);
+
+    const MipVolume& objectVisibility() const { return objectVisibility_; }
+    const MipVolume& fullLight() const { return fullLight_; }
+    const MipVolume& deltaLight() const { return deltaLight_; }
+    // The full light volume's voxels that the objects occupy (level 0; zero elsewhere), mip-mapped: the
+    // objects' own light, which the differential relit cones tell apart from the scene's
+    // (traceLightChangeCone).
+    const MipVolume& objectLight() const { return objectLight_; }
+    // The level-0 voxels of the light volumes that the last inject() wrote (all of them when it injected
+    // from scratch): what a frame cost, for tests and measurements.
+    const VoxelBox& injectedBox() const { return lightChanged_; }
+
+  private:
+    // mipmap() without the objects' bounce.
+    void buildLightMips();
+    // objectLight_ = the full light where the objects are, zero elsewhere, inside `box`, and its mip chain.
+    void updateObjectLight(const VoxelBox& box);
+    VolumeRegion region_;
+    VoxelGeometry objects_;  // the objects' voxels (level 0 of objectVisibility_, copied there by mipmap())
+    MipVolume objectVisibility_, fullLight_, deltaLight_, objectLight_;
+    VoxelBox objectsChanged_;  // level-0 voxels that this frame's voxelization changed
+    VoxelBox lightDiffers_;    // outside it the full light volume is the scene's (the last injection)
+    VoxelBox lightChanged_;    // level-0 voxels that this frame's injection rewrote
+    std::optional<Grid3> freshFull_, freshDelta_;  // injected from scratch this frame, for mipmap()
+    // Built on the first frame that needs them:
+    std::optional<TexelBins> sceneTexels_;      // the real scene's RSM texels by voxel row
+    std::optional<VoxelBox> sceneLightBounds_;  // the real scene's non-zero light voxels
+};
+
+}  // namespace deltagi

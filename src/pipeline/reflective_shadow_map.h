@@ -1,0 +1,87 @@
+// Stage 2: reflective shadow maps (Dachsbacher & Stamminger 2005), one per light: the surfaces the light sees
+// directly, with position, normal and the flux they reflect diffusely. Rendered by casting one ray per texel
+// from the light; rendered once for the real scene with the virtual objects and once for the real scene alone
+// (§3.2). Only texels whose surface lies inside the volume region are kept, since only they are injected.
+#pragma once
+
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "core/ray_scene.h"
+#include "deltagi/renderer.h"
+
+namespace deltagi {
+
+struct RsmTexel {
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};  // facing the light
+    glm::vec3 flux{
+        0.0f};          // reflected flux (W): Material::volumeReflectance() * flux arriving through the texel
+    float area = 0.0f;  // surface area the texel covers (world units^2)
+    uint32_t index = 0;  // face * resolution^2 + row * resolution + column: the texel's place in the map
+};
+
+struct ReflectiveShadowMap {
+    int resolution = 0;  // texels per face side
+    int faces = 0;       // 1 (a frustum fitted to the region, or orthographic) or 6 (light inside the region)
+    float rayStart = 0.0f;         // directional lights: how far behind the region's centre the rays start
+    std::vector<RsmTexel> texels;  // the texels that hit a surface inside the region, in texel order
+};
+
+// The face resolution of each light's map (options.rsm.resolution): the given one for all, or "auto": the
+// ceiling (rsmResolutionCeiling) for the light that brings the most light into `region`, and for each other
+// light the ceiling times sqrt(E / E_max), rounded down to a power of two and at least the ceiling /
+// kAutoRsmMinShare, where E is a light's largest irradiance at the region's centre and corners (facing it).
+std::vector<int> rsmResolutions(const Options& options, std::span<const Light> lights,
+                                const VolumeRegion& region);
+
+// With a `viewpoint` (the camera), a texel on a real surface is kept only where the surface's lit side faces
+// the viewpoint: a voxel stores one radiance for both sides of its surfaces, and the side the camera sees is
+// the real scene's (a reconstruction's other side is not modelled: the underside of a ground plane lit by an
+// environment map's lower half would light the ground's top in the volume). The rays still stop there.
+// Virtual objects are closed; their texels are all kept.
+ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
+                                              const VolumeRegion& region, int resolution,
+                                              std::optional<glm::vec3> viewpoint = std::nullopt);
+
+// Which side of each real triangle's plane `viewpoint` is on, for the texels renderReflectiveShadowMap keeps:
+// per triangle of `meshes` in order, +1 or -1, and 0 where the viewpoint is too close to the plane to tell
+// (within a ten-thousandth of its distance to the triangle and the triangle's size, far more than the hit
+// points' rounding). The maps of two viewpoints are the same where these are, with no 0 (FrameRenderer keeps
+// them while the camera moves).
+std::vector<int8_t> rsmViewSides(std::span<const TriangleMesh> meshes, glm::vec3 viewpoint);
+
+// Texel indices [first, last).
+struct TexelRange {
+    uint32_t first = 0, last = 0;
+};
+
+// What objects change in a map, per frame: the texels whose rays can meet the objects, traced again.
+struct RsmUpdate {
+    // Increasing (one range per row of a face); every texel outside them is the base map's. One range over
+    // every index when the map is rendered afresh.
+    std::vector<TexelRange> retraced;
+    std::vector<RsmTexel> texels;  // the retraced texels that hit a surface inside the region, in texel order
+    float rayStart = 0.0f;         // the map's with the objects (ReflectiveShadowMap::rayStart)
+};
+
+// The update of `base` for `scene` = the scene `base` was rendered over (same light, region and resolution)
+// plus objects inside `changed` (world bounds): the texels whose rays cannot meet `changed` (outside its
+// projection onto each face, clipped to the light's front) are left to `base`, the others are traced again.
+// When `scene` is layered over the base scene (RayScene's `base`), a ray that misses the top layer takes the
+// base map's texel without being traced below it. A directional light whose ray origins the objects move is
+// rendered afresh.
+RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene, const Light& light,
+                         const VolumeRegion& region, const Bounds3f& changed,
+                         std::optional<glm::vec3> viewpoint = std::nullopt);
+
+// `base` with `update`'s texels: renderReflectiveShadowMap() over the update's scene, texel for texel.
+ReflectiveShadowMap applyRsmUpdate(const ReflectiveShadowMap& base, const RsmUpdate& update);
+
+// applyRsmUpdate(base, traceRsmUpdate(base, scene, light, region, changed)).
+ReflectiveShadowMap updateReflectiveShadowMap(const ReflectiveShadowMap& base, const RayScene& scene,
+                                              const Light& light, const VolumeRegion& region,
+                                              const Bounds3f& changed);
+
+}  // namespace deltagi

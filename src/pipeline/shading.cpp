@@ -1,0 +1,204 @@
+#include "pipeline/shading.h"
+
+#include <numbers>
+
+#include "core/brdf.h"
+#include "core/brdf_sampling.h"
+#include "core/lights.h"
+#include "core/parallel.h"
+
+namespace deltagi {
+
+namespace {
+
+constexpr int64_t kPointGrain = 256;
+// A shadow cone stops this many cone diameters short of a point or spot light: trilinear samples of a mip
+// level reach one voxel of that level beyond the cone, and a cone reaching the lamp would read the surfaces
+// around it (a lamp set into a ceiling would shadow everything).
+constexpr float kShadowConeStopDiameters = 1.5f;
+
+}  // namespace
+
+float shadowFactor(const ShadowOcclusion& o, ShadowMode mode) {
+    switch (mode) {
+        case ShadowMode::Shaded:
+            return 1.0f - o.combined;
+        case ShadowMode::SceneOnly:
+            return 1.0f - o.scene;
+        case ShadowMode::DeltaShadow:
+            return o.scene - o.combined;
+        case ShadowMode::DeltaSingleVisibility:
+            return -o.combined;
+    }
+    return 0.0f;
+}
+
+std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> points,
+                                              std::span<const Light> lights,
+                                              const VisibilityVolumes& visibility, const Options& options,
+                                              bool objectShadowOnly, std::span<const uint32_t> pixels,
+                                              SceneOcclusionCache* sceneCache) {
+    std::vector<ShadowOcclusion> out(points.size() * lights.size());
+    if (sceneCache && sceneCache->known.size() != out.size()) {
+        sceneCache->occlusion.assign(out.size(), 0.0f);
+        sceneCache->known.assign(out.size(), 0);
+    }
+    if (lights.empty() || (!visibility.scene && !visibility.object)) return out;
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    const VolumeRegion& region = visibility.scene ? visibility.scene->region() : visibility.object->region();
+    const float defaultTan = std::tan(0.5f * glm::radians(options.shadow.apertureDeg));
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        for (size_t l = 0; l < lights.size(); ++l) {
+            const LightSample s = sampleLight(lights[l], p.position);
+            if (glm::dot(s.wi, p.normal) <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
+            const float tanHalf = lights[l].radius > 0.0f && std::isfinite(s.distance)
+                                      ? lights[l].radius / s.distance
+                                  : lights[l].angularRadius > 0.0f ? std::tan(lights[l].angularRadius)
+                                                                   : defaultTan;
+            Cone cone;
+            cone.tanHalfAngle = tanHalf;
+            cone.origin = coneOrigin(p.position, p.normal, s.wi, region, settings);
+            cone.direction = s.wi;
+            cone.maxDistance = std::isfinite(s.distance)
+                                   ? s.distance / (1.0f + kShadowConeStopDiameters * 2.0f * tanHalf)
+                                   : s.distance;
+            cone.jitter = hashToUnit(i, static_cast<uint32_t>(l));
+            const size_t k = i * lights.size() + l;
+            if (!objectShadowOnly) {
+                out[k] = traceShadowCone(cone, visibility, settings);
+                continue;
+            }
+            const float object = traceObjectOcclusion(cone, visibility, settings);
+            if (object == 0.0f) continue;
+            float scene;
+            if (sceneCache && sceneCache->known[k]) {
+                scene = sceneCache->occlusion[k];
+            } else {
+                scene = traceSceneOcclusion(cone, visibility, settings);
+                if (sceneCache) sceneCache->occlusion[k] = scene, sceneCache->known[k] = 1;
+            }
+            out[k] = {scene, object, scene + object - scene * object};
+        }
+    });
+    return out;
+}
+
+std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
+                                         const VisibilityVolumes& visibility, const Options& options,
+                                         std::span<const uint32_t> pixels, const MipVolume* fullLight,
+                                         const MipVolume* objectLight, bool objectLightByRays,
+                                         std::optional<float> apertureDeg) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    ConeTraceSettings settings = coneTraceSettings(options.trace);
+    settings.objectLightByRays = objectLightByRays;
+    const DiffuseConeSet cones =
+        makeDiffuseCones(options.diffuse.count, apertureDeg.value_or(options.diffuse.apertureDeg));
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        if (p.surface.diffuse == glm::vec3(0.0f)) return;
+        const glm::mat3 frame = frameAround(p.normal);
+        glm::vec3 sum(0.0f);
+        for (size_t k = 0; k < cones.directions.size(); ++k) {
+            Cone cone;
+            cone.direction = frame * cones.directions[k];
+            cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
+            cone.tanHalfAngle = cones.tanHalfAngle;
+            cone.jitter = hashToUnit(i, static_cast<uint32_t>(1000 + k));
+            sum += cones.weights[k] * (fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility,
+                                                                        settings, objectLight)
+                                                 : traceLightCone(cone, light, visibility, settings));
+        }
+        out[i] = sum;
+    });
+    return out;
+}
+
+std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, const MipVolume& light,
+                                          const VisibilityVolumes& visibility, const Options& options,
+                                          std::span<const uint32_t> pixels, const MipVolume* fullLight,
+                                          const MipVolume* objectLight) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    const ConeTraceSettings settings = coneTraceSettings(options.trace);
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        if (p.surface.specular == glm::vec3(0.0f)) return;
+        Cone cone;
+        cone.direction = glm::normalize(glm::reflect(-p.toEye, p.normal));
+        cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
+        cone.tanHalfAngle = specularConeTanHalfAngle(
+            p.surface.phongExponent(), options.specular.minApertureDeg, options.specular.maxApertureDeg);
+        cone.jitter = hashToUnit(i, 2000u);
+        out[i] = fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility, settings, objectLight)
+                           : traceLightCone(cone, light, visibility, settings);
+    });
+    return out;
+}
+
+glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
+    const LightSample s = sampleLight(light, point.position);
+    const float cosTheta = glm::dot(s.wi, point.normal);
+    if (cosTheta <= 0.0f) return glm::vec3(0.0f);
+    // A sphere light's glossy highlight is as wide as its disk (the path tracer samples the disk).
+    const float lightAngle = light.type == Light::Type::Directional ? light.angularRadius
+                             : light.radius > 0.0f && s.distance > 0.0f
+                                 ? std::asin(std::min(light.radius / s.distance, 1.0f))
+                                 : 0.0f;
+    return evalBrdf(point.surface, point.normal, point.toEye, s.wi, lightAngle) * s.irradiance * cosTheta;
+}
+
+namespace {
+
+// The direct light of `light` at `p`, or its mean over the valid points of `area` when there are any.
+glm::vec3 directRadianceOver(const SurfacePoint& p, std::span<const SurfacePoint> area, const Light& light) {
+    glm::vec3 sum(0.0f);
+    int n = 0;
+    for (const SurfacePoint& q : area) {
+        if (!q.valid()) continue;
+        sum += directRadiance(q, light);
+        ++n;
+    }
+    return n > 0 ? sum / static_cast<float>(n) : directRadiance(p, light);
+}
+
+}  // namespace
+
+std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std::span<const Light> lights,
+                                       std::span<const ShadowOcclusion> shadows, ShadowMode mode,
+                                       std::span<const glm::vec3> diffuse,
+                                       std::span<const glm::vec3> specular, const PixelRect* bounds,
+                                       int width, const PixelSamples* samples,
+                                       std::vector<glm::vec3>* indirect) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    if (indirect) indirect->assign(points.size(), glm::vec3(0.0f));
+    // A rendered surface shows what it emits; a relit one only changes, and its emission is in the photo.
+    const bool emits = mode == ShadowMode::Shaded || mode == ShadowMode::SceneOnly;
+    auto shade = [&](size_t i) {
+        const SurfacePoint& p = points[i];
+        if (!p.valid()) return;
+        glm::vec3 radiance = emits ? p.surface.emission : glm::vec3(0.0f);
+        const std::span<const SurfacePoint> area =
+            samples && mode == ShadowMode::Shaded ? samples->of(i, width) : std::span<const SurfacePoint>{};
+        for (size_t l = 0; l < lights.size(); ++l) {
+            // Relit surfaces mostly do not change: skip the BRDF where the factor is zero.
+            const float factor = shadowFactor(shadows[i * lights.size() + l], mode);
+            if (factor != 0.0f) radiance += directRadianceOver(p, area, lights[l]) * factor;
+        }
+        glm::vec3& reflected = indirect ? (*indirect)[i] : radiance;
+        if (!diffuse.empty()) reflected += p.surface.diffuse * (p.surface.occlusion * diffuse[i]);
+        if (!specular.empty())
+            reflected += p.surface.specularReflectance(glm::dot(p.normal, p.toEye)) *
+                         (p.surface.occlusion * specular[i]);
+        out[i] = radiance;
+    };
+    if (!bounds) {
+        parallelFor(0, static_cast<int64_t>(points.size()), 4096, [&](int64_t i) { shade(i); });
+        return out;
+    }
+    parallelFor(bounds->y0, bounds->y1, 4, [&](int64_t y) {
+        for (int x = bounds->x0; x < bounds->x1; ++x) shade(static_cast<size_t>(y) * width + x);
+    });
+    return out;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,257 @@
+#include "pipeline/shadow_rays.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+#include "core/brdf_sampling.h"
+#include "core/lights.h"
+
+namespace deltagi {
+
+namespace {
+
+constexpr int64_t kPointGrain = 64;
+// Random streams of hashToUnit for the per-pixel offset of the sample grid (two per light).
+constexpr uint32_t kShadowRayStream = 5000;
+
+// Shirley & Chiu's concentric map of the unit square onto the unit disk: keeps the grid's strata compact.
+glm::vec2 concentricDisk(float u, float v) {
+    const float a = 2.0f * u - 1.0f, b = 2.0f * v - 1.0f;
+    if (a == 0.0f && b == 0.0f) return glm::vec2(0.0f);
+    constexpr float kQuarterPi = std::numbers::pi_v<float> / 4.0f;
+    float r, phi;
+    if (std::abs(a) > std::abs(b)) {
+        r = a;
+        phi = kQuarterPi * (b / a);
+    } else {
+        r = b;
+        phi = 2.0f * kQuarterPi - kQuarterPi * (a / b);
+    }
+    return r * glm::vec2(std::cos(phi), std::sin(phi));
+}
+
+// The largest k x k grid of G-buffer sub-samples (options.render.samples_per_pixel 16).
+constexpr int kMaxPixelSamples = 16;
+// The random stream that rotates which sub-sample each of a pixel's rays starts from (one per light).
+constexpr uint32_t kPixelSampleStream = 5500;
+
+}  // namespace
+
+ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v) {
+    ShadowRaySample s;
+    if (light.type == Light::Type::Directional) {
+        s.distance = std::numeric_limits<float>::infinity();
+        s.wi = -light.direction;
+        if (light.angularRadius > 0.0f) {
+            // Uniform over the cone's solid angle.
+            const float cosTheta = 1.0f - u * (1.0f - std::cos(light.angularRadius));
+            const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
+            const float phi = 2.0f * std::numbers::pi_v<float> * v;
+            s.wi = glm::normalize(frameAround(s.wi) *
+                                  glm::vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta));
+        }
+        return s;
+    }
+    glm::vec3 target = light.position;
+    const glm::vec3 axis = p - light.position;
+    const float d = glm::length(axis);
+    if (light.radius > 0.0f && d > 0.0f) {
+        const glm::vec2 onDisk = light.radius * concentricDisk(u, v);
+        target += frameAround(axis / d) * glm::vec3(onDisk, 0.0f);
+    }
+    const glm::vec3 toLight = target - p;
+    s.distance = glm::length(toLight);
+    s.wi = s.distance > 0.0f ? toLight / s.distance : glm::vec3(0.0f);
+    return s;
+}
+
+bool segmentMayMeetBox(glm::vec3 p, glm::vec3 target, float radius, const Bounds3f& box) {
+    const glm::vec3 lo = box.min - radius, hi = box.max + radius;
+    const glm::vec3 d = target - p;
+    float t0 = 0.0f, t1 = 1.0f;
+    for (int a = 0; a < 3; ++a) {
+        if (std::abs(d[a]) < 1e-12f) {
+            if (p[a] < lo[a] || p[a] > hi[a]) return false;
+            continue;
+        }
+        const float inverse = 1.0f / d[a];
+        float ta = (lo[a] - p[a]) * inverse, tb = (hi[a] - p[a]) * inverse;
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
+                       float sphereRadius) {
+    const glm::vec3 toCentre = sphereCentre - p;
+    const float distance = glm::length(toCentre);
+    if (distance <= sphereRadius) return true;
+    const float angle = std::acos(glm::clamp(glm::dot(toCentre / distance, direction), -1.0f, 1.0f));
+    return angle <= halfAngle + std::asin(sphereRadius / distance);
+}
+
+float objectSphereRadius(std::span<const TriangleMesh> meshes) {
+    Bounds3f bounds;
+    for (const TriangleMesh& m : meshes) bounds.extend(m.bounds());
+    if (bounds.empty()) return 0.0f;
+    const glm::vec3 centre = bounds.center();
+    float radius2 = 0.0f;
+    for (const TriangleMesh& m : meshes)
+        for (const glm::vec3& v : m.positions) {
+            const glm::vec3 d = v - centre;
+            radius2 = std::max(radius2, glm::dot(d, d));
+        }
+    // A hair wider, so that rounding does not leave a vertex outside.
+    return std::sqrt(radius2) * (1.0f + 1e-5f);
+}
+
+float shadowRayOffset(const RayScene& scene) {
+    const Bounds3f bounds = scene.bounds();
+    return kRayOffsetScale * std::max(bounds.empty() ? 1.0f : bounds.maxExtent(), 1e-3f);
+}
+
+int squareSampleCount(int samples) {
+    const int side = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(samples)) + 1e-3f));
+    return side * side;
+}
+
+int shadowRayCount(const Light& light, int raySamples) {
+    const bool sized =
+        light.type == Light::Type::Directional ? light.angularRadius > 0.0f : light.radius > 0.0f;
+    return sized ? squareSampleCount(raySamples) : 1;
+}
+
+namespace {
+
+// The occlusion of `light` over a pixel's area, `points` its valid sub-samples (ShadowMode::Shaded): the
+// light's jittered grid of samples, at least one per sub-sample, each ray from the next sub-sample in turn
+// (starting at `rotation`, and shifted by the grid's row so that no sub-sample sees one column of the light
+// only); each ray counts by its cosine at its sub-sample, and rays below a sub-sample's horizon not at all.
+ShadowOcclusion pixelAreaOcclusion(std::span<const SurfacePoint* const> points, const Light& light,
+                                   const ShadowRayScenes& rays, const Options& options, float offset,
+                                   float jitterU, float jitterV, float rotation) {
+    ShadowOcclusion o;
+    // Out of a spot's cone (or of any light's reach) at every sub-sample: nothing to shadow.
+    if (std::none_of(points.begin(), points.end(), [&](const SurfacePoint* q) {
+            return sampleLight(light, q->position).irradiance != glm::vec3(0.0f);
+        }))
+        return o;
+    const int n = static_cast<int>(points.size());
+    const int lightCount = shadowRayCount(light, options.shadow.raySamples);
+    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(lightCount))));
+    const int count = std::max(lightCount, n);
+    const int first = std::min(static_cast<int>(rotation * static_cast<float>(n)), n - 1);
+    const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
+    float total = 0.0f, byObjects = 0.0f, byScene = 0.0f, byEither = 0.0f;
+    for (int k = 0; k < count; ++k) {
+        const int stratum = k % lightCount;
+        const SurfacePoint& q = *points[(first + k + stratum / side) % n];
+        const auto [u, v] = jitteredGridPoint(stratum, side, jitterU, jitterV);
+        const ShadowRaySample s = sampleShadowRay(light, q.position, u, v);
+        const float weight = glm::dot(s.wi, q.normal);
+        const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
+        if (!(weight > 0.0f) || !(tMax > 0.0f)) continue;
+        const glm::vec3 origin = q.position + offset * q.normal;
+        const bool object = objects && objects->occludedTopLayer(origin, s.wi, 0.0f, tMax);
+        const bool scene = rays.scene->occluded(origin, s.wi, 0.0f, tMax);
+        total += weight;
+        byObjects += object ? weight : 0.0f;
+        byScene += scene ? weight : 0.0f;
+        byEither += object || scene ? weight : 0.0f;
+    }
+    if (total > 0.0f) o = {byScene / total, byObjects / total, byEither / total};
+    return o;
+}
+
+}  // namespace
+
+std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> points,
+                                             std::span<const Light> lights, const ShadowRayScenes& rays,
+                                             const Options& options, ShadowMode mode,
+                                             std::span<const uint32_t> pixels, const PixelSamples* samples,
+                                             int width) {
+    std::vector<ShadowOcclusion> out(points.size() * lights.size());
+    if (lights.empty() || !rays.scene) return out;
+    const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
+    const bool relit = mode == ShadowMode::DeltaShadow;
+    const bool sceneOnly = mode == ShadowMode::SceneOnly;
+    const float offset = shadowRayOffset(*rays.scene);
+    const glm::vec3 objectCentre = objects ? rays.objectBounds.center() : glm::vec3(0.0f);
+    const float objectRadius = objects ? rays.boundingRadius() : 0.0f;
+
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        const glm::vec3 origin = p.position + offset * p.normal;
+        const std::span<const SurfacePoint> area =
+            samples && mode == ShadowMode::Shaded ? samples->of(i, width) : std::span<const SurfacePoint>{};
+        std::array<const SurfacePoint*, kMaxPixelSamples> valid{};
+        int validCount = 0;
+        for (const SurfacePoint& q : area)
+            if (q.valid() && validCount < kMaxPixelSamples) valid[validCount++] = &q;
+        for (size_t l = 0; l < lights.size(); ++l) {
+            const Light& light = lights[l];
+            if (validCount > 0) {
+                out[i * lights.size() + l] =
+                    pixelAreaOcclusion(std::span(valid.data(), validCount), light, rays, options, offset,
+                                       hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l)),
+                                       hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l) + 1),
+                                       hashToUnit(i, kPixelSampleStream + static_cast<uint32_t>(l)));
+                continue;
+            }
+            const LightSample centre = sampleLight(light, p.position);
+            if (glm::dot(centre.wi, p.normal) <= 0.0f || centre.irradiance == glm::vec3(0.0f)) continue;
+            // Relit points whose rays cannot reach the objects do not change: no rays at all.
+            bool mayMeetObjects = objects != nullptr && !sceneOnly;
+            if (mayMeetObjects && relit) {
+                mayMeetObjects =
+                    light.type == Light::Type::Directional
+                        ? coneMayMeetSphere(origin, centre.wi, light.angularRadius, objectCentre,
+                                            objectRadius)
+                        : segmentMayMeetBox(origin, light.position, light.radius, rays.objectBounds);
+                if (!mayMeetObjects) continue;
+            }
+            const int count = shadowRayCount(light, options.shadow.raySamples);
+            const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
+            const float jitterU = hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l));
+            const float jitterV = hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l) + 1);
+            // Per sample: blocked by the objects, by the scene; the scene is tested only where needed.
+            int byObjects = 0, byScene = 0, byEither = 0;
+            for (int k = 0; k < count; ++k) {
+                const auto [u, v] = jitteredGridPoint(k, side, jitterU, jitterV);
+                const ShadowRaySample s = sampleShadowRay(light, p.position, u, v);
+                const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
+                const bool horizon = glm::dot(s.wi, p.normal) <= 0.0f || !(tMax > 0.0f);
+                const bool object =
+                    horizon || (mayMeetObjects && objects->occludedTopLayer(origin, s.wi, 0.0f, tMax));
+                byObjects += object;
+                // Relit: a sample the objects leave alone does not change.
+                if (relit && !object) continue;
+                const bool scene = horizon || rays.scene->occluded(origin, s.wi, 0.0f, tMax);
+                byScene += scene;
+                byEither += scene || object;
+            }
+            if (relit && byObjects == 0) continue;
+            const float n = static_cast<float>(count);
+            ShadowOcclusion& o = out[i * lights.size() + l];
+            o.object = static_cast<float>(byObjects) / n;
+            if (relit) {
+                // Only the samples the objects block were tested against the scene: those count once in
+                // `combined`; the others are the same with and without the objects, so scene and combined
+                // carry only the change, which is all that DeltaShadow reads.
+                o.scene = 0.0f;
+                o.combined = static_cast<float>(byObjects - byScene) / n;
+            } else {
+                o.scene = static_cast<float>(byScene) / n;
+                o.combined = static_cast<float>(byEither) / n;
+            }
+        }
+    });
+    return out;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,91 @@
+// Stage 6, shadows by rays: the fraction of each light that reaches a G-buffer point, from shadow rays cast
+// towards points spread over the light's area, against the real scene's and the virtual objects' triangles.
+//
+// The paper's shadow cone (§3.5, shading.h) reads the visibility volumes: an occluder smaller than a coarse
+// voxel fills it, so its shadow comes out too wide and too dark, and it ends where the volumes end. On a CPU
+// a ray against the triangles costs about as much as a cone step, so the default is rays
+// (options.shadow.method); the cones stay available. The result has the same form as the cones'
+// (ShadowOcclusion), is traced at the same sparse pixels and goes through the same edge-aware filter.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "core/ray_scene.h"
+#include "deltagi/scene.h"
+#include "pipeline/gbuffer.h"
+#include "pipeline/shading.h"
+
+namespace deltagi {
+
+// What shadow rays are cast against.
+struct ShadowRayScenes {
+    const RayScene* scene = nullptr;    // the real scene alone
+    const RayScene* objects = nullptr;  // the virtual objects (only this layer of it is tested); may be null
+    Bounds3f objectBounds;              // of the virtual objects: rays that cannot reach it skip `objects`
+    // The radius of a sphere about objectBounds' centre that holds the objects (objectSphereRadius); 0: half
+    // the box's diagonal. Rays aimed at the objects aim into it.
+    float objectRadius = 0.0f;
+    float boundingRadius() const {
+        return objectRadius > 0.0f ? objectRadius : 0.5f * glm::length(objectBounds.diagonal());
+    }
+};
+
+// The radius of the smallest sphere about the centre of the meshes' bounding box that holds all their
+// vertices: tighter than half the box's diagonal (a ball's is sqrt(3) times smaller).
+float objectSphereRadius(std::span<const TriangleMesh> meshes);
+
+// One point on a light for shadow sample (u, v) in [0,1)^2 seen from `p`: the direction towards it and how
+// far it is. A sphere light (radius > 0) is sampled uniformly over its disk facing `p` (as the path tracer
+// samples it), a directional light with an angular radius over its cone of directions; a light without a
+// size always gives its centre (or its direction).
+struct ShadowRaySample {
+    glm::vec3 wi{0.0f};
+    float distance = 0.0f;  // infinity for directional lights
+};
+ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v);
+
+// The culling tests of the relit rays (conservative: a ray they reject cannot meet the objects). Whether a
+// segment from `p` to any point within `radius` of `target` can meet `box` (every such segment stays within
+// `radius` of the segment p-target, so the box is grown by `radius`; slab test):
+bool segmentMayMeetBox(glm::vec3 p, glm::vec3 target, float radius, const Bounds3f& box);
+// Whether a ray from `p` within `halfAngle` of `direction` can pass within `sphereRadius` of `sphereCentre`.
+bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
+                       float sphereRadius);
+
+// How far shadow rays start off their surface, as the path tracer offsets its own (so that DGI and its
+// reference agree on grazing light): kRayOffsetScale times the scene's size.
+float shadowRayOffset(const RayScene& scene);
+
+// A sample count rounded down to a square (a jittered side x side grid), at least 1.
+int squareSampleCount(int samples);
+
+// Sample k of a side x side grid over [0, 1)^2, each cell's point offset by (jitterU, jitterV) in [0, 1)
+// (the same for every cell of one point: a stratified pattern that differs from point to point).
+inline glm::vec2 jitteredGridPoint(int k, int side, float jitterU, float jitterV) {
+    return {(static_cast<float>(k % side) + jitterU) / static_cast<float>(side),
+            (static_cast<float>(k / side) + jitterV) / static_cast<float>(side)};
+}
+
+// Shadow rays per point and light for options.shadow.ray_samples: a square number, 1 for a light without a
+// size.
+int shadowRayCount(const Light& light, int raySamples);
+
+// For every point and light (index point * lights + light), the fraction of the light's samples that do not
+// reach the point (the light's side of the surface, a sample below the horizon counts as blocked): by the
+// scene alone, by the objects alone, by both. Points facing away from a light, or out of its reach, get zero,
+// as the cones give them. Under ShadowMode::DeltaShadow (relighting), where only scene - combined counts, a
+// point whose rays cannot meet the objects, or meet none, gets zeros: its change is zero either way.
+// Samples lie on a jittered grid offset per pixel (seeded by the point's index: the same with any number of
+// threads). Traces the points listed in `pixels` (indices into `points`), or all of them when it is empty.
+// With `samples` (ShadowMode::Shaded; `points` are the pixels of an image `width` wide), a pixel's rays start
+// from its sub-samples in turn (at least one ray each) and each ray counts by its cosine there: the fractions
+// are those of the light over the pixel's area, which combineLighting multiplies with the mean of the
+// sub-samples' unshadowed light.
+std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> points,
+                                             std::span<const Light> lights, const ShadowRayScenes& rays,
+                                             const Options& options, ShadowMode mode,
+                                             std::span<const uint32_t> pixels = {},
+                                             const PixelSamples* samples = nullptr, int width = 0);
+
+}  // namespace deltagi

@@ -1,0 +1,261 @@
+// Voxel volumes: a cubic grid of 4-float voxels with its mip chain (§3.1, Fig. 1).
+//
+// All four volumes of the method share this layout and the region of §3.4:
+//   visibility volume: (occlusion, occlusion * average normal)  -- premultiplied, so a mip level is the plain
+//                      mean of its 8 children: occlusion becomes the fraction of filled sub-voxels (§3.2) and
+//                      the normal the occlusion-weighted mean normal, whose length says how coherent it is;
+//   light volume:      (occlusion * radiance rgb, occlusion)     -- premultiplied the same way.
+#pragma once
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/large_blocks.h"
+#include "core/parallel.h"
+#include "deltagi/renderer.h"
+
+namespace deltagi {
+
+// One level: n^3 voxels, x fastest. Move-only: volumes are large.
+class Grid3 {
+  public:
+    Grid3() = default;
+    explicit Grid3(int n) : n_(n), voxels_(static_cast<size_t>(n) * n * n, glm::vec4(0.0f)) {}
+    Grid3(Grid3&&) noexcept = default;
+    Grid3& operator=(Grid3&&) noexcept = default;
+    Grid3(const Grid3&) = delete;
+    Grid3& operator=(const Grid3&) = delete;
+
+    Grid3 clone() const {
+        Grid3 g;
+        g.n_ = n_;
+        g.voxels_ = voxels_;
+        return g;
+    }
+    int resolution() const { return n_; }
+    size_t size() const { return voxels_.size(); }
+    size_t index(int x, int y, int z) const { return (static_cast<size_t>(z) * n_ + y) * n_ + x; }
+    glm::vec4& at(int x, int y, int z) { return voxels_[index(x, y, z)]; }
+    const glm::vec4& at(int x, int y, int z) const { return voxels_[index(x, y, z)]; }
+    glm::vec4& operator[](size_t i) { return voxels_[i]; }
+    const glm::vec4& operator[](size_t i) const { return voxels_[i]; }
+    // Zero outside the grid (clamp-to-border).
+    glm::vec4 fetch(int x, int y, int z) const {
+        if (static_cast<unsigned>(x) >= static_cast<unsigned>(n_) ||
+            static_cast<unsigned>(y) >= static_cast<unsigned>(n_) ||
+            static_cast<unsigned>(z) >= static_cast<unsigned>(n_))
+            return glm::vec4(0.0f);
+        return voxels_[index(x, y, z)];
+    }
+
+  private:
+    int n_ = 0;
+    std::vector<glm::vec4, LargeBlockAllocator<glm::vec4>> voxels_;
+};
+
+// A box of level-0 voxels [lo, hi) (hi exclusive); empty when hi <= lo on any axis. The frame-to-frame
+// updates of stages 1, 3 and 4 redo only the voxels of such boxes.
+struct VoxelBox {
+    glm::ivec3 lo{0}, hi{0};
+
+    static VoxelBox all(int n) { return {glm::ivec3(0), glm::ivec3(n)}; }
+    static VoxelBox voxel(glm::ivec3 v) { return {v, v + 1}; }
+    bool empty() const { return hi.x <= lo.x || hi.y <= lo.y || hi.z <= lo.z; }
+    size_t count() const {
+        return empty() ? 0 : static_cast<size_t>(hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+    }
+    // The bounding box of both (an empty box adds nothing).
+    VoxelBox& extend(const VoxelBox& b) {
+        if (b.empty()) return *this;
+        if (empty()) return *this = b;
+        lo = glm::min(lo, b.lo);
+        hi = glm::max(hi, b.hi);
+        return *this;
+    }
+    // The voxels of the next coarser mip level that hold these (resolution halved).
+    VoxelBox parents() const { return empty() ? VoxelBox{} : VoxelBox{lo >> 1, (hi + 1) >> 1}; }
+};
+
+// 4 floats in one SIMD register (GCC/Clang vector extension: SSE on x86-64, NEON on Arm).
+using Float4 = float __attribute__((vector_size(16)));
+inline Float4 loadFloat4(const glm::vec4& v) {
+    Float4 r;
+    std::memcpy(&r, &v, sizeof(r));
+    return r;
+}
+inline glm::vec4 storeFloat4(Float4 v) {
+    glm::vec4 r;
+    std::memcpy(&r, &v, sizeof(r));
+    return r;
+}
+
+// The 8 voxels and weights of one trilinear lookup (corners outside the grid have weight 0).
+struct TrilinearCorners {
+    uint32_t index[8];
+    float weight[8];
+};
+
+// Where one quadrilinear lookup reads. It depends only on the region and resolution, so the volumes that
+// share them (all four of the method) are read with one lookup.
+struct VolumeLookup {
+    glm::vec3 voxelPos{0.0f};  // level-0 voxel units
+    int level0 = 0;            // the finer of the two levels
+    float blend = 0.0f;        // weight of level0 + 1
+    TrilinearCorners fine, coarse;
+};
+
+// Trilinear corners at a level of resolution n, for a position in level-0 voxel units.
+inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorners& c) {
+    const glm::vec3 q = voxelPos * (1.0f / static_cast<float>(1 << level)) - 0.5f;
+    const glm::vec3 base = glm::floor(q);
+    const glm::vec3 f = q - base;
+    const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
+    const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
+    if (x >= 0 && y >= 0 && z >= 0 && x + 1 < n && y + 1 < n && z + 1 < n) {
+        // All 8 corners inside: one base index and fixed offsets.
+        const uint32_t base = static_cast<uint32_t>((static_cast<size_t>(z) * n + y) * n + x);
+        const uint32_t row = static_cast<uint32_t>(n), slice = static_cast<uint32_t>(n) * row;
+        const uint32_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
+        const float wxy[4] = {wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]};
+        for (int k = 0; k < 8; ++k) {
+            c.index[k] = base + offsets[k];
+            c.weight[k] = wxy[k & 3] * wz[k >> 2];
+        }
+        return;
+    }
+    for (int k = 0; k < 8; ++k) {
+        const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
+        const int cx = x + dx, cy = y + dy, cz = z + dz;
+        const bool valid = static_cast<unsigned>(cx) < static_cast<unsigned>(n) &&
+                           static_cast<unsigned>(cy) < static_cast<unsigned>(n) &&
+                           static_cast<unsigned>(cz) < static_cast<unsigned>(n);
+        c.index[k] = valid ? static_cast<uint32_t>((static_cast<size_t>(cz) * n + cy) * n + cx) : 0u;
+        c.weight[k] = valid ? wx[dx] * wy[dy] * wz[dz] : 0.0f;
+    }
+}
+
+// Calls rowBody(y, z) for every row of voxels of `box` (x from box.lo.x to box.hi.x), rows in parallel.
+template <typename RowBody>
+void forEachRow(const VoxelBox& box, RowBody&& rowBody);
+
+// The box around every non-zero voxel of `grid` inside `within` (empty when there is none).
+VoxelBox nonZeroBounds(const Grid3& grid, const VoxelBox& within);
+
+// A level-0 grid and its mip chain over a region. Level l has resolution n / 2^l; its voxels are 2^l level-0
+// voxels wide.
+class MipVolume {
+  public:
+    MipVolume() = default;
+    MipVolume(VolumeRegion region, std::vector<Grid3> levels) : region_(region), levels_(std::move(levels)) {
+        findOccupiedBounds();
+    }
+
+    const VolumeRegion& region() const { return region_; }
+    int levelCount() const { return static_cast<int>(levels_.size()); }
+    const Grid3& level(int l) const { return levels_[l]; }
+    bool empty() const { return levels_.empty(); }
+
+    // Prepares a quadrilinear lookup at `voxelPos` (level-0 voxel units, 0 at the region's corner) between
+    // the two levels around the fractional `level`.
+    VolumeLookup lookup(glm::vec3 voxelPos, float level) const {
+        VolumeLookup l;
+        l.voxelPos = voxelPos;
+        level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
+        l.level0 = static_cast<int>(level);
+        l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
+        trilinearCorners(voxelPos, l.level0, levels_[l.level0].resolution(), l.fine);
+        if (l.blend > 0.0f)
+            trilinearCorners(voxelPos, l.level0 + 1, levels_[l.level0 + 1].resolution(), l.coarse);
+        return l;
+    }
+    // Reads a lookup prepared by any volume of the same region and resolution. Returns 0 at once where the
+    // lookup's footprint cannot reach a non-zero voxel.
+    glm::vec4 gather(const VolumeLookup& l) const {
+        if (!mayReadNonZero(l.voxelPos, l.level0)) return glm::vec4(0.0f);
+        Float4 v = gatherLevel(l.level0, l.fine);
+        if (l.blend > 0.0f) v += (gatherLevel(l.level0 + 1, l.coarse) - v) * l.blend;
+        return storeFloat4(v);
+    }
+    // False where a lookup at `voxelPos` between levels level0 and level0 + 1 cannot reach a non-zero voxel.
+    bool mayReadNonZero(glm::vec3 voxelPos, int level0) const {
+        const float reach = static_cast<float>(4 << level0);  // level-0 voxels a lookup can read from
+        return !glm::any(glm::lessThan(voxelPos, occupiedMin_ - reach)) &&
+               !glm::any(glm::greaterThan(voxelPos, occupiedMax_ + reach));
+    }
+    // The level-0 voxels outside which every voxel is zero, as used by mayReadNonZero (a superset of the
+    // non-zero voxels gives the same lookups, only fewer early outs).
+    VoxelBox occupiedBounds() const { return occupied_; }
+    // For updates in place (mipmap.h's updateMipChain): a level to write, and the occupied bounds to use
+    // instead of scanning level 0 again. The caller keeps the levels a mip chain and the bounds a superset of
+    // the non-zero voxels.
+    Grid3& levelForUpdate(int l) { return levels_[l]; }
+    void setOccupiedBounds(const VoxelBox& box) {
+        occupied_ = box;
+        if (box.empty()) {
+            occupiedMin_ = glm::vec3(std::numeric_limits<float>::max());
+            occupiedMax_ = glm::vec3(-std::numeric_limits<float>::max());
+        } else {
+            occupiedMin_ = glm::vec3(box.lo);
+            occupiedMax_ = glm::vec3(box.hi);
+        }
+    }
+    // Trilinear sample of level `l`.
+    glm::vec4 sampleLevel(glm::vec3 voxelPos, int l) const {
+        TrilinearCorners c;
+        trilinearCorners(voxelPos, l, levels_[l].resolution(), c);
+        return storeFloat4(gatherLevel(l, c));
+    }
+    // Quadrilinear sample: trilinear in the two levels around the fractional `level`, blended.
+    glm::vec4 sample(glm::vec3 voxelPos, float level) const { return gather(lookup(voxelPos, level)); }
+
+  private:
+    Float4 gatherLevel(int l, const TrilinearCorners& c) const {
+        const Grid3& g = levels_[l];
+        Float4 acc = {0.0f, 0.0f, 0.0f, 0.0f};
+        for (int k = 0; k < 8; ++k) acc += loadFloat4(g[c.index[k]]) * c.weight[k];
+        return acc;
+    }
+    // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
+    void findOccupiedBounds() {
+        setOccupiedBounds(
+            levels_.empty() ? VoxelBox{} : nonZeroBounds(levels_[0], VoxelBox::all(levels_[0].resolution())));
+    }
+
+    VolumeRegion region_;
+    std::vector<Grid3> levels_;
+    VoxelBox occupied_;
+    glm::vec3 occupiedMin_{0.0f}, occupiedMax_{0.0f};  // occupied_ as floats, for mayReadNonZero
+};
+
+template <typename RowBody>
+void forEachRow(const VoxelBox& box, RowBody&& rowBody) {
+    if (box.empty()) return;
+    const int rows = box.hi.y - box.lo.y;
+    parallelFor(0, static_cast<int64_t>(box.hi.z - box.lo.z) * rows, 4, [&](int64_t r) {
+        rowBody(box.lo.y + static_cast<int>(r % rows), box.lo.z + static_cast<int>(r / rows));
+    });
+}
+
+inline VoxelBox nonZeroBounds(const Grid3& grid, const VoxelBox& within) {
+    glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
+    for (int z = within.lo.z; z < within.hi.z; ++z)
+        for (int y = within.lo.y; y < within.hi.y; ++y) {
+            // The first and the last non-zero voxel of the row.
+            int first = within.lo.x;
+            while (first < within.hi.x && grid.at(first, y, z) == glm::vec4(0.0f)) ++first;
+            if (first == within.hi.x) continue;
+            int last = within.hi.x - 1;
+            while (grid.at(last, y, z) == glm::vec4(0.0f)) --last;
+            lo = glm::min(lo, glm::ivec3(first, y, z));
+            hi = glm::max(hi, glm::ivec3(last + 1, y + 1, z + 1));
+        }
+    return lo.x <= hi.x ? VoxelBox{lo, hi} : VoxelBox{};
+}
+
+}  // namespace deltagi

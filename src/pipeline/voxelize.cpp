@@ -1,0 +1,277 @@
+#include "pipeline/voxelize.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "core/parallel.h"
+#include "core/surface_material.h"
+
+namespace deltagi {
+
+namespace {
+
+struct VoxelTriangle {
+    VoxelTriangle() {}   // not zeroed: toVoxelSpace writes every one it reads
+    glm::vec3 p[3];      // level-0 voxel coordinates
+    glm::vec3 normal;    // unit face normal (winding order)
+    float area;          // voxel units^2
+    bool oneVoxel;       // lies inside a single voxel of the grid
+    glm::vec3 emission;  // the material's emitted radiance
+    glm::vec3 albedo;    // what the material reflects into the volumes (Material::volumeReflectance)
+    // Textured or vertex-coloured meshes: the mesh and the triangle's index, whose material is looked up
+    // over each piece in a voxel instead (null: the constant emission and albedo above hold everywhere).
+    const TriangleMesh* varying;
+    uint32_t index;
+    glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
+    bool touchesGrid() const { return hi.x >= lo.x; }
+};
+
+// A convex polygon in voxel space: a triangle cut by voxel planes (at most 3 + 2 per axis vertices).
+struct Polygon {
+    std::array<glm::vec3, 12> v;
+    int count = 0;
+    void push(glm::vec3 p) { v[count++] = p; }
+    float area() const {
+        glm::vec3 sum(0.0f);
+        for (int i = 1; i + 1 < count; ++i) sum += glm::cross(v[i] - v[0], v[i + 1] - v[0]);
+        return 0.5f * glm::length(sum);
+    }
+    glm::vec3 vertexMean() const {
+        glm::vec3 sum(0.0f);
+        for (int i = 0; i < count; ++i) sum += v[i];
+        return sum / static_cast<float>(count);
+    }
+};
+
+// The parts of `p` on each side of the plane q[axis] = k, both closed (a vertex on the plane is in both; a
+// polygon that only touches the plane leaves a part without area on that side). Either may be null.
+void splitPolygon(const Polygon& p, int axis, float k, Polygon* below, Polygon* above) {
+    if (below) below->count = 0;
+    if (above) above->count = 0;
+    for (int i = 0; i < p.count; ++i) {
+        const glm::vec3 a = p.v[i], b = p.v[i + 1 < p.count ? i + 1 : 0];
+        const float da = a[axis] - k, db = b[axis] - k;
+        if (below && da <= 0.0f) below->push(a);
+        if (above && da >= 0.0f) above->push(a);
+        if ((da < 0.0f && db > 0.0f) || (da > 0.0f && db < 0.0f)) {
+            glm::vec3 m = a + (da / (da - db)) * (b - a);
+            m[axis] = k;  // exactly on the plane, for the next cuts
+            if (below) below->push(m);
+            if (above) above->push(m);
+        }
+    }
+}
+
+// Calls f(x, y, z, piece) for each voxel with lo <= (x, y) <= hi and z0 <= z < z1 that the triangle t touches
+// (closed voxels), with the area of the part (a Polygon) of the triangle inside it: the triangle is cut into the voxels' pieces by
+// the grid planes, one plane at a time. Layer by layer in z, row by row in y, then x.
+template <typename F>
+void forEachTouchedVoxel(const VoxelTriangle& t, int z0, int z1, F&& f) {
+    Polygon triangle;
+    for (const glm::vec3& p : t.p) triangle.push(p);
+    const glm::vec3 mn = glm::min(t.p[0], glm::min(t.p[1], t.p[2]));
+    const glm::vec3 mx = glm::max(t.p[0], glm::max(t.p[1], t.p[2]));
+    // Calls each(i, part) with the part of `p` (a part of the triangle) in layer i of `axis`, for the layers
+    // first <= i <= last that it touches. A plane that the triangle does not reach beyond is not cut at: the
+    // cut would copy the polygon unchanged.
+    auto layers = [&](const Polygon& p, int axis, int first, int last, auto&& each) {
+        Polygon buffers[3];
+        Polygon& part = buffers[2];
+        const Polygon* rest = &p;
+        if (mn[axis] < static_cast<float>(first)) {
+            splitPolygon(p, axis, static_cast<float>(first), nullptr, &buffers[0]);
+            rest = &buffers[0];
+        }
+        for (int i = first; i <= last && rest->count > 0; ++i) {
+            if (i == last) {
+                if (mx[axis] <= static_cast<float>(last + 1)) {
+                    each(i, *rest);
+                } else {
+                    splitPolygon(*rest, axis, static_cast<float>(last + 1), &part, nullptr);
+                    if (part.count > 0) each(i, part);
+                }
+                return;
+            }
+            Polygon& next = buffers[rest == &buffers[0] ? 1 : 0];
+            splitPolygon(*rest, axis, static_cast<float>(i + 1), &part, &next);
+            if (part.count > 0) each(i, part);
+            rest = &next;
+        }
+    };
+    // z from the slab's first layer z0 (slabs are cut each on its own), then y and x within each part.
+    layers(triangle, 2, z0, z1 - 1, [&](int z, const Polygon& layerZ) {
+        layers(layerZ, 1, t.lo.y, t.hi.y, [&](int y, const Polygon& rowY) {
+            layers(rowY, 0, t.lo.x, t.hi.x, [&](int x, const Polygon& piece) { f(x, y, z, piece); });
+        });
+    });
+}
+
+// Embree's barycentric (u, v) of a point `p` in the plane of triangle t (p = (1 - u - v) p0 + u p1 + v p2).
+glm::vec2 barycentricOf(const VoxelTriangle& t, glm::vec3 p) {
+    const glm::vec3 e1 = t.p[1] - t.p[0], e2 = t.p[2] - t.p[0], d = p - t.p[0];
+    const float d11 = glm::dot(e1, e1), d12 = glm::dot(e1, e2), d22 = glm::dot(e2, e2);
+    const float d1 = glm::dot(d, e1), d2 = glm::dot(d, e2);
+    const float det = d11 * d22 - d12 * d12;
+    if (!(det > 0.0f)) return glm::vec2(1.0f / 3.0f);
+    const glm::vec2 uv((d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det);
+    return glm::clamp(uv, glm::vec2(0.0f), glm::vec2(1.0f));
+}
+
+// Every triangle of `meshes` in voxel space, in mesh and triangle order; in parallel (a detailed object has
+// many).
+std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
+    std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
+    constexpr size_t kChunk = 4096;
+    struct Chunk {
+        const TriangleMesh* mesh;
+        size_t first, last, out;  // triangles [first, last) of mesh, written from `out` on
+    };
+    std::vector<Chunk> chunks;
+    size_t total = 0;
+    for (const TriangleMesh& mesh : meshes)
+        for (size_t first = 0; first < mesh.triangles.size(); first += kChunk) {
+            const size_t last = std::min(first + kChunk, mesh.triangles.size());
+            chunks.push_back({&mesh, first, last, total});
+            total += last - first;
+        }
+    std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> tris(total);
+    const float invVoxel = 1.0f / region.voxelSize();
+    const int n = region.resolution;
+    parallelFor(0, static_cast<int64_t>(chunks.size()), 1, [&](int64_t c) {
+        const Chunk& chunk = chunks[c];
+        const TriangleMesh& mesh = *chunk.mesh;
+        for (size_t i = chunk.first; i < chunk.last; ++i) {
+            const glm::uvec3& t = mesh.triangles[i];
+            VoxelTriangle& vt = tris[chunk.out + (i - chunk.first)];
+            vt.lo = glm::ivec3(0);
+            vt.hi = glm::ivec3(-1);
+            for (int k = 0; k < 3; ++k) vt.p[k] = (mesh.positions[t[k]] - region.origin) * invVoxel;
+            glm::vec3 cr = glm::cross(vt.p[1] - vt.p[0], vt.p[2] - vt.p[0]);
+            float len = glm::length(cr);
+            if (!(len > 0.0f)) continue;  // degenerate: covers no area
+            vt.normal = cr / len;
+            vt.area = 0.5f * len;
+            vt.emission = mesh.material.emission;
+            vt.albedo = mesh.material.volumeReflectance();
+            vt.varying = variesOverSurface(mesh) ? &mesh : nullptr;
+            vt.index = static_cast<uint32_t>(i);
+            glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
+            glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
+            if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
+            vt.lo = glm::clamp(glm::ivec3(glm::floor(mn)), glm::ivec3(0), glm::ivec3(n - 1));
+            vt.hi = glm::clamp(glm::ivec3(glm::floor(mx)), glm::ivec3(0), glm::ivec3(n - 1));
+            vt.oneVoxel = glm::ivec3(glm::floor(mn)) == glm::ivec3(glm::floor(mx)) &&
+                          glm::all(glm::greaterThanEqual(mn, glm::vec3(0.0f))) &&
+                          glm::all(glm::lessThan(mx, glm::vec3(static_cast<float>(n))));
+        }
+    });
+    return tris;
+}
+
+}  // namespace
+
+VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission,
+                       bool withAlbedo) {
+    const int n = region.resolution;
+    VoxelGeometry out{Grid3(n), {}, {}, {}, {}};
+    out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
+    if (withAlbedo) out.albedo.assign(out.area.size(), glm::vec3(0.0f));
+    revoxelize(out, meshes, region, withEmission);
+    return out;
+}
+
+VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                    bool withEmission) {
+    const bool emissive =
+        withEmission &&
+        std::any_of(meshes.begin(), meshes.end(), [](const TriangleMesh& m) { return m.material.emits(); });
+    // Clear the old geometry: the grid is zero everywhere then.
+    const VoxelBox old = out.bounds;
+    const bool hadEmission = !out.emission.empty();
+    const bool withAlbedo = !out.albedo.empty();
+    forEachRow(old, [&](int y, int z) {
+        const size_t first = out.visibility.index(old.lo.x, y, z), count = old.hi.x - old.lo.x;
+        std::fill_n(&out.visibility[first], count, glm::vec4(0.0f));
+        std::fill_n(out.area.begin() + first, count, 0.0f);
+        if (hadEmission) std::fill_n(out.emission.begin() + first, count, glm::vec3(0.0f));
+        if (withAlbedo) std::fill_n(out.albedo.begin() + first, count, glm::vec3(0.0f));
+    });
+    if (!emissive) out.emission.clear();
+    if (emissive && !hadEmission) out.emission.assign(out.area.size(), glm::vec3(0.0f));
+
+    const auto tris = toVoxelSpace(meshes, region);
+    VoxelBox& box = out.bounds;
+    box = {};
+    for (const VoxelTriangle& t : tris)
+        if (t.touchesGrid()) box.extend({t.lo, t.hi + 1});
+    if (box.empty()) return old;
+    // Scatter in slabs of the box's layers.
+    const int slabCount = (box.hi.z - box.lo.z + kSlabThickness - 1) / kSlabThickness;
+    const SlabBins bins = binBySlab(tris.size(), slabCount, [&](size_t i) {
+        if (!tris[i].touchesGrid()) return std::pair{1, 0};  // in no slab
+        return std::pair{(tris[i].lo.z - box.lo.z) / kSlabThickness,
+                         (tris[i].hi.z - box.lo.z) / kSlabThickness};
+    });
+    parallelFor(0, slabCount, 1, [&](int64_t s) {
+        const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
+        const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
+        // The emission and albedo of a textured triangle's piece `where` (voxel space): its material at the
+        // piece's centre, its textures filtered over a voxel (the voxel averages all its pieces anyway; a
+        // piece's own, smaller footprint reads finer mip levels, for nothing but cache misses).
+        auto materialOf = [&](const VoxelTriangle& t, glm::vec3 where) {
+            const glm::vec2 uv = barycentricOf(t, where);
+            const SurfaceMaterial m =
+                surfaceMaterialAt(*t.varying, t.index, uv.x, uv.y, region.voxelSize(), nullptr);
+            return std::pair{m.emission, m.volumeReflectance()};
+        };
+        auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a, glm::vec3 where) {
+            const size_t i = out.visibility.index(x, y, z);
+            glm::vec4& v = out.visibility[i];
+            v.x = 1.0f;
+            v.y += t.normal.x * a;
+            v.z += t.normal.y * a;
+            v.w += t.normal.z * a;
+            out.area[i] += a;
+            if (t.varying && (emissive || withAlbedo)) {
+                const auto [emission, albedo] = materialOf(t, where);
+                if (emissive) out.emission[i] += emission * a;
+                if (withAlbedo) out.albedo[i] += albedo * a;
+                return;
+            }
+            if (emissive) out.emission[i] += t.emission * a;
+            if (withAlbedo) out.albedo[i] += t.albedo * a;
+        };
+        for (uint32_t ti : bins.slab(s)) {
+            const VoxelTriangle& t = tris[ti];
+            // A triangle inside one voxel (most of a detailed mesh's) needs no cutting.
+            if (t.oneVoxel) {
+                add(t.lo.x, t.lo.y, t.lo.z, t, t.area, (t.p[0] + t.p[1] + t.p[2]) / 3.0f);
+                continue;
+            }
+            forEachTouchedVoxel(t, std::max(zBegin, t.lo.z), std::min(zEnd, t.hi.z + 1),
+                                [&](int x, int y, int z, const Polygon& piece) {
+                                    add(x, y, z, t, piece.area(), t.varying ? piece.vertexMean() : glm::vec3(0.0f));
+                                });
+        }
+    });
+    // Normal sums to area-weighted means; areas from voxel units to world units.
+    const float voxelArea = region.voxelSize() * region.voxelSize();
+    forEachRow(box, [&](int y, int z) {
+        for (size_t i = out.visibility.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i) {
+            glm::vec4& v = out.visibility[i];
+            float a = out.area[i];
+            if (a > 0.0f) {
+                v.y /= a;
+                v.z /= a;
+                v.w /= a;
+                if (withAlbedo) out.albedo[i] /= a;
+            }
+            out.area[i] = a * voxelArea;
+            if (emissive) out.emission[i] *= voxelArea;
+        }
+    });
+    return old;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,77 @@
+// Stage 1: voxelization into a visibility volume (§3.2): occlusion 1 in every voxel that any triangle touches
+// (closed voxels) and the area-weighted average normal of the geometry in it; also the area of the geometry
+// in each voxel and, for emissive materials, the radiance they emit. Each triangle is cut by the grid planes
+// it crosses, one plane at a time, into its pieces in each voxel: what a triangle/box overlap test
+// (Akenine-Möller 2001) and clipping the triangle to each voxel of its bounds give, at a fraction of the
+// cost.
+#pragma once
+
+#include <span>
+#include <vector>
+
+#include "deltagi/scene.h"
+#include "pipeline/volume.h"
+
+namespace deltagi {
+
+struct VoxelGeometry {
+    Grid3 visibility;  // level 0: (occlusion, occlusion * average normal); occlusion is 0 or 1
+    std::vector<float, LargeBlockAllocator<float>>
+        area;  // surface area of the geometry inside each voxel (world units^2), same indexing
+    // Emitted radiance times area of the emissive surfaces in each voxel, summed (same indexing); empty when
+    // no mesh emits. Divided by `area` it is the voxel's mean emitted radiance (light injection).
+    std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> emission;
+    // The area-weighted mean reflectance (Material::volumeReflectance) of the surfaces in each voxel (same
+    // indexing); empty unless asked for (voxelize's `withAlbedo`: the multi-bounce light of bounceLight()
+    // reflects by it).
+    std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> albedo;
+    // Every voxel outside it is zero in all three: the voxels that the triangles' bounding boxes touch.
+    VoxelBox bounds;
+};
+
+// Voxelizes `meshes` over `region`. Deterministic for any thread count (each voxel sums its triangles in
+// mesh and triangle order).
+// `withEmission` false leaves emitting surfaces' radiance out (VoxelGeometry::emission empty): their light
+// reaches the scene through shadow rays and reflective shadow maps instead (options.shadow.method "rays").
+VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                       bool withEmission = true, bool withAlbedo = false);
+
+// Voxelizes `meshes` again into `geometry`, a voxelization over the same region (of other or moved meshes):
+// the voxels of its old bounds are cleared and the new geometry is written, so the cost is that of the
+// triangles and the two boxes, not of the grid. Afterwards `geometry` equals voxelize(meshes, region) bit
+// for bit. Returns the old bounds.
+VoxelBox revoxelize(VoxelGeometry& geometry, std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                    bool withEmission = true);
+
+// Counting sort of items into consecutive z-slabs of a grid, keeping item order inside a slab: the basis of
+// the deterministic parallel scatter used by voxelization and light injection. `slabOf(item, first, last)`
+// gives the range of slabs an item touches.
+struct SlabBins {
+    std::vector<uint32_t> offsets;  // slabCount + 1 entries
+    std::vector<uint32_t> items;    // item indices, grouped by slab
+    std::span<const uint32_t> slab(size_t s) const {
+        return std::span<const uint32_t>(items).subspan(offsets[s], offsets[s + 1] - offsets[s]);
+    }
+};
+template <typename SlabRange>
+SlabBins binBySlab(size_t itemCount, size_t slabCount, SlabRange&& slabRange) {
+    SlabBins bins;
+    bins.offsets.assign(slabCount + 1, 0);
+    for (size_t i = 0; i < itemCount; ++i) {
+        auto [first, last] = slabRange(i);
+        for (int s = first; s <= last; ++s) ++bins.offsets[s + 1];
+    }
+    for (size_t s = 0; s < slabCount; ++s) bins.offsets[s + 1] += bins.offsets[s];
+    bins.items.resize(bins.offsets[slabCount]);
+    std::vector<uint32_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
+    for (size_t i = 0; i < itemCount; ++i) {
+        auto [first, last] = slabRange(i);
+        for (int s = first; s <= last; ++s) bins.items[cursor[s]++] = static_cast<uint32_t>(i);
+    }
+    return bins;
+}
+
+// Level-0 voxel layers per slab of the scatter passes.
+inline constexpr int kSlabThickness = 2;
+
+}  // namespace deltagi

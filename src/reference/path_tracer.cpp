@@ -1,0 +1,301 @@
+#include "reference/path_tracer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+
+#include "core/brdf.h"
+#include "core/brdf_sampling.h"
+#include "core/parallel.h"
+#include "deltagi/reference.h"
+#include "pipeline/composite.h"
+#include "pipeline/gbuffer.h"
+
+namespace deltagi {
+
+namespace {
+
+// A pass (one sample per pixel) is split into rows, one row per task.
+constexpr int64_t kRowGrain = 1;
+// Russian roulette never continues with more than this probability, so that paths in a white room end.
+constexpr float kMaxSurvivalProbability = 0.95f;
+
+// Multiple importance sampling (Veach 1997): the power heuristic's weight of a sample drawn with pdf `a`
+// when the other strategy would have drawn it with pdf `b`.
+float powerHeuristic(float a, float b) {
+    const float a2 = a * a, b2 = b * b;
+    return a2 + b2 > 0.0f ? a2 / (a2 + b2) : 0.0f;
+}
+
+float maxComponent(glm::vec3 v) {
+    return std::max(v.x, std::max(v.y, v.z));
+}
+bool isFinite(glm::vec3 v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+}  // namespace
+
+LightSample sampleLightPoint(const Light& light, glm::vec3 p, float u1, float u2) {
+    if (light.type == Light::Type::Directional || !(light.radius > 0.0f)) return sampleLight(light, p);
+    const glm::vec3 axis = p - light.position;
+    const float d = glm::length(axis);
+    if (!(d > 0.0f)) return sampleLight(light, p);
+    const glm::mat3 frame = frameAround(axis / d);
+    const float r = light.radius * std::sqrt(u1);
+    const float phi = 2.0f * std::numbers::pi_v<float> * u2;
+    const glm::vec3 onDisk = light.position + frame * glm::vec3(r * std::cos(phi), r * std::sin(phi), 0.0f);
+    const glm::vec3 toLight = onDisk - p;
+    LightSample s;
+    const float d2 = glm::dot(toLight, toLight);
+    if (!(d2 > 0.0f)) return s;
+    s.distance = std::sqrt(d2);
+    s.wi = toLight / s.distance;
+    // The spot's cone is the lamp's: its falloff is taken along the axis from the centre.
+    s.irradiance = light.power() * (spotFalloff(light, axis / d) / d2);
+    return s;
+}
+
+glm::vec3 PathTracer::offsetOrigin(const RayHit& hit, glm::vec3 towards) const {
+    const float side = glm::dot(towards, hit.normal) >= 0.0f ? 1.0f : -1.0f;
+    return hit.position + (side * settings_.rayOffset) * hit.normal;
+}
+
+glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
+    glm::vec3 sum(0.0f);
+    for (const Light& light : lights_) {
+        const float u1 = rng.uniform(), u2 = rng.uniform();
+        if (light.fromEnvironment) continue;  // its light is in the map, sampled below
+        const LightSample s = sampleLightPoint(light, hit.position, u1, u2);
+        const float cosTheta = glm::dot(s.wi, hit.normal);
+        if (cosTheta <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
+        const glm::vec3 origin = offsetOrigin(hit, s.wi);
+        const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * settings_.rayOffset : s.distance;
+        if (tMax <= 0.0f || rays_.intersect(origin, s.wi, 0.0f, tMax).hit()) continue;
+        sum += evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.irradiance * cosTheta;
+    }
+    if (environment_) {
+        const float u1 = rng.uniform(), u2 = rng.uniform();
+        sum += environmentLight(hit, wo, u1, u2);
+    }
+    return sum;
+}
+
+glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
+    const float uTriangle = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    const SurfaceMaterial& m = hit.surface;
+    if (areaLights_.empty() || (m.diffuse == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)))
+        return glm::vec3(0.0f);
+    const AreaLightSample s = areaLights_.sample(uTriangle, u1, u2);
+    const glm::vec3 toLight = s.position - hit.position;
+    const float d2 = glm::dot(toLight, toLight);
+    if (!(d2 > 0.0f)) return glm::vec3(0.0f);
+    const float d = std::sqrt(d2);
+    const glm::vec3 wi = toLight / d;
+    const float cosSurface = glm::dot(wi, hit.normal);
+    const float cosLight = std::abs(glm::dot(wi, s.normal));
+    if (cosSurface <= 0.0f || !(cosLight > 0.0f)) return glm::vec3(0.0f);
+    // The shadow ray aims at the point from the offset origin: a ray parallel to wi would meet the emitter's
+    // plane short of the point at grazing angles, and the emitter would shadow itself.
+    const glm::vec3 origin = offsetOrigin(hit, wi);
+    const glm::vec3 toPoint = s.position - origin;
+    const float distance = glm::length(toPoint);
+    const float tMax = distance - 2.0f * settings_.rayOffset;
+    if (tMax <= 0.0f || rays_.intersect(origin, toPoint / distance, 0.0f, tMax).hit()) return glm::vec3(0.0f);
+    const float pdfLight = s.pdfArea * d2 / cosLight;  // per unit solid angle at the hit
+    if (!(pdfLight > 0.0f) || !std::isfinite(pdfLight)) return glm::vec3(0.0f);
+    const float weight = powerHeuristic(pdfLight, brdfPdf(m, hit.normal, wo, wi));
+    return evalBrdf(m, hit.normal, wo, wi) * s.radiance * (cosSurface * weight / pdfLight);
+}
+
+glm::vec3 PathTracer::environmentLight(const RayHit& hit, glm::vec3 wo, float u1, float u2) const {
+    const EnvironmentSampler::Sample s = environment_->sample(u1, u2);
+    const float cosTheta = glm::dot(s.wi, hit.normal);
+    if (!(s.pdf > 0.0f) || cosTheta <= 0.0f || s.radiance == glm::vec3(0.0f)) return glm::vec3(0.0f);
+    if (rays_.intersect(offsetOrigin(hit, s.wi), s.wi).hit()) return glm::vec3(0.0f);
+    const float weight = powerHeuristic(s.pdf, brdfPdf(hit.surface, hit.normal, wo, s.wi));
+    return evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.radiance * (cosTheta * weight / s.pdf);
+}
+
+glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const {
+    return radianceFromHit(rays_.intersect(origin, direction), direction, rng);
+}
+
+glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const {
+    if (!firstHit.hit()) return environment_ ? environment_->radiance(direction) : glm::vec3(0.0f);
+    glm::vec3 radiance(0.0f), throughput(1.0f);
+    RayHit hit = firstHit;
+    glm::vec3 previousPosition(0.0f);
+    float previousPdf = 0.0f;  // of the BRDF sample that led to `hit`
+    // An emitter reached by a BRDF sample from `previousPosition`: its MIS share against emittedLight().
+    auto emitterWeight = [&](const RayHit& at, glm::vec3 dir) {
+        const glm::vec3 step = at.position - previousPosition;
+        const float cosLight = std::abs(glm::dot(at.geometricNormal, dir));
+        const float pdfLight =
+            cosLight > 0.0f ? areaLights_.pdfArea(triangleEmission(*at.mesh, at.triangle)) * glm::dot(step, step) / cosLight
+                            : std::numeric_limits<float>::infinity();
+        return powerHeuristic(previousPdf, pdfLight);
+    };
+    for (int bounce = 0; hit.hit(); ++bounce) {
+        const glm::vec3 wo = -direction;
+        // Seen by the camera: all of it.
+        if (hit.surface.emits())
+            radiance +=
+                throughput * hit.surface.emission * (bounce > 0 ? emitterWeight(hit, direction) : 1.0f);
+        radiance += throughput * (directLight(hit, wo, rng) + emittedLight(hit, wo, rng));
+        const bool lastBounce = bounce + 1 >= settings_.maxBounces;
+        // Always four numbers per bounce, whatever happens, to keep the two correlated paths in step.
+        const float uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), uRoulette = rng.uniform();
+        const BrdfSample s = sampleBrdf(hit.surface, hit.normal, wo, uLobe, u1, u2);
+        if (!s.valid()) break;
+        if (lastBounce) {
+            // The bounce limit (a direct-light-only reference: maxBounces 1): the BRDF sample still brings
+            // its MIS share of the direct light, the environment or an emitter it meets, and nothing beyond.
+            // Without it the light sample's share alone fell short of the map's direct light.
+            const RayHit next = rays_.intersect(offsetOrigin(hit, s.wi), s.wi);
+            if (!next.hit() && environment_)
+                radiance += throughput * s.weight * environment_->radiance(s.wi) *
+                            powerHeuristic(s.pdf, environment_->pdf(s.wi));
+            if (next.hit() && next.surface.emits()) {
+                previousPosition = hit.position;
+                previousPdf = s.pdf;
+                radiance += throughput * s.weight * next.surface.emission * emitterWeight(next, s.wi);
+            }
+            break;
+        }
+        throughput *= s.weight;
+        if (bounce + 1 >= settings_.rouletteStartBounce) {
+            const float survive = std::min(maxComponent(throughput), kMaxSurvivalProbability);
+            if (!(uRoulette < survive)) break;
+            throughput /= survive;
+        }
+        direction = s.wi;
+        previousPosition = hit.position;
+        previousPdf = s.pdf;
+        hit = rays_.intersect(offsetOrigin(hit, s.wi), direction);
+        // A path that leaves the scene sees the environment, weighted against the light sample of
+        // directLight().
+        if (!hit.hit() && environment_)
+            radiance += throughput * environment_->radiance(direction) *
+                        powerHeuristic(s.pdf, environment_->pdf(direction));
+    }
+    return radiance;
+}
+
+namespace {
+
+// Per-pixel sums over the samples taken so far, in double so that thousands of samples add up exactly enough.
+struct PixelSums {
+    glm::dvec3 with{0.0}, without{0.0};
+    glm::dvec3 object{0.0};  // `with` of the samples whose first hit is virtual
+    glm::dvec3 change{0.0};  // with - without of the other samples
+    int virtualSamples = 0;
+};
+
+glm::vec3 toVec3(glm::dvec3 v) {
+    return glm::vec3(v);
+}
+
+ReferenceOutput assemble(const Scene& scene, std::span<const PixelSums> sums, int samples) {
+    const int w = scene.camera.width, h = scene.camera.height;
+    ReferenceOutput out;
+    out.with = Image(w, h, 3);
+    out.without = Image(w, h, 3);
+    GBuffer coverage;  // only the coverage is read by the composite
+    coverage.width = w;
+    coverage.height = h;
+    coverage.object.resize(sums.size());
+    coverage.coverage.assign(sums.size(), 0.0f);
+    std::vector<glm::vec3> objectRadiance(sums.size()), realChange(sums.size());
+    const double n = std::max(samples, 1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = static_cast<size_t>(y) * w + x;
+            const PixelSums& s = sums[i];
+            out.with.setRgb(x, y, toVec3(s.with / n));
+            out.without.setRgb(x, y, toVec3(s.without / n));
+            const int realSamples = samples - s.virtualSamples;
+            coverage.coverage[i] = static_cast<float>(s.virtualSamples / n);
+            objectRadiance[i] =
+                s.virtualSamples > 0 ? toVec3(s.object / double(s.virtualSamples)) : glm::vec3(0);
+            realChange[i] = realSamples > 0 ? toVec3(s.change / double(realSamples)) : glm::vec3(0);
+        }
+    sanitize(out.with);
+    sanitize(out.without);
+    out.background = scene.background ? *scene.background : out.without;
+    CompositeImages images = differentialComposite(out.background, coverage, objectRadiance, realChange);
+    out.composite = std::move(images.composite);
+    out.objectMask = std::move(images.objectMask);
+    out.delta = std::move(images.delta);
+    out.samplesPerPixel = samples;
+    return out;
+}
+
+}  // namespace
+
+ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
+                                const ReferenceProgress& onPass) {
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    const Camera& camera = scene.camera;
+    const RayScene all(scene, SceneContent::RealAndVirtual);
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    PathSettings settings;
+    settings.rouletteStartBounce = options.rouletteStartBounce;
+    settings.maxBounces = std::max(options.maxBounces, 1);
+    settings.rayOffset =
+        kRayOffsetScale * std::max(all.bounds().empty() ? 1.0f : all.bounds().maxExtent(), 1e-3f);
+    const AreaLights allEmitters(scene, SceneContent::RealAndVirtual);
+    const AreaLights realEmitters(scene, SceneContent::RealOnly);
+    std::optional<EnvironmentSampler> environment;
+    if (scene.environment) environment.emplace(*scene.environment);
+    const EnvironmentSampler* sampler = environment ? &*environment : nullptr;
+    const PathTracer withTracer(all, allEmitters, scene.lights, settings, sampler);
+    const PathTracer withoutTracer(realOnly, realEmitters, scene.lights, settings, sampler);
+
+    const int w = camera.width, h = camera.height;
+    std::vector<PixelSums> sums(static_cast<size_t>(w) * h);
+    const glm::vec3 eye = camera.position();
+    const int total = std::max(options.samplesPerPixel, 1);
+    int done = 0;
+    while (done < total) {
+        const int sample = done;
+        parallelFor(0, h, kRowGrain, [&](int64_t y) {
+            for (int x = 0; x < w; ++x) {
+                const size_t i = static_cast<size_t>(y) * w + x;
+                Rng pixelRng(i, static_cast<uint64_t>(sample), options.seed);
+                const float jx = pixelRng.uniform(), jy = pixelRng.uniform();
+                const glm::vec3 dir = glm::normalize(camera.rayDirection(x + jx, static_cast<float>(y) + jy));
+                const RayHit first = all.intersect(eye, dir);
+                // The same random numbers for both paths: their difference is the object's effect alone.
+                Rng rngWith = pixelRng, rngWithout = pixelRng;
+                glm::vec3 with = withTracer.radianceFromHit(first, dir, rngWith);
+                // A real first hit is the same surface in the scene without the objects.
+                glm::vec3 without = first.isVirtual ? withoutTracer.radiance(eye, dir, rngWithout)
+                                                    : withoutTracer.radianceFromHit(first, dir, rngWithout);
+                if (!isFinite(with) || !isFinite(without)) with = without = glm::vec3(0.0f);  // never NaN
+                PixelSums& s = sums[i];
+                s.with += glm::dvec3(with);
+                s.without += glm::dvec3(without);
+                if (first.hit() && first.isVirtual) {
+                    s.object += glm::dvec3(with);
+                    ++s.virtualSamples;
+                } else {
+                    s.change += glm::dvec3(with) - glm::dvec3(without);
+                }
+            }
+        });
+        ++done;
+        const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+        if (onPass) onPass(done, total, seconds);
+        if (options.timeLimitSeconds > 0.0 && seconds >= options.timeLimitSeconds) break;
+    }
+    ReferenceOutput out = assemble(scene, sums, done);
+    out.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    return out;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,133 @@
+#include "scene/environment_io.h"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "core/environment.h"
+#include "deltagi/error.h"
+
+namespace deltagi {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// [x, y] in pixels.
+glm::vec2 readPixel(const JsonNode& node) {
+    if (!node.value().is_array() || node.size() != 2)
+        node.fail("expected [x, y] (2 numbers, pixels), got " + describeValue(node.value()));
+    return {node.element(0).floatNumber(), node.element(1).floatNumber()};
+}
+
+// The circle's centre and radius default to the image's centre and the largest circle inside the image.
+void readCircle(const std::optional<JsonNode>& node, const Image& image, glm::vec2& center, float& radius) {
+    center = 0.5f * glm::vec2(image.width(), image.height());
+    radius = 0.5f * static_cast<float>(std::min(image.width(), image.height()));
+    if (!node) return;
+    if (auto n = node->find("center")) center = readPixel(*n);
+    if (auto n = node->find("radius")) radius = n->floatNumber(kPositive);
+}
+
+FisheyeProjection readFisheye(const std::optional<JsonNode>& node, const Image& image) {
+    FisheyeProjection p;
+    if (node) node->allowKeys({"model", "center", "radius", "fov_deg"});
+    readCircle(node, image, p.center, p.radius);
+    if (!node) return p;
+    if (auto n = node->find("model")) {
+        const std::string model = n->string();
+        if (model == "equidistant")
+            p.model = FisheyeProjection::Model::Equidistant;
+        else if (model == "equisolid")
+            p.model = FisheyeProjection::Model::Equisolid;
+        else
+            n->fail("expected \"equidistant\" or \"equisolid\", got \"" + model + "\"");
+    }
+    if (auto n = node->find("fov_deg")) p.fovDeg = n->floatNumber({0.0, 360.0, true, false});
+    return p;
+}
+
+MirrorBallProjection readMirrorBall(const std::optional<JsonNode>& node, const Image& image) {
+    MirrorBallProjection p;
+    if (node) node->allowKeys({"center", "radius"});
+    readCircle(node, image, p.center, p.radius);
+    return p;
+}
+
+// Rotation in degrees about x, then y, then z (R = Rz Ry Rx), as in mesh transforms.
+glm::mat3 readRotation(const JsonNode& node) {
+    const glm::vec3 deg = node.vec3();
+    glm::mat4 m(1.0f);
+    m = glm::rotate(m, glm::radians(deg.z), glm::vec3(0, 0, 1));
+    m = glm::rotate(m, glm::radians(deg.y), glm::vec3(0, 1, 0));
+    m = glm::rotate(m, glm::radians(deg.x), glm::vec3(1, 0, 0));
+    return glm::mat3(m);
+}
+
+}  // namespace
+
+void readEnvironment(const JsonNode& node, const fs::path& sceneFolder, Scene& scene) {
+    node.requireObject();
+    node.allowKeys({"file", "projection", "fisheye", "mirror_ball", "rotate_deg", "intensity"});
+    const JsonNode fileNode = node.child("file");
+    Environment environment;
+    environment.file = inputFile(fileNode, sceneFolder);
+    const std::string fileName = environment.file.string();
+
+    std::string projection = "equirectangular";
+    if (auto n = node.find("projection")) {
+        projection = n->string();
+        if (projection != "equirectangular" && projection != "fisheye" && projection != "mirror_ball")
+            n->fail("expected \"equirectangular\", \"fisheye\" or \"mirror_ball\", got \"" + projection +
+                    "\"");
+    }
+    for (const char* key : {"fisheye", "mirror_ball"})
+        if (node.has(key) && projection != key)
+            node.child(key).fail(
+                fmt::format("only allowed with \"projection\": \"{}\" (it is \"{}\")", key, projection));
+    float intensity = 1.0f;
+    if (auto n = node.find("intensity")) intensity = n->floatNumber(kNonNegative);
+    if (auto n = node.find("rotate_deg")) environment.worldFromEnvironment = readRotation(*n);
+
+    ImageFile file;
+    try {
+        file = readImageFile(environment.file);
+    } catch (const InputError& e) {
+        fileNode.fail(e.what());
+    }
+    Image& image = file.image;
+    if (!file.floatPixels)
+        scene.warnings.push_back(
+            fmt::format("{}: '{}' is a low-dynamic-range image: decoded from sRGB, but its brightest parts "
+                        "(the sun, lamps) "
+                        "are clipped, so it lights the scene too weakly; use an .hdr or .exr light probe",
+                        fileNode.where(), fileName));
+    if (const size_t bad = sanitizeRadiance(image); bad > 0)
+        scene.warnings.push_back(
+            fmt::format("{}: {} of {} pixels of '{}' are NaN, infinite or negative: set to 0",
+                        fileNode.where(), bad, image.pixelCount(), fileName));
+
+    if (projection == "equirectangular") {
+        if (image.width() != 2 * image.height())
+            fileNode.fail(
+                fmt::format("expected an equirectangular image twice as wide as high, got {}x{} ('{}')",
+                            image.width(), image.height(), fileName));
+        environment.radiance = std::move(image);
+    } else if (projection == "fisheye") {
+        environment.radiance = equirectFromFisheye(image, readFisheye(node.find("fisheye"), image));
+    } else {
+        environment.radiance = equirectFromMirrorBall(image, readMirrorBall(node.find("mirror_ball"), image));
+    }
+    float brightest = 0.0f;
+    for (float& v : environment.radiance.data()) brightest = std::max(brightest, v *= intensity);
+    if (!(brightest <= static_cast<float>(kMaxRadiance)))
+        throw InputError(
+            node.childWhere("intensity"),
+            fmt::format("the brightest pixel of '{}' times intensity is {:.3g}, more than {:.0e}, "
+                        "beyond which the render's 32-bit floats overflow",
+                        fileName, brightest, kMaxRadiance));
+    setEnvironment(scene, std::move(environment));
+}
+
+}  // namespace deltagi

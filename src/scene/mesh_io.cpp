@@ -1,0 +1,435 @@
+// Loading mesh files with Assimp: one importer set-up for every format.
+#include "scene/mesh_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+#include <assimp/DefaultLogger.hpp>
+#include <assimp/Importer.hpp>
+#include <assimp/LogStream.hpp>
+
+#include "deltagi/error.h"
+#include "io/image_encode.h"
+#include "scene/json_reader.h"
+
+namespace deltagi {
+
+namespace {
+
+std::string lowerExtension(const std::filesystem::path& file) {
+    std::string ext = file.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+    return ext;
+}
+
+bool isGltf(const std::filesystem::path& file) {
+    const std::string ext = lowerExtension(file);
+    return ext == ".gltf" || ext == ".glb";
+}
+
+TriangleMesh readTriangles(const aiMesh& source) {
+    TriangleMesh mesh;
+    mesh.positions.reserve(source.mNumVertices);
+    for (unsigned i = 0; i < source.mNumVertices; ++i) {
+        const aiVector3D& p = source.mVertices[i];
+        mesh.positions.emplace_back(p.x, p.y, p.z);
+    }
+    if (source.HasNormals()) {
+        mesh.normals.reserve(source.mNumVertices);
+        for (unsigned i = 0; i < source.mNumVertices; ++i) {
+            const aiVector3D& n = source.mNormals[i];
+            mesh.normals.emplace_back(n.x, n.y, n.z);
+        }
+    }
+    mesh.triangles.reserve(source.mNumFaces);
+    for (unsigned f = 0; f < source.mNumFaces; ++f) {
+        const aiFace& face = source.mFaces[f];
+        if (face.mNumIndices == 3)
+            mesh.triangles.emplace_back(face.mIndices[0], face.mIndices[1], face.mIndices[2]);
+    }
+    return mesh;
+}
+
+// The per-vertex attributes beyond positions and normals.
+// Texture coordinates: Assimp gives every format's in OpenGL's convention, v up from the image's bottom (its
+// glTF reader flips glTF's v); deltagi keeps glTF's, v down from the top (deltagi/texture.h): v = 1 - v.
+// Colours: glTF's COLOR_0 is linear (the glTF spec); every other format's (PLY red/green/blue, which
+// Assimp divides by 255, and OBJ's "v x y z r g b") is taken as sRGB-encoded, as the camera colours of
+// scans are, and decoded. Alpha is dropped.
+// Tangents: Assimp's (glTF's TANGENT, else aiProcess_CalcTangentSpace's from texture coordinate set 0). Its
+// bitangent points along increasing OpenGL v, up the image, as a normal map's +y (green) does; w is the
+// handedness that gives it back as w * cross(n, t).
+void readAttributes(const aiMesh& source, bool linearColours, TriangleMesh& mesh) {
+    const unsigned count = source.mNumVertices;
+    for (int set = 0; set < 2; ++set) {
+        if (!source.HasTextureCoords(set)) continue;
+        std::vector<glm::vec2>& uvs = set == 0 ? mesh.uvs : mesh.uvs1;
+        uvs.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiVector3D& uv = source.mTextureCoords[set][i];
+            uvs.emplace_back(uv.x, 1.0f - uv.y);
+        }
+    }
+    if (source.HasVertexColors(0)) {
+        mesh.colors.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiColor4D& c = source.mColors[0][i];
+            glm::vec3 rgb(c.r, c.g, c.b);
+            // Rounding in a file's floats may step just past [0, 1]; cleanMesh() refuses real excursions.
+            if (!linearColours)
+                for (int k = 0; k < 3; ++k) rgb[k] = srgbToLinearValue(std::clamp(rgb[k], 0.0f, 1.0f));
+            mesh.colors.push_back(rgb);
+        }
+    }
+    if (source.HasTangentsAndBitangents() && source.HasNormals() && !mesh.uvs.empty()) {
+        mesh.tangents.reserve(count);
+        for (unsigned i = 0; i < count; ++i) {
+            const aiVector3D &t = source.mTangents[i], &b = source.mBitangents[i], &n = source.mNormals[i];
+            const glm::vec3 tangent(t.x, t.y, t.z);
+            const float handedness =
+                glm::dot(glm::cross(glm::vec3(n.x, n.y, n.z), tangent), glm::vec3(b.x, b.y, b.z));
+            // A NaN tangent (Assimp's mark for degenerate texture coordinates) is replaced by cleanMesh().
+            mesh.tangents.emplace_back(tangent, handedness < 0.0f ? -1.0f : 1.0f);
+        }
+    }
+}
+
+bool hasPolygons(const aiScene& scene) {
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+        const aiMesh* mesh = scene.mMeshes[m];
+        if (mesh == nullptr || mesh->mFaces == nullptr) continue;
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f)
+            if (mesh->mFaces[f].mNumIndices >= 3) return true;
+    }
+    return false;
+}
+
+// ---- sizes claimed by a file's header ---------------------------------------------------------------------
+
+// What loading one element costs in memory at most, Assimp's copy and ours together: a vertex's position and
+// normal in Assimp, its copies through post-processing and in TriangleMesh; a face's indices likewise.
+constexpr double kBytesPerVertex = 160.0;
+constexpr double kBytesPerFace = 96.0;
+// Formats without counts in a header: memory in proportion to the file (OBJ text or glTF binary data).
+constexpr double kBytesPerFileByte = 16.0;
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+
+struct ClaimedElement {
+    std::string name;
+    uint64_t count = 0;
+    uint64_t minBytes = 0;  // the fewest bytes one element takes in the file
+};
+
+constexpr int kMaxPlyHeaderLines = 10000;
+
+// Where the stream is; past the end when it has reached it.
+uint64_t streamPosition(std::istream& in) {
+    const std::streamoff position = in.tellg();
+    return position < 0 ? UINT64_MAX : static_cast<uint64_t>(position);
+}
+
+// The elements a PLY header declares, with the fewest bytes each can take (binary: the sizes of its scalar
+// properties and list counts; ASCII: 2 characters per property, a digit and a separator); the header's length
+// goes to `headerBytes`. The header must be printable text, begin with "ply" and "format FORMAT 1.0", and
+// its "element NAME COUNT", "property TYPE NAME", "property list TYPE TYPE NAME" and "end_header" lines must
+// be well formed, else InputError(where, ...): Assimp's PLY reader crashed or spun on malformed headers
+// (found by scripts/fuzz.sh).
+std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes, const std::string& name,
+                                        const std::string& where) {
+    static const std::map<std::string, uint64_t> kTypeBytes = {
+        {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
+        {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
+        {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+    std::vector<ClaimedElement> elements;
+    bool binary = false;
+    std::string line;
+    auto corrupt = [&](int lineNumber, const std::string& expected) {
+        std::string shown;
+        for (char c : line.substr(0, 60)) shown += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+        return InputError(
+            where, fmt::format("'{}' is corrupt: line {} of its PLY header is \"{}\", expected {}", name,
+                               lineNumber, shown, expected));
+    };
+    for (int number = 1; number <= kMaxPlyHeaderLines && std::getline(in, line); ++number) {
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (std::any_of(line.begin(), line.end(),
+                        [](char c) { return !std::isprint(static_cast<unsigned char>(c)) && c != '\t'; }))
+            throw corrupt(number, "printable text");
+        std::istringstream words(line);
+        std::string word, extra;
+        words >> word;
+        if (number == 1) {
+            if (line != "ply") throw corrupt(number, "\"ply\"");
+        } else if (number == 2) {
+            std::string format, version;
+            if (word != "format" || !(words >> format >> version) || (words >> extra) ||
+                (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian") ||
+                (version != "1.0" && version != "1"))
+                throw corrupt(number, "\"format ascii|binary_little_endian|binary_big_endian 1.0\"");
+            binary = format != "ascii";
+        } else if (word == "element") {
+            ClaimedElement element;
+            // A count beyond 64 bits would slip past the size check.
+            if (!(words >> element.name >> element.count) || (words >> extra))
+                throw corrupt(number, "\"element NAME COUNT\" with a whole number of 64 bits");
+            elements.push_back(element);
+        } else if (word == "property" && !elements.empty()) {
+            std::string type, propertyName;
+            words >> type;
+            const bool list = type == "list";
+            std::string itemType;
+            if (list) words >> type >> itemType;  // the count's type, then the items' (the list may be empty)
+            auto size = kTypeBytes.find(type);
+            if (size == kTypeBytes.end() || (list && !kTypeBytes.contains(itemType)) ||
+                !(words >> propertyName) || (words >> extra))
+                throw corrupt(number,
+                              "\"property TYPE NAME\" or \"property list TYPE TYPE NAME\" with known types");
+            elements.back().minBytes += binary ? size->second : 2;
+        } else if (word == "end_header" && !(words >> extra)) {
+            headerBytes = streamPosition(in);
+            return elements;
+        }
+        // Other printable lines are skipped, as Assimp skips them (Blender 2.47 wrote a comment without the
+        // "comment" keyword).
+    }
+    throw InputError(where, fmt::format("'{}' is corrupt: its PLY header has no line \"end_header\" within "
+                                        "{} lines",
+                                        name, kMaxPlyHeaderLines));
+}
+
+// OFF: "OFF" (or COFF, NOFF, ...) then "vertices faces edges"; a vertex takes at least "0 0 0\n", a face
+// at least "0\n".
+std::vector<ClaimedElement> offElements(std::istream& in, uint64_t& headerBytes) {
+    std::string line;
+    std::getline(in, line);
+    std::istringstream first(line);
+    std::string magic;
+    first >> magic;
+    uint64_t vertices = 0, faces = 0;
+    if (!(first >> vertices >> faces)) {  // the counts on a line of their own
+        do {
+            if (!std::getline(in, line)) return {};
+        } while (line.empty() || line[0] == '#');
+        std::istringstream counts(line);
+        if (!(counts >> vertices >> faces)) return {};
+    }
+    headerBytes = streamPosition(in);
+    return {{"vertex", vertices, 6}, {"face", faces, 2}};
+}
+
+// ---- Assimp's output --------------------------------------------------------------------------------------
+
+// Assimp's warnings during one import: glTF faces with out-of-range indices are dropped with a warning only.
+// Assimp's logger is global: one import at a time (scenes are loaded on one thread).
+class WarningLog : public Assimp::LogStream {
+  public:
+    WarningLog() {
+        Assimp::DefaultLogger::create(nullptr, Assimp::Logger::NORMAL, 0);
+        Assimp::DefaultLogger::get()->attachStream(this, Assimp::Logger::Warn | Assimp::Logger::Err);
+    }
+    ~WarningLog() override {
+        Assimp::DefaultLogger::get()->detachStream(this, Assimp::Logger::Warn | Assimp::Logger::Err);
+        Assimp::DefaultLogger::kill();
+    }
+    WarningLog(const WarningLog&) = delete;
+    WarningLog& operator=(const WarningLog&) = delete;
+    void write(const char* message) override { messages.emplace_back(message); }
+    std::vector<std::string> messages;
+};
+
+// What post-processing relies on, checked on the importer's raw output (Assimp's ValidateDataStructure has
+// checked the indices already; this also covers what it does not: finite positions).
+// Meshes are named as loadMeshFile() names them.
+// Also sets each mesh's primitive types to those its faces have, which Assimp's triangulation relies on (an
+// assertion aborts it otherwise).
+void validateRawScene(aiScene& scene, const std::filesystem::path& file, const std::string& where,
+                      const std::string& baseName) {
+    const std::string name = file.filename().string();
+    for (unsigned m = 0; m < scene.mNumMeshes; ++m) {
+        aiMesh* mesh = scene.mMeshes[m];
+        if (mesh == nullptr || (mesh->mNumVertices > 0 && mesh->mVertices == nullptr) ||
+            (mesh->mNumFaces > 0 && mesh->mFaces == nullptr))
+            throw InputError(where, fmt::format("'{}': mesh {} has no vertex or face data", name, m));
+        const std::string meshName =
+            scene.mNumMeshes == 1
+                ? baseName
+                : baseName + "/" + (mesh->mName.length > 0 ? mesh->mName.C_Str() : std::to_string(m));
+        for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
+            const aiVector3D& p = mesh->mVertices[i];
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                throw InputError(where,
+                                 fmt::format("vertex {} of mesh '{}' is not finite: ({}, {}, {}) ('{}')", i,
+                                             meshName, p.x, p.y, p.z, name));
+        }
+        // Texture coordinates outside [0, 1] are legal (textures repeat); NaN or infinite ones are not.
+        for (unsigned set = 0; set < 2; ++set) {
+            if (!mesh->HasTextureCoords(set)) continue;
+            for (unsigned i = 0; i < mesh->mNumVertices; ++i) {
+                const aiVector3D& uv = mesh->mTextureCoords[set][i];
+                if (!std::isfinite(uv.x) || !std::isfinite(uv.y))
+                    throw InputError(where,
+                                     fmt::format("texture coordinate (set {}) of vertex {} of mesh '{}' is "
+                                                 "not finite: ({}, {}) ('{}')",
+                                                 set, i, meshName, uv.x, 1.0f - uv.y, name));  // glTF's v
+            }
+        }
+        unsigned primitiveTypes = 0;
+        for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+            const aiFace& face = mesh->mFaces[f];
+            primitiveTypes |= face.mNumIndices == 1   ? aiPrimitiveType_POINT
+                              : face.mNumIndices == 2 ? aiPrimitiveType_LINE
+                              : face.mNumIndices == 3 ? aiPrimitiveType_TRIANGLE
+                                                      : aiPrimitiveType_POLYGON;
+            // A face of no vertices passes Assimp's validation but aborts its triangulation (fuzz finding).
+            if (face.mNumIndices == 0)
+                throw InputError(
+                    where, fmt::format("'{}': face {} of mesh '{}' has no vertices", name, f, meshName));
+            if (face.mIndices == nullptr)
+                throw InputError(where,
+                                 fmt::format("'{}': face {} of mesh '{}' has no indices", name, f, meshName));
+            for (unsigned k = 0; k < face.mNumIndices; ++k)
+                if (face.mIndices[k] >= mesh->mNumVertices)
+                    throw InputError(
+                        where, fmt::format("'{}': face {} of mesh '{}' refers to vertex {}, but the mesh "
+                                           "has {} vertices",
+                                           name, f, meshName, face.mIndices[k], mesh->mNumVertices));
+        }
+        mesh->mPrimitiveTypes = primitiveTypes;
+    }
+}
+
+// Assimp's message without its prefixes, e.g. "Validation failed: aiMesh::mFaces[0]::mIndices[1] is out of
+// range".
+std::string importError(const Assimp::Importer& importer) {
+    std::string error = importer.GetErrorString();
+    return error.empty() ? "unknown error" : error;
+}
+
+}  // namespace
+
+void checkMeshFileClaims(const std::filesystem::path& file, const std::string& where, uint64_t memoryBytes) {
+    std::error_code error;
+    const uint64_t fileBytes = std::filesystem::file_size(file, error);
+    if (error) return;  // Assimp reports the unreadable file
+    std::ifstream in(file, std::ios::binary);
+    char magic[4] = {};
+    in.read(magic, 4);
+    in.seekg(0);
+    std::vector<ClaimedElement> elements;
+    uint64_t headerBytes = 0;
+    std::string extension = file.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    // Assimp picks its PLY reader by the extension or by these 3 bytes.
+    if (extension == ".ply" || std::string(magic, 3) == "ply")
+        elements = plyElements(in, headerBytes, file.filename().string(), where);
+    else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
+             std::string(magic, 4) == "STOF")
+        elements = offElements(in, headerBytes);
+
+    double neededMemory = 0.0, neededBytes = 0.0;
+    std::string claims;
+    for (const ClaimedElement& element : elements) {
+        neededBytes += static_cast<double>(element.count) * static_cast<double>(element.minBytes);
+        neededMemory +=
+            static_cast<double>(element.count) * (element.name == "vertex" ? kBytesPerVertex : kBytesPerFace);
+        claims += fmt::format("{}{} {} element{}", claims.empty() ? "" : ", ", element.count, element.name,
+                              element.count == 1 ? "" : "s");
+    }
+    const std::string name = file.filename().string();
+    const uint64_t dataBytes = fileBytes - std::min(fileBytes, headerBytes);
+    if (!elements.empty() && neededBytes > static_cast<double>(dataBytes))
+        throw InputError(where,
+                         fmt::format("'{}' is truncated or corrupt: its header claims {}, which take at "
+                                     "least {:.0f} bytes, but the file holds {} bytes after the header",
+                                     name, claims, neededBytes, dataBytes));
+    if (elements.empty()) neededMemory = kBytesPerFileByte * static_cast<double>(fileBytes);
+    if (neededMemory > static_cast<double>(memoryBytes))
+        throw InputError(where,
+                         fmt::format("loading '{}' needs about {:.1f} GiB, more than the {:.1f} GiB of "
+                                     "physical memory",
+                                     name, neededMemory / kGiB, static_cast<double>(memoryBytes) / kGiB));
+}
+
+std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
+                                   const std::string& baseName, std::vector<std::string>* warnings) {
+    checkMeshFileClaims(file, where, physicalMemoryBytes());
+    Assimp::Importer importer;
+    importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, kCreaseAngleDeg);
+    // Bake node transforms but keep one mesh per node: joining meshes of equal material would name, say, all
+    // white walls of a Cornell box after the first of them.
+    importer.SetPropertyBool(AI_CONFIG_PP_PTV_KEEP_HIERARCHY, true);
+    const std::string name = file.filename().string();
+
+    // First the import alone, validated (indices in range, counts consistent), and checked by us, so that
+    // post-processing never sees a broken scene; then the post-processing steps.
+    const aiScene* scene = nullptr;
+    {
+        WarningLog log;
+        scene = importer.ReadFile(file.string(), aiProcess_ValidateDataStructure);
+        if (scene == nullptr) {
+            // Validation fails a file of points alone ("Mesh contains no faces"): say what is wrong.
+            const std::string error = importError(importer);
+            Assimp::Importer plain;
+            if (const aiScene* raw = plain.ReadFile(file.string(), 0); raw != nullptr && !hasPolygons(*raw))
+                throw InputError(where, fmt::format("'{}' contains no triangles", name));
+            throw InputError(where, fmt::format("cannot load '{}': {}", file.string(), error));
+        }
+        for (const std::string& message : log.messages)
+            if (message.find("out-of-range indices") != std::string::npos)
+                throw InputError(where,
+                                 fmt::format("'{}': some triangles refer to vertices that do not exist "
+                                             "(index out of range)",
+                                             name));
+    }
+    // The importer owns the scene; the post-processing below reads the primitive types validateRawScene sets.
+    validateRawScene(*const_cast<aiScene*>(scene), file, where, baseName);
+    if (!hasPolygons(*scene)) throw InputError(where, fmt::format("'{}' contains no triangles", name));
+    constexpr unsigned kFlags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices |
+                                aiProcess_GenSmoothNormals | aiProcess_CalcTangentSpace |
+                                aiProcess_PreTransformVertices | aiProcess_SortByPType;
+    // SortByPType splits meshes by primitive type; point and line meshes are skipped below.
+    scene = importer.ApplyPostProcessing(kFlags);
+    if (scene == nullptr)
+        throw InputError(where, fmt::format("cannot load '{}': {}", file.string(), importError(importer)));
+
+    std::vector<FileMesh> meshes;
+    std::map<std::string, int> timesSeen;
+    MaterialReader materialReader{*scene, file, where, {}, {}, false};
+    std::vector<std::optional<FileMaterial>> materials(scene->mNumMaterials);  // each read once
+    for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+        const aiMesh& source = *scene->mMeshes[m];
+        if ((source.mPrimitiveTypes & aiPrimitiveType_TRIANGLE) == 0) continue;
+        FileMesh result{readTriangles(source), {}};
+        if (result.mesh.triangles.empty()) continue;
+        readAttributes(source, isGltf(file), result.mesh);
+        if (source.mMaterialIndex < scene->mNumMaterials) {
+            std::optional<FileMaterial>& material = materials[source.mMaterialIndex];
+            if (!material)
+                material = readFileMaterial(*scene->mMaterials[source.mMaterialIndex], materialReader);
+            result.material = *material;
+        }
+        std::string name =
+            baseName + "/" + (source.mName.length > 0 ? source.mName.C_Str() : std::to_string(m));
+        // A mesh placed by several nodes (glTF instancing) appears once per node: number the repeats.
+        int seen = ++timesSeen[name];
+        result.mesh.name = seen == 1 ? name : fmt::format("{} ({})", name, seen);
+        meshes.push_back(std::move(result));
+    }
+    if (meshes.empty())
+        throw InputError(where, fmt::format("'{}' contains no triangles", file.filename().string()));
+    if (meshes.size() == 1) meshes[0].mesh.name = baseName;
+    if (warnings)
+        warnings->insert(warnings->end(), materialReader.warnings.begin(), materialReader.warnings.end());
+    return meshes;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,407 @@
+// Textures of materials: validation, the mip chain, decoding files and embedded images (OpenImageIO), and
+// the filtered lookup with glTF 2.0's sampler state (wrap modes, filters).
+#include "deltagi/texture.h"
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cctype>
+#include <cmath>
+#include <cstdint>
+#include <new>
+#include <utility>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+#include <fmt/format.h>
+
+#include "deltagi/error.h"
+#include "io/image_encode.h"
+#include "io/quiet_stderr.h"
+
+namespace deltagi {
+
+namespace {
+
+// The largest width or height accepted (from a file or the constructor): guards against absurd sizes in
+// corrupt or hostile headers before anything is allocated. 16384 is the limit of most GPUs' 2D textures; a
+// texture at the limit in both directions holds 2^28 texels, 4 GiB of linear RGBA floats.
+constexpr int kMaxTextureSide = 16384;
+
+std::string sizeProblem(int width, int height) {
+    if (width <= 0 || height <= 0)
+        return fmt::format("texture size {}x{}: width and height must be positive", width, height);
+    if (width > kMaxTextureSide || height > kMaxTextureSide)
+        return fmt::format("texture size {}x{}: more than {} texels per side", width, height,
+                           kMaxTextureSide);
+    return {};
+}
+
+// --- The mip chain --------------------------------------------------------------------------------------
+
+// One destination texel of a box filter from `srcSize` texels to `dstSize` (dstSize <= srcSize): the source
+// texels it covers and their weights, which sum to 1.
+struct BoxTaps {
+    int first = 0;
+    int count = 0;
+    std::array<float, 4> weight{};
+};
+
+// Each destination texel i covers the source interval [i * r, (i + 1) * r), r = srcSize / dstSize, and
+// weighs every source texel by the length of its overlap with that interval (divided by r). An even size
+// halves to the familiar 2-texel average; an odd size 2n + 1 -> n spreads every texel over intervals of
+// 2 + 1/n texels (3 for 3 -> 1, fractional at the ends otherwise). Every source texel's weights sum to
+// dstSize / srcSize, so the mean of a level is exactly the mean of the one above (up to float rounding).
+// r lies in [2, 3) apart from sizes 1 (r = 1) and 3 (r = 3), so an interval touches at most 4 texels.
+std::vector<BoxTaps> boxTaps(int srcSize, int dstSize) {
+    std::vector<BoxTaps> taps(dstSize);
+    double ratio = static_cast<double>(srcSize) / dstSize;
+    for (int i = 0; i < dstSize; ++i) {
+        double begin = i * ratio, end = (i + 1) * ratio;
+        int first = static_cast<int>(std::floor(begin));
+        int last = std::min(srcSize, static_cast<int>(std::ceil(end))) - 1;
+        BoxTaps& t = taps[i];
+        t.first = first;
+        for (int j = first; j <= last; ++j) {
+            double overlap = std::min(end, j + 1.0) - std::max(begin, static_cast<double>(j));
+            if (overlap <= 0.0) continue;  // an interval ending exactly on a texel edge
+            assert(j - first < 4);
+            t.weight[j - first] = static_cast<float>(overlap / ratio);
+            t.count = j - first + 1;
+        }
+    }
+    return taps;
+}
+
+// The next mip level: floor(size / 2) but at least 1 in each direction, box filtered (boxTaps), separably:
+// rows first, then columns.
+std::vector<glm::vec4> downsample(std::span<const glm::vec4> src, int width, int height, int dstWidth,
+                                  int dstHeight) {
+    std::vector<BoxTaps> tapsX = boxTaps(width, dstWidth), tapsY = boxTaps(height, dstHeight);
+    std::vector<glm::vec4> rows(static_cast<size_t>(dstWidth) * height);
+    for (int y = 0; y < height; ++y) {
+        const glm::vec4* in = &src[static_cast<size_t>(y) * width];
+        glm::vec4* out = &rows[static_cast<size_t>(y) * dstWidth];
+        for (int x = 0; x < dstWidth; ++x) {
+            const BoxTaps& t = tapsX[x];
+            glm::vec4 sum(0.0f);
+            for (int k = 0; k < t.count; ++k) sum += t.weight[k] * in[t.first + k];
+            out[x] = sum;
+        }
+    }
+    std::vector<glm::vec4> dst(static_cast<size_t>(dstWidth) * dstHeight);
+    for (int y = 0; y < dstHeight; ++y) {
+        const BoxTaps& t = tapsY[y];
+        glm::vec4* out = &dst[static_cast<size_t>(y) * dstWidth];
+        for (int x = 0; x < dstWidth; ++x) {
+            glm::vec4 sum(0.0f);
+            for (int k = 0; k < t.count; ++k)
+                sum += t.weight[k] * rows[static_cast<size_t>(t.first + k) * dstWidth + x];
+            out[x] = sum;
+        }
+    }
+    return dst;
+}
+
+// --- Lookups --------------------------------------------------------------------------------------------
+
+// Brings a coordinate (uv units) into one period of its wrap mode, so that texel indices computed from it
+// fit an int whatever the uv (1e30 included); the indices are wrapped again (wrapIndex), which makes the
+// reduction exact for Repeat and MirroredRepeat and harmless for ClampToEdge.
+float reduceCoordinate(float u, TextureWrap wrap) {
+    switch (wrap) {
+        case TextureWrap::Repeat:
+            return u - std::floor(u);
+        case TextureWrap::MirroredRepeat:
+            return u - 2.0f * std::floor(0.5f * u);
+        case TextureWrap::ClampToEdge:
+            break;
+    }
+    return std::clamp(u, -1.0f, 2.0f);
+}
+
+// glTF's wrap modes on a texel index (OpenGL 4.6, section 8.14.2): Repeat takes it modulo the size,
+// MirroredRepeat reflects every other period (-1 -> 0, n -> n - 1), ClampToEdge clamps to the edge texels.
+int wrapIndex(int i, int size, TextureWrap wrap) {
+    if (i >= 0 && i < size) return i;  // nearly every lookup: no division
+    switch (wrap) {
+        case TextureWrap::Repeat:
+            i %= size;
+            return i < 0 ? i + size : i;
+        case TextureWrap::MirroredRepeat: {
+            int period = 2 * size;
+            i %= period;
+            if (i < 0) i += period;
+            return i < size ? i : period - 1 - i;
+        }
+        case TextureWrap::ClampToEdge:
+            break;
+    }
+    return std::clamp(i, 0, size - 1);
+}
+
+// --- Decoding -------------------------------------------------------------------------------------------
+
+std::string lowercase(std::string_view s) {
+    std::string out(s);
+    std::transform(out.begin(), out.end(), out.begin(), [](unsigned char c) { return std::tolower(c); });
+    return out;
+}
+
+bool startsWith(std::span<const std::byte> bytes, std::string_view magic, size_t offset = 0) {
+    if (bytes.size() < offset + magic.size()) return false;
+    for (size_t i = 0; i < magic.size(); ++i)
+        if (bytes[offset + i] != static_cast<std::byte>(magic[i])) return false;
+    return true;
+}
+
+// The format of an image in memory by its signature (magic bytes), as an extension OpenImageIO knows; empty
+// when unknown (TGA has none).
+std::string sniffFormat(std::span<const std::byte> bytes) {
+    using namespace std::string_view_literals;
+    if (startsWith(bytes, "\x89PNG\r\n\x1a\n"sv)) return "png";
+    if (startsWith(bytes, "\xff\xd8\xff"sv)) return "jpg";
+    if (startsWith(bytes, "GIF87a"sv) || startsWith(bytes, "GIF89a"sv)) return "gif";
+    if (startsWith(bytes, "RIFF"sv) && startsWith(bytes, "WEBP"sv, 8)) return "webp";
+    if (startsWith(bytes, "\x76\x2f\x31\x01"sv)) return "exr";
+    if (startsWith(bytes, "#?RADIANCE"sv) || startsWith(bytes, "#?RGBE"sv)) return "hdr";
+    if (startsWith(bytes, "II*\0"sv) || startsWith(bytes, "MM\0*"sv)) return "tif";
+    if (startsWith(bytes, "BM"sv) && bytes.size() > 26) return "bmp";
+    return {};
+}
+
+// The extension OpenImageIO knows for a container's format hint: a file extension (with or without the
+// dot) or a MIME type; empty when it names no format read here.
+std::string formatFromHint(std::string_view hint) {
+    std::string h = lowercase(hint);
+    if (!h.empty() && h.front() == '.') h.erase(0, 1);
+    static constexpr std::pair<std::string_view, std::string_view> kMimeTypes[] = {
+        {"image/png", "png"},   {"image/jpeg", "jpg"},    {"image/jpg", "jpg"},
+        {"image/webp", "webp"}, {"image/gif", "gif"},     {"image/bmp", "bmp"},
+        {"image/tiff", "tif"},  {"image/x-exr", "exr"},   {"image/vnd.radiance", "hdr"},
+        {"image/x-tga", "tga"}, {"image/x-targa", "tga"},
+    };
+    for (auto [mime, ext] : kMimeTypes)
+        if (h == mime) return std::string(ext);
+    static constexpr std::string_view kExtensions[] = {"png", "jpg", "jpeg", "jpe", "webp", "gif",
+                                                       "bmp", "tif", "tiff", "exr", "hdr",  "tga"};
+    for (std::string_view ext : kExtensions)
+        if (h == ext) return h;
+    return {};
+}
+
+bool isFloatFormat(OIIO::TypeDesc format) {
+    return format.basetype == OIIO::TypeDesc::FLOAT || format.basetype == OIIO::TypeDesc::HALF ||
+           format.basetype == OIIO::TypeDesc::DOUBLE;
+}
+
+// Reads the first image of an opened file as linear RGBA texels: 8/16-bit colour channels sRGB-decoded for
+// TextureEncoding::Srgb, alpha always linear; float files as they are. Grey repeats to RGB (grey + alpha
+// keeps its alpha), missing alpha is 1, channels past the fourth are ignored. Throws InputError(where, ...),
+// the message starting with `what`.
+std::shared_ptr<const Texture> readTexels(OIIO::ImageInput& input, TextureEncoding encoding,
+                                          const std::string& where, const std::string& what,
+                                          const std::string& name) {
+    const OIIO::ImageSpec& spec = input.spec();
+    int width = spec.width, height = spec.height;
+    if (std::string problem = sizeProblem(width, height); !problem.empty())
+        throw InputError(where, what + problem);
+    if (spec.depth > 1) throw InputError(where, what + "a volume image, not a 2D texture");
+    if (spec.nchannels <= 0) throw InputError(where, what + "the image has no channels");
+    int channels = std::min(spec.nchannels, 4);
+    int alpha = channels == 2 ? 1 : channels == 4 ? 3 : -1;
+    bool floatFile = isFloatFormat(spec.format);
+    bool srgb = encoding == TextureEncoding::Srgb && !floatFile;
+    size_t texelCount = static_cast<size_t>(width) * height;
+    try {
+        std::vector<float> values(texelCount * channels);
+        if (spec.format == OIIO::TypeDesc::UINT8) {
+            std::vector<uint8_t> bytes(values.size());
+            if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, bytes.data()))
+                throw InputError(where, what + "cannot read the pixels: " + input.geterror());
+            const std::array<float, 256>& decoded = srgb8ToLinearValues();
+            for (size_t i = 0; i < values.size(); ++i) {
+                bool colour = static_cast<int>(i % channels) != alpha;
+                values[i] = srgb && colour ? decoded[bytes[i]] : static_cast<float>(bytes[i]) / 255.0f;
+            }
+        } else {
+            // OpenImageIO scales integer pixels to [0, 1] when it converts them to float.
+            if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, values.data()))
+                throw InputError(where, what + "cannot read the pixels: " + input.geterror());
+            if (srgb)
+                for (size_t i = 0; i < values.size(); ++i)
+                    if (static_cast<int>(i % channels) != alpha) values[i] = srgbToLinearValue(values[i]);
+        }
+        std::vector<glm::vec4> texels(texelCount);
+        for (size_t p = 0; p < texelCount; ++p) {
+            const float* v = &values[p * channels];
+            glm::vec3 rgb = channels >= 3 ? glm::vec3(v[0], v[1], v[2]) : glm::vec3(v[0]);
+            texels[p] = glm::vec4(rgb, alpha >= 0 ? v[alpha] : 1.0f);
+        }
+        values = {};
+        try {
+            return std::make_shared<const Texture>(width, height, std::move(texels), name);
+        } catch (const InputError& e) {
+            throw InputError(where, what + e.message());
+        }
+    } catch (const std::bad_alloc&) {
+        throw InputError(
+            where, what + fmt::format("a texture of {}x{} texels does not fit in memory", width, height));
+    }
+}
+
+}  // namespace
+
+// --- Texture --------------------------------------------------------------------------------------------
+
+Texture::Texture(int width, int height, std::vector<glm::vec4> texels, std::string name)
+    : width_(width), height_(height), name_(std::move(name)) {
+    if (std::string problem = sizeProblem(width, height); !problem.empty()) throw InputError(name_, problem);
+    size_t count = static_cast<size_t>(width) * height;
+    if (texels.size() != count)
+        throw InputError(name_, fmt::format("texture size {}x{} needs {} texels, got {}", width, height,
+                                            count, texels.size()));
+    for (size_t i = 0; i < count; ++i) {
+        const glm::vec4& t = texels[i];
+        if (!std::isfinite(t.x) || !std::isfinite(t.y) || !std::isfinite(t.z) || !std::isfinite(t.w))
+            throw InputError(name_, fmt::format("texel ({}, {}) is not finite", i % width, i / width));
+    }
+    try {
+        levels_.push_back({width, height, std::move(texels)});
+        while (levels_.back().width > 1 || levels_.back().height > 1) {
+            const Level& above = levels_.back();
+            int w = std::max(1, above.width / 2), h = std::max(1, above.height / 2);
+            std::vector<glm::vec4> next = downsample(above.texels, above.width, above.height, w, h);
+            levels_.push_back({w, h, std::move(next)});
+        }
+    } catch (const std::bad_alloc&) {
+        throw InputError(name_,
+                         fmt::format("a texture of {}x{} texels does not fit in memory", width, height));
+    }
+}
+
+std::shared_ptr<const Texture> Texture::load(const std::filesystem::path& file, TextureEncoding encoding,
+                                             const std::string& where) {
+    std::string path = file.string();
+    std::string location = where.empty() ? path : where;
+    // The file is named in the message unless it is already `where`.
+    std::string what = where.empty() || where == path ? "" : "texture '" + path + "': ";
+    std::error_code error;
+    if (!std::filesystem::exists(file, error)) throw InputError(location, what + "no such file");
+    if (!std::filesystem::is_regular_file(file, error))
+        throw InputError(location, what + "not a regular file");
+    if (std::filesystem::file_size(file, error) == 0 || error)
+        throw InputError(location, what + "the file is empty");
+    QuietStderr quiet;
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);  // colours as stored, not multiplied by alpha
+    auto input = OIIO::ImageInput::open(path, &config);
+    if (!input) throw InputError(location, what + "cannot read image: " + OIIO::geterror());
+    return readTexels(*input, encoding, location, what, path);
+}
+
+std::shared_ptr<const Texture> Texture::decode(std::span<const std::byte> encoded,
+                                               std::string_view formatHint, TextureEncoding encoding,
+                                               const std::string& where) {
+    std::string location = where.empty() ? "embedded texture" : where;
+    std::string what = where.empty() ? "" : "embedded texture: ";
+    if (encoded.empty()) throw InputError(location, what + "no image data (0 bytes)");
+    // The bytes' signature wins over the hint: containers mislabel images (a JPEG declared image/png).
+    std::string format = sniffFormat(encoded);
+    if (format.empty()) format = formatFromHint(formatHint);
+    if (format.empty())
+        throw InputError(
+            location, what + (formatHint.empty() ? std::string("not an image format this program reads")
+                                                 : fmt::format("unsupported image format '{}'", formatHint)));
+    QuietStderr quiet;
+    OIIO::Filesystem::IOMemReader memory(encoded.data(), encoded.size());
+    OIIO::Filesystem::IOProxy* proxy = &memory;
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    auto input = OIIO::ImageInput::create(format, false, &config, proxy);
+    if (!input || !input->supports("ioproxy")) {
+        OIIO::geterror();  // cleared, not to show up in a later message
+        throw InputError(location, what + fmt::format("cannot decode {} images from memory", format));
+    }
+    OIIO::ImageSpec spec;
+    if (!input->open("embedded." + format, spec, config))
+        throw InputError(location,
+                         what + fmt::format("cannot decode the {} image: {}", format, input->geterror()));
+    return readTexels(*input, encoding, location, what, location);
+}
+
+glm::vec4 Texture::average() const {
+    return levels_.back().texels.front();
+}
+
+glm::vec4 Texture::texel(int level, int x, int y) const {
+    assert(level >= 0 && level < levels());
+    const Level& l = levels_[level];
+    assert(x >= 0 && x < l.width && y >= 0 && y < l.height);
+    return l.texels[static_cast<size_t>(y) * l.width + x];
+}
+
+namespace {
+
+// The lookups of one level; `u`, `v` already reduced (reduceCoordinate). Texel centres lie at (i + 0.5) /
+// size.
+struct LevelLookup {
+    int width, height;
+    const glm::vec4* texels;
+    TextureWrap wrapS, wrapT;
+
+    glm::vec4 at(int x, int y) const {
+        return texels[static_cast<size_t>(wrapIndex(y, height, wrapT)) * width + wrapIndex(x, width, wrapS)];
+    }
+    glm::vec4 nearest(float u, float v) const {
+        return at(static_cast<int>(std::floor(u * width)), static_cast<int>(std::floor(v * height)));
+    }
+    glm::vec4 bilinear(float u, float v) const {
+        float s = u * width - 0.5f, t = v * height - 0.5f;
+        float x0 = std::floor(s), y0 = std::floor(t);
+        float fx = s - x0, fy = t - y0;
+        int x = static_cast<int>(x0), y = static_cast<int>(y0);
+        glm::vec4 top = glm::mix(at(x, y), at(x + 1, y), fx);
+        glm::vec4 bottom = glm::mix(at(x, y + 1), at(x + 1, y + 1), fx);
+        return glm::mix(top, bottom, fy);
+    }
+};
+
+}  // namespace
+
+glm::vec4 Texture::sample(glm::vec2 uv, float footprint, const TextureSampler& sampler) const {
+    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return average();
+    float u = reduceCoordinate(uv.x, sampler.wrapS), v = reduceCoordinate(uv.y, sampler.wrapT);
+    auto lookup = [&](int level) {
+        const Level& l = levels_[level];
+        return LevelLookup{l.width, l.height, l.texels.data(), sampler.wrapS, sampler.wrapT};
+    };
+    // The level of detail: log2 of the footprint in texels of level 0 (OpenGL 4.6, section 8.14.1, with the
+    // larger side's scale). Magnification at or below 0; a NaN footprint counts as 0.
+    float lod =
+        footprint > 0.0f ? std::log2(footprint * static_cast<float>(std::max(width_, height_))) : 0.0f;
+    if (!(lod > 0.0f)) {
+        LevelLookup finest = lookup(0);
+        return sampler.magFilter == TextureFilter::Nearest ? finest.nearest(u, v) : finest.bilinear(u, v);
+    }
+    if (!sampler.mipmaps) {
+        LevelLookup finest = lookup(0);
+        return sampler.minFilter == TextureFilter::Nearest ? finest.nearest(u, v) : finest.bilinear(u, v);
+    }
+    int last = levels() - 1;
+    lod = std::min(lod, static_cast<float>(last));
+    if (sampler.minFilter == TextureFilter::Nearest) {
+        // NEAREST_MIPMAP_NEAREST: the level nearest lod (OpenGL's ceil(lod + 0.5) - 1, 0.5 rounding down).
+        int level = std::clamp(static_cast<int>(std::ceil(lod + 0.5f)) - 1, 0, last);
+        return lookup(level).nearest(u, v);
+    }
+    // LINEAR_MIPMAP_LINEAR: bilinear lookups of the two levels around lod, blended (trilinear).
+    int level = static_cast<int>(std::floor(lod));
+    float blend = lod - static_cast<float>(level);
+    glm::vec4 fine = lookup(level).bilinear(u, v);
+    if (level >= last || blend <= 0.0f) return fine;
+    return glm::mix(fine, lookup(level + 1).bilinear(u, v), blend);
+}
+
+}  // namespace deltagi

@@ -1,0 +1,131 @@
+// Multi-bounce light in the volumes (bounceLight) against the closed form of a furnace: inside a closed box
+// whose walls all leave radiance L and reflect albedo rho, each wall sees radiance L everywhere, so one more
+// bounce adds rho L, two add rho L + rho^2 L.
+#include "pipeline/bounce_light.h"
+
+#include <gtest/gtest.h>
+
+#include "core/ray_scene.h"
+#include "pipeline/mipmap.h"
+#include "scene/shapes.h"
+#include "test_scenes.h"
+
+namespace deltagi {
+namespace {
+
+const glm::vec3 kCentre(0.5f);  // the viewpoint: inside the box
+
+struct Furnace {
+    VolumeRegion region{glm::vec3(0.0f), 1.0f, 32};
+    VoxelGeometry geometry;
+    Grid3 direct;
+    MipVolume visibility;
+};
+
+// A closed box of albedo `albedo`, whose every surface voxel leaves radiance 1; its faces point out
+// (makeBox), or in (`inward`: each triangle's winding reversed): the viewpoint inside decides the side that
+// gathers.
+Furnace furnace(float albedo, bool inward = false) {
+    Furnace f;
+    TriangleMesh box = makeBox(glm::vec3(0.7f));
+    transformMesh(box, glm::translate(glm::mat4(1.0f), glm::vec3(0.5f)));
+    if (inward)
+        for (glm::uvec3& t : box.triangles) std::swap(t.y, t.z);
+    box.material = test::diffuse(glm::vec3(albedo));
+    const TriangleMesh meshes[] = {box};
+    f.geometry = voxelize(meshes, f.region, true, true);
+    f.direct = Grid3(f.region.resolution);
+    for (size_t i = 0; i < f.direct.size(); ++i) {
+        const float occupancy = f.geometry.visibility[i].x;
+        f.direct[i] = glm::vec4(glm::vec3(occupancy), occupancy);
+    }
+    f.visibility = buildMipChain(f.region, f.geometry.visibility.clone());
+    return f;
+}
+
+// The mean added radiance over the surface voxels.
+float meanAdded(const Furnace& f, const Grid3& added) {
+    double sum = 0.0;
+    int count = 0;
+    for (size_t i = 0; i < added.size(); ++i)
+        if (f.geometry.visibility[i].x > 0.0f) {
+            EXPECT_EQ(added[i].w, 0.0f);
+            sum += added[i].x;
+            ++count;
+        }
+    return count ? static_cast<float>(sum / count) : 0.0f;
+}
+
+TEST(BounceLight, AFurnaceGainsAlbedoTimesItsRadiancePerBounce) {
+    Options options;
+    // Faces pointing in, as a room's walls do: the cone marcher takes a coherent surface seen from behind as
+    // a back face (options.trace.backface_weight), which does not apply to a box wound the other way.
+    for (const bool inward : {true}) {
+        SCOPED_TRACE(inward ? "faces in" : "faces out");
+        const Furnace f = furnace(0.5f, inward);
+        EXPECT_NEAR(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 1, kCentre)), 0.5f,
+                    0.1f);
+        EXPECT_NEAR(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 2, kCentre)), 0.75f,
+                    0.15f);
+        EXPECT_EQ(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 0, kCentre)), 0.0f);
+    }
+}
+
+TEST(BounceLight, BlackWallsReflectNothing) {
+    const Furnace f = furnace(0.0f);
+    Options options;
+    EXPECT_EQ(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 2, kCentre)), 0.0f);
+}
+
+// A box standing on a floor whose voxels leave radiance 1: the box's bottom voxels see only the floor, so
+// their bounce is albedo * 1. The rays start on the box's surface and find it; the cones start half a coarse
+// voxel and more below it, under the floor, and find almost nothing.
+TEST(BounceLight, ObjectsOnAFloorGetItsLightUnderneathByRays) {
+    Scene s;
+    s.real.push_back(
+        test::placed(makeQuad({2.0f, 2.0f}), {0.5f, 0.2f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    s.virtuals.push_back(test::placed(makeBox(glm::vec3(0.3f)), {0.5f, 0.2f + 0.15f + 0.002f, 0.5f},
+                                      test::diffuse(glm::vec3(0.5f))));
+    const VolumeRegion region{glm::vec3(0.0f), 1.0f, 32};
+    const VoxelGeometry floor = voxelize(s.real, region, true, true);
+    const VoxelGeometry box = voxelize(s.virtuals, region, true, true);
+    Grid3 light(region.resolution);
+    for (size_t i = 0; i < light.size(); ++i) {
+        const float occupancy = floor.visibility[i].x;
+        light[i] = glm::vec4(glm::vec3(occupancy), occupancy);
+    }
+    const MipVolume lightMips = buildMipChain(region, std::move(light));
+    const MipVolume sceneVisibility = buildMipChain(region, floor.visibility.clone());
+    const MipVolume objectVisibility = buildMipChain(region, box.visibility.clone());
+    const RayScene realOnly(s, SceneContent::RealOnly);
+    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
+    Options options;
+    const VoxelBox& bounds = box.bounds;
+    const std::vector<glm::vec3> byRays =
+        gatherObjectBounceByRays(lightMips, box, objectVisibility, sceneVisibility, all, options, bounds, 2);
+    const std::vector<glm::vec3> byCones =
+        gatherObjectBounce(lightMips, box, objectVisibility, sceneVisibility, options, bounds, 2);
+    // The mean over the box's lowest layer of voxels (its bottom face), and its top layer.
+    auto layerMean = [&](const std::vector<glm::vec3>& added, int y) {
+        double sum = 0.0;
+        int count = 0;
+        const glm::ivec3 extent = bounds.hi - bounds.lo;
+        for (int z = bounds.lo.z; z < bounds.hi.z; ++z)
+            for (int x = bounds.lo.x; x < bounds.hi.x; ++x) {
+                if (box.visibility.at(x, y, z).x <= 0.0f) continue;
+                sum +=
+                    added[(static_cast<size_t>(z - bounds.lo.z) * extent.y + (y - bounds.lo.y)) * extent.x +
+                          (x - bounds.lo.x)]
+                        .x;
+                ++count;
+            }
+        return count ? sum / count : 0.0;
+    };
+    EXPECT_NEAR(layerMean(byRays, bounds.lo.y), 0.5, 0.1);
+    EXPECT_LT(layerMean(byCones, bounds.lo.y), 0.25);
+    // Its top sees no floor: nothing.
+    EXPECT_LT(layerMean(byRays, bounds.hi.y - 1), 0.02);
+}
+
+}  // namespace
+}  // namespace deltagi

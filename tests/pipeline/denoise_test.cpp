@@ -1,0 +1,192 @@
+#include "pipeline/denoise.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "pipeline/cone_trace.h"
+
+namespace deltagi {
+namespace {
+
+// A 32 x 16 view of two surfaces: the left half a floor (normal +y), the right half a wall (normal +x).
+struct Fixture {
+    static constexpr int kW = 32, kH = 16;
+    Material material;
+    std::vector<SurfacePoint> points;
+    Fixture() {
+        for (int y = 0; y < kH; ++y)
+            for (int x = 0; x < kW; ++x) {
+                SurfacePoint p;
+                p.material = &material;
+                p.surface = constantSurfaceMaterial(material);
+                p.toEye = {0, 0, 1};
+                if (x < kW / 2) {
+                    p.position = {0.01f * x, 0.0f, 0.01f * y};
+                    p.normal = {0, 1, 0};
+                } else {
+                    p.position = {0.16f, 0.01f * (x - kW / 2), 0.01f * y};
+                    p.normal = {1, 0, 0};
+                }
+                points.push_back(p);
+            }
+    }
+};
+
+TEST(Denoise, KeepsConstantsReducesNoiseAndDoesNotMixSurfaces) {
+    Fixture f;
+    std::vector<float> values(f.points.size());
+    for (size_t i = 0; i < values.size(); ++i) {
+        const bool wall = (i % Fixture::kW) >= Fixture::kW / 2;
+        values[i] = (wall ? 1.0f : 0.0f) + 0.2f * (hashToUnit(i, 0) - 0.5f);  // two levels plus noise
+    }
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    const std::vector<float> out =
+        denoise(values, 1, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, DenoiseSettings{});
+    double noiseIn = 0.0, noiseOut = 0.0;
+    for (size_t i = 0; i < values.size(); ++i) {
+        const bool wall = (i % Fixture::kW) >= Fixture::kW / 2;
+        const float level = wall ? 1.0f : 0.0f;
+        noiseIn += std::pow(values[i] - level, 2.0);
+        noiseOut += std::pow(out[i] - level, 2.0);
+        // The pixels next to the crease keep their own surface's level: nothing leaks across.
+        EXPECT_NEAR(out[i], level, 0.1f) << i;
+    }
+    EXPECT_LT(noiseOut, 0.25 * noiseIn);
+    // A constant stays exactly constant (up to rounding).
+    std::vector<float> constant(f.points.size(), 0.7f);
+    for (float v : denoise(constant, 1, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, DenoiseSettings{}))
+        EXPECT_NEAR(v, 0.7f, 1e-6f);
+    // Radius 0 is the identity.
+    EXPECT_EQ(denoise(values, 1, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, DenoiseSettings{0}), values);
+}
+
+// Sparse samples (stride 3) whose windows hold only zeros filter to exactly zero without being weighed; the
+// holes (pixels without a usable sample) do not depend on the values; a window with one non-zero sample
+// interpolates it, multi-channel values too.
+TEST(Denoise, SparseZerosStayZeroAndHolesDoNotDependOnValues) {
+    Fixture f;
+    // Some points invalid: a stripe of columns the samples (x = 0, 3, ...) miss, so their pixels may be
+    // holes.
+    for (int y = 0; y < Fixture::kH; ++y)
+        for (int x = 0; x < Fixture::kW; ++x)
+            if (x % 3 == 0 && x > 20) f.points[static_cast<size_t>(y) * Fixture::kW + x].material = nullptr;
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    DenoiseSettings sparse;
+    sparse.stride = 3;
+    const int channels = 5;  // not one of the specialised counts
+    std::vector<float> zeros(f.points.size() * channels, 0.0f), ones(zeros.size(), 1.0f), spike(zeros);
+    const size_t spikePixel = 3 * Fixture::kW + 3;  // a sample of the floor
+    for (int c = 0; c < channels; ++c) spike[spikePixel * channels + c] = 1.0f + static_cast<float>(c);
+    std::vector<size_t> holesZeros, holesOnes, holesSpike;
+    const auto outZeros =
+        denoise(zeros, channels, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, sparse, &holesZeros);
+    const auto outOnes =
+        denoise(ones, channels, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, sparse, &holesOnes);
+    const auto outSpike =
+        denoise(spike, channels, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, sparse, &holesSpike);
+    EXPECT_FALSE(holesOnes.empty());
+    EXPECT_EQ(holesZeros, holesOnes);
+    EXPECT_EQ(holesSpike, holesOnes);
+    for (float v : outZeros) EXPECT_EQ(v, 0.0f);
+    for (size_t i = 0; i < f.points.size(); ++i) {
+        if (!f.points[i].valid() || std::count(holesOnes.begin(), holesOnes.end(), i)) continue;
+        for (int c = 0; c < channels; ++c) EXPECT_NEAR(outOnes[i * channels + c], 1.0f, 1e-6f) << i;
+    }
+    // Next to the spike: a positive share of it in every channel, in proportion; far away (the wall): zero.
+    const size_t near = spikePixel + 1, far = 10 * Fixture::kW + 28;
+    EXPECT_GT(outSpike[near * channels], 0.0f);
+    for (int c = 0; c < channels; ++c)
+        EXPECT_NEAR(outSpike[near * channels + c], outSpike[near * channels] * (1.0f + c), 1e-5f);
+    EXPECT_EQ(outSpike[far * channels], 0.0f);
+    // Interpolating between the filtered samples: the same zeros and holes.
+    sparse.interpolate = true;
+    std::vector<size_t> holesInterpolated;
+    for (float v :
+         denoise(zeros, channels, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, sparse, &holesInterpolated))
+        EXPECT_EQ(v, 0.0f);
+    EXPECT_EQ(holesInterpolated, holesOnes);
+}
+
+// settings.interpolate: the pixels between samples blend the filtered samples around them on their own
+// surface: a linear ramp stays linear away from the image border, and nothing crosses the crease.
+TEST(Denoise, InterpolationBetweenSamplesKeepsRampsAndEdges) {
+    Fixture f;
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    std::vector<float> values(f.points.size(), 0.0f);
+    for (int y = 0; y < Fixture::kH; y += 2)
+        for (int x = 0; x < Fixture::kW; x += 2) {
+            const bool wall = x >= Fixture::kW / 2;
+            values[static_cast<size_t>(y) * Fixture::kW + x] = wall ? 5.0f : 0.1f * static_cast<float>(y);
+        }
+    DenoiseSettings settings;
+    settings.stride = 2;
+    settings.interpolate = true;
+    std::vector<size_t> holes;
+    const auto out = denoise(values, 1, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holes);
+    EXPECT_TRUE(holes.empty());
+    for (int y = 0; y < Fixture::kH; ++y)
+        for (int x = 0; x < Fixture::kW; ++x) {
+            const float v = out[static_cast<size_t>(y) * Fixture::kW + x];
+            if (x >= Fixture::kW / 2)
+                EXPECT_NEAR(v, 5.0f, 1e-5f) << x << "," << y;  // the wall: its own constant only
+            else if (y >= 4 && y <= Fixture::kH - 6)  // the floor away from the top and bottom rows, within
+                // the floor under the bilinear weights (1e-3 of the next sample row's 0.2 more)
+                EXPECT_NEAR(v, 0.1f * static_cast<float>(y), 1e-3f) << x << "," << y;
+        }
+    // Without interpolation every pixel is filtered on its own, over the window of its nearest sample row
+    // (the next one between two): the ramp on the sample rows, a step of a row between them.
+    settings.interpolate = false;
+    const auto direct = denoise(values, 1, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, settings);
+    for (int y = 4; y <= Fixture::kH - 6; ++y)
+        EXPECT_NEAR(direct[static_cast<size_t>(y) * Fixture::kW + 3], 0.1f * static_cast<float>(y + y % 2),
+                    1e-4f)
+            << y;
+}
+
+// A plan of the interpolation weights over fixed surfaces gives the filter's bits without it, also for a pass
+// in which some of those surfaces are invalid (hidden by an object) inside `planChanged`; the plan is kept
+// for later passes, which use it as they are.
+TEST(Denoise, InterpolationPlanGivesTheSameBits) {
+    Fixture f;
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    std::vector<float> values(f.points.size() * 3, 0.0f);
+    for (int y = 0; y < Fixture::kH; y += 4)
+        for (int x = 0; x < Fixture::kW; x += 4)
+            for (int c = 0; c < 3; ++c)
+                values[(static_cast<size_t>(y) * Fixture::kW + x) * 3 + c] =
+                    x == 8 && y == 8 ? 0.0f : std::sin(0.7f * x + 1.3f * y + c);
+    InterpolationPlan plan;
+    plan.surfaces = f.points;
+    for (int pass = 0; pass < 3; ++pass) {
+        // Pass 1 hides a block of pixels (and so the samples in it) as an object would.
+        std::vector<SurfacePoint> points = f.points;
+        PixelRect hidden{};
+        if (pass == 1) {
+            hidden = {9, 3, 15, 10};
+            for (int y = hidden.y0; y < hidden.y1; ++y)
+                for (int x = hidden.x0; x < hidden.x1; ++x)
+                    points[static_cast<size_t>(y) * Fixture::kW + x] = {};
+        }
+        DenoiseSettings settings;
+        settings.stride = 4;
+        settings.interpolate = true;
+        std::vector<size_t> holesWithout, holesWith;
+        const auto without =
+            denoise(values, 3, points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holesWithout);
+        settings.plan = &plan;
+        settings.planChanged = hidden;
+        const auto with =
+            denoise(values, 3, points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holesWith);
+        EXPECT_EQ(plan.stride, 4);
+        EXPECT_EQ(holesWith, holesWithout);
+        for (size_t i = 0; i < with.size(); ++i)
+            ASSERT_EQ(std::memcmp(&with[i], &without[i], sizeof(float)), 0)
+                << "pass " << pass << " value " << i;
+    }
+}
+
+}  // namespace
+}  // namespace deltagi

@@ -1,0 +1,298 @@
+// Reflective shadow maps and light injection against closed-form irradiance.
+#include "pipeline/inject.h"
+#include "pipeline/mipmap.h"
+#include "pipeline/reflective_shadow_map.h"
+#include "pipeline/shading.h"
+#include "scene/shapes.h"
+
+#include <algorithm>
+#include <array>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "test_scenes.h"
+
+namespace deltagi {
+namespace {
+
+const VolumeRegion kRegion{glm::vec3(-1.0f), 2.0f, 16};
+
+Scene floorOnly(float albedo) {
+    Scene s;
+    s.real.push_back(test::placed(makeQuad({4.0f, 4.0f}), {0, 0.0625f, 0}, test::diffuse(glm::vec3(albedo))));
+    return s;
+}
+
+Light directionalDown(float irradiance) {
+    Light l;
+    l.type = Light::Type::Directional;
+    l.direction = glm::vec3(0, -1, 0);
+    l.intensity = irradiance;
+    return l;
+}
+
+// A directional light straight down on a Lambertian floor: every lit floor voxel holds albedo * E / pi.
+TEST(Inject, DirectionalLightOnAFloorGivesAlbedoTimesIrradianceOverPi) {
+    Scene s = floorOnly(0.5f);
+    RayScene rays(s, SceneContent::RealOnly);
+    std::vector<ReflectiveShadowMap> rsm = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256)};
+    // The RSM carries the reflected flux: albedo * E * (floor area inside the region) = 0.5 * 2 * 4.
+    glm::dvec3 flux(0.0);
+    for (const RsmTexel& t : rsm[0].texels) flux += glm::dvec3(t.flux);
+    EXPECT_NEAR(flux.x, 4.0, 0.05);
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    Grid3 light = injectLight(rsm, kRegion, geometry);
+    const float expected = 0.5f * 2.0f / std::numbers::pi_v<float>;
+    for (int z = 1; z < 15; ++z)
+        for (int x = 1; x < 15; ++x) {
+            glm::vec4 v = light.at(x, 8, z);
+            ASSERT_EQ(v.w, 1.0f);
+            EXPECT_NEAR(v.x, expected, 0.02f * expected) << x << "," << z;
+        }
+    // Nothing above or below the floor.
+    EXPECT_EQ(light.at(8, 9, 8), glm::vec4(0.0f));
+}
+
+// A glossy floor reflects its glossy share into the volume too, spread over the hemisphere: albedo 0.3 and
+// specular 0.2 light the voxels as a Lambertian 0.5 does.
+TEST(Inject, GlossySurfacesReflectTheirWholeReflectanceIntoTheVolume) {
+    Scene s = floorOnly(0.3f);
+    s.real[0].material.specular = glm::vec3(0.2f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const std::vector<ReflectiveShadowMap> rsm = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256)};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    const Grid3 light = injectLight(rsm, kRegion, geometry);
+    EXPECT_NEAR(light.at(8, 8, 8).x, 0.5f * 2.0f / std::numbers::pi_v<float>, 0.01f);
+}
+
+// Two lights that both light the whole floor: each voxel holds the sum of their radiances, albedo * (E1 cos1
+// + E2 cos2) / pi. (Summing the texels of both before dividing by their footprints gave the mean of the two:
+// an environment map's 16 lights lit the volume at a tenth of its light.)
+TEST(Inject, TwoLightsAddTheirRadiance) {
+    Scene s = floorOnly(0.5f);
+    RayScene rays(s, SceneContent::RealOnly);
+    Light slanted = directionalDown(1.0f);
+    slanted.direction = glm::normalize(glm::vec3(0.6f, -0.8f, 0.0f));
+    const std::vector<ReflectiveShadowMap> rsms = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256),
+        renderReflectiveShadowMap(rays, slanted, kRegion, 256)};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    const Grid3 light = injectLight(rsms, kRegion, geometry);
+    const float expected = 0.5f * (2.0f + 1.0f * 0.8f) / std::numbers::pi_v<float>;
+    for (int z = 1; z < 15; ++z)
+        for (int x = 1; x < 15; ++x)
+            EXPECT_NEAR(light.at(x, 8, z).x, expected, 0.03f * expected) << x << "," << z;
+}
+
+// options.rsm.resolution "auto": a point light's map has 4 texels per voxel (128 at 32^3, 512 at 128^3 and
+// above), a directional light's 512 (its orthographic map spreads over the whole region); among several
+// lights each takes the square root of its share of the brightest one's irradiance (1/4 and 1/16 of it: a
+// half and a quarter of the side), at least a quarter. A given resolution is every light's.
+TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
+    Options options;
+    options.volume.resolution = 32;
+    const Light bright = test::pointLight({0.0f, 0.9f, 0.0f}, 1.0f);
+    Light quarter = bright, sixteenth = bright, dim = bright;
+    quarter.intensity = 0.25f;
+    sixteenth.intensity = 1.0f / 16.0f;
+    dim.intensity = 1e-4f;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, quarter, sixteenth, dim}, kRegion),
+              (std::vector<int>{128, 64, 32, 32}));
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion),
+              std::vector<int>{512});
+    options.volume.resolution = 256;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright}, kRegion), std::vector<int>{512});
+    options.rsm.resolution = 200;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, dim}, kRegion),
+              (std::vector<int>{200, 200}));
+}
+
+// Lights whose maps differ in resolution still add their radiance: each light's texels are turned into
+// radiance with their own footprints.
+TEST(Inject, LightsWithMapsOfDifferentResolutionsAddTheirRadiance) {
+    Scene s = floorOnly(0.5f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const std::vector<Light> lights = {directionalDown(2.0f), directionalDown(2.0f / 16.0f)};
+    const std::vector<int> resolutions = rsmResolutions(Options{}, lights, kRegion);
+    ASSERT_EQ(resolutions, (std::vector<int>{512, 128}));
+    const std::vector<ReflectiveShadowMap> rsms = {
+        renderReflectiveShadowMap(rays, lights[0], kRegion, resolutions[0]),
+        renderReflectiveShadowMap(rays, lights[1], kRegion, resolutions[1])};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    const Grid3 light = injectLight(rsms, kRegion, geometry);
+    const float expected = 0.5f * (2.0f + 2.0f / 16.0f) / std::numbers::pi_v<float>;
+    for (int z = 1; z < 15; ++z)
+        for (int x = 1; x < 15; ++x)
+            EXPECT_NEAR(light.at(x, 8, z).x, expected, 0.03f * expected) << x << "," << z;
+}
+
+// With a viewpoint above the floor, a light from below lights the floor's underside, which the camera does
+// not see: its texels are not kept (the volume's voxel has one radiance for both sides). Without one, or for
+// a virtual object, they are.
+TEST(Inject, ShadowMapKeepsOnlyTheViewpointsSideOfRealSurfaces) {
+    Scene s = floorOnly(0.5f);
+    s.virtuals.push_back(
+        test::placed(makeBox(glm::vec3(0.5f)), {0, -0.5f, 0}, test::diffuse(glm::vec3(0.5f))));
+    RayScene rays(s, SceneContent::RealAndVirtual);
+    Light fromBelow = directionalDown(1.0f);
+    fromBelow.direction = glm::vec3(0, 1, 0);
+    const glm::vec3 above(0.0f, 2.0f, 0.5f);
+    const ReflectiveShadowMap seen = renderReflectiveShadowMap(rays, fromBelow, kRegion, 64, above);
+    const ReflectiveShadowMap all = renderReflectiveShadowMap(rays, fromBelow, kRegion, 64);
+    auto count = [](const ReflectiveShadowMap& m, bool onFloor) {
+        return std::count_if(m.texels.begin(), m.texels.end(), [&](const RsmTexel& t) {
+            return (std::abs(t.position.y - 0.0625f) < 1e-3f) == onFloor;
+        });
+    };
+    EXPECT_EQ(count(seen, true), 0);
+    EXPECT_GT(count(all, true), 1000);
+    // The box under the floor is lit from below in both.
+    EXPECT_GT(count(seen, false), 50);
+    EXPECT_EQ(count(seen, false), count(all, false));
+    // Lit from above, the floor faces the viewpoint: all of its texels are kept.
+    const ReflectiveShadowMap fromAbove =
+        renderReflectiveShadowMap(rays, directionalDown(1.0f), kRegion, 64, above);
+    EXPECT_EQ(count(fromAbove, true),
+              count(renderReflectiveShadowMap(rays, directionalDown(1.0f), kRegion, 64), true));
+}
+
+// A point light: the voxel under it holds albedo * I / (pi d^2).
+TEST(Inject, PointLightMatchesInverseSquareIrradiance) {
+    Scene s = floorOnly(0.8f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const float height = 3.0f - 0.0625f;  // light outside the region: one fitted frustum
+    Light light = test::pointLight({0.0f, 3.0f, 0.0f}, 5.0f);
+    std::vector<ReflectiveShadowMap> rsm = {renderReflectiveShadowMap(rays, light, kRegion, 512)};
+    EXPECT_EQ(rsm[0].faces, 1);
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    Grid3 volume = injectLight(rsm, kRegion, geometry);
+    const float expected = 0.8f * 5.0f / (std::numbers::pi_v<float> * height * height);
+    const glm::vec4 v = volume.at(8, 8, 8);  // the voxel whose corner is under the light
+    EXPECT_NEAR(v.x, expected, 0.03f * expected);
+    // Light inside the region: a cube map, same answer.
+    Light inside = test::pointLight({0.0f, 0.6f, 0.0f}, 5.0f);
+    std::vector<ReflectiveShadowMap> cube = {renderReflectiveShadowMap(rays, inside, kRegion, 256)};
+    EXPECT_EQ(cube[0].faces, 6);
+    Grid3 volume2 = injectLight(cube, kRegion, geometry);
+    const float h2 = 0.6f - 0.0625f;
+    // Averaged over the voxel (0.125 wide) at distance ~0.54 the irradiance is a little lower than at its
+    // corner; compare the four voxels around the axis against the mean irradiance over them.
+    float mean = 0.25f * (volume2.at(7, 8, 7).x + volume2.at(8, 8, 7).x + volume2.at(7, 8, 8).x +
+                          volume2.at(8, 8, 8).x);
+    // Closed form: mean over the 0.25 x 0.25 square of I h / r^3 (cosine and inverse square), numerically.
+    double e = 0.0;
+    const int k = 200;
+    for (int i = 0; i < k; ++i)
+        for (int j = 0; j < k; ++j) {
+            double x = -0.125 + 0.25 * (i + 0.5) / k, z = -0.125 + 0.25 * (j + 0.5) / k;
+            double r2 = x * x + z * z + double(h2) * h2;
+            e += 5.0 * h2 / (r2 * std::sqrt(r2));
+        }
+    e /= double(k) * k;
+    EXPECT_NEAR(mean, 0.8 * e / std::numbers::pi, 0.03 * 0.8 * e / std::numbers::pi);
+}
+
+// The delta volume: negative where a virtual box now shadows the floor, positive on the lit box.
+TEST(Inject, DeltaVolumeIsNegativeInTheShadowAndPositiveOnTheObject) {
+    Scene s = floorOnly(0.5f);
+    s.virtuals.push_back(
+        test::placed(makeBox(glm::vec3(0.5f)), {0, 0.5f, 0}, test::diffuse(glm::vec3(0.9f))));
+    RayScene realOnly(s, SceneContent::RealOnly), all(s, SceneContent::RealAndVirtual);
+    const Light light = directionalDown(1.0f);
+    std::vector<ReflectiveShadowMap> full = {renderReflectiveShadowMap(all, light, kRegion, 256)};
+    std::vector<ReflectiveShadowMap> alone = {renderReflectiveShadowMap(realOnly, light, kRegion, 256)};
+    VoxelGeometry sceneGeometry = voxelize(s.real, kRegion), objectGeometry = voxelize(s.virtuals, kRegion);
+    const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
+    const VoxelGeometry* sceneOnly[] = {&sceneGeometry};
+    Grid3 delta = deltaVolume(injectLight(full, kRegion, both), injectLight(alone, kRegion, sceneOnly));
+    EXPECT_LT(delta.at(8, 8, 8).x, -0.1f);  // floor under the box
+    EXPECT_EQ(delta.at(2, 8, 2).x, 0.0f);   // floor far from the box: unchanged
+    EXPECT_GT(delta.at(8, 14, 8).x, 0.1f);  // the lit top of the box, y = 0.75: layer 14
+}
+
+// Updating the scene-alone map for the objects gives the map rendered with them, texel for texel: a light
+// whose frustum is fitted to the region, a light inside the region (6 faces), a directional light.
+TEST(ReflectiveShadowMap, UpdateForTheObjectsEqualsAFullRender) {
+    Scene s = floorOnly(0.5f);
+    s.virtuals.push_back(
+        test::placed(makeSphere(0.2f, 24), {0.1f, 0.4f, -0.1f}, test::diffuse(glm::vec3(0.9f))));
+    const RayScene realOnly(s, SceneContent::RealOnly);
+    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
+    Bounds3f objectBounds = s.virtuals[0].bounds();
+    const Light lights[] = {test::pointLight({0.3f, 3.0f, 0.2f}, 2.0f),
+                            test::pointLight({0.0f, 0.9f, 0.0f}, 2.0f), directionalDown(1.0f)};
+    for (const Light& light : lights) {
+        const ReflectiveShadowMap full = renderReflectiveShadowMap(all, light, kRegion, 128);
+        const ReflectiveShadowMap base = renderReflectiveShadowMap(realOnly, light, kRegion, 128);
+        const ReflectiveShadowMap updated =
+            updateReflectiveShadowMap(base, all, light, kRegion, objectBounds);
+        ASSERT_EQ(updated.texels.size(), full.texels.size());
+        EXPECT_EQ(updated.rayStart, full.rayStart);
+        EXPECT_EQ(updated.faces, full.faces);
+        size_t differentFromBase = 0;
+        for (size_t i = 0; i < full.texels.size(); ++i) {
+            const RsmTexel &a = updated.texels[i], &b = full.texels[i];
+            ASSERT_EQ(a.index, b.index);
+            ASSERT_EQ(a.position, b.position);
+            ASSERT_EQ(a.normal, b.normal);
+            ASSERT_EQ(a.flux, b.flux);
+            ASSERT_EQ(a.area, b.area);
+            differentFromBase += i >= base.texels.size() || base.texels[i].position != a.position;
+        }
+        EXPECT_GT(differentFromBase, 0u);  // the object is in the map
+    }
+    // The light inside the region has six faces; the object is below it, so the face looking up (+y, the
+    // third) and the faces looking away from it along x and z trace nothing again.
+    const Light& inside = lights[1];
+    const ReflectiveShadowMap base = renderReflectiveShadowMap(realOnly, inside, kRegion, 128);
+    ASSERT_EQ(base.faces, 6);
+    std::array<uint32_t, 6> perFace{};
+    for (const TexelRange& r : traceRsmUpdate(base, all, inside, kRegion, objectBounds).retraced)
+        for (uint32_t t = r.first; t < r.last; ++t) ++perFace[t / (128 * 128)];
+    EXPECT_GT(perFace[3], 0u);  // -y: below the light
+    EXPECT_EQ(perFace[1], 0u);  // -x: the object is at +x
+    EXPECT_EQ(perFace[2], 0u);  // +y
+    EXPECT_EQ(perFace[4], 0u);  // +z: the object is at -z
+}
+
+}  // namespace
+}  // namespace deltagi
+
+namespace deltagi {
+namespace {
+
+// Closed form through the whole light path: a point facing down over a uniformly lit Lambertian floor sees
+// radiance L = albedo E / pi over its hemisphere, so the cosine-weighted diffuse cones return L (minus the
+// few grazing cones that leave the region before reaching the floor: 5% of the weight for 9 cones at h =
+// 0.2).
+TEST(DiffuseCones, APointAboveALitFloorGathersTheFloorsRadiance) {
+    Scene s = floorOnly(0.5f);
+    const Light light = directionalDown(1.0f);
+    const VolumeRegion region{glm::vec3(-1.0f), 2.0f, 64};
+    RayScene rays(s, SceneContent::RealOnly);
+    std::vector<ReflectiveShadowMap> rsm = {renderReflectiveShadowMap(rays, light, region, 512)};
+    VoxelGeometry g = voxelize(s.real, region);
+    const VoxelGeometry* geometry[] = {&g};
+    MipVolume lightVolume = buildMipChain(region, injectLight(rsm, region, geometry));
+    MipVolume visibility = buildMipChain(region, std::move(g.visibility));
+    const Material white = test::diffuse(glm::vec3(1.0f));
+    const float floorRadiance = 0.5f / std::numbers::pi_v<float>;
+    for (float h : {0.2f, 0.4f}) {
+        std::vector<SurfacePoint> points = {{{0.0f, h, 0.0f}, {0, -1, 0}, {0, 0, 1}, &white, constantSurfaceMaterial(white)}};
+        Options options;
+        const glm::vec3 gathered = traceDiffuseCones(points, lightVolume, {&visibility, nullptr}, options)[0];
+        // Measured 0.139-0.141 at resolution 64 (expected 0.151 after the grazing cones): within 15%.
+        EXPECT_NEAR(gathered.x, 0.95f * floorRadiance, 0.15f * floorRadiance) << "h = " << h;
+    }
+}
+
+}  // namespace
+}  // namespace deltagi

@@ -1,0 +1,96 @@
+#include "pipeline/mipmap.h"
+
+#include <cmath>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+namespace deltagi {
+namespace {
+
+TEST(Mipmap, EachLevelKeepsTheMeanAndOcclusionBecomesTheFilledFraction) {
+    const int n = 8;
+    Grid3 g(n);
+    // One filled voxel in the first 2x2x2 block, and a gradient elsewhere.
+    g.at(0, 0, 0) = glm::vec4(1.0f, 0.0f, 1.0f, 0.0f);
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 4; x < n; ++x) g.at(x, y, z) = glm::vec4(0.0f, float(x + y + z), 0.0f, 1.0f);
+    auto mean = [](const Grid3& grid) {
+        glm::dvec4 sum(0.0);
+        for (size_t i = 0; i < grid.size(); ++i) sum += glm::dvec4(grid[i]);
+        return sum / double(grid.size());
+    };
+    const glm::dvec4 m0 = mean(g);
+    MipVolume mips = buildMipChain({glm::vec3(0), 1.0f, n}, std::move(g));
+    ASSERT_EQ(mips.levelCount(), 4);
+    EXPECT_EQ(mips.level(3).resolution(), 1);
+    for (int l = 1; l < 4; ++l) {
+        const glm::dvec4 m = mean(mips.level(l));
+        for (int c = 0; c < 4; ++c) EXPECT_NEAR(m[c], m0[c], 1e-5) << "level " << l << " channel " << c;
+    }
+    EXPECT_FLOAT_EQ(mips.level(1).at(0, 0, 0).x, 0.125f);  // 1 of 8 sub-voxels filled
+}
+
+TEST(MipVolume, TrilinearSampleIsExactAtVoxelCentresAndZeroOutside) {
+    Grid3 g(4);
+    g.at(1, 2, 3) = glm::vec4(2.0f);
+    MipVolume v = buildMipChain({glm::vec3(0), 1.0f, 4}, std::move(g));
+    EXPECT_EQ(v.sampleLevel({1.5f, 2.5f, 3.5f}, 0), glm::vec4(2.0f));
+    EXPECT_EQ(v.sampleLevel({2.0f, 2.5f, 3.5f}, 0), glm::vec4(1.0f));  // half way to an empty neighbour
+    EXPECT_EQ(v.sampleLevel({-3.0f, 0.5f, 0.5f}, 0), glm::vec4(0.0f));
+    // Level 1 voxel (0,1,1) holds the mean of its 8 children: 2/8.
+    EXPECT_FLOAT_EQ(v.sampleLevel({1.0f, 3.0f, 3.0f}, 1).x, 0.25f);
+    // Between levels, quadrilinear blending.
+    EXPECT_FLOAT_EQ(v.sample({1.0f, 3.0f, 3.0f}, 0.5f).x, 0.5f * (v.sampleLevel({1.0f, 3.0f, 3.0f}, 0).x + 0.25f));
+}
+
+// Level 0 rewritten inside a box, and the chain updated above it only: the same bits as a chain built anew.
+TEST(Mipmap, UpdatingTheLevelsAboveAChangedBoxEqualsRebuildingTheChain) {
+    const int n = 16;
+    const VolumeRegion region{glm::vec3(0), 1.0f, n};
+    auto value = [](int x, int y, int z, float seed) {
+        return glm::vec4(std::sin(seed * float(x + 3 * y)), float(z) * 0.1f + seed, 0.0f,
+                         1.0f / float(1 + x));
+    };
+    Grid3 g(n);
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) g.at(x, y, z) = value(x, y, z, 0.3f);
+    MipVolume kept = buildMipChain(region, g.clone());
+    // Odd corners, so that the box's parents straddle voxels at every level.
+    for (const VoxelBox box : {VoxelBox{{3, 5, 1}, {9, 6, 14}}, VoxelBox{{0, 0, 0}, {1, 1, 1}},
+                               VoxelBox{{15, 2, 7}, {16, 16, 8}}}) {
+        for (int z = box.lo.z; z < box.hi.z; ++z)
+            for (int y = box.lo.y; y < box.hi.y; ++y)
+                for (int x = box.lo.x; x < box.hi.x; ++x) {
+                    g.at(x, y, z) = value(x, y, z, 0.7f + float(box.lo.x));
+                    kept.levelForUpdate(0).at(x, y, z) = g.at(x, y, z);
+                }
+        updateMipChain(kept, box, VoxelBox::all(n));
+        const MipVolume fresh = buildMipChain(region, g.clone());
+        for (int l = 0; l < fresh.levelCount(); ++l)
+            for (size_t i = 0; i < fresh.level(l).size(); ++i)
+                ASSERT_EQ(std::memcmp(&kept.level(l)[i], &fresh.level(l)[i], sizeof(glm::vec4)), 0)
+                    << "level " << l << ", voxel " << i;
+    }
+}
+
+// The occupied bounds found by a scan, and a box's non-zero bounds.
+TEST(MipVolume, OccupiedBoundsAreTheBoxOfTheNonZeroVoxels) {
+    Grid3 g(8);
+    g.at(2, 3, 4) = glm::vec4(0.0f, 0.0f, 0.0f, -1.0f);
+    g.at(5, 1, 6) = glm::vec4(1.0f);
+    const VoxelBox inner = nonZeroBounds(g, {{3, 0, 0}, {8, 8, 8}});
+    EXPECT_EQ(inner.lo, glm::ivec3(5, 1, 6));
+    EXPECT_EQ(inner.hi, glm::ivec3(6, 2, 7));
+    EXPECT_TRUE(nonZeroBounds(g, {{0, 0, 0}, {2, 8, 8}}).empty());
+    const MipVolume v = buildMipChain({glm::vec3(0), 1.0f, 8}, std::move(g));
+    EXPECT_EQ(v.occupiedBounds().lo, glm::ivec3(2, 1, 4));
+    EXPECT_EQ(v.occupiedBounds().hi, glm::ivec3(6, 4, 7));
+    EXPECT_FALSE(v.mayReadNonZero({20.0f, 2.0f, 5.0f}, 0));
+    EXPECT_TRUE(v.mayReadNonZero({3.0f, 2.0f, 5.0f}, 0));
+}
+
+}  // namespace
+}  // namespace deltagi

@@ -1,0 +1,60 @@
+// The objects' light on real surfaces by rays (traceObjectBounceRays) against the closed form of a
+// uniformly bright sphere: a floor point at distance d under the centre of a sphere of radius r and radiance
+// L receives E = pi L (r / d)^2, so the diffuse cones' quantity E / pi is L (r / d)^2.
+#include "pipeline/object_bounce_rays.h"
+
+#include <gtest/gtest.h>
+
+#include "core/ray_scene.h"
+#include "pipeline/mipmap.h"
+#include "pipeline/voxelize.h"
+#include "scene/shapes.h"
+#include "test_scenes.h"
+
+namespace deltagi {
+namespace {
+
+TEST(ObjectBounceRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
+    const float radius = 0.2f, height = 0.5f, radiance = 2.0f;
+    Scene s;
+    s.real.push_back(
+        test::placed(makeQuad({2.0f, 2.0f}), {0.5f, 0.0f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    s.virtuals.push_back(
+        test::placed(makeSphere(radius, 64), {0.5f, height, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    const VolumeRegion region{glm::vec3(0.0f, -0.25f, 0.0f), 1.0f, 64};
+    const VoxelGeometry sphere = voxelize(s.virtuals, region);
+    Grid3 light(region.resolution);
+    for (size_t i = 0; i < light.size(); ++i) {
+        const float occupancy = sphere.visibility[i].x;
+        light[i] = glm::vec4(glm::vec3(radiance * occupancy), occupancy);
+    }
+    const MipVolume objectLight = buildMipChain(region, std::move(light));
+    const RayScene realOnly(s, SceneContent::RealOnly);
+    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
+    const ShadowRayScenes rays{&realOnly,
+                               &all,
+                               {glm::vec3(0.5f - radius, height - radius, 0.5f - radius),
+                                glm::vec3(0.5f + radius, height + radius, 0.5f + radius)}};
+    Options options;
+    options.diffuse.objectRays = 256;
+    const Material& floor = s.real[0].material;
+    std::vector<SurfacePoint> points;
+    for (const float dx : {0.0f, 0.3f, 0.45f})
+        points.push_back(test::floorPoint({0.5f + dx, 0.0f, 0.5f}, floor));
+    const std::vector<glm::vec3> got = traceObjectBounceRays(points, objectLight, rays, options);
+    // Under the centre: L (r / d)^2. Off to the side the sphere's disk is tilted: E / pi = L (r / D)^2 cos,
+    // with D the distance to the centre and cos the angle of the centre from the normal.
+    for (size_t k = 0; k < points.size(); ++k) {
+        const glm::vec3 toCentre = glm::vec3(0.5f, height, 0.5f) - points[k].position;
+        const float d = glm::length(toCentre);
+        const float expected = radiance * (radius / d) * (radius / d) * (toCentre.y / d);
+        EXPECT_NEAR(got[k].x, expected, 0.08f * expected) << k;
+    }
+    // A floor point with the sphere below its horizon (its back side) gets nothing.
+    SurfacePoint below = test::floorPoint({0.5f, height + 0.4f, 0.5f}, floor);
+    const SurfacePoint under[] = {below};
+    EXPECT_EQ(traceObjectBounceRays(under, objectLight, rays, options)[0], glm::vec3(0.0f));
+}
+
+}  // namespace
+}  // namespace deltagi

@@ -1,0 +1,175 @@
+// ObjectVolumes keeps the objects' volumes from frame to frame and redoes only what the objects change: every
+// level of every volume must be the one computed from scratch, bit for bit, whatever the objects do.
+#include "pipeline/object_volumes.h"
+
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "test_scenes.h"
+
+namespace deltagi {
+namespace {
+
+using test::diffuse;
+using test::placed;
+
+// A floor and a red block under a lamp inside the region (a 6-face RSM), a spot light outside it, and a ball.
+Scene floorWithBall() {
+    Scene s = test::floorScene();
+    s.real.push_back(
+        placed(makeBox({0.3f, 0.6f, 0.3f}), {-0.5f, 0.3f, -0.3f}, diffuse({0.8f, 0.2f, 0.2f}), "block"));
+    s.lights[0].position = {0.1f, 0.9f, 0.1f};
+    Light spot = test::pointLight({1.2f, 1.4f, 0.6f}, 3.0f);
+    spot.type = Light::Type::Spot;
+    spot.direction = glm::normalize(glm::vec3(-1.2f, -1.4f, -0.6f));
+    spot.outerAngleDeg = 50.0f;
+    spot.innerAngleDeg = 30.0f;
+    s.lights.push_back(spot);
+    s.virtuals.push_back(
+        placed(makeSphere(0.2f, 24), {0.1f, 0.25f, 0.0f}, diffuse({0.2f, 0.3f, 0.9f}), "ball"));
+    return s;
+}
+
+const VolumeRegion kRegion{glm::vec3(-0.8f, -0.3f, -0.8f), 1.6f, 32};
+
+void moveMesh(TriangleMesh& m, glm::vec3 offset) {
+    for (glm::vec3& p : m.positions) p += offset;
+}
+
+// The same bits in every voxel of every level.
+void expectSameVolume(const MipVolume& kept, const MipVolume& scratch, const char* name) {
+    ASSERT_EQ(kept.levelCount(), scratch.levelCount()) << name;
+    for (int l = 0; l < kept.levelCount(); ++l) {
+        const Grid3 &a = kept.level(l), &b = scratch.level(l);
+        ASSERT_EQ(a.size(), b.size()) << name;
+        for (size_t i = 0; i < a.size(); ++i)
+            ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(glm::vec4)), 0)
+                << name << ": level " << l << ", voxel " << i << ": (" << a[i].x << ", " << a[i].y << ", "
+                << a[i].z << ", " << a[i].w << ") instead of (" << b[i].x << ", " << b[i].y << ", " << b[i].z
+                << ", " << b[i].w << ")";
+    }
+    // The occupied bounds may be larger than the scan's, never smaller.
+    VoxelBox occupied = kept.occupiedBounds();
+    occupied.extend(scratch.occupiedBounds());
+    EXPECT_EQ(occupied.lo, kept.occupiedBounds().lo) << name;
+    EXPECT_EQ(occupied.hi, kept.occupiedBounds().hi) << name;
+}
+
+// The real scene's share, computed once as the renderer keeps it.
+struct RealScene {
+    RayScene rays;
+    VoxelGeometry geometry;
+    std::vector<ReflectiveShadowMap> rsms;
+    Grid3 light;
+    explicit RealScene(const Scene& s)
+        : rays(s, SceneContent::RealOnly), geometry(voxelize(s.real, kRegion)) {
+        for (const Light& l : s.lights)
+            rsms.push_back(renderReflectiveShadowMap(rays, l, kRegion, s.options.rsm.resolution));
+        const VoxelGeometry* alone[] = {&geometry};
+        light = injectLight(rsms, kRegion, alone);
+    }
+};
+
+// One frame as the renderer runs it (stages 1-4 on the kept volumes), checked against everything computed
+// from scratch. Returns the number of voxels injected.
+size_t frameEqualsScratch(ObjectVolumes& kept, const RealScene& real, const Scene& s) {
+    const RayScene all(s, SceneContent::VirtualOnly, &real.rays);
+    Bounds3f objectBounds;
+    for (const TriangleMesh& m : s.virtuals) objectBounds.extend(m.bounds());
+    kept.voxelize(s.virtuals, kRegion);
+    std::vector<RsmUpdate> updates;
+    std::vector<ReflectiveShadowMap> withObjects;
+    for (size_t l = 0; l < s.lights.size(); ++l) {
+        updates.push_back(traceRsmUpdate(real.rsms[l], all, s.lights[l], kRegion, objectBounds));
+        withObjects.push_back(applyRsmUpdate(real.rsms[l], updates.back()));
+    }
+    kept.inject({real.geometry, real.rsms, real.light}, updates);
+    kept.mipmap();
+
+    // From scratch, as render() does (the updated maps are the maps rendered with the objects, texel for
+    // texel: ReflectiveShadowMap.UpdateForTheObjectsEqualsAFullRender).
+    VoxelGeometry objects = voxelize(s.virtuals, kRegion);
+    const VoxelGeometry* geometry[] = {&real.geometry, &objects};
+    Grid3 full = injectLight(withObjects, kRegion, geometry);
+    Grid3 delta = deltaVolume(full, real.light);
+    expectSameVolume(kept.objectVisibility(), buildMipChain(kRegion, std::move(objects.visibility)),
+                     "object visibility");
+    expectSameVolume(kept.fullLight(), buildMipChain(kRegion, std::move(full)), "full light");
+    expectSameVolume(kept.deltaLight(), buildMipChain(kRegion, std::move(delta)), "delta light");
+    return kept.injectedBox().count();
+}
+
+TEST(ObjectVolumes, MovingObjectFramesEqualVolumesFromScratch) {
+    Scene s = floorWithBall();
+    const RealScene real(s);
+    ObjectVolumes kept;
+    const size_t all = VoxelBox::all(kRegion.resolution).count();
+    EXPECT_EQ(frameEqualsScratch(kept, real, s), all);  // the first frame computes everything
+    const glm::vec3 path[] = {
+        {0.05f, 0.0f, 0.03f},  // small moves: only the box around the ball and its shadows is injected
+        {0.04f, 0.02f, -0.05f}, {0.55f, 0.0f, 0.0f},  // partly out of the region (x > 0.8)
+        {0.6f, 0.0f, 0.0f},                           // all out: only its shadow on the floor is left
+        {-1.3f, 0.0f, 0.25f},                         // back in, far away
+        {0.0f, -0.1f, 0.0f},                          // into the floor
+    };
+    for (const glm::vec3& offset : path) {
+        SCOPED_TRACE(testing::Message()
+                     << "moved by (" << offset.x << ", " << offset.y << ", " << offset.z << ")");
+        moveMesh(s.virtuals[0], offset);
+        const size_t injected = frameEqualsScratch(kept, real, s);
+        if (HasFatalFailure()) return;
+        EXPECT_LT(injected, all / 4);
+    }
+}
+
+TEST(ObjectVolumes, ChangesOfTheObjectsMaterialAndNumberEqualVolumesFromScratch) {
+    Scene s = floorWithBall();
+    const RealScene real(s);
+    ObjectVolumes kept;
+    int frame = 0;
+    auto next = [&] {
+        SCOPED_TRACE(testing::Message() << "frame " << frame++);
+        return frameEqualsScratch(kept, real, s);
+    };
+    next();
+    s.virtuals[0].material.albedo = {0.9f, 0.9f, 0.1f};  // other reflected flux: same texels, new values
+    next();
+    s.virtuals[0].material.emission = {2.0f, 1.0f, 0.5f};  // emissive: the objects' emission grid appears
+    next();
+    s.virtuals.push_back(
+        placed(makeBox(glm::vec3(0.15f)), {-0.2f, 0.1f, 0.4f}, diffuse(glm::vec3(0.7f)), "cube"));
+    next();
+    s.virtuals[0].material.emission = glm::vec3(0.0f);  // and goes again
+    moveMesh(s.virtuals[1], {0.1f, 0.0f, -0.1f});
+    next();
+    s.virtuals.erase(s.virtuals.begin());  // one object fewer
+    const size_t injected = next();
+    EXPECT_LT(injected, VoxelBox::all(kRegion.resolution).count() / 4);
+}
+
+// A directional light's map is traced again whole when the objects reach beyond the real scene (its rays
+// start further out); a large jump injects everything again. Both give the volumes from scratch too.
+TEST(ObjectVolumes, WholeMapsRetracedAndLargeJumpsEqualVolumesFromScratch) {
+    Scene s = floorWithBall();
+    Light sun;
+    sun.type = Light::Type::Directional;
+    sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+    sun.intensity = 1.5f;
+    s.lights = {sun};
+    const RealScene real(s);
+    ObjectVolumes kept;
+    frameEqualsScratch(kept, real, s);
+    moveMesh(s.virtuals[0], {0.05f, 0.0f, 0.05f});
+    frameEqualsScratch(kept, real, s);
+    // A ball as large as the region.
+    s.virtuals[0] = placed(makeSphere(0.7f, 24), {0.0f, 0.4f, 0.0f}, diffuse(glm::vec3(0.5f)), "big");
+    EXPECT_EQ(frameEqualsScratch(kept, real, s), VoxelBox::all(kRegion.resolution).count());
+    s.virtuals[0] = placed(makeSphere(0.1f, 24), {0.3f, 0.2f, 0.0f}, diffuse(glm::vec3(0.5f)), "small");
+    frameEqualsScratch(kept, real, s);
+    moveMesh(s.virtuals[0], {-0.05f, 0.0f, 0.0f});
+    frameEqualsScratch(kept, real, s);
+}
+
+}  // namespace
+}  // namespace deltagi

@@ -1,0 +1,181 @@
+// Shadow rays (options.shadow.method "rays") against closed forms: the umbra of a sphere under a point light,
+// and the penumbra of a disk light behind a straight edge.
+#include "pipeline/shadow_rays.h"
+
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "deltagi/renderer.h"
+#include "test_scenes.h"
+
+namespace deltagi {
+namespace {
+
+using test::diffuse;
+using test::floorPoint;
+using test::placed;
+
+// A sphere of radius 0.2 at height 0.5 under a point light at 1.5 casts a round umbra of radius
+// 1.5 tan(asin(0.2 / 1.0)) = 0.306 on the floor, with no penumbra. Rendered end to end with the default
+// volume (twice the sphere's box, which does not reach the floor): the floor's change is its whole direct
+// light inside the umbra and nothing outside. The paper's shadow cones removed 56-64 % of it and spread it
+// wider.
+TEST(ShadowRays, SphereUnderAPointLightCastsItsProjectedUmbra) {
+    Scene scene = test::floorScene();
+    scene.real[0] = placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor");
+    // A black sphere: it reflects nothing, so the floor's change is the shadow alone.
+    scene.virtuals.push_back(placed(makeSphere(0.2f, 96), {0, 0.5f, 0}, diffuse(glm::vec3(0.0f)), "ball"));
+    scene.camera = test::lookAtCamera({0.0f, 1.6f, 1.6f}, {0, 0, 0}, 160, 120, 60.0f);
+    const RenderOutput out = render(scene);
+    const float umbra = 1.5f * std::tan(std::asin(0.2f));
+    const glm::vec3 eye = scene.camera.position();
+    int inside = 0, outside = 0;
+    for (int y = 0; y < scene.camera.height; ++y)
+        for (int x = 0; x < scene.camera.width; ++x) {
+            if (out.objectMask.at(x, y, 0) > 0.0f) continue;
+            const glm::vec3 dir = scene.camera.rayDirection(x + 0.5f, y + 0.5f);
+            if (dir.y >= 0.0f) continue;
+            const glm::vec3 p = eye + dir * (-eye.y / dir.y);
+            const float r = glm::length(glm::vec2(p.x, p.z));
+            const glm::vec3 toLight = glm::vec3(0, 1.5f, 0) - p;
+            const float d2 = glm::dot(toLight, toLight);
+            const float direct = 0.5f / std::numbers::pi_v<float> * 2.0f * (1.5f / std::sqrt(d2)) / d2;
+            const float change = out.delta.at(x, y, 0);
+            if (r < umbra - 0.06f) {
+                EXPECT_NEAR(change, -direct, 0.05f * direct) << "umbra at r = " << r;
+                ++inside;
+            } else if (r > umbra + 0.1f && r < 1.0f) {  // beyond the filter's reach (2 pixels)
+                EXPECT_NEAR(change, 0.0f, 0.02f * direct) << "lit at r = " << r;
+                ++outside;
+            }
+        }
+    EXPECT_GT(inside, 50);
+    EXPECT_GT(outside, 500);
+}
+
+// A disk light of radius a = 0.1 at height 1 above a straight edge at height 0.5 (an opaque plate over
+// x < 0): a floor point at x sees the part of the disk beyond -x, so its visible fraction is the disk's area
+// fraction beyond a chord at distance -x: (acos(d) - d sqrt(1 - d^2)) / pi with d = -x / a. The penumbra is
+// 2a wide, centred under the edge.
+TEST(ShadowRays, DiskLightPenumbraFollowsTheChordAreaBehindAnEdge) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(placed(makeQuad({2.0f, 2.0f}), {-1.0f, 0.5f, 0}, diffuse(glm::vec3(0.5f)), "plate"));
+    Light light = test::pointLight({0.0f, 1.0f, 0.0f}, 1.0f);
+    light.radius = 0.1f;
+    scene.lights.push_back(light);
+    const RayScene rays(scene, SceneContent::RealOnly);
+    Options options;
+    options.shadow.raySamples = 256;
+    std::vector<SurfacePoint> points;
+    std::vector<float> xs;
+    for (float x = -0.14f; x <= 0.1401f; x += 0.02f) {
+        points.push_back(floorPoint({x, 0.0f, 0.3f * x}, scene.real[0].material));
+        xs.push_back(x);
+    }
+    const std::vector<ShadowOcclusion> shadows =
+        traceShadowRays(points, scene.lights, {&rays, nullptr, {}}, options, ShadowMode::SceneOnly);
+    for (size_t i = 0; i < xs.size(); ++i) {
+        const float d = glm::clamp(-xs[i] / 0.1f, -1.0f, 1.0f);
+        const float visible = (std::acos(d) - d * std::sqrt(1.0f - d * d)) / std::numbers::pi_v<float>;
+        EXPECT_NEAR(1.0f - shadows[i].scene, visible, 0.04f) << "x = " << xs[i];
+    }
+}
+
+// Relighting reads only the change the objects make: where the scene already blocks a sample, the objects
+// blocking it too changes nothing (no double shadow, §3.2), and points whose rays cannot reach the objects
+// get no rays.
+TEST(ShadowRays, RelightingCountsOnlySamplesTheSceneLeavesOpen) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(placed(makeQuad({2.0f, 2.0f}), {-1.0f, 0.5f, 0}, diffuse(glm::vec3(0.5f)), "plate"));
+    // A box over the whole edge between plate and light: it blocks what the plate blocks, and more.
+    scene.virtuals.push_back(
+        placed(makeBox({0.4f, 0.02f, 0.4f}), {0, 0.75f, 0}, diffuse(glm::vec3(0.5f)), "lid"));
+    Light light = test::pointLight({0.0f, 1.0f, 0.0f}, 1.0f);
+    light.radius = 0.1f;
+    scene.lights.push_back(light);
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
+    Options options;
+    options.shadow.raySamples = 64;
+    const Material& m = scene.real[0].material;
+    const std::vector<SurfacePoint> points = {floorPoint({-0.3f, 0, 0}, m), floorPoint({0.3f, 0, 0}, m),
+                                              floorPoint({1.8f, 0, 1.8f}, m)};
+    const ShadowRayScenes rays{&realOnly, &objects, scene.virtuals[0].bounds()};
+    const auto relit = traceShadowRays(points, scene.lights, rays, options, ShadowMode::DeltaShadow);
+    const auto shaded = traceShadowRays(points, scene.lights, rays, options, ShadowMode::Shaded);
+    // Under the plate: in its shadow already, the lid changes nothing.
+    EXPECT_EQ(shadowFactor(relit[0], ShadowMode::DeltaShadow), 0.0f);
+    EXPECT_EQ(shaded[0].combined, 1.0f);
+    // In the open, under the lid: all of the light is taken away.
+    EXPECT_FLOAT_EQ(shadowFactor(relit[1], ShadowMode::DeltaShadow), -1.0f);
+    EXPECT_FLOAT_EQ(shaded[1].combined, 1.0f);
+    EXPECT_FLOAT_EQ(shaded[1].scene, 0.0f);
+    // Far away, out of the lid's shadow: nothing.
+    EXPECT_EQ(shadowFactor(relit[2], ShadowMode::DeltaShadow), 0.0f);
+    EXPECT_EQ(shaded[2].combined, 0.0f);
+}
+
+// A pixel's shadow is the light's over the pixel's area: with the pixel's sub-samples (PixelSamples), two of
+// them under the plate's edge and two in the open give half the light blocked, whichever the centre is
+// (the centre alone gave 0 or 1). A sub-sample facing away from the light takes no part.
+TEST(ShadowRays, APixelsSubSamplesShareItsShadow) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(placed(makeQuad({2.0f, 2.0f}), {-1.0f, 0.5f, 0}, diffuse(glm::vec3(0.5f)), "plate"));
+    scene.lights.push_back(test::pointLight({0.0f, 1.0f, 0.0f}, 1.0f));  // no size: one ray per sample
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    const Material& m = scene.real[0].material;
+    Options options;
+    PixelSamples samples;
+    samples.perPixel = 4;
+    samples.rect = {0, 0, 1, 1};
+    samples.points = {floorPoint({-0.01f, 0, 0}, m), floorPoint({0.01f, 0, 0}, m),
+                      floorPoint({-0.01f, 0, 0.01f}, m), floorPoint({0.01f, 0, 0.01f}, m)};
+    for (const glm::vec3 centre : {glm::vec3(-0.005f, 0, 0.005f), glm::vec3(0.005f, 0, 0.005f)}) {
+        const std::vector<SurfacePoint> points = {floorPoint(centre, m)};
+        const auto alone =
+            traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options, ShadowMode::Shaded);
+        EXPECT_EQ(alone[0].combined, centre.x < 0.0f ? 1.0f : 0.0f);
+        const auto area = traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options,
+                                          ShadowMode::Shaded, {}, &samples, 1);
+        EXPECT_FLOAT_EQ(area[0].combined, 0.5f) << "centre x = " << centre.x;
+        EXPECT_FLOAT_EQ(area[0].scene, 0.5f);
+    }
+    // The two open sub-samples turned away from the light: only the shadowed ones count.
+    samples.points[1].normal = samples.points[3].normal = glm::vec3(0, -1, 0);
+    const std::vector<SurfacePoint> points = {floorPoint({0.005f, 0, 0.005f}, m)};
+    const auto area = traceShadowRays(points, scene.lights, {&realOnly, nullptr, {}}, options,
+                                      ShadowMode::Shaded, {}, &samples, 1);
+    EXPECT_FLOAT_EQ(area[0].combined, 1.0f);
+    // And the light before the shadow is their mean: half of the facing points' (combineLighting).
+    const std::vector<ShadowOcclusion> open(1);
+    const auto shadedAlone = combineLighting(points, scene.lights, open, ShadowMode::Shaded, {}, {});
+    const auto shadedArea =
+        combineLighting(points, scene.lights, open, ShadowMode::Shaded, {}, {}, nullptr, 1, &samples);
+    EXPECT_NEAR(shadedArea[0].x, 0.5f * shadedAlone[0].x, 1e-3f * shadedAlone[0].x);
+}
+
+// Sample points on a sphere light lie on its disk facing the point; a light without a size is one ray.
+TEST(ShadowRays, SamplesLieOnTheLightsDiskFacingThePoint) {
+    Light light = test::pointLight({0.0f, 2.0f, 0.0f}, 1.0f);
+    EXPECT_EQ(shadowRayCount(light, 16), 1);
+    light.radius = 0.25f;
+    EXPECT_EQ(shadowRayCount(light, 16), 16);
+    EXPECT_EQ(shadowRayCount(light, 20), 16);
+    const glm::vec3 p(1.0f, 0.0f, 0.5f);
+    const glm::vec3 axis = glm::normalize(light.position - p);
+    for (float u : {0.05f, 0.5f, 0.95f})
+        for (float v : {0.1f, 0.6f}) {
+            const ShadowRaySample s = sampleShadowRay(light, p, u, v);
+            const glm::vec3 target = p + s.wi * s.distance;
+            EXPECT_NEAR(glm::dot(target - light.position, axis), 0.0f, 1e-5f);
+            EXPECT_LE(glm::length(target - light.position), 0.25f + 1e-5f);
+        }
+}
+
+}  // namespace
+}  // namespace deltagi
