@@ -69,16 +69,12 @@ glm::vec3 mappedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float 
 
 }  // namespace
 
-float SurfaceMaterial::phongExponent() const {
-    // GGX: the exponent whose cos^n falls to half at the GGX lobe's half-maximum (ggx.h).
-    if (model == MaterialModel::MetallicRoughness) return ggxPhongExponent(roughness * roughness);
-    // Phong: the Blinn-Phong/Beckmann correspondence n = 2/r^2 - 2 (Material::phongExponent).
-    const float r = std::max(roughness, 1e-3f);
-    return std::max(2.0f / (r * r) - 2.0f, 0.0f);
+// GGX: the exponent whose cos^n falls to half at the GGX lobe's half-maximum (ggx.h).
+float SurfaceMaterial::ggxPhongExponentOf(float perceptualRoughness) {
+    return ggxPhongExponent(perceptualRoughness * perceptualRoughness);
 }
 
-glm::vec3 SurfaceMaterial::specularReflectance(float nDotV) const {
-    if (model != MaterialModel::MetallicRoughness) return specular;
+glm::vec3 SurfaceMaterial::ggxSpecularReflectance(float nDotV) const {
     const glm::vec4 c0(-1.0f, -0.0275f, -0.572f, 0.022f), c1(1.0f, 0.0425f, 1.04f, -0.04f);
     const glm::vec4 r = roughness * c0 + c1;
     const float a004 = std::min(r.x * r.x, std::exp2(-9.28f * std::clamp(nDotV, 0.0f, 1.0f))) * r.x + r.y;

@@ -3,6 +3,8 @@
 // reflective shadow maps, voxelization and the path tracer use, so that every stage sees the same texel.
 #pragma once
 
+#include <algorithm>
+
 #include <glm/glm.hpp>
 
 #include "deltagi/scene.h"
@@ -28,12 +30,24 @@ struct SurfaceMaterial {
     glm::vec3 volumeReflectance() const { return diffuse + specular; }
     // The exponent of the Phong lobe cos^n around the mirror direction that the specular cone stands for:
     // Phong's own (Material::phongExponent), or the one as wide as the GGX lobe's half-maximum.
-    float phongExponent() const;
+    float phongExponent() const {
+        if (model == MaterialModel::MetallicRoughness) return ggxPhongExponentOf(roughness);
+        // Phong: the Blinn-Phong/Beckmann correspondence n = 2/r^2 - 2 (Material::phongExponent).
+        const float r = std::max(roughness, 1e-3f);
+        return std::max(2.0f / (r * r) - 2.0f, 0.0f);
+    }
     // What the specular cone's radiance is weighted by, seen at n.v = `nDotV`: Phong's glossy reflectance;
     // for GGX the lobe's directional albedo with Schlick's Fresnel, F0 * A + B (the split-sum
     // approximation), after Karis' analytic fit ("Physically Based Shading on Mobile", 2014): the glancing
     // Fresnel rise of a dielectric, and the energy a rough lobe loses.
-    glm::vec3 specularReflectance(float nDotV) const;
+    glm::vec3 specularReflectance(float nDotV) const {
+        return model == MaterialModel::MetallicRoughness ? ggxSpecularReflectance(nDotV) : specular;
+    }
+
+  private:
+    // The GGX model's: the exponent as wide as the lobe's half-maximum (ggx.h), and the split-sum albedo.
+    static float ggxPhongExponentOf(float perceptualRoughness);
+    glm::vec3 ggxSpecularReflectance(float nDotV) const;
 };
 
 // The values of a material without textures and vertex colours (its factors).
