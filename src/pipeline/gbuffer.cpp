@@ -200,9 +200,9 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                     const glm::vec3 dir = directions[next++];
                     if (!hit.hit()) continue;
                     ++virtualCount;
-                    // Textures filtered over the whole pixel, as at its centre: the sub-samples' light is
-                    // averaged over the pixel anyway, and finer mip levels cost cache misses.
-                    out[sy * k + sx] = toSurfacePoint(hit, dir, pixelAngleOf(camera));
+                    // Textures filtered over the sub-sample's share of the pixel (over the whole pixel,
+                    // quality suite's cornell-textured: object_rel_rmse 0.462 -> 0.517, blurred twice).
+                    out[sy * k + sx] = toSurfacePoint(hit, dir, pixelAngleOf(camera) / static_cast<float>(k));
                     const float offset = ox * ox + oy * oy;
                     if (offset < bestOffset) {
                         bestOffset = offset;
