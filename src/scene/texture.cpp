@@ -361,10 +361,13 @@ struct LevelLookup {
         float s = u * width - 0.5f, t = v * height - 0.5f;
         float x0 = std::floor(s), y0 = std::floor(t);
         float fx = s - x0, fy = t - y0;
-        int x = static_cast<int>(x0), y = static_cast<int>(y0);
-        glm::vec4 top = glm::mix(at(x, y), at(x + 1, y), fx);
-        glm::vec4 bottom = glm::mix(at(x, y + 1), at(x + 1, y + 1), fx);
-        return glm::mix(top, bottom, fy);
+        const int x = static_cast<int>(x0), y = static_cast<int>(y0);
+        // Each of the two columns and rows wrapped once (not each of the four texels' indices).
+        const size_t left = static_cast<size_t>(wrapIndex(x, width, wrapS));
+        const size_t right = static_cast<size_t>(wrapIndex(x + 1, width, wrapS));
+        const glm::vec4* top = texels + static_cast<size_t>(wrapIndex(y, height, wrapT)) * width;
+        const glm::vec4* bottom = texels + static_cast<size_t>(wrapIndex(y + 1, height, wrapT)) * width;
+        return glm::mix(glm::mix(top[left], top[right], fx), glm::mix(bottom[left], bottom[right], fx), fy);
     }
 };
 
