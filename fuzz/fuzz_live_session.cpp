@@ -1,7 +1,8 @@
-// libFuzzer target: the live session's message handler (src/live/live_session.h), as `deltagi serve` calls it for
-// each WebSocket message. Every input must end in a reply or a change; an exception that escapes handle(), a
-// crash or a sanitizer finding is a finding. The session is the tiny scene of tests/test_scene_json.h,
-// written once to a temporary folder; after each message the scene must still be one the renderer takes.
+// libFuzzer target: the live session's message handler (src/live/live_session.h), as `deltagi serve` calls it
+// for each WebSocket message. Every input must end in a reply or a change; an exception that escapes
+// handle(), a crash or a sanitizer finding is a finding. The session is the tiny scene of
+// tests/test_scene_json.h, written once to a temporary folder; after each message the scene must still be one
+// the renderer takes.
 #include <unistd.h>
 
 #include <cstddef>

@@ -40,7 +40,7 @@ enum class MaterialModel { Phong, MetallicRoughness };
 enum class AlphaMode { Opaque, Mask };
 
 struct Material {
-    glm::vec3 albedo{0.8f};    // "albedo": diffuse reflectance in [0,1]; MetallicRoughness: base colour factor
+    glm::vec3 albedo{0.8f};  // "albedo": diffuse reflectance in [0,1]; MetallicRoughness: base colour factor
     glm::vec3 specular{0.0f};  // "specular": glossy reflectance in [0,1] (Phong only)
     float roughness = 1.0f;    // "roughness" in (0,1], or "glossiness" = 1 - roughness
     // "emission" times "emission_scale": emitted radiance (W / (sr m^2), per world unit squared), linear RGB

@@ -30,13 +30,13 @@ Scene loadScene(const nlohmann::json& document, const std::filesystem::path& fil
 // The options as JSON, every key with its value (the defaults where the scene did not set one).
 nlohmann::json optionsToJson(const Options& options);
 
-// ---- tracked camera sequences (src/scene/sequence_io.cpp) -------------------------------------------------------
-// As capture tools write them: the nerfstudio / instant-ngp `transforms.json` that COLMAP, Polycam, Record3D,
-// Metashape and others are converted into. Intrinsics (fl_x fl_y cx cy w h, or camera_angle_x), the camera
-// model (PINHOLE, OPENCV with k1 k2 (k3) p1 p2, OPENCV_FISHEYE with k1..k4) globally or per frame; per frame
-// `file_path` (the photo, relative to the file) and `transform_matrix` (camera to world, OpenGL axes: the
-// camera looks down -z with +y up, as deltagi's cameras do). Keys deltagi does not use (aabb_scale,
-// depth_file_path, ...) are ignored.
+// ---- tracked camera sequences (src/scene/sequence_io.cpp)
+// ------------------------------------------------------- As capture tools write them: the nerfstudio /
+// instant-ngp `transforms.json` that COLMAP, Polycam, Record3D, Metashape and others are converted into.
+// Intrinsics (fl_x fl_y cx cy w h, or camera_angle_x), the camera model (PINHOLE, OPENCV with k1 k2 (k3) p1
+// p2, OPENCV_FISHEYE with k1..k4) globally or per frame; per frame `file_path` (the photo, relative to the
+// file) and `transform_matrix` (camera to world, OpenGL axes: the camera looks down -z with +y up, as
+// deltagi's cameras do). Keys deltagi does not use (aabb_scale, depth_file_path, ...) are ignored.
 
 // A range of frames "A:B" (A included, B not; either may be left out: "A:", ":B", ":").
 struct FrameRange {

@@ -46,8 +46,9 @@ class Texture {
                                                const std::string& where);
     // The same for an image held in memory (a texture embedded in a GLB file): `formatHint` is the file
     // extension or MIME type the container gives ("png", "image/jpeg"), may be empty.
-    static std::shared_ptr<const Texture> decode(std::span<const std::byte> encoded, std::string_view formatHint,
-                                                 TextureEncoding encoding, const std::string& where);
+    static std::shared_ptr<const Texture> decode(std::span<const std::byte> encoded,
+                                                 std::string_view formatHint, TextureEncoding encoding,
+                                                 const std::string& where);
 
     int width() const { return width_; }
     int height() const { return height_; }

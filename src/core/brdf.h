@@ -50,7 +50,8 @@ inline glm::vec3 evalBrdf(const SurfaceMaterial& m, glm::vec3 n, glm::vec3 wo, g
 }
 
 // The BRDF of a material's factors (no textures): tests and callers without a surface point.
-inline glm::vec3 evalBrdf(const Material& m, glm::vec3 n, glm::vec3 wo, glm::vec3 wi, float lightAngle = 0.0f) {
+inline glm::vec3 evalBrdf(const Material& m, glm::vec3 n, glm::vec3 wo, glm::vec3 wi,
+                          float lightAngle = 0.0f) {
     return evalBrdf(constantSurfaceMaterial(m), n, wo, wi, lightAngle);
 }
 

@@ -1,8 +1,8 @@
-// Importance sampling of the BRDFs (brdf.h). Phong: a mixture of a cosine-weighted hemisphere for the Lambertian
-// part and the Phong lobe cos^n around the mirror direction for the glossy part, each lobe chosen with a
-// probability proportional to its reflectance. The reference path tracer samples with these; the BRDF values
-// themselves always come from evalBrdf(). Metallic-roughness: ggx.h's mixture of the cosine hemisphere and
-// GGX's visible normals.
+// Importance sampling of the BRDFs (brdf.h). Phong: a mixture of a cosine-weighted hemisphere for the
+// Lambertian part and the Phong lobe cos^n around the mirror direction for the glossy part, each lobe chosen
+// with a probability proportional to its reflectance. The reference path tracer samples with these; the BRDF
+// values themselves always come from evalBrdf(). Metallic-roughness: ggx.h's mixture of the cosine hemisphere
+// and GGX's visible normals.
 #pragma once
 
 #include <algorithm>
@@ -56,7 +56,8 @@ inline float brdfPdf(const SurfaceMaterial& m, glm::vec3 n, glm::vec3 wo, glm::v
 // Samples wi for the BRDF at a surface with unit normal n (on the side of wo) from three uniform numbers:
 // uLobe picks the lobe, (u1, u2) the direction. The Phong lobe can reach below the surface: such samples come
 // back with zero weight, which keeps the estimator unbiased (the lobe's mass there has zero integrand).
-inline BrdfSample sampleBrdf(const SurfaceMaterial& m, glm::vec3 n, glm::vec3 wo, float uLobe, float u1, float u2) {
+inline BrdfSample sampleBrdf(const SurfaceMaterial& m, glm::vec3 n, glm::vec3 wo, float uLobe, float u1,
+                             float u2) {
     if (m.model == MaterialModel::MetallicRoughness)
         return sampleGltfBrdf(m.diffuse, m.specular, m.roughness * m.roughness, n, wo, uLobe, u1, u2);
     BrdfSample s;

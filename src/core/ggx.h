@@ -4,10 +4,10 @@
 //   f(wi, wo) = (1 - F(v.h)) * diffuseColor / pi + F(v.h) * D(n.h) * V(n.l, n.v),
 // with diffuseColor = base * (1 - metallic), F0 = mix(0.04, base, metallic), alpha = roughness^2.
 // Single scattering only: the lobe loses energy at high roughness (a white metal reflects 0.877 of the light
-// at alpha 0.3 and 0.307 at alpha 1, seen from above; tests/core/ggx_test.cpp has the figures). The path tracer
-// and the cone tracer are both to use it as it is, with no multiple-scattering compensation, so that they
-// stay comparable. glTF's mix, (1 - F(v.h)) under the diffuse, reflects more than 1 from a white dielectric
-// at grazing angles (1.39 at n.v = 0.1 and alpha 0.05): that is the specification's formula, kept.
+// at alpha 0.3 and 0.307 at alpha 1, seen from above; tests/core/ggx_test.cpp has the figures). The path
+// tracer and the cone tracer are both to use it as it is, with no multiple-scattering compensation, so that
+// they stay comparable. glTF's mix, (1 - F(v.h)) under the diffuse, reflects more than 1 from a white
+// dielectric at grazing angles (1.39 at n.v = 0.1 and alpha 0.05): that is the specification's formula, kept.
 //
 // Also here: sampling of the visible normals (Heitz 2018) and a diffuse + specular mixture for the path
 // tracer, in the shape of brdf_sampling.h; and the specular cone's aperture for the cone tracer.

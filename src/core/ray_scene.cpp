@@ -72,14 +72,16 @@ void alphaMaskFilter(const RTCFilterFunctionNArguments* args) {
 
 // The mesh's normals interpolated at (u, v), unit length; `fallback` where they cancel.
 glm::vec3 interpolatedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v, glm::vec3 fallback) {
-    const glm::vec3 n = (1.0f - u - v) * mesh.normals[tri.x] + u * mesh.normals[tri.y] + v * mesh.normals[tri.z];
+    const glm::vec3 n =
+        (1.0f - u - v) * mesh.normals[tri.x] + u * mesh.normals[tri.y] + v * mesh.normals[tri.z];
     const float len = glm::length(n);
     return len > 0.0f ? n / len : fallback;
 }
 
 // The shading normal of a two-sided surface: the interpolated normal turned to the side the ray came from,
 // the side `geometricNormal` (unit) already faces.
-glm::vec3 shadingNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v, glm::vec3 geometricNormal) {
+glm::vec3 shadingNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v,
+                        glm::vec3 geometricNormal) {
     const glm::vec3 n = interpolatedNormal(mesh, tri, u, v, geometricNormal);
     return glm::dot(n, geometricNormal) < 0.0f ? -n : n;
 }
@@ -118,10 +120,9 @@ RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* bas
         unsigned id = rtcAttachGeometry(impl_->scene, geom);
         rtcReleaseGeometry(geom);
         if (id != meshes_.size()) throw std::logic_error("Embree geometry IDs are not consecutive");
-        meshes_.push_back(
-            {&mesh, isVirtual, vertices, indices, mesh.positions.size(), mesh.triangles.size(),
-             mesh.material.alphaMode == AlphaMode::Mask, variesOverSurface(mesh),
-             constantSurfaceMaterial(mesh.material)});
+        meshes_.push_back({&mesh, isVirtual, vertices, indices, mesh.positions.size(), mesh.triangles.size(),
+                           mesh.material.alphaMode == AlphaMode::Mask, variesOverSurface(mesh),
+                           constantSurfaceMaterial(mesh.material)});
         bounds_.extend(mesh.bounds());
     };
     if (content != SceneContent::VirtualOnly)

@@ -102,8 +102,8 @@ class RayScene {
         float* vertices;  // Embree's buffers, of vertexCount vertices and triangleCount triangles
         const unsigned* indices;
         size_t vertexCount, triangleCount;
-        bool masked;  // an alpha-masked material: Embree filters its hits
-        bool varying;  // variesOverSurface(): each hit looks its material up
+        bool masked;              // an alpha-masked material: Embree filters its hits
+        bool varying;             // variesOverSurface(): each hit looks its material up
         SurfaceMaterial surface;  // else this, everywhere
     };
     SceneContent content_;

@@ -9,7 +9,6 @@ namespace deltagi {
 
 namespace {
 
-
 template <typename T>
 T interpolate(const std::vector<T>& values, glm::uvec3 tri, float u, float v) {
     return (1.0f - u - v) * values[tri.x] + u * values[tri.y] + v * values[tri.z];
@@ -96,8 +95,8 @@ glm::vec2 textureCoordinatesAt(const TriangleMesh& mesh, unsigned triangle, floa
     return interpolate(uvs, mesh.triangles[triangle], u, v);
 }
 
-SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, float footprint,
-                                  glm::vec3* normal) {
+SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v,
+                                  float footprint, glm::vec3* normal) {
     const Material& m = mesh.material;
     if (!variesOverSurface(mesh)) return constantSurfaceMaterial(m);
     const glm::uvec3 tri = mesh.triangles[triangle];
@@ -131,12 +130,13 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
         const float exponent = std::max(2.0f / (r * r) - 2.0f, 0.0f) * lookup(m.shininessTexture).x;
         roughness = std::sqrt(2.0f / (exponent + 2.0f));
     }
-    SurfaceMaterial s = fromFactors(m, base, std::clamp(metallic, 0.0f, 1.0f), std::clamp(roughness, 0.0f, 1.0f));
-    if (m.specularTexture && m.model == MaterialModel::Phong) s.specular *= glm::vec3(lookup(m.specularTexture));
+    SurfaceMaterial s =
+        fromFactors(m, base, std::clamp(metallic, 0.0f, 1.0f), std::clamp(roughness, 0.0f, 1.0f));
+    if (m.specularTexture && m.model == MaterialModel::Phong)
+        s.specular *= glm::vec3(lookup(m.specularTexture));
     if (m.emissiveTexture) s.emission *= glm::vec3(lookup(m.emissiveTexture));
     if (!normal) return s;
-    if (m.occlusionTexture)
-        s.occlusion = 1.0f + m.occlusionStrength * (lookup(m.occlusionTexture).x - 1.0f);
+    if (m.occlusionTexture) s.occlusion = 1.0f + m.occlusionStrength * (lookup(m.occlusionTexture).x - 1.0f);
     if (m.normalTexture)
         *normal = mappedNormal(mesh, tri, u, v, *normal, glm::vec3(lookup(m.normalTexture)), m.normalScale);
     return s;
@@ -148,7 +148,8 @@ glm::vec3 triangleEmission(const TriangleMesh& mesh, unsigned triangle) {
     const glm::uvec3 tri = mesh.triangles[triangle];
     const glm::vec3 a = mesh.positions[tri.x];
     const float area = 0.5f * glm::length(glm::cross(mesh.positions[tri.y] - a, mesh.positions[tri.z] - a));
-    const glm::vec2 uv = textureCoordinatesAt(mesh, triangle, 1.0f / 3.0f, 1.0f / 3.0f, m.emissiveTexture.texCoord);
+    const glm::vec2 uv =
+        textureCoordinatesAt(mesh, triangle, 1.0f / 3.0f, 1.0f / 3.0f, m.emissiveTexture.texCoord);
     float uvFootprint = 0.0f;
     if (area > 0.0f) {
         const glm::vec2 d1 = mesh.uvs[tri.y] - mesh.uvs[tri.x], d2 = mesh.uvs[tri.z] - mesh.uvs[tri.x];
@@ -162,8 +163,8 @@ bool surfacePresentAt(const TriangleMesh& mesh, unsigned triangle, float u, floa
     if (m.alphaMode != AlphaMode::Mask) return true;
     float alpha = m.opacity;
     if (m.baseColorTexture && !mesh.uvs.empty())
-        alpha *= m.baseColorTexture.sample(textureCoordinatesAt(mesh, triangle, u, v, m.baseColorTexture.texCoord),
-                                           0.0f)
+        alpha *= m.baseColorTexture
+                     .sample(textureCoordinatesAt(mesh, triangle, u, v, m.baseColorTexture.texCoord), 0.0f)
                      .w;
     return alpha >= m.alphaCutoff;
 }

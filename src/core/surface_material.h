@@ -63,8 +63,8 @@ bool variesOverSurface(const TriangleMesh& mesh);
 // texture-coordinate density. `normal`: the interpolated unit shading normal, oriented as the mesh's
 // normals are; replaced by the normal-mapped one when the material has a normal map. Null: only what the
 // light volumes need (reflectance and emission): the normal and occlusion maps are not looked up.
-SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, float footprint,
-                                  glm::vec3* normal);
+SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v,
+                                  float footprint, glm::vec3* normal);
 
 // The texture coordinates (set `set`, 0 or 1) at barycentric (u, v) of `triangle`; (0, 0) when the mesh has
 // none.

@@ -26,7 +26,9 @@ SurfacePoint toSurfacePoint(const RayHit& hit, glm::vec3 rayDir, float pixelAngl
     return {hit.position, hit.normal, -rayDir, hit.material, hit.surface};
 }
 
-float pixelAngleOf(const Camera& camera) { return 1.0f / std::max(camera.fy, 1e-6f); }
+float pixelAngleOf(const Camera& camera) {
+    return 1.0f / std::max(camera.fy, 1e-6f);
+}
 
 // The first surface along a camera ray if it is virtual. With the objects in a layer of their own, the real
 // scene below is traced only for rays that meet an object, up to it (most rays near an object miss it).
@@ -97,7 +99,8 @@ void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vec
             directions[x] = glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f));
         realOnly.intersectCoherent(eye, directions, hits, false, true);
         for (int x = 0; x < camera.width; ++x)
-            real[static_cast<size_t>(y) * camera.width + x] = toSurfacePoint(hits[x], directions[x], pixelAngleOf(camera));
+            real[static_cast<size_t>(y) * camera.width + x] =
+                toSurfacePoint(hits[x], directions[x], pixelAngleOf(camera));
     });
 }
 

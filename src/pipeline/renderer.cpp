@@ -341,14 +341,14 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         for (size_t j = 0; j < jobs.size(); ++j) {
             const ConeJob& job = jobs[j];
             addInto(results[j].diffuse,
-                    traceSparse<glm::vec3>(
-                        job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
-                        job.filter(o, job.diffuseStride(o, scene.camera)),
-                        [&](std::span<const uint32_t> pixels) {
-                            return traceSkyCones(job.points, environment, job.visibility, job.mode, o,
-                                                 SkyParts::Diffuse, pixels)
-                                .diffuse;
-                        }));
+                    traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
+                                           job.diffuseStride(o, scene.camera), 1,
+                                           job.filter(o, job.diffuseStride(o, scene.camera)),
+                                           [&](std::span<const uint32_t> pixels) {
+                                               return traceSkyCones(job.points, environment, job.visibility,
+                                                                    job.mode, o, SkyParts::Diffuse, pixels)
+                                                   .diffuse;
+                                           }));
             addInto(results[j].specular,
                     traceSkyCones(job.points, environment, job.visibility, job.mode, o, SkyParts::Specular)
                         .specular);
@@ -370,10 +370,10 @@ struct StaticWork {
     // camera that moves every frame would build them for one use; its passes compute only those they need).
     bool cameraSteady = false;
     std::unique_ptr<RayScene> realOnly;
-    std::unique_ptr<RayScene> objects;  // the virtual objects' layer over realOnly, refit as they move
+    std::unique_ptr<RayScene> objects;       // the virtual objects' layer over realOnly, refit as they move
     std::vector<SurfacePoint> realSurfaces;  // the G-buffer's real half, when realSurfacesMade
     bool realSurfacesMade = false;
-    std::optional<Image> background;                        // the real scene rendered alone (no photo)
+    std::optional<Image> background;  // the real scene rendered alone (no photo)
     // Over `region`:
     std::optional<VolumeRegion> region;
     std::optional<VoxelGeometry> sceneGeometry;

@@ -184,9 +184,8 @@ SkyLight traceSkyCones(std::span<const SurfacePoint> points, const Environment& 
         }
         if (parts != SkyParts::Diffuse && p.surface.specular != glm::vec3(0.0f)) {
             const glm::vec3 mirror = glm::normalize(glm::reflect(-p.toEye, p.normal));
-            const float tanHalf =
-                specularConeTanHalfAngle(p.surface.phongExponent(), options.specular.minApertureDeg,
-                                         options.specular.maxApertureDeg);
+            const float tanHalf = specularConeTanHalfAngle(
+                p.surface.phongExponent(), options.specular.minApertureDeg, options.specular.maxApertureDeg);
             out.specular[i] = coneSky(p.position, p.normal, mirror, tanHalf, hashToUnit(i, 4000u));
         }
     });

@@ -23,7 +23,7 @@ struct VoxelTriangle {
     // over each piece in a voxel instead (null: the constant emission and albedo above hold everywhere).
     const TriangleMesh* varying;
     uint32_t index;
-    glm::ivec3 lo, hi;   // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
+    glm::ivec3 lo, hi;  // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
     bool touchesGrid() const { return hi.x >= lo.x; }
 };
 
@@ -64,8 +64,8 @@ void splitPolygon(const Polygon& p, int axis, float k, Polygon* below, Polygon* 
 }
 
 // Calls f(x, y, z, piece) for each voxel with lo <= (x, y) <= hi and z0 <= z < z1 that the triangle t touches
-// (closed voxels), with the area of the part (a Polygon) of the triangle inside it: the triangle is cut into the voxels' pieces by
-// the grid planes, one plane at a time. Layer by layer in z, row by row in y, then x.
+// (closed voxels), with the area of the part (a Polygon) of the triangle inside it: the triangle is cut into
+// the voxels' pieces by the grid planes, one plane at a time. Layer by layer in z, row by row in y, then x.
 template <typename F>
 void forEachTouchedVoxel(const VoxelTriangle& t, int z0, int z1, F&& f) {
     Polygon triangle;
@@ -251,7 +251,8 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             }
             forEachTouchedVoxel(t, std::max(zBegin, t.lo.z), std::min(zEnd, t.hi.z + 1),
                                 [&](int x, int y, int z, const Polygon& piece) {
-                                    add(x, y, z, t, piece.area(), t.varying ? piece.vertexMean() : glm::vec3(0.0f));
+                                    add(x, y, z, t, piece.area(),
+                                        t.varying ? piece.vertexMean() : glm::vec3(0.0f));
                                 });
         }
     });

@@ -250,7 +250,8 @@ class Estimator {
                 white.material = &white_;
                 white.surface = constantSurfaceMaterial(white_);
                 gloss.material = &glossOnly[p.mesh];
-                gloss.surface.diffuse = glm::vec3(0.0f);  // the hit's textured material, less its diffuse part
+                gloss.surface.diffuse =
+                    glm::vec3(0.0f);  // the hit's textured material, less its diffuse part
                 glm::dvec3 e(0.0), s(0.0);
                 for (int sample = 0; sample < options_.samplesPerPixel; ++sample) {
                     // The same numbers every pass: the change from pass to pass is the albedos', not noise.

@@ -134,9 +134,10 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
     auto emitterWeight = [&](const RayHit& at, glm::vec3 dir) {
         const glm::vec3 step = at.position - previousPosition;
         const float cosLight = std::abs(glm::dot(at.geometricNormal, dir));
-        const float pdfLight =
-            cosLight > 0.0f ? areaLights_.pdfArea(triangleEmission(*at.mesh, at.triangle)) * glm::dot(step, step) / cosLight
-                            : std::numeric_limits<float>::infinity();
+        const float pdfLight = cosLight > 0.0f
+                                   ? areaLights_.pdfArea(triangleEmission(*at.mesh, at.triangle)) *
+                                         glm::dot(step, step) / cosLight
+                                   : std::numeric_limits<float>::infinity();
         return powerHeuristic(previousPdf, pdfLight);
     };
     for (int bounce = 0; hit.hit(); ++bounce) {

@@ -29,10 +29,10 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kMaxImageSide = 16384;            // camera width and height
-constexpr int kMaxShapeSegments = 4096;         // sphere and torus tessellation
-constexpr float kEnergyTolerance = 1e-6f;       // albedo + specular <= 1 up to rounding
-constexpr float kMinPhongRoughness = 1e-3f;     // as mesh files' roughness (mesh_materials.cpp)
+constexpr int kMaxImageSide = 16384;         // camera width and height
+constexpr int kMaxShapeSegments = 4096;      // sphere and torus tessellation
+constexpr float kEnergyTolerance = 1e-6f;    // albedo + specular <= 1 up to rounding
+constexpr float kMinPhongRoughness = 1e-3f;  // as mesh files' roughness (mesh_materials.cpp)
 
 }  // namespace
 
@@ -772,7 +772,8 @@ Scene loadScene(const json& document, const fs::path& file) {
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
     MeshInputs meshInputs{sceneFolder, scene.meshFiles, scene.warnings, {}};
     const std::vector<bool> albedoEstimates = albedoRequests(root, scene);
-    if (auto n = root.find("scene")) scene.real = readMeshList(*n, meshInputs, false, nullptr, &scene.realEntries);
+    if (auto n = root.find("scene"))
+        scene.real = readMeshList(*n, meshInputs, false, nullptr, &scene.realEntries);
     if (auto n = root.find("virtual")) {
         const KeyframeReader keyframes{scene, scene.animations};
         scene.virtuals = readMeshList(*n, meshInputs, true, &keyframes, &scene.virtualEntries);

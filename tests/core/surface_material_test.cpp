@@ -50,7 +50,8 @@ TriangleMesh texturedQuad(Material material) {
 std::tuple<unsigned, float, float> locate(const TriangleMesh& mesh, glm::vec3 p) {
     for (unsigned t = 0; t < mesh.triangles.size(); ++t) {
         const glm::uvec3 tri = mesh.triangles[t];
-        const glm::vec3 a = mesh.positions[tri.x], e1 = mesh.positions[tri.y] - a, e2 = mesh.positions[tri.z] - a;
+        const glm::vec3 a = mesh.positions[tri.x], e1 = mesh.positions[tri.y] - a,
+                        e2 = mesh.positions[tri.z] - a;
         const glm::mat2 m(glm::vec2(e1.x, e1.z), glm::vec2(e2.x, e2.z));
         const glm::vec2 uv = glm::inverse(m) * glm::vec2(p.x - a.x, p.z - a.z);
         if (uv.x >= -1e-6f && uv.y >= -1e-6f && uv.x + uv.y <= 1.0f + 1e-6f) return {t, uv.x, uv.y};
@@ -175,7 +176,8 @@ TEST(SurfaceMaterial, AlphaMaskLetsRaysThroughTheCutAwayTexels) {
     leaf.baseColorTexture.texture = textureOf(2, 1, {{1, 1, 1, 1}, {1, 1, 1, 0}});  // left kept, right cut
     leaf.baseColorTexture.sampler.magFilter = TextureFilter::Nearest;
     scene.real.push_back(test::placed(makeQuad({2.0f, 2.0f}), {0, 1, 0}, leaf, "leaf"));
-    scene.real.push_back(test::placed(makeQuad({2.0f, 2.0f}), {0, 0, 0}, test::diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(
+        test::placed(makeQuad({2.0f, 2.0f}), {0, 0, 0}, test::diffuse(glm::vec3(0.5f)), "floor"));
     const RayScene rays(scene, SceneContent::RealOnly);
     const glm::vec3 down(0, -1, 0);
     EXPECT_NEAR(rays.intersect({-0.5f, 2, 0}, down).position.y, 1.0f, 1e-5f);  // the kept half

@@ -268,7 +268,8 @@ TEST_F(QualitySuiteTest, TheKeyFollowsTheContentOfReferencedFiles) {
 
 // Textures count too: an OBJ's MTL maps and a glTF's images and buffers, which the scene file never names.
 TEST_F(QualitySuiteTest, TheKeyFollowsTexturesAndBuffersOfMeshFiles) {
-    write("tri.obj", "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n");
+    write("tri.obj",
+          "mtllib tri.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n");
     write("tri.mtl", "newmtl m\nKd 1 1 1\nmap_Kd -bm 1 checker.png\n");
     write("checker.png", "first");
     write("thing.gltf", R"({"asset": {"version": "2.0"}, "buffers": [{"uri": "thing.bin", "byteLength": 4}],

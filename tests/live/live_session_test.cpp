@@ -1,6 +1,6 @@
-// The live session's message handler (src/live/live_session.h), without sockets: bad messages are refused with an
-// error and change nothing; a drag rests the object on the surface under the cursor; the saved document
-// loads to the session's scene bit for bit.
+// The live session's message handler (src/live/live_session.h), without sockets: bad messages are refused
+// with an error and change nothing; a drag rests the object on the surface under the cursor; the saved
+// document loads to the session's scene bit for bit.
 #include "live/live_session.h"
 
 #include <pthread.h>

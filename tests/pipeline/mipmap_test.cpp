@@ -42,7 +42,8 @@ TEST(MipVolume, TrilinearSampleIsExactAtVoxelCentresAndZeroOutside) {
     // Level 1 voxel (0,1,1) holds the mean of its 8 children: 2/8.
     EXPECT_FLOAT_EQ(v.sampleLevel({1.0f, 3.0f, 3.0f}, 1).x, 0.25f);
     // Between levels, quadrilinear blending.
-    EXPECT_FLOAT_EQ(v.sample({1.0f, 3.0f, 3.0f}, 0.5f).x, 0.5f * (v.sampleLevel({1.0f, 3.0f, 3.0f}, 0).x + 0.25f));
+    EXPECT_FLOAT_EQ(v.sample({1.0f, 3.0f, 3.0f}, 0.5f).x,
+                    0.5f * (v.sampleLevel({1.0f, 3.0f, 3.0f}, 0).x + 0.25f));
 }
 
 // Level 0 rewritten inside a box, and the chain updated above it only: the same bits as a chain built anew.

@@ -386,8 +386,8 @@ TEST_F(MeshIoTest, ObjMaps) {
     ASSERT_TRUE(a.baseColorTexture && a.specularTexture && a.normalTexture && a.shininessTexture &&
                 a.roughnessTexture);
     EXPECT_EQ(a.shininessTexture.texture, a.roughnessTexture.texture);  // both linear scalar maps
-    EXPECT_EQ(a.baseColorTexture.texture, a.specularTexture.texture);  // one file, one encoding: read once
-    EXPECT_FALSE(b.normalTexture);                                     // a height map
+    EXPECT_EQ(a.baseColorTexture.texture, a.specularTexture.texture);   // one file, one encoding: read once
+    EXPECT_FALSE(b.normalTexture);                                      // a height map
     std::string all;
     for (const std::string& w : warnings) all += w + "\n";
     expectContains(all, {"where: material 'a' of 'm.obj': an opacity map (map_d) ('kd.png') is ignored",
@@ -510,11 +510,11 @@ TEST_F(MeshIoTest, SceneTexturesOverrideTheFilesAndNeedTextureCoordinates) {
     EXPECT_TRUE(scene.virtuals[0].material.normalTexture);
     // A normal map on a mesh without texture coordinates (a "triangles" shape has none): a warning, and no
     // normal map.
-    scene = loadScene(sceneWith({{"normal_texture", "marked.png"}},
-                                {{"type", "triangles"},
-                                 {"positions", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}},
-                                 {"indices", {{0, 1, 2}}}}),
-                      sceneFile);
+    scene = loadScene(
+        sceneWith({{"normal_texture", "marked.png"}}, {{"type", "triangles"},
+                                                       {"positions", {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}},
+                                                       {"indices", {{0, 1, 2}}}}),
+        sceneFile);
     EXPECT_FALSE(scene.virtuals[0].material.normalTexture);
     all.clear();
     for (const std::string& w : scene.warnings) all += w + "\n";

@@ -1,2 +1,3 @@
-// The evaluation may include the pipeline (tests/layout/violation/pipeline/stage.h breaks the rule, not this).
+// The evaluation may include the pipeline (tests/layout/violation/pipeline/stage.h breaks the rule, not
+// this).
 #pragma once
