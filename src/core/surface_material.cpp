@@ -97,13 +97,9 @@ glm::vec2 textureCoordinatesAt(const TriangleMesh& mesh, unsigned triangle, floa
 
 SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v,
                                   float footprint, glm::vec3* normal) {
-    const Material& m = mesh.material;
-    if (!variesOverSurface(mesh)) return constantSurfaceMaterial(m);
+    if (!mesh.material.textured() || mesh.uvs.empty())
+        return surfaceMaterialAtUv(mesh, triangle, u, v, 0.0f, normal);
     const glm::uvec3 tri = mesh.triangles[triangle];
-    glm::vec3 base = m.albedo;
-    if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
-    if (!m.textured() || mesh.uvs.empty()) return fromFactors(m, base, m.metallic, m.roughness);
-
     // The footprint in texture coordinates: world units times the triangle's texture-coordinate density.
     float uvFootprint = 0.0f;
     if (footprint > 0.0f) {
@@ -113,6 +109,17 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
         const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
         if (worldArea > 0.0f) uvFootprint = footprint * std::sqrt(uvArea / worldArea);
     }
+    return surfaceMaterialAtUv(mesh, triangle, u, v, uvFootprint, normal);
+}
+
+SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle, float u, float v,
+                                    float uvFootprint, glm::vec3* normal) {
+    const Material& m = mesh.material;
+    if (!variesOverSurface(mesh)) return constantSurfaceMaterial(m);
+    const glm::uvec3 tri = mesh.triangles[triangle];
+    glm::vec3 base = m.albedo;
+    if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
+    if (!m.textured() || mesh.uvs.empty()) return fromFactors(m, base, m.metallic, m.roughness);
     auto lookup = [&](const TextureSlot& slot) {
         return slot.sample(textureCoordinatesAt(mesh, triangle, u, v, slot.texCoord), uvFootprint);
     };

@@ -66,6 +66,10 @@ bool variesOverSurface(const TriangleMesh& mesh);
 SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v,
                                   float footprint, glm::vec3* normal);
 
+// surfaceMaterialAt with the footprint given in texture coordinates (1 = the texture's width) instead.
+SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle, float u, float v,
+                                    float uvFootprint, glm::vec3* normal);
+
 // The texture coordinates (set `set`, 0 or 1) at barycentric (u, v) of `triangle`; (0, 0) when the mesh has
 // none.
 glm::vec2 textureCoordinatesAt(const TriangleMesh& mesh, unsigned triangle, float u, float v, int set = 0);

@@ -23,6 +23,9 @@ struct VoxelTriangle {
     // over each piece in a voxel instead (null: the constant emission and albedo above hold everywhere).
     const TriangleMesh* varying;
     uint32_t index;
+    // Its voxel material when kept (VoxelGeometry::triangleMaterials), for every piece of it: a triangle
+    // smaller than a voxel is looked up once, at its centre, over a voxel's footprint (which covers it).
+    const std::array<glm::vec3, 2>* cached;
     glm::ivec3 lo, hi;  // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
     bool touchesGrid() const { return hi.x >= lo.x; }
 };
@@ -118,23 +121,118 @@ glm::vec2 barycentricOf(const VoxelTriangle& t, glm::vec3 p) {
     return glm::clamp(uv, glm::vec2(0.0f), glm::vec2(1.0f));
 }
 
+// The steps of the voxel-material cache's scale: 1/64 octave, about 1 %. Quantized so that a turning object's
+// scale, computed again from its rotated transform, gives the same key to the last bit.
+constexpr float kScaleStepsPerOctave = 64.0f;
+
+// A mesh's transform's scale (the cube root of its linear part's determinant), quantized.
+float quantizedScale(const glm::mat4& worldFromObject) {
+    const float scale = std::cbrt(std::abs(glm::determinant(glm::mat3(worldFromObject))));
+    if (!(scale > 0.0f) || !std::isfinite(scale)) return 1.0f;
+    return std::exp2(std::round(std::log2(scale) * kScaleStepsPerOctave) / kScaleStepsPerOctave);
+}
+
+// FNV-1a over what a mesh's triangle voxel materials depend on besides its object-space mesh.
+uint64_t triangleMaterialSignature(const TriangleMesh& mesh, float voxelSize, float scale) {
+    uint64_t hash = 0xcbf29ce484222325ull;
+    auto bytes = [&](const void* data, size_t size) {
+        for (size_t i = 0; i < size; ++i) {
+            hash ^= static_cast<const unsigned char*>(data)[i];
+            hash *= 0x100000001b3ull;
+        }
+    };
+    auto value = [&](const auto& v) { bytes(&v, sizeof(v)); };
+    const Material& m = mesh.material;
+    value(voxelSize);
+    value(scale);
+    value(m.albedo);
+    value(m.specular);
+    value(m.roughness);
+    value(m.emission);
+    value(m.model);
+    value(m.metallic);
+    for (const TextureSlot* slot : {&m.baseColorTexture, &m.specularTexture, &m.roughnessTexture,
+                                    &m.shininessTexture, &m.metallicRoughnessTexture, &m.emissiveTexture}) {
+        value(slot->texture.get());
+        value(slot->sampler.wrapS);
+        value(slot->sampler.wrapT);
+        value(slot->sampler.magFilter);
+        value(slot->sampler.minFilter);
+        value(slot->sampler.mipmaps);
+        value(slot->texCoord);
+    }
+    return hash;
+}
+
+// Brings `cache` up to date for `meshes` (VoxelGeometry::triangleMaterials) and returns, per mesh, its
+// triangles' kept voxel materials or null. A triangle's material is looked up on the object-space mesh's
+// texture-coordinate density at the quantized scale, so that it does not depend on where the object is.
+std::vector<const std::array<glm::vec3, 2>*> keptTriangleMaterials(
+    std::span<const TriangleMesh> meshes, float voxelSize,
+    std::vector<VoxelGeometry::TriangleMaterials>& cache) {
+    cache.resize(meshes.size());
+    std::vector<const std::array<glm::vec3, 2>*> kept(meshes.size(), nullptr);
+    for (size_t k = 0; k < meshes.size(); ++k) {
+        const TriangleMesh& mesh = meshes[k];
+        VoxelGeometry::TriangleMaterials& entry = cache[k];
+        const TriangleMesh* objectSpace = mesh.objectSpace.get();
+        // Triangle i of the placed mesh is triangle i of the object-space one when clean-up dropped none (it may
+        // drop unreferenced vertices: the indices differ then, the triangles' order does not).
+        if (!objectSpace || !variesOverSurface(mesh) || objectSpace->triangles.size() != mesh.triangles.size() ||
+            objectSpace->uvs.size() != objectSpace->positions.size() || mesh.uvs.size() != mesh.positions.size()) {
+            entry = {};
+            continue;
+        }
+        const float scale = quantizedScale(mesh.worldFromObject);
+        const uint64_t signature = triangleMaterialSignature(mesh, voxelSize, scale);
+        if (entry.objectSpace != objectSpace || entry.signature != signature ||
+            entry.values.size() != mesh.triangles.size()) {
+            entry.objectSpace = objectSpace;
+            entry.signature = signature;
+            entry.values.resize(mesh.triangles.size());
+            const float objectFootprint = voxelSize / scale;
+            parallelFor(0, static_cast<int64_t>(mesh.triangles.size()), 4096, [&](int64_t i) {
+                const glm::uvec3 t = objectSpace->triangles[i];
+                const glm::vec3 a = objectSpace->positions[t.x];
+                const float objectArea = glm::length(
+                    glm::cross(objectSpace->positions[t.y] - a, objectSpace->positions[t.z] - a));
+                const std::vector<glm::vec2>& uvs = objectSpace->uvs;
+                const glm::vec2 d1 = uvs[t.y] - uvs[t.x], d2 = uvs[t.z] - uvs[t.x];
+                const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
+                const float uvFootprint = objectArea > 0.0f ? objectFootprint * std::sqrt(uvArea / objectArea) : 0.0f;
+                const SurfaceMaterial m = surfaceMaterialAtUv(mesh, static_cast<unsigned>(i), 1.0f / 3.0f,
+                                                              1.0f / 3.0f, uvFootprint, nullptr);
+                entry.values[i] = {m.emission, m.volumeReflectance()};
+            });
+        }
+        kept[k] = entry.values.data();
+    }
+    return kept;
+}
+
 // Every triangle of `meshes` in voxel space, in mesh and triangle order; in parallel (a detailed object has
 // many).
 std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
-    std::span<const TriangleMesh> meshes, const VolumeRegion& region) {
+    std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+    std::vector<VoxelGeometry::TriangleMaterials>& cache) {
     constexpr size_t kChunk = 4096;
     struct Chunk {
         const TriangleMesh* mesh;
-        size_t first, last, out;  // triangles [first, last) of mesh, written from `out` on
+        size_t first, last, out;                 // triangles [first, last) of mesh, written from `out` on
+        const std::array<glm::vec3, 2>* cached;  // the mesh's kept triangle materials, or null
     };
+    const std::vector<const std::array<glm::vec3, 2>*> kept =
+        keptTriangleMaterials(meshes, region.voxelSize(), cache);
     std::vector<Chunk> chunks;
     size_t total = 0;
-    for (const TriangleMesh& mesh : meshes)
+    for (size_t k = 0; k < meshes.size(); ++k) {
+        const TriangleMesh& mesh = meshes[k];
         for (size_t first = 0; first < mesh.triangles.size(); first += kChunk) {
             const size_t last = std::min(first + kChunk, mesh.triangles.size());
-            chunks.push_back({&mesh, first, last, total});
+            chunks.push_back({&mesh, first, last, total, kept[k]});
             total += last - first;
         }
+    }
     std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> tris(total);
     const float invVoxel = 1.0f / region.voxelSize();
     const int n = region.resolution;
@@ -156,11 +254,13 @@ std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
             vt.albedo = mesh.material.volumeReflectance();
             vt.varying = variesOverSurface(mesh) ? &mesh : nullptr;
             vt.index = static_cast<uint32_t>(i);
+            vt.cached = nullptr;
             glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
             glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
             if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
             vt.lo = glm::clamp(glm::ivec3(glm::floor(mn)), glm::ivec3(0), glm::ivec3(n - 1));
             vt.hi = glm::clamp(glm::ivec3(glm::floor(mx)), glm::ivec3(0), glm::ivec3(n - 1));
+            if (chunk.cached && glm::all(glm::lessThanEqual(mx - mn, glm::vec3(1.0f)))) vt.cached = chunk.cached + i;
             vt.oneVoxel = glm::ivec3(glm::floor(mn)) == glm::ivec3(glm::floor(mx)) &&
                           glm::all(glm::greaterThanEqual(mn, glm::vec3(0.0f))) &&
                           glm::all(glm::lessThan(mx, glm::vec3(static_cast<float>(n))));
@@ -174,7 +274,7 @@ std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission,
                        bool withAlbedo) {
     const int n = region.resolution;
-    VoxelGeometry out{Grid3(n), {}, {}, {}, {}};
+    VoxelGeometry out{Grid3(n), {}, {}, {}, {}, {}};
     out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
     if (withAlbedo) out.albedo.assign(out.area.size(), glm::vec3(0.0f));
     revoxelize(out, meshes, region, withEmission);
@@ -200,7 +300,7 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     if (!emissive) out.emission.clear();
     if (emissive && !hadEmission) out.emission.assign(out.area.size(), glm::vec3(0.0f));
 
-    const auto tris = toVoxelSpace(meshes, region);
+    const auto tris = toVoxelSpace(meshes, region, out.triangleMaterials);
     VoxelBox& box = out.bounds;
     box = {};
     for (const VoxelTriangle& t : tris)
@@ -234,7 +334,8 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             v.w += t.normal.z * a;
             out.area[i] += a;
             if (t.varying && (emissive || withAlbedo)) {
-                const auto [emission, albedo] = materialOf(t, where);
+                const auto [emission, albedo] =
+                    t.cached ? std::pair{(*t.cached)[0], (*t.cached)[1]} : materialOf(t, where);
                 if (emissive) out.emission[i] += emission * a;
                 if (withAlbedo) out.albedo[i] += albedo * a;
                 return;
@@ -252,7 +353,7 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             forEachTouchedVoxel(t, std::max(zBegin, t.lo.z), std::min(zEnd, t.hi.z + 1),
                                 [&](int x, int y, int z, const Polygon& piece) {
                                     add(x, y, z, t, piece.area(),
-                                        t.varying ? piece.vertexMean() : glm::vec3(0.0f));
+                                        t.varying && !t.cached ? piece.vertexMean() : glm::vec3(0.0f));
                                 });
         }
     });

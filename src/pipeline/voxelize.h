@@ -6,6 +6,8 @@
 // cost.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -27,6 +29,18 @@ struct VoxelGeometry {
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> albedo;
     // Every voxel outside it is zero in all three: the voxels that the triangles' bounding boxes touch.
     VoxelBox bounds;
+    // Textured objects' triangles (meshes placed from an object-space mesh, TriangleMesh::objectSpace): each
+    // triangle's voxel material, its emission and reflectance at its centre filtered over a voxel, used for
+    // the triangles smaller than a voxel (most of a detailed mesh's), for each of their pieces. Kept from one voxelization to the next
+    // while the mesh, its material, the voxel size and the scale of its transform stay the same (an object
+    // that moves or turns), so that moving a textured object does not look its textures up again. One entry
+    // per mesh, in order.
+    struct TriangleMaterials {
+        const TriangleMesh* objectSpace = nullptr;
+        uint64_t signature = 0;
+        std::vector<std::array<glm::vec3, 2>> values;  // emission, reflectance
+    };
+    std::vector<TriangleMaterials> triangleMaterials;
 };
 
 // Voxelizes `meshes` over `region`. Deterministic for any thread count (each voxel sums its triangles in
