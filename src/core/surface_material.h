@@ -50,6 +50,34 @@ struct SurfaceMaterial {
     glm::vec3 ggxSpecularReflectance(float nDotV) const;
 };
 
+// Calls value(field) for every field of `m` that decides how it looks, one by one (Material has padding, so
+// it cannot be hashed as bytes): for cache keys. Textures never change, so their addresses stand for them.
+template <typename Value>
+void visitMaterialFields(const Material& m, Value&& value) {
+    value(m.albedo);
+    value(m.specular);
+    value(m.roughness);
+    value(m.emission);
+    value(m.model);
+    value(m.metallic);
+    value(m.opacity);
+    value(m.alphaMode);
+    value(m.alphaCutoff);
+    value(m.normalScale);
+    value(m.occlusionStrength);
+    for (const TextureSlot* slot : {&m.baseColorTexture, &m.specularTexture, &m.roughnessTexture,
+                                    &m.shininessTexture, &m.metallicRoughnessTexture, &m.normalTexture,
+                                    &m.emissiveTexture, &m.occlusionTexture}) {
+        value(slot->texture.get());
+        value(slot->sampler.wrapS);
+        value(slot->sampler.wrapT);
+        value(slot->sampler.magFilter);
+        value(slot->sampler.minFilter);
+        value(slot->sampler.mipmaps);
+        value(slot->texCoord);
+    }
+}
+
 // The values of a material without textures and vertex colours (its factors).
 SurfaceMaterial constantSurfaceMaterial(const Material& m);
 

@@ -485,30 +485,7 @@ uint64_t worldSignature(const Scene& scene) {
         bytes(m.uvs1.data(), m.uvs1.size() * sizeof(glm::vec2));
         bytes(m.tangents.data(), m.tangents.size() * sizeof(glm::vec4));
         bytes(m.colors.data(), m.colors.size() * sizeof(glm::vec3));
-        // Field by field: Material has padding. Textures never change: their addresses stand for them.
-        const Material& mat = m.material;
-        value(mat.albedo);
-        value(mat.specular);
-        value(mat.roughness);
-        value(mat.emission);
-        value(mat.model);
-        value(mat.metallic);
-        value(mat.opacity);
-        value(mat.alphaMode);
-        value(mat.alphaCutoff);
-        value(mat.normalScale);
-        value(mat.occlusionStrength);
-        for (const TextureSlot* slot : {&mat.baseColorTexture, &mat.specularTexture, &mat.roughnessTexture,
-                                        &mat.shininessTexture, &mat.metallicRoughnessTexture,
-                                        &mat.normalTexture, &mat.emissiveTexture, &mat.occlusionTexture}) {
-            value(slot->texture.get());
-            value(slot->sampler.wrapS);
-            value(slot->sampler.wrapT);
-            value(slot->sampler.magFilter);
-            value(slot->sampler.minFilter);
-            value(slot->sampler.mipmaps);
-            value(slot->texCoord);
-        }
+        visitMaterialFields(m.material, value);
     }
     for (const Light& l : scene.lights) {  // field by field: Light has padding after its bool
         value(l.type);

@@ -142,25 +142,9 @@ uint64_t triangleMaterialSignature(const TriangleMesh& mesh, float voxelSize, fl
         }
     };
     auto value = [&](const auto& v) { bytes(&v, sizeof(v)); };
-    const Material& m = mesh.material;
     value(voxelSize);
     value(scale);
-    value(m.albedo);
-    value(m.specular);
-    value(m.roughness);
-    value(m.emission);
-    value(m.model);
-    value(m.metallic);
-    for (const TextureSlot* slot : {&m.baseColorTexture, &m.specularTexture, &m.roughnessTexture,
-                                    &m.shininessTexture, &m.metallicRoughnessTexture, &m.emissiveTexture}) {
-        value(slot->texture.get());
-        value(slot->sampler.wrapS);
-        value(slot->sampler.wrapT);
-        value(slot->sampler.magFilter);
-        value(slot->sampler.minFilter);
-        value(slot->sampler.mipmaps);
-        value(slot->texCoord);
-    }
+    visitMaterialFields(mesh.material, value);
     return hash;
 }
 
