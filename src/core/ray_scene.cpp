@@ -176,16 +176,18 @@ void RayScene::updateMaterials() {
     }
 }
 
-RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
-    RayHit hit = intersectTopLayer(origin, direction, tMin, tMax);
+RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax,
+                           bool texturesLater) const {
+    RayHit hit = intersectTopLayer(origin, direction, tMin, tMax, texturesLater);
     if (base_) {
-        RayHit below = base_->intersect(origin, direction, tMin, hit.hit() ? hit.t : tMax);
+        RayHit below = base_->intersect(origin, direction, tMin, hit.hit() ? hit.t : tMax, texturesLater);
         if (below.hit()) hit = below;
     }
     return hit;
 }
 
-RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax,
+                                   bool texturesLater) const {
     RayHit result;
     if (meshes_.empty()) return result;
     RTCIntersectContext context;
@@ -197,7 +199,7 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
     rtcIntersect1(impl_->scene, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return result;
     return hitOn(rh.hit.geomID, rh.hit.primID, {rh.hit.u, rh.hit.v, rh.ray.tfar},
-                 {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, origin, direction);
+                 {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, origin, direction, !texturesLater);
 }
 
 void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,

@@ -66,12 +66,14 @@ class RayScene {
     // construction (and by refit()), so that they need not compute them again and again.
     void updateMaterials();
 
-    // Closest hit along origin + t * direction (direction unit length), t in (tMin, tMax).
+    // Closest hit along origin + t * direction (direction unit length), t in (tMin, tMax). `texturesLater`
+    // as for intersectCoherent().
     RayHit intersect(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
-                     float tMax = std::numeric_limits<float>::infinity()) const;
+                     float tMax = std::numeric_limits<float>::infinity(), bool texturesLater = false) const;
     // The closest hit in this layer alone, without the base's.
     RayHit intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
-                             float tMax = std::numeric_limits<float>::infinity()) const;
+                             float tMax = std::numeric_limits<float>::infinity(),
+                             bool texturesLater = false) const;
     // intersect() (or intersectTopLayer()) for many rays from one origin (camera rays), traced in packets:
     // hits[i] for directions[i] (unit length), t in (0, infinity). The same hits as one ray at a time: each
     // is computed again from its triangle (an edge shared by two triangles may be found on either, at the

@@ -157,13 +157,16 @@ class MapLayout {
 
 // The texel `index` made from its ray's closest hit, if that hit is on a surface inside the region (and, with
 // a viewpoint, on the viewpoint's side of a real surface).
-std::optional<RsmTexel> texelFromHit(const RayHit& hit, const TexelRay& ray, const Bounds3f& regionBounds,
+// The hit's textures are looked up here, filtered over the texel's area on the surface (its rays are cast
+// with texturesLater).
+std::optional<RsmTexel> texelFromHit(RayHit hit, const TexelRay& ray, const Bounds3f& regionBounds,
                                      uint32_t index, const std::optional<glm::vec3>& viewpoint) {
     if (!hit.hit() || !regionBounds.contains(hit.position)) return std::nullopt;
     if (viewpoint && !hit.isVirtual && glm::dot(hit.geometricNormal, *viewpoint - hit.position) < 0.0f)
         return std::nullopt;
     const float cosTheta = std::max(glm::dot(hit.normal, -ray.dir), kMinCos);
     const float area = (ray.areaConst + ray.areaPerT2 * hit.t * hit.t) / cosTheta;
+    if (variesOverSurface(*hit.mesh)) lookUpMaterial(hit, std::sqrt(area));
     return RsmTexel{hit.position, hit.normal, hit.surface.volumeReflectance() * ray.fluxIn, area, index};
 }
 
@@ -181,7 +184,8 @@ std::optional<RsmTexel> traceTexel(const RayScene& scene, const MapLayout& layou
                                    const std::optional<glm::vec3>& viewpoint) {
     const TexelRay ray = layout.ray(face, i, j);
     if (!carriesLight(ray)) return std::nullopt;
-    return texelFromHit(scene.intersect(ray.origin, ray.dir), ray, regionBounds, texelIndex(res, face, i, j),
+    return texelFromHit(scene.intersect(ray.origin, ray.dir, 0.0f, INFINITY, true), ray, regionBounds,
+                        texelIndex(res, face, i, j),
                         viewpoint);
 }
 
@@ -194,9 +198,9 @@ std::optional<RsmTexel> retraceTexel(const RayScene& scene, const MapLayout& lay
     if (!scene.base()) return traceTexel(scene, layout, regionBounds, res, face, i, j, viewpoint);
     const TexelRay ray = layout.ray(face, i, j);
     if (!carriesLight(ray)) return std::nullopt;
-    RayHit hit = scene.intersectTopLayer(ray.origin, ray.dir);
+    RayHit hit = scene.intersectTopLayer(ray.origin, ray.dir, 0.0f, INFINITY, true);
     if (!hit.hit()) return baseTexel ? std::optional(*baseTexel) : std::nullopt;
-    const RayHit below = scene.base()->intersect(ray.origin, ray.dir, 0.0f, hit.t);
+    const RayHit below = scene.base()->intersect(ray.origin, ray.dir, 0.0f, hit.t, true);
     if (below.hit()) hit = below;
     return texelFromHit(hit, ray, regionBounds, texelIndex(res, face, i, j), viewpoint);
 }
