@@ -65,9 +65,9 @@ void visitMaterialFields(const Material& m, Value&& value) {
     value(m.alphaCutoff);
     value(m.normalScale);
     value(m.occlusionStrength);
-    for (const TextureSlot* slot : {&m.baseColorTexture, &m.specularTexture, &m.roughnessTexture,
-                                    &m.shininessTexture, &m.metallicRoughnessTexture, &m.normalTexture,
-                                    &m.emissiveTexture, &m.occlusionTexture}) {
+    for (const TextureSlot* slot :
+         {&m.baseColorTexture, &m.specularTexture, &m.roughnessTexture, &m.shininessTexture,
+          &m.metallicRoughnessTexture, &m.normalTexture, &m.emissiveTexture, &m.occlusionTexture}) {
         value(slot->texture.get());
         value(slot->sampler.wrapS);
         value(slot->sampler.wrapT);

@@ -185,8 +185,7 @@ std::optional<RsmTexel> traceTexel(const RayScene& scene, const MapLayout& layou
     const TexelRay ray = layout.ray(face, i, j);
     if (!carriesLight(ray)) return std::nullopt;
     return texelFromHit(scene.intersect(ray.origin, ray.dir, 0.0f, INFINITY, true), ray, regionBounds,
-                        texelIndex(res, face, i, j),
-                        viewpoint);
+                        texelIndex(res, face, i, j), viewpoint);
 }
 
 // traceTexel() over a layered `scene` whose base layer is the scene a map was rendered over, `baseTexel` the

@@ -160,10 +160,12 @@ std::vector<const std::array<glm::vec3, 2>*> keptTriangleMaterials(
         const TriangleMesh& mesh = meshes[k];
         VoxelGeometry::TriangleMaterials& entry = cache[k];
         const TriangleMesh* objectSpace = mesh.objectSpace.get();
-        // Triangle i of the placed mesh is triangle i of the object-space one when clean-up dropped none (it may
-        // drop unreferenced vertices: the indices differ then, the triangles' order does not).
-        if (!objectSpace || !variesOverSurface(mesh) || objectSpace->triangles.size() != mesh.triangles.size() ||
-            objectSpace->uvs.size() != objectSpace->positions.size() || mesh.uvs.size() != mesh.positions.size()) {
+        // Triangle i of the placed mesh is triangle i of the object-space one when clean-up dropped none (it
+        // may drop unreferenced vertices: the indices differ then, the triangles' order does not).
+        if (!objectSpace || !variesOverSurface(mesh) ||
+            objectSpace->triangles.size() != mesh.triangles.size() ||
+            objectSpace->uvs.size() != objectSpace->positions.size() ||
+            mesh.uvs.size() != mesh.positions.size()) {
             entry = {};
             continue;
         }
@@ -178,12 +180,13 @@ std::vector<const std::array<glm::vec3, 2>*> keptTriangleMaterials(
             parallelFor(0, static_cast<int64_t>(mesh.triangles.size()), 4096, [&](int64_t i) {
                 const glm::uvec3 t = objectSpace->triangles[i];
                 const glm::vec3 a = objectSpace->positions[t.x];
-                const float objectArea = glm::length(
-                    glm::cross(objectSpace->positions[t.y] - a, objectSpace->positions[t.z] - a));
+                const float objectArea =
+                    glm::length(glm::cross(objectSpace->positions[t.y] - a, objectSpace->positions[t.z] - a));
                 const std::vector<glm::vec2>& uvs = objectSpace->uvs;
                 const glm::vec2 d1 = uvs[t.y] - uvs[t.x], d2 = uvs[t.z] - uvs[t.x];
                 const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
-                const float uvFootprint = objectArea > 0.0f ? objectFootprint * std::sqrt(uvArea / objectArea) : 0.0f;
+                const float uvFootprint =
+                    objectArea > 0.0f ? objectFootprint * std::sqrt(uvArea / objectArea) : 0.0f;
                 const SurfaceMaterial m = surfaceMaterialAtUv(mesh, static_cast<unsigned>(i), 1.0f / 3.0f,
                                                               1.0f / 3.0f, uvFootprint, nullptr);
                 entry.values[i] = {m.emission, m.volumeReflectance()};
@@ -244,7 +247,8 @@ std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
             if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
             vt.lo = glm::clamp(glm::ivec3(glm::floor(mn)), glm::ivec3(0), glm::ivec3(n - 1));
             vt.hi = glm::clamp(glm::ivec3(glm::floor(mx)), glm::ivec3(0), glm::ivec3(n - 1));
-            if (chunk.cached && glm::all(glm::lessThanEqual(mx - mn, glm::vec3(1.0f)))) vt.cached = chunk.cached + i;
+            if (chunk.cached && glm::all(glm::lessThanEqual(mx - mn, glm::vec3(1.0f))))
+                vt.cached = chunk.cached + i;
             vt.oneVoxel = glm::ivec3(glm::floor(mn)) == glm::ivec3(glm::floor(mx)) &&
                           glm::all(glm::greaterThanEqual(mn, glm::vec3(0.0f))) &&
                           glm::all(glm::lessThan(mx, glm::vec3(static_cast<float>(n))));

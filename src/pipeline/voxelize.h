@@ -31,10 +31,10 @@ struct VoxelGeometry {
     VoxelBox bounds;
     // Textured objects' triangles (meshes placed from an object-space mesh, TriangleMesh::objectSpace): each
     // triangle's voxel material, its emission and reflectance at its centre filtered over a voxel, used for
-    // the triangles smaller than a voxel (most of a detailed mesh's), for each of their pieces. Kept from one voxelization to the next
-    // while the mesh, its material, the voxel size and the scale of its transform stay the same (an object
-    // that moves or turns), so that moving a textured object does not look its textures up again. One entry
-    // per mesh, in order.
+    // the triangles smaller than a voxel (most of a detailed mesh's), for each of their pieces. Kept from one
+    // voxelization to the next while the mesh, its material, the voxel size and the scale of its transform
+    // stay the same (an object that moves or turns), so that moving a textured object does not look its
+    // textures up again. One entry per mesh, in order.
     struct TriangleMaterials {
         const TriangleMesh* objectSpace = nullptr;
         uint64_t signature = 0;

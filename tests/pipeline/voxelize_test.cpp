@@ -281,7 +281,8 @@ TEST(Voxelize, RevoxelizingChangedMeshesEqualsVoxelizingThemAfresh) {
 TEST(Voxelize, AMovingTexturedObjectKeepsItsTriangleMaterials) {
     std::vector<glm::vec4> texels;
     for (int y = 0; y < 16; ++y)
-        for (int x = 0; x < 16; ++x) texels.push_back((x + y) % 2 ? glm::vec4(1, 1, 1, 1) : glm::vec4(1, 0, 0, 1));
+        for (int x = 0; x < 16; ++x)
+            texels.push_back((x + y) % 2 ? glm::vec4(1, 1, 1, 1) : glm::vec4(1, 0, 0, 1));
     Material m;
     m.albedo = glm::vec3(1.0f);
     m.baseColorTexture.texture = std::make_shared<Texture>(16, 16, std::move(texels), "checker");
@@ -289,8 +290,8 @@ TEST(Voxelize, AMovingTexturedObjectKeepsItsTriangleMaterials) {
     meshes[0].material = m;
     const VolumeRegion region{glm::vec3(-1.0f), 2.0f, 32};
     auto place = [&](glm::vec3 at, float turnDeg, float scale) {
-        setTransform(meshes[0], glm::scale(glm::rotate(glm::translate(glm::mat4(1.0f), at), glm::radians(turnDeg),
-                                                       glm::vec3(0, 1, 0)),
+        setTransform(meshes[0], glm::scale(glm::rotate(glm::translate(glm::mat4(1.0f), at),
+                                                       glm::radians(turnDeg), glm::vec3(0, 1, 0)),
                                            glm::vec3(scale)));
     };
     place({0, 0, 0}, 0.0f, 1.0f);
@@ -304,7 +305,8 @@ TEST(Voxelize, AMovingTexturedObjectKeepsItsTriangleMaterials) {
         EXPECT_EQ(kept.triangleMaterials[0].signature, signature) << "frame " << frame;
         const VoxelGeometry fresh = voxelize(meshes, region, false, true);
         ASSERT_EQ(fresh.albedo.size(), kept.albedo.size());
-        EXPECT_EQ(std::memcmp(fresh.albedo.data(), kept.albedo.data(), fresh.albedo.size() * sizeof(glm::vec3)), 0)
+        EXPECT_EQ(
+            std::memcmp(fresh.albedo.data(), kept.albedo.data(), fresh.albedo.size() * sizeof(glm::vec3)), 0)
             << "frame " << frame;
     }
     place({0, 0, 0}, 0.0f, 1.5f);
