@@ -99,17 +99,18 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
                                   float footprint, glm::vec3* normal) {
     if (!mesh.material.textured() || mesh.uvs.empty())
         return surfaceMaterialAtUv(mesh, triangle, u, v, 0.0f, normal);
-    const glm::uvec3 tri = mesh.triangles[triangle];
-    // The footprint in texture coordinates: world units times the triangle's texture-coordinate density.
-    float uvFootprint = 0.0f;
-    if (footprint > 0.0f) {
-        const glm::vec3 a = mesh.positions[tri.x];
-        const float worldArea = glm::length(glm::cross(mesh.positions[tri.y] - a, mesh.positions[tri.z] - a));
-        const glm::vec2 d1 = mesh.uvs[tri.y] - mesh.uvs[tri.x], d2 = mesh.uvs[tri.z] - mesh.uvs[tri.x];
-        const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
-        if (worldArea > 0.0f) uvFootprint = footprint * std::sqrt(uvArea / worldArea);
-    }
+    const float uvFootprint =
+        footprint > 0.0f ? uvFootprintOn(mesh.positions, mesh.uvs, mesh.triangles[triangle], footprint) : 0.0f;
     return surfaceMaterialAtUv(mesh, triangle, u, v, uvFootprint, normal);
+}
+
+float uvFootprintOn(const std::vector<glm::vec3>& positions, const std::vector<glm::vec2>& uvs, glm::uvec3 tri,
+                    float footprint) {
+    const glm::vec3 a = positions[tri.x];
+    const float area = glm::length(glm::cross(positions[tri.y] - a, positions[tri.z] - a));
+    const glm::vec2 d1 = uvs[tri.y] - uvs[tri.x], d2 = uvs[tri.z] - uvs[tri.x];
+    const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
+    return area > 0.0f ? footprint * std::sqrt(uvArea / area) : 0.0f;
 }
 
 SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle, float u, float v,

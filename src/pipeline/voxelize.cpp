@@ -178,15 +178,8 @@ std::vector<const std::array<glm::vec3, 2>*> keptTriangleMaterials(
             entry.values.resize(mesh.triangles.size());
             const float objectFootprint = voxelSize / scale;
             parallelFor(0, static_cast<int64_t>(mesh.triangles.size()), 4096, [&](int64_t i) {
-                const glm::uvec3 t = objectSpace->triangles[i];
-                const glm::vec3 a = objectSpace->positions[t.x];
-                const float objectArea =
-                    glm::length(glm::cross(objectSpace->positions[t.y] - a, objectSpace->positions[t.z] - a));
-                const std::vector<glm::vec2>& uvs = objectSpace->uvs;
-                const glm::vec2 d1 = uvs[t.y] - uvs[t.x], d2 = uvs[t.z] - uvs[t.x];
-                const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
-                const float uvFootprint =
-                    objectArea > 0.0f ? objectFootprint * std::sqrt(uvArea / objectArea) : 0.0f;
+                const float uvFootprint = uvFootprintOn(objectSpace->positions, objectSpace->uvs,
+                                                        objectSpace->triangles[i], objectFootprint);
                 const SurfaceMaterial m = surfaceMaterialAtUv(mesh, static_cast<unsigned>(i), 1.0f / 3.0f,
                                                               1.0f / 3.0f, uvFootprint, nullptr);
                 entry.values[i] = {m.emission, m.volumeReflectance()};
