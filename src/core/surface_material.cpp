@@ -100,12 +100,13 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
     if (!mesh.material.textured() || mesh.uvs.empty())
         return surfaceMaterialAtUv(mesh, triangle, u, v, 0.0f, normal);
     const float uvFootprint =
-        footprint > 0.0f ? uvFootprintOn(mesh.positions, mesh.uvs, mesh.triangles[triangle], footprint) : 0.0f;
+        footprint > 0.0f ? uvFootprintOn(mesh.positions, mesh.uvs, mesh.triangles[triangle], footprint)
+                         : 0.0f;
     return surfaceMaterialAtUv(mesh, triangle, u, v, uvFootprint, normal);
 }
 
-float uvFootprintOn(const std::vector<glm::vec3>& positions, const std::vector<glm::vec2>& uvs, glm::uvec3 tri,
-                    float footprint) {
+float uvFootprintOn(const std::vector<glm::vec3>& positions, const std::vector<glm::vec2>& uvs,
+                    glm::uvec3 tri, float footprint) {
     const glm::vec3 a = positions[tri.x];
     const float area = glm::length(glm::cross(positions[tri.y] - a, positions[tri.z] - a));
     const glm::vec2 d1 = uvs[tri.y] - uvs[tri.x], d2 = uvs[tri.z] - uvs[tri.x];

@@ -96,8 +96,8 @@ SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, f
 
 // A footprint `footprint` world units wide on triangle `tri` of a mesh with `positions` and `uvs`, in
 // texture coordinates: times the triangle's texture-coordinate density; 0 for a degenerate triangle.
-float uvFootprintOn(const std::vector<glm::vec3>& positions, const std::vector<glm::vec2>& uvs, glm::uvec3 tri,
-                    float footprint);
+float uvFootprintOn(const std::vector<glm::vec3>& positions, const std::vector<glm::vec2>& uvs,
+                    glm::uvec3 tri, float footprint);
 
 // surfaceMaterialAt with the footprint given in texture coordinates (1 = the texture's width) instead.
 SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle, float u, float v,
