@@ -14,16 +14,26 @@ namespace {
 // footprint: grazing surfaces are filtered as at about 84 degrees rather than over the whole image.
 constexpr float kMinFootprintCosine = 0.1f;
 
-// `pixelAngle`: the angle (radians) a pixel subtends, for the textures' filter footprint.
-SurfacePoint toSurfacePoint(const RayHit& hit, glm::vec3 rayDir, float pixelAngle) {
-    if (!hit.hit()) return {};
+// `pixelAngle`: the angle (radians) a pixel subtends, for the textures' filter footprint. Writes the fields
+// in place (returning the 96-byte record by value cost the real G-buffer a tenth of its time).
+void toSurfacePoint(const RayHit& hit, glm::vec3 rayDir, float pixelAngle, SurfacePoint& out) {
+    if (!hit.hit()) {
+        out = SurfacePoint{};
+        return;
+    }
+    out.position = hit.position;
+    out.toEye = -rayDir;
+    out.material = hit.material;
     if (variesOverSurface(*hit.mesh)) {
         RayHit filtered = hit;
         const float cosine = std::max(std::abs(glm::dot(hit.geometricNormal, rayDir)), kMinFootprintCosine);
         lookUpMaterial(filtered, hit.t * pixelAngle / cosine);
-        return {filtered.position, filtered.normal, -rayDir, filtered.material, filtered.surface};
+        out.normal = filtered.normal;
+        out.surface = filtered.surface;
+        return;
     }
-    return {hit.position, hit.normal, -rayDir, hit.material, hit.surface};
+    out.normal = hit.normal;
+    out.surface = hit.surface;
 }
 
 float pixelAngleOf(const Camera& camera) {
@@ -35,7 +45,7 @@ float pixelAngleOf(const Camera& camera) {
 RayHit visibleObjectHit(const RayScene& all, glm::vec3 eye, glm::vec3 dir) {
     const RayHit hit = all.base() ? all.intersectTopLayer(eye, dir) : all.intersect(eye, dir);
     if (!hit.isVirtual) return {};
-    if (all.base() && all.base()->intersect(eye, dir, 0.0f, hit.t).hit()) return {};
+    if (all.base() && all.base()->occluded(eye, dir, 0.0f, hit.t)) return {};
     return hit;
 }
 
@@ -48,8 +58,7 @@ void visibleObjectHits(const RayScene& all, glm::vec3 eye, std::span<const glm::
     }
     all.intersectCoherent(eye, directions, hits, true, true);
     for (size_t i = 0; i < directions.size(); ++i)
-        if (!hits[i].isVirtual || all.base()->intersect(eye, directions[i], 0.0f, hits[i].t).hit())
-            hits[i] = {};
+        if (!hits[i].isVirtual || all.base()->occluded(eye, directions[i], 0.0f, hits[i].t)) hits[i] = {};
 }
 
 // The pixel rows and columns [x0, x1] x [y0, y1] whose rays may meet the box `b` (its corners' projections,
@@ -92,15 +101,17 @@ void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vec
     real.resize(static_cast<size_t>(camera.width) * camera.height);
     const glm::vec3 eye = camera.position();
     parallelFor(0, camera.height, 2, [&](int64_t y) {
-        // A row's rays in packets.
-        std::vector<glm::vec3> directions(static_cast<size_t>(camera.width));
-        std::vector<RayHit> hits(directions.size());
+        // A row's rays in packets (the buffers kept by each thread: a row's RayHits are 70 KiB).
+        thread_local std::vector<glm::vec3> directions;
+        thread_local std::vector<RayHit> hits;
+        directions.resize(static_cast<size_t>(camera.width));
+        hits.resize(directions.size());
         for (int x = 0; x < camera.width; ++x)
             directions[x] = glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f));
         realOnly.intersectCoherent(eye, directions, hits, false, true);
         for (int x = 0; x < camera.width; ++x)
-            real[static_cast<size_t>(y) * camera.width + x] =
-                toSurfacePoint(hits[x], directions[x], pixelAngleOf(camera));
+            toSurfacePoint(hits[x], directions[x], pixelAngleOf(camera),
+                           real[static_cast<size_t>(y) * camera.width + x]);
     });
 }
 
@@ -133,24 +144,36 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     const auto [x0, x1, y0, y1] = pixelsCovering(camera, objectBounds);
     g.written = x1 < x0 || y1 < y0 ? PixelRect{} : PixelRect{x0, y0, x1 + 1, y1 + 1};
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
-        std::vector<glm::vec3> directions;
+        thread_local std::vector<glm::vec3> directions;
+        thread_local std::vector<RayHit> hits;
+        directions.clear();
         for (int x = x0; x <= x1; ++x)
             directions.push_back(glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f)));
-        std::vector<RayHit> hits(directions.size());
+        hits.resize(directions.size());
         visibleObjectHits(all, eye, directions, hits);
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
-            g.object[i] = toSurfacePoint(hits[x - x0], directions[x - x0], pixelAngleOf(camera));
+            toSurfacePoint(hits[x - x0], directions[x - x0], pixelAngleOf(camera), g.object[i]);
             g.coverage[i] = g.object[i].valid() ? 1.0f : 0.0f;
         }
     });
-    g.objectSamples.perPixel = 0;
-    g.objectSamples.points.clear();
-    if (k == 1) return;
+    PixelSamples& samples = g.objectSamples;
+    if (k == 1 || g.written.empty()) {
+        samples.perPixel = k == 1 ? 0 : k * k;
+        samples.rect = g.written;
+        samples.points.clear();
+        return;
+    }
+    samples.perPixel = k * k;
+    samples.rect = g.written;
 
     // Then the sub-samples of silhouette pixels (decided from the centres alone, so the pass is
-    // deterministic).
-    std::vector<uint8_t> silhouette(count, 0);
+    // deterministic), over the rectangle [x0, x1] x [y0, y1].
+    const size_t silhouetteWidth = static_cast<size_t>(x1 - x0 + 1);
+    std::vector<uint8_t> silhouette(silhouetteWidth * static_cast<size_t>(y1 - y0 + 1));
+    auto onSilhouette = [&](int64_t y, int x) -> uint8_t& {
+        return silhouette[static_cast<size_t>(y - y0) * silhouetteWidth + static_cast<size_t>(x - x0)];
+    };
     parallelFor(y0, y1 + 1, 8, [&](int64_t y) {
         for (int x = x0; x <= x1; ++x) {
             const bool centre = g.object[static_cast<size_t>(y) * width + x].valid();
@@ -159,25 +182,28 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                     const int xx = x + dx, yy = static_cast<int>(y) + dy;
                     if (xx < 0 || yy < 0 || xx >= width || yy >= height) continue;
                     if (g.object[static_cast<size_t>(yy) * width + xx].valid() != centre)
-                        silhouette[static_cast<size_t>(y) * width + x] = 1;
+                        onSilhouette(y, x) = 1;
                 }
         }
     });
     // Every pixel that shows an object or lies on a silhouette takes k x k sub-samples: the coverage, and
     // the surfaces its direct light is shaded over.
-    PixelSamples& samples = g.objectSamples;
-    samples.perPixel = k * k;
-    samples.rect = g.written;
     const int rectWidth = samples.rect.x1 - samples.rect.x0;
-    samples.points.assign(
-        static_cast<size_t>(std::max(rectWidth, 0)) * std::max(samples.rect.y1 - samples.rect.y0, 0) * k * k,
-        SurfacePoint{});
+    // Sized only, keeping the memory of the frame before: a row's slots are cleared by the row's task, in
+    // parallel (38 MiB for an object over a third of the image).
+    samples.points.resize(static_cast<size_t>(std::max(rectWidth, 0)) *
+                          std::max(samples.rect.y1 - samples.rect.y0, 0) * k * k);
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
+        SurfacePoint* const row =
+            samples.points.data() + static_cast<size_t>(y - samples.rect.y0) * rectWidth * k * k;
+        std::fill(row, row + static_cast<size_t>(rectWidth) * k * k, SurfacePoint{});
         // The row's sub-sample rays, in packets.
-        std::vector<glm::vec3> directions;
+        thread_local std::vector<glm::vec3> directions;
+        thread_local std::vector<RayHit> hits;
+        directions.clear();
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
-            if (!silhouette[i] && !g.object[i].valid()) continue;
+            if (!onSilhouette(y, x) && !g.object[i].valid()) continue;
             for (int sy = 0; sy < k; ++sy)
                 for (int sx = 0; sx < k; ++sx) {
                     const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
@@ -185,14 +211,14 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                         camera.rayDirection(x + 0.5f + ox, static_cast<float>(y) + 0.5f + oy)));
                 }
         }
-        std::vector<RayHit> hits(directions.size());
+        hits.resize(directions.size());
         visibleObjectHits(all, eye, directions, hits);
         size_t next = 0;
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
-            if (!silhouette[i] && !g.object[i].valid()) continue;
-            SurfacePoint* out = samples.points.data() +
-                                (static_cast<size_t>(y - samples.rect.y0) * rectWidth + (x - x0)) * k * k;
+            const bool edge = onSilhouette(y, x);
+            if (!edge && !g.object[i].valid()) continue;
+            SurfacePoint* out = row + static_cast<size_t>(x - x0) * k * k;
             int virtualCount = 0;
             float bestOffset = g.object[i].valid() ? 0.0f : INFINITY;
             SurfacePoint nearest = g.object[i];
@@ -205,14 +231,14 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                     ++virtualCount;
                     // Textures filtered over the sub-sample's share of the pixel (over the whole pixel,
                     // quality suite's cornell-textured: object_rel_rmse 0.462 -> 0.517, blurred twice).
-                    out[sy * k + sx] = toSurfacePoint(hit, dir, pixelAngleOf(camera) / static_cast<float>(k));
+                    toSurfacePoint(hit, dir, pixelAngleOf(camera) / static_cast<float>(k), out[sy * k + sx]);
                     const float offset = ox * ox + oy * oy;
                     if (offset < bestOffset) {
                         bestOffset = offset;
                         nearest = out[sy * k + sx];
                     }
                 }
-            if (!silhouette[i]) continue;  // inside an object: the centre stays, coverage 1
+            if (!edge) continue;  // inside an object: the centre stays, coverage 1
             g.object[i] = virtualCount > 0 ? nearest : SurfacePoint{};
             g.coverage[i] = static_cast<float>(virtualCount) / static_cast<float>(k * k);
         }

@@ -258,6 +258,14 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect
     return values;
 }
 
+// Runs body(j) for the jobs at once (the real surfaces' and the objects'): each job's own passes are
+// parallel, but they end in small tails of work that leave a core idle; the other job fills them. The
+// results do not depend on the order (each job writes only its own).
+template <typename Body>
+void forEachJob(size_t jobs, Body&& body) {
+    parallelFor(0, static_cast<int64_t>(jobs), 1, [&](int64_t j) { body(static_cast<size_t>(j)); });
+}
+
 // Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs, then the
 // sky light through the cones, with options `o` (the scene's, or the background's). Shadow and diffuse cones
 // are traced at options.shadow/diffuse.pixel_stride (relight_pixel_stride for real surfaces relit) and
@@ -266,7 +274,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                                     std::span<const Light> directLights, StageTimer& timer) {
     const int lights = static_cast<int>(directLights.size());
     std::vector<ConeResults> results(jobs.size());
-    for (size_t j = 0; j < jobs.size(); ++j) {
+    forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
         results[j].shadows = traceSparse<ShadowOcclusion>(
             job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
@@ -277,19 +285,19 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                 return traceShadowCones(job.points, directLights, job.visibility, o,
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
-    }
-    for (size_t j = 0; j < jobs.size(); ++j) {
+    });
+    forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
-        if (!job.emitters || job.emitters->empty()) continue;
+        if (!job.emitters || job.emitters->empty()) return;
         results[j].areaLight = traceSparse<glm::vec3>(
             job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
             job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                 return traceAreaLightRays(job.points, *job.emitters, job.rays, o, job.mode, pixels);
             });
-    }
-    for (size_t j = 0; j < jobs.size(); ++j) {
+    });
+    forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
-        if (!job.environment) continue;
+        if (!job.environment) return;
         addInto(
             results[j].areaLight,
             traceSparse<glm::vec3>(
@@ -297,11 +305,11 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                 job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                     return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode, pixels);
                 }));
-    }
+    });
     timer.lap("shadow");
-    for (size_t j = 0; j < jobs.size(); ++j) {
+    forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
-        if (!job.indirect) continue;
+        if (!job.indirect) return;
         results[j].diffuse = traceSparse<glm::vec3>(
             job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
             job.filter(o, job.diffuseStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
@@ -316,11 +324,11 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                         [&](std::span<const uint32_t> pixels) {
                             return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels);
                         }));
-    }
+    });
     timer.lap("diffuse");
-    for (size_t j = 0; j < jobs.size(); ++j) {
+    forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
-        if (!job.indirect) continue;
+        if (!job.indirect) return;
         auto trace = [&](std::span<const uint32_t> pixels) {
             return traceSpecularCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
                                       job.objectLight);
@@ -331,14 +339,14 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                                                  job.specularStride(o, scene.camera), 1,
                                                  job.filter(o, job.specularStride(o, scene.camera)), trace)
                         : trace({});
-    }
+    });
     timer.lap("specular");
     // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
     // filtered like the diffuse cones (it has the same jitter noise).
     // (With the environment's light by rays, its direct light, sky included, is already in `areaLight`.)
     if (scene.environment && !scene.environment->sky.empty() && o.shadow.method != "rays") {
         const Environment& environment = *scene.environment;
-        for (size_t j = 0; j < jobs.size(); ++j) {
+        forEachJob(jobs.size(), [&](size_t j) {
             const ConeJob& job = jobs[j];
             addInto(results[j].diffuse,
                     traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
@@ -352,7 +360,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             addInto(results[j].specular,
                     traceSkyCones(job.points, environment, job.visibility, job.mode, o, SkyParts::Specular)
                         .specular);
-        }
+        });
         timer.lap("sky");
     }
     return results;
