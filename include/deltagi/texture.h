@@ -1,10 +1,12 @@
 // Textures of materials: 2D images with their mip chain, and the sampler state glTF 2.0 gives them
-// (wrap modes and filters). Texels are kept as linear RGBA floats: 8/16-bit colour files (base colour,
-// emissive) are sRGB-decoded when read, data textures (metallic-roughness, normals, occlusion) are not.
+// (wrap modes and filters). Texels of 8-bit files are kept as 8 bits and decoded at lookup (sRGB for colour:
+// base colour, emissive; linear for data: metallic-roughness, normals, occlusion); those of other files as
+// linear RGBA floats (16-bit colour sRGB-decoded when read).
 // Texture coordinates follow glTF: (0, 0) is the image's top-left corner, u to the right, v down.
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <filesystem>
 #include <memory>
 #include <span>
@@ -38,6 +40,13 @@ class Texture {
     // `texels`: width * height linear RGBA values, row 0 at the top (v = 0). Throws InputError(name, ...)
     // for a zero or negative size, a texel count that does not match, or a non-finite texel.
     Texture(int width, int height, std::vector<glm::vec4> texels, std::string name);
+    // 8-bit texels as an image file holds them: width * height * 4 bytes, RGBA, row 0 at the top; `encoding`
+    // says how RGB become linear values (alpha is always linear). Kept as 8 bits, as graphics hardware keeps
+    // an RGBA8 or SRGB8_ALPHA8 texture: a quarter of the memory of linear floats, and lookups that read a
+    // quarter of the bytes. Level 0 gives exactly the values of a decoding to floats; the smaller levels are
+    // box-filtered in linear values and stored as 8 bits again (rounded to the nearest code). Throws as the
+    // constructor above for a bad size or a byte count that does not match.
+    Texture(int width, int height, std::vector<uint8_t> rgba8, TextureEncoding encoding, std::string name);
 
     // Reads an image file (PNG, JPEG, EXR, HDR, TGA, BMP, ... whatever OpenImageIO reads). Grey files repeat
     // their channel to RGB, files without alpha get alpha 1. Throws InputError(where, ...) naming the file
@@ -66,12 +75,19 @@ class Texture {
     // The texel (x, y) of mip level `level` (no filtering, no wrapping; x, y in range).
     glm::vec4 texel(int level, int x, int y) const;
 
+    // Whether the texels are kept as 8 bits (the second constructor).
+    bool eightBit() const { return eightBit_; }
+
   private:
     struct Level {
         int width = 0, height = 0;
-        std::vector<glm::vec4> texels;
+        std::vector<glm::vec4> texels;  // linear values; empty when eightBit_
+        std::vector<uint32_t> packed;   // eightBit_: R | G << 8 | B << 16 | A << 24
     };
+    void buildMipChain();
     int width_ = 0, height_ = 0;
+    bool eightBit_ = false;
+    TextureEncoding encoding_ = TextureEncoding::Linear;
     std::vector<Level> levels_;
     std::string name_;
 };

@@ -37,6 +37,47 @@ std::string sizeProblem(int width, int height) {
     return {};
 }
 
+// --- 8-bit texels ---------------------------------------------------------------------------------------
+
+uint32_t packTexel(uint8_t r, uint8_t g, uint8_t b, uint8_t a) {
+    return static_cast<uint32_t>(r) | static_cast<uint32_t>(g) << 8 | static_cast<uint32_t>(b) << 16 |
+           static_cast<uint32_t>(a) << 24;
+}
+
+// i / 255 for every 8-bit value: the linear decoding (the same floats as a division).
+const std::array<float, 256>& unorm8Values() {
+    static const std::array<float, 256> table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) t[i] = static_cast<float>(i) / 255.0f;
+        return t;
+    }();
+    return table;
+}
+
+// An 8-bit texel's linear RGBA values: RGB through the encoding's table (sRGB or linear), alpha linear.
+struct TexelDecoder {
+    const float* rgb;
+    const float* alpha;
+    explicit TexelDecoder(TextureEncoding encoding)
+        : rgb(encoding == TextureEncoding::Srgb ? srgb8ToLinearValues().data() : unorm8Values().data()),
+          alpha(unorm8Values().data()) {}
+    glm::vec4 operator()(uint32_t t) const {
+        return {rgb[t & 0xffu], rgb[(t >> 8) & 0xffu], rgb[(t >> 16) & 0xffu], alpha[t >> 24]};
+    }
+};
+
+// The nearest 8-bit code of a linear value in [0, 1] (clamped), sRGB-encoded for colour.
+uint8_t encodeChannel(float linear, bool srgb) {
+    const float v = std::clamp(srgb ? linearToSrgbValue(std::clamp(linear, 0.0f, 1.0f)) : linear, 0.0f, 1.0f);
+    return static_cast<uint8_t>(std::lround(v * 255.0f));
+}
+
+uint32_t encodeTexel(glm::vec4 linear, TextureEncoding encoding) {
+    const bool srgb = encoding == TextureEncoding::Srgb;
+    return packTexel(encodeChannel(linear.x, srgb), encodeChannel(linear.y, srgb),
+                     encodeChannel(linear.z, srgb), encodeChannel(linear.w, false));
+}
+
 // --- The mip chain --------------------------------------------------------------------------------------
 
 // One destination texel of a box filter from `srcSize` texels to `dstSize` (dstSize <= srcSize): the source
@@ -213,25 +254,37 @@ std::shared_ptr<const Texture> readTexels(OIIO::ImageInput& input, TextureEncodi
     bool floatFile = isFloatFormat(spec.format);
     bool srgb = encoding == TextureEncoding::Srgb && !floatFile;
     size_t texelCount = static_cast<size_t>(width) * height;
+    auto make = [&](auto&&... texels) {
+        try {
+            return std::make_shared<const Texture>(width, height, std::move(texels)..., name);
+        } catch (const InputError& e) {
+            throw InputError(where, what + e.message());
+        }
+    };
     try {
-        std::vector<float> values(texelCount * channels);
-        if (spec.format == OIIO::TypeDesc::UINT8) {
-            std::vector<uint8_t> bytes(values.size());
+        if (spec.format == OIIO::TypeDesc::UINT8) {  // kept as 8 bits (RGBA)
+            std::vector<uint8_t> bytes(texelCount * channels);
             if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, bytes.data()))
                 throw InputError(where, what + "cannot read the pixels: " + input.geterror());
-            const std::array<float, 256>& decoded = srgb8ToLinearValues();
-            for (size_t i = 0; i < values.size(); ++i) {
-                bool colour = static_cast<int>(i % channels) != alpha;
-                values[i] = srgb && colour ? decoded[bytes[i]] : static_cast<float>(bytes[i]) / 255.0f;
+            std::vector<uint8_t> rgba(texelCount * 4);
+            for (size_t p = 0; p < texelCount; ++p) {
+                const uint8_t* v = &bytes[p * channels];
+                uint8_t* out = &rgba[p * 4];
+                out[0] = v[0];
+                out[1] = channels >= 3 ? v[1] : v[0];
+                out[2] = channels >= 3 ? v[2] : v[0];
+                out[3] = alpha >= 0 ? v[alpha] : 255;
             }
-        } else {
-            // OpenImageIO scales integer pixels to [0, 1] when it converts them to float.
-            if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, values.data()))
-                throw InputError(where, what + "cannot read the pixels: " + input.geterror());
-            if (srgb)
-                for (size_t i = 0; i < values.size(); ++i)
-                    if (static_cast<int>(i % channels) != alpha) values[i] = srgbToLinearValue(values[i]);
+            bytes = {};
+            return make(std::move(rgba), srgb ? TextureEncoding::Srgb : TextureEncoding::Linear);
         }
+        std::vector<float> values(texelCount * channels);
+        // OpenImageIO scales integer pixels to [0, 1] when it converts them to float.
+        if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, values.data()))
+            throw InputError(where, what + "cannot read the pixels: " + input.geterror());
+        if (srgb)
+            for (size_t i = 0; i < values.size(); ++i)
+                if (static_cast<int>(i % channels) != alpha) values[i] = srgbToLinearValue(values[i]);
         std::vector<glm::vec4> texels(texelCount);
         for (size_t p = 0; p < texelCount; ++p) {
             const float* v = &values[p * channels];
@@ -239,11 +292,7 @@ std::shared_ptr<const Texture> readTexels(OIIO::ImageInput& input, TextureEncodi
             texels[p] = glm::vec4(rgb, alpha >= 0 ? v[alpha] : 1.0f);
         }
         values = {};
-        try {
-            return std::make_shared<const Texture>(width, height, std::move(texels), name);
-        } catch (const InputError& e) {
-            throw InputError(where, what + e.message());
-        }
+        return make(std::move(texels));
     } catch (const std::bad_alloc&) {
         throw InputError(
             where, what + fmt::format("a texture of {}x{} texels does not fit in memory", width, height));
@@ -266,17 +315,53 @@ Texture::Texture(int width, int height, std::vector<glm::vec4> texels, std::stri
         if (!std::isfinite(t.x) || !std::isfinite(t.y) || !std::isfinite(t.z) || !std::isfinite(t.w))
             throw InputError(name_, fmt::format("texel ({}, {}) is not finite", i % width, i / width));
     }
+    levels_.push_back({width, height, std::move(texels), {}});
+    buildMipChain();
+}
+
+Texture::Texture(int width, int height, std::vector<uint8_t> rgba8, TextureEncoding encoding,
+                 std::string name)
+    : width_(width), height_(height), eightBit_(true), encoding_(encoding), name_(std::move(name)) {
+    if (std::string problem = sizeProblem(width, height); !problem.empty()) throw InputError(name_, problem);
+    size_t count = static_cast<size_t>(width) * height;
+    if (rgba8.size() != count * 4)
+        throw InputError(name_, fmt::format("texture size {}x{} needs {} bytes (RGBA), got {}", width, height,
+                                            count * 4, rgba8.size()));
     try {
-        levels_.push_back({width, height, std::move(texels)});
-        while (levels_.back().width > 1 || levels_.back().height > 1) {
-            const Level& above = levels_.back();
-            int w = std::max(1, above.width / 2), h = std::max(1, above.height / 2);
-            std::vector<glm::vec4> next = downsample(above.texels, above.width, above.height, w, h);
-            levels_.push_back({w, h, std::move(next)});
-        }
+        std::vector<uint32_t> packed(count);
+        for (size_t i = 0; i < count; ++i)
+            packed[i] = packTexel(rgba8[4 * i], rgba8[4 * i + 1], rgba8[4 * i + 2], rgba8[4 * i + 3]);
+        rgba8 = {};
+        levels_.push_back({width, height, {}, std::move(packed)});
     } catch (const std::bad_alloc&) {
         throw InputError(name_,
                          fmt::format("a texture of {}x{} texels does not fit in memory", width, height));
+    }
+    buildMipChain();
+}
+
+void Texture::buildMipChain() {
+    try {
+        while (levels_.back().width > 1 || levels_.back().height > 1) {
+            const Level& above = levels_.back();
+            int w = std::max(1, above.width / 2), h = std::max(1, above.height / 2);
+            if (!eightBit_) {
+                std::vector<glm::vec4> next = downsample(above.texels, above.width, above.height, w, h);
+                levels_.push_back({w, h, std::move(next), {}});
+                continue;
+            }
+            // Filtered in linear values (as a float texture is), then stored as 8 bits again.
+            const TexelDecoder decoder(encoding_);
+            std::vector<glm::vec4> linear(above.packed.size());
+            for (size_t i = 0; i < linear.size(); ++i) linear[i] = decoder(above.packed[i]);
+            const std::vector<glm::vec4> next = downsample(linear, above.width, above.height, w, h);
+            std::vector<uint32_t> packed(next.size());
+            for (size_t i = 0; i < next.size(); ++i) packed[i] = encodeTexel(next[i], encoding_);
+            levels_.push_back({w, h, {}, std::move(packed)});
+        }
+    } catch (const std::bad_alloc&) {
+        throw InputError(name_,
+                         fmt::format("a texture of {}x{} texels does not fit in memory", width_, height_));
     }
 }
 
@@ -332,14 +417,15 @@ std::shared_ptr<const Texture> Texture::decode(std::span<const std::byte> encode
 }
 
 glm::vec4 Texture::average() const {
-    return levels_.back().texels.front();
+    return texel(levels() - 1, 0, 0);
 }
 
 glm::vec4 Texture::texel(int level, int x, int y) const {
     assert(level >= 0 && level < levels());
     const Level& l = levels_[level];
     assert(x >= 0 && x < l.width && y >= 0 && y < l.height);
-    return l.texels[static_cast<size_t>(y) * l.width + x];
+    const size_t i = static_cast<size_t>(y) * l.width + x;
+    return eightBit_ ? TexelDecoder(encoding_)(l.packed[i]) : l.texels[i];
 }
 
 namespace {
@@ -348,11 +434,14 @@ namespace {
 // size.
 struct LevelLookup {
     int width, height;
-    const glm::vec4* texels;
+    const glm::vec4* texels;  // linear values, or
+    const uint32_t* packed;   // 8-bit texels decoded by `decoder`
+    TexelDecoder decoder;
     TextureWrap wrapS, wrapT;
 
+    glm::vec4 fetch(size_t i) const { return packed ? decoder(packed[i]) : texels[i]; }
     glm::vec4 at(int x, int y) const {
-        return texels[static_cast<size_t>(wrapIndex(y, height, wrapT)) * width + wrapIndex(x, width, wrapS)];
+        return fetch(static_cast<size_t>(wrapIndex(y, height, wrapT)) * width + wrapIndex(x, width, wrapS));
     }
     glm::vec4 nearest(float u, float v) const {
         return at(static_cast<int>(std::floor(u * width)), static_cast<int>(std::floor(v * height)));
@@ -365,9 +454,10 @@ struct LevelLookup {
         // Each of the two columns and rows wrapped once (not each of the four texels' indices).
         const size_t left = static_cast<size_t>(wrapIndex(x, width, wrapS));
         const size_t right = static_cast<size_t>(wrapIndex(x + 1, width, wrapS));
-        const glm::vec4* top = texels + static_cast<size_t>(wrapIndex(y, height, wrapT)) * width;
-        const glm::vec4* bottom = texels + static_cast<size_t>(wrapIndex(y + 1, height, wrapT)) * width;
-        return glm::mix(glm::mix(top[left], top[right], fx), glm::mix(bottom[left], bottom[right], fx), fy);
+        const size_t top = static_cast<size_t>(wrapIndex(y, height, wrapT)) * width;
+        const size_t bottom = static_cast<size_t>(wrapIndex(y + 1, height, wrapT)) * width;
+        return glm::mix(glm::mix(fetch(top + left), fetch(top + right), fx),
+                        glm::mix(fetch(bottom + left), fetch(bottom + right), fx), fy);
     }
 };
 
@@ -378,7 +468,13 @@ glm::vec4 Texture::sample(glm::vec2 uv, float footprint, const TextureSampler& s
     float u = reduceCoordinate(uv.x, sampler.wrapS), v = reduceCoordinate(uv.y, sampler.wrapT);
     auto lookup = [&](int level) {
         const Level& l = levels_[level];
-        return LevelLookup{l.width, l.height, l.texels.data(), sampler.wrapS, sampler.wrapT};
+        return LevelLookup{l.width,
+                           l.height,
+                           eightBit_ ? nullptr : l.texels.data(),
+                           eightBit_ ? l.packed.data() : nullptr,
+                           TexelDecoder(encoding_),
+                           sampler.wrapS,
+                           sampler.wrapT};
     };
     // The level of detail: log2 of the footprint in texels of level 0 (OpenGL 4.6, section 8.14.1, with the
     // larger side's scale). Magnification at or below 0; a NaN footprint counts as 0.

@@ -35,6 +35,11 @@ double decodeSrgb(double encoded) {
     return encoded <= 0.04045 ? encoded / 12.92 : std::pow((encoded + 0.055) / 1.055, 2.4);
 }
 
+// The exact sRGB encoding of a linear value in [0, 1] (IEC 61966-2-1).
+double encodeSrgb(double linear) {
+    return linear <= 0.0031308 ? linear * 12.92 : 1.055 * std::pow(linear, 1.0 / 2.4) - 0.055;
+}
+
 void expectNear(glm::vec4 actual, glm::vec4 expected, float tolerance, const std::string& what = "") {
     for (int c = 0; c < 4; ++c) EXPECT_NEAR(actual[c], expected[c], tolerance) << what << ", channel " << c;
 }
@@ -381,6 +386,69 @@ TEST(TextureMips, OddSizesWeighTheirTexels) {
     EXPECT_FLOAT_EQ(five.texel(1, 0, 0).x, 5.0f / 2.5f);
     EXPECT_FLOAT_EQ(five.texel(1, 1, 0).x, 26.0f / 2.5f);
     EXPECT_FLOAT_EQ(five.average().x, 31.0f / 5.0f);
+}
+
+// 8-bit texels are kept as 8 bits: level 0 gives the same floats as decoding them (sRGB for colour, alpha
+// linear), the smaller levels are the float texture's levels to within half an 8-bit step of their encoding.
+TEST(TextureEightBit, LevelZeroIsExactAndMipsWithinHalfAStep) {
+    constexpr int kWidth = 6, kHeight = 5;
+    std::vector<uint8_t> bytes(kWidth * kHeight * 4);
+    for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<uint8_t>((i * 7919 + 13) % 256);
+    for (TextureEncoding encoding : {TextureEncoding::Srgb, TextureEncoding::Linear}) {
+        const bool srgb = encoding == TextureEncoding::Srgb;
+        SCOPED_TRACE(srgb ? "srgb" : "linear");
+        const Texture eight(kWidth, kHeight, bytes, encoding, "eight");
+        EXPECT_TRUE(eight.eightBit());
+        std::vector<glm::vec4> decoded;
+        for (size_t p = 0; p < bytes.size(); p += 4) {
+            auto colour = [&](uint8_t b) {
+                return srgb ? static_cast<float>(decodeSrgb(b / 255.0)) : static_cast<float>(b) / 255.0f;
+            };
+            decoded.emplace_back(colour(bytes[p]), colour(bytes[p + 1]), colour(bytes[p + 2]),
+                                 static_cast<float>(bytes[p + 3]) / 255.0f);
+        }
+        const Texture floats(kWidth, kHeight, decoded, "floats");
+        EXPECT_FALSE(floats.eightBit());
+        ASSERT_EQ(eight.levels(), floats.levels());
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x)
+                expectNear(eight.texel(0, x, y), decoded[y * kWidth + x], 1e-6f, "level 0");
+        // The mips: 8-bit codes of the float levels (each level filtered from the 8-bit one above, so the
+        // steps can add up over levels: within one and a half steps of the encoding).
+        for (int level = 1; level < eight.levels(); ++level) {
+            const int w = std::max(1, kWidth >> level), h = std::max(1, kHeight >> level);
+            for (int y = 0; y < h; ++y)
+                for (int x = 0; x < w; ++x) {
+                    const glm::vec4 a = eight.texel(level, x, y), b = floats.texel(level, x, y);
+                    for (int c = 0; c < 4; ++c) {
+                        auto encode = [&](float v) { return c < 3 && srgb ? encodeSrgb(v) : v; };
+                        EXPECT_NEAR(encode(a[c]), encode(b[c]), 1.5 / 255.0)
+                            << "level " << level << " (" << x << ", " << y << ") channel " << c;
+                    }
+                }
+        }
+        // Lookups read the same texels: a bilinear lookup at level 0 between four texel centres.
+        const glm::vec2 uv((1.0f + 0.5f) / kWidth, (2.0f + 0.5f) / kHeight);
+        expectNear(eight.sample(uv, 0.0f), floats.sample(uv, 0.0f), 1e-6f, "bilinear lookup");
+    }
+}
+
+TEST_F(TextureFileTest, EightBitFilesAreKeptAsEightBits) {
+    fs::path file = dir_ / "colour.png";
+    writeImage(file, 2, 1, 4, OIIO::TypeDesc::UINT8, kRgba8);
+    EXPECT_TRUE(Texture::load(file, TextureEncoding::Srgb, "")->eightBit());
+    fs::path deep = dir_ / "deep.png";
+    writeImage(deep, 1, 1, 3, OIIO::TypeDesc::UINT16, std::vector<uint16_t>{0, 32768, 65535});
+    EXPECT_FALSE(Texture::load(deep, TextureEncoding::Srgb, "")->eightBit());
+}
+
+TEST(TextureErrors, EightBitConstructorRejectsBadSizes) {
+    expectContains(
+        inputErrorOf([] { Texture(2, 2, std::vector<uint8_t>(15), TextureEncoding::Srgb, "a.png"); }),
+        {"a.png", "16 bytes", "got 15"});
+    expectContains(
+        inputErrorOf([] { Texture(0, 2, std::vector<uint8_t>{}, TextureEncoding::Linear, "b.png"); }),
+        {"b.png", "0x2"});
 }
 
 TEST(TextureErrors, ConstructorRejectsBadSizesAndTexels) {
