@@ -122,8 +122,16 @@ SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle,
     glm::vec3 base = m.albedo;
     if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
     if (!m.textured() || mesh.uvs.empty()) return fromFactors(m, base, m.metallic, m.roughness);
+    // Each texture coordinate set interpolated once, when a texture reads it.
+    glm::vec2 uvs[2];
+    bool interpolated[2] = {false, false};
     auto lookup = [&](const TextureSlot& slot) {
-        return slot.sample(textureCoordinatesAt(mesh, triangle, u, v, slot.texCoord), uvFootprint);
+        const int set = slot.texCoord == 1 ? 1 : 0;
+        if (!interpolated[set]) {
+            uvs[set] = textureCoordinatesAt(mesh, triangle, u, v, slot.texCoord);
+            interpolated[set] = true;
+        }
+        return slot.sample(uvs[set], uvFootprint);
     };
     float metallic = m.metallic, roughness = m.roughness;
     if (m.baseColorTexture) base *= glm::vec3(lookup(m.baseColorTexture));

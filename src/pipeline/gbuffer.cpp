@@ -16,24 +16,56 @@ constexpr float kMinFootprintCosine = 0.1f;
 
 // `pixelAngle`: the angle (radians) a pixel subtends, for the textures' filter footprint. Writes the fields
 // in place (returning the 96-byte record by value cost the real G-buffer a tenth of its time).
-void toSurfacePoint(const RayHit& hit, glm::vec3 rayDir, float pixelAngle, SurfacePoint& out) {
+// `hit` is the caller's to change (its material is looked up again in place). Without `lookUpTextures` a
+// textured surface keeps its mesh's constant material and unmapped normal for now: returns true then.
+bool toSurfacePoint(RayHit& hit, glm::vec3 rayDir, float pixelAngle, SurfacePoint& out,
+                    bool lookUpTextures = true) {
     if (!hit.hit()) {
         out = SurfacePoint{};
-        return;
+        return false;
     }
     out.position = hit.position;
     out.toEye = -rayDir;
     out.material = hit.material;
-    if (variesOverSurface(*hit.mesh)) {
-        RayHit filtered = hit;
+    const bool varies = variesOverSurface(*hit.mesh);
+    if (varies && lookUpTextures) {
         const float cosine = std::max(std::abs(glm::dot(hit.geometricNormal, rayDir)), kMinFootprintCosine);
-        lookUpMaterial(filtered, hit.t * pixelAngle / cosine);
-        out.normal = filtered.normal;
-        out.surface = filtered.surface;
-        return;
+        lookUpMaterial(hit, hit.t * pixelAngle / cosine);
     }
     out.normal = hit.normal;
     out.surface = hit.surface;
+    return varies && !lookUpTextures;
+}
+
+// A pixel centre's textured material as the mean of its k x k sub-samples' (each filtered over its share of
+// the pixel: together the pixel's area, supersampled), when they all show the centre's material; the
+// normal-mapped normal as their normals' mean. False when they do not (the centre is looked up itself).
+bool centreFromSubSamples(std::span<const SurfacePoint> subSamples, SurfacePoint& centre) {
+    SurfaceMaterial sum;
+    sum.roughness = 0.0f;
+    sum.occlusion = 0.0f;
+    glm::vec3 normal(0.0f);
+    for (const SurfacePoint& p : subSamples) {
+        if (p.material != centre.material) return false;
+        sum.diffuse += p.surface.diffuse;
+        sum.specular += p.surface.specular;
+        sum.roughness += p.surface.roughness;
+        sum.emission += p.surface.emission;
+        sum.occlusion += p.surface.occlusion;
+        normal += p.normal;
+    }
+    const float length = glm::length(normal);
+    if (!(length > 1e-6f) || glm::dot(normal, centre.toEye) <= 0.0f) return false;
+    const float weight = 1.0f / static_cast<float>(subSamples.size());
+    sum.diffuse *= weight;
+    sum.specular *= weight;
+    sum.roughness *= weight;
+    sum.emission *= weight;
+    sum.occlusion *= weight;
+    sum.model = centre.surface.model;
+    centre.surface = sum;
+    if (centre.material->normalTexture) centre.normal = normal / length;
+    return true;
 }
 
 float pixelAngleOf(const Camera& camera) {
@@ -140,9 +172,15 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     const glm::vec3 eye = camera.position();
     const int k = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<float>(samplesPerPixel)))));
 
-    // Pixel centres first, where the objects can be.
+    // Pixel centres first, where the objects can be. With sub-samples, a textured centre's material is theirs
+    // (centreFromSubSamples): its lookups wait (`deferred`, over the rectangle).
     const auto [x0, x1, y0, y1] = pixelsCovering(camera, objectBounds);
     g.written = x1 < x0 || y1 < y0 ? PixelRect{} : PixelRect{x0, y0, x1 + 1, y1 + 1};
+    const size_t rectWidth = g.written.empty() ? 0 : static_cast<size_t>(x1 - x0 + 1);
+    std::vector<uint8_t> deferred(k > 1 ? rectWidth * (g.written.empty() ? 0 : y1 - y0 + 1) : 0);
+    auto inRect = [&](int64_t y, int x) {
+        return static_cast<size_t>(y - y0) * rectWidth + static_cast<size_t>(x - x0);
+    };
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
         thread_local std::vector<glm::vec3> directions;
         thread_local std::vector<RayHit> hits;
@@ -153,7 +191,8 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
         visibleObjectHits(all, eye, directions, hits);
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
-            toSurfacePoint(hits[x - x0], directions[x - x0], pixelAngleOf(camera), g.object[i]);
+            if (toSurfacePoint(hits[x - x0], directions[x - x0], pixelAngleOf(camera), g.object[i], k == 1))
+                deferred[inRect(y, x)] = 1;
             g.coverage[i] = g.object[i].valid() ? 1.0f : 0.0f;
         }
     });
@@ -169,11 +208,8 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
 
     // Then the sub-samples of silhouette pixels (decided from the centres alone, so the pass is
     // deterministic), over the rectangle [x0, x1] x [y0, y1].
-    const size_t silhouetteWidth = static_cast<size_t>(x1 - x0 + 1);
-    std::vector<uint8_t> silhouette(silhouetteWidth * static_cast<size_t>(y1 - y0 + 1));
-    auto onSilhouette = [&](int64_t y, int x) -> uint8_t& {
-        return silhouette[static_cast<size_t>(y - y0) * silhouetteWidth + static_cast<size_t>(x - x0)];
-    };
+    std::vector<uint8_t> silhouette(deferred.size());
+    auto onSilhouette = [&](int64_t y, int x) -> uint8_t& { return silhouette[inRect(y, x)]; };
     parallelFor(y0, y1 + 1, 8, [&](int64_t y) {
         for (int x = x0; x <= x1; ++x) {
             const bool centre = g.object[static_cast<size_t>(y) * width + x].valid();
@@ -188,15 +224,12 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     });
     // Every pixel that shows an object or lies on a silhouette takes k x k sub-samples: the coverage, and
     // the surfaces its direct light is shaded over.
-    const int rectWidth = samples.rect.x1 - samples.rect.x0;
     // Sized only, keeping the memory of the frame before: a row's slots are cleared by the row's task, in
     // parallel (38 MiB for an object over a third of the image).
-    samples.points.resize(static_cast<size_t>(std::max(rectWidth, 0)) *
-                          std::max(samples.rect.y1 - samples.rect.y0, 0) * k * k);
+    samples.points.resize(deferred.size() * k * k);
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
-        SurfacePoint* const row =
-            samples.points.data() + static_cast<size_t>(y - samples.rect.y0) * rectWidth * k * k;
-        std::fill(row, row + static_cast<size_t>(rectWidth) * k * k, SurfacePoint{});
+        SurfacePoint* const row = samples.points.data() + inRect(y, x0) * k * k;
+        std::fill(row, row + rectWidth * k * k, SurfacePoint{});
         // The row's sub-sample rays, in packets.
         thread_local std::vector<glm::vec3> directions;
         thread_local std::vector<RayHit> hits;
@@ -220,20 +253,31 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
             if (!edge && !g.object[i].valid()) continue;
             SurfacePoint* out = row + static_cast<size_t>(x - x0) * k * k;
             int virtualCount = 0;
+            for (int s = 0; s < k * k; ++s, ++next) {
+                if (!hits[next].hit()) continue;
+                ++virtualCount;
+                // Textures filtered over the sub-sample's share of the pixel (over the whole pixel,
+                // quality suite's cornell-textured: object_rel_rmse 0.462 -> 0.517, blurred twice).
+                toSurfacePoint(hits[next], directions[next], pixelAngleOf(camera) / static_cast<float>(k),
+                               out[s]);
+            }
+            if (deferred[inRect(y, x)] &&
+                !centreFromSubSamples({out, static_cast<size_t>(k * k)}, g.object[i])) {
+                // Sub-samples of other surfaces: the centre's own lookup, its ray cast again (the same hit).
+                const glm::vec3 dir =
+                    glm::normalize(camera.rayDirection(x + 0.5f, static_cast<float>(y) + 0.5f));
+                RayHit centre = visibleObjectHit(all, eye, dir);
+                if (centre.hit()) toSurfacePoint(centre, dir, pixelAngleOf(camera), g.object[i]);
+            }
+            // A silhouette pixel's surface: the centre's if it shows an object, else the nearest
+            // sub-sample's.
             float bestOffset = g.object[i].valid() ? 0.0f : INFINITY;
             SurfacePoint nearest = g.object[i];
             for (int sy = 0; sy < k; ++sy)
                 for (int sx = 0; sx < k; ++sx) {
                     const float ox = (sx + 0.5f) / k - 0.5f, oy = (sy + 0.5f) / k - 0.5f;
-                    const RayHit& hit = hits[next];
-                    const glm::vec3 dir = directions[next++];
-                    if (!hit.hit()) continue;
-                    ++virtualCount;
-                    // Textures filtered over the sub-sample's share of the pixel (over the whole pixel,
-                    // quality suite's cornell-textured: object_rel_rmse 0.462 -> 0.517, blurred twice).
-                    toSurfacePoint(hit, dir, pixelAngleOf(camera) / static_cast<float>(k), out[sy * k + sx]);
                     const float offset = ox * ox + oy * oy;
-                    if (offset < bestOffset) {
+                    if (out[sy * k + sx].valid() && offset < bestOffset) {
                         bestOffset = offset;
                         nearest = out[sy * k + sx];
                     }

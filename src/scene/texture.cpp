@@ -58,13 +58,16 @@ const std::array<float, 256>& unorm8Values() {
 struct TexelDecoder {
     const float* rgb;
     const float* alpha;
-    explicit TexelDecoder(TextureEncoding encoding)
-        : rgb(encoding == TextureEncoding::Srgb ? srgb8ToLinearValues().data() : unorm8Values().data()),
-          alpha(unorm8Values().data()) {}
     glm::vec4 operator()(uint32_t t) const {
         return {rgb[t & 0xffu], rgb[(t >> 8) & 0xffu], rgb[(t >> 16) & 0xffu], alpha[t >> 24]};
     }
 };
+// The two decoders, made once (not at every lookup).
+const TexelDecoder& decoderFor(TextureEncoding encoding) {
+    static const TexelDecoder srgb{srgb8ToLinearValues().data(), unorm8Values().data()};
+    static const TexelDecoder linear{unorm8Values().data(), unorm8Values().data()};
+    return encoding == TextureEncoding::Srgb ? srgb : linear;
+}
 
 // The nearest 8-bit code of a linear value in [0, 1] (clamped), sRGB-encoded for colour.
 uint8_t encodeChannel(float linear, bool srgb) {
@@ -351,7 +354,7 @@ void Texture::buildMipChain() {
                 continue;
             }
             // Filtered in linear values (as a float texture is), then stored as 8 bits again.
-            const TexelDecoder decoder(encoding_);
+            const TexelDecoder& decoder = decoderFor(encoding_);
             std::vector<glm::vec4> linear(above.packed.size());
             for (size_t i = 0; i < linear.size(); ++i) linear[i] = decoder(above.packed[i]);
             const std::vector<glm::vec4> next = downsample(linear, above.width, above.height, w, h);
@@ -425,7 +428,7 @@ glm::vec4 Texture::texel(int level, int x, int y) const {
     const Level& l = levels_[level];
     assert(x >= 0 && x < l.width && y >= 0 && y < l.height);
     const size_t i = static_cast<size_t>(y) * l.width + x;
-    return eightBit_ ? TexelDecoder(encoding_)(l.packed[i]) : l.texels[i];
+    return eightBit_ ? decoderFor(encoding_)(l.packed[i]) : l.texels[i];
 }
 
 namespace {
@@ -436,10 +439,10 @@ struct LevelLookup {
     int width, height;
     const glm::vec4* texels;  // linear values, or
     const uint32_t* packed;   // 8-bit texels decoded by `decoder`
-    TexelDecoder decoder;
+    const TexelDecoder* decoder;
     TextureWrap wrapS, wrapT;
 
-    glm::vec4 fetch(size_t i) const { return packed ? decoder(packed[i]) : texels[i]; }
+    glm::vec4 fetch(size_t i) const { return packed ? (*decoder)(packed[i]) : texels[i]; }
     glm::vec4 at(int x, int y) const {
         return fetch(static_cast<size_t>(wrapIndex(y, height, wrapT)) * width + wrapIndex(x, width, wrapS));
     }
@@ -472,7 +475,7 @@ glm::vec4 Texture::sample(glm::vec2 uv, float footprint, const TextureSampler& s
                            l.height,
                            eightBit_ ? nullptr : l.texels.data(),
                            eightBit_ ? l.packed.data() : nullptr,
-                           TexelDecoder(encoding_),
+                           &decoderFor(encoding_),
                            sampler.wrapS,
                            sampler.wrapT};
     };
