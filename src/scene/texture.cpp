@@ -25,7 +25,7 @@ namespace {
 
 // The largest width or height accepted (from a file or the constructor): guards against absurd sizes in
 // corrupt or hostile headers before anything is allocated. 16384 is the limit of most GPUs' 2D textures; a
-// texture at the limit in both directions holds 2^28 texels, 4 GiB of linear RGBA floats.
+// texture at the limit in both directions holds 2^28 texels, 4 GiB of linear RGBA floats (1 GiB as 8 bits).
 constexpr int kMaxTextureSide = 16384;
 
 std::string sizeProblem(int width, int height) {
