@@ -199,8 +199,9 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(impl_->scene, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return result;
-    return hitOn(rh.hit.geomID, rh.hit.primID, {rh.hit.u, rh.hit.v, rh.ray.tfar},
-                 {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, origin, direction, !texturesLater);
+    hitOn(rh.hit.geomID, rh.hit.primID, {rh.hit.u, rh.hit.v, rh.ray.tfar},
+          {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, origin, direction, !texturesLater, result);
+    return result;
 }
 
 void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
@@ -237,19 +238,20 @@ void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> di
             rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
         rtcIntersect8(valid, impl_->scene, &context, &rh);
-        for (size_t k = 0; k < n; ++k)
-            hits[first + k] =
-                rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID
-                    ? RayHit{}
-                    : hitOn(rh.hit.geomID[k], rh.hit.primID[k], {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
-                            {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin, directions[first + k],
-                            !texturesLater);
+        for (size_t k = 0; k < n; ++k) {
+            if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+                hits[first + k] = RayHit{};
+                continue;
+            }
+            hitOn(rh.hit.geomID[k], rh.hit.primID[k], {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
+                  {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin, directions[first + k],
+                  !texturesLater, hits[first + k]);
+        }
     }
 }
 
-RayHit RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
-                       glm::vec3 direction, bool lookUpTextures) const {
-    RayHit result;
+void RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
+                     glm::vec3 direction, bool lookUpTextures, RayHit& result) const {
     const MeshRef& ref = meshes_[geomID];
     const TriangleMesh& mesh = *ref.mesh;
     const glm::uvec3 tri = mesh.triangles[primID];
@@ -278,7 +280,6 @@ RayHit RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec
         result.normal = shadingNormal(mesh, tri, u, v, result.geometricNormal);
     }
     result.isVirtual = ref.isVirtual;
-    return result;
 }
 
 void lookUpMaterial(RayHit& hit, float footprint) {

@@ -94,8 +94,9 @@ class RayScene {
 
   private:
     // The hit on triangle `primID` of mesh `geomID` that Embree found at (u, v, t) with normal `ng`.
-    RayHit hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
-                 glm::vec3 direction, bool lookUpTextures = true) const;
+    // Writes every field of `out` (a caller's buffer: no 120-byte record made and copied per hit).
+    void hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
+               glm::vec3 direction, bool lookUpTextures, RayHit& out) const;
     struct Impl;
     std::unique_ptr<Impl> impl_;
     struct MeshRef {
