@@ -14,6 +14,7 @@
 #include "pipeline/area_light_rays.h"
 #include "pipeline/bounce_light.h"
 #include "pipeline/composite.h"
+#include "pipeline/cone_jobs.h"
 #include "pipeline/denoise.h"
 #include "pipeline/gbuffer.h"
 #include "pipeline/inject.h"
@@ -24,31 +25,12 @@
 #include "pipeline/shading.h"
 #include "pipeline/shadow_rays.h"
 #include "pipeline/sky_light.h"
+#include "pipeline/stage_timer.h"
 #include "pipeline/voxelize.h"
 
 namespace deltagi {
 
 namespace {
-
-class StageTimer {
-  public:
-    StageTimer(std::vector<StageTiming>& timings, const StageCallback& callback)
-        : timings_(timings), callback_(callback), start_(Clock::now()) {}
-    // Ends the current stage under `name` and starts the next one.
-    void lap(std::string name) {
-        const auto now = Clock::now();
-        StageTiming t{std::move(name), std::chrono::duration<double, std::milli>(now - start_).count()};
-        start_ = now;
-        timings_.push_back(t);
-        if (callback_) callback_(t);
-    }
-
-  private:
-    using Clock = std::chrono::steady_clock;
-    std::vector<StageTiming>& timings_;
-    StageCallback callback_;
-    Clock::time_point start_;
-};
 
 Bounds3f boundsOf(std::span<const TriangleMesh> meshes) {
     Bounds3f b;
@@ -101,91 +83,6 @@ Image depthImage(const Camera& camera, const GBuffer& gbuffer, std::span<const S
     return depth;
 }
 
-// One set of surfaces to trace cones from, against a light volume and visibility volumes.
-struct ConeJob {
-    std::span<const SurfacePoint> points;
-    const MipVolume* light;
-    VisibilityVolumes visibility;
-    bool indirect;  // trace diffuse and specular cones too
-    ShadowMode
-        mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
-    PixelRect bounds;                             // holds every valid point
-    SceneOcclusionCache* sceneShadows = nullptr;  // relit with DeltaShadow: the scene's share, kept
-    // Relit real surfaces: the filter's interpolation weights of the shadow, diffuse and specular passes,
-    // kept (their surfaces are the real G-buffer's), and the pixels whose points differ from it (covered).
-    std::array<InterpolationPlan, 5>* plans = nullptr;  // one per stride (filter())
-    PixelRect changed;
-    ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
-    // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
-    const MipVolume* fullLight = nullptr;
-    const MipVolume* objectLight = nullptr;  // with fullLight: the objects' share of it
-    // Emitting surfaces lighting the points through shadow rays (options.shadow.method "rays"), or none.
-    const AreaLights* emitters = nullptr;
-    // The environment map lighting the points through shadow rays (options.shadow.method "rays"), or none.
-    const EnvironmentSampler* environment = nullptr;
-    // Rendered objects: the sub-samples of their pixels, whose area the shadow rays sample; or none.
-    const PixelSamples* pixelSamples = nullptr;
-    bool relit() const {
-        return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
-    }
-    // The pixel strides of its shadow, specular (relit only) and diffuse cones, "auto" resolved for the
-    // camera's image.
-    // Emitters' and the environment's direct light: as the shadows when given, else their own "auto".
-    int areaLightStride(const Options& o, const Camera& c) const {
-        return relit() ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightAreaLightStride, c.width,
-                                        c.height)
-                       : pixelStrideFor(o.shadow.pixelStride, kAutoAreaLightStride, c.width, c.height);
-    }
-    int shadowStride(const Options& o, const Camera& c) const {
-        return relit()
-                   ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightShadowStride, c.width, c.height)
-                   : pixelStrideFor(o.shadow.pixelStride, kAutoShadowStride, c.width, c.height);
-    }
-    // The edge-aware filter of its sparse cones; the real surfaces' change varies slowly, so its pixels
-    // between samples are interpolated.
-    // The passes of one stride share their plan: their weights are the same.
-    DenoiseSettings filter(const Options& o, int stride) const {
-        DenoiseSettings s;
-        s.radius = o.render.denoiseRadius;
-        s.interpolate = relit();
-        if (plans) {
-            auto plan = std::find_if(plans->begin(), plans->end(),
-                                     [&](const InterpolationPlan& p) { return p.stride == stride; });
-            if (plan == plans->end())  // one not built yet
-                plan = std::find_if(plans->begin(), plans->end(),
-                                    [](const InterpolationPlan& p) { return p.stride == 0; });
-            if (plan != plans->end()) s.plan = &*plan;
-        }
-        s.planChanged = changed;
-        return s;
-    }
-    // The objects' light on relit real surfaces by rays (traceObjectBounceRays): only when the differential
-    // relit cones can leave it out.
-    bool objectBounceByRays(const Options& o) const {
-        return relit() && indirect && fullLight && objectLight && rays.scene && rays.objects &&
-               o.render.relightObjectLight == "rays";
-    }
-    // The virtual objects' diffuse cones have their own aperture; the others options.diffuse.aperture_deg.
-    std::optional<float> diffuseAperture(const Options& o) const {
-        if (mode == ShadowMode::Shaded) return o.diffuse.objectApertureDeg;
-        return std::nullopt;
-    }
-    int specularStride(const Options& o, const Camera& c) const {
-        return pixelStrideFor(o.specular.relightPixelStride, kAutoRelightSpecularStride, c.width, c.height);
-    }
-    int diffuseStride(const Options& o, const Camera& c) const {
-        return relit() ? pixelStrideFor(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride, c.width,
-                                        c.height)
-                       : pixelStrideFor(o.diffuse.pixelStride, kAutoDiffuseStride, c.width, c.height);
-    }
-};
-
-struct ConeResults {
-    std::vector<ShadowOcclusion> shadows;      // points x lights
-    std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
-    std::vector<glm::vec3> areaLight;          // direct light of emitting surfaces; empty without
-};
-
 // Whether the environment map lights the scene through shadow rays (then its extracted lights only drive the
 // reflective shadow maps, and its sky is not gathered through the cones).
 bool environmentByRays(const Scene& scene) {
@@ -209,161 +106,6 @@ std::vector<Light> rsmLights(const Scene& scene, const RayScene& realOnly) {
         lights.insert(lights.end(), standIns.begin(), standIns.end());
     }
     return lights;
-}
-
-// a += b, where an empty vector is zero.
-void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
-    if (b.empty()) return;
-    if (a.empty()) {
-        a = std::move(b);
-        return;
-    }
-    for (size_t i = 0; i < a.size(); ++i) a[i] += b[i];
-}
-
-// Cone results `trace(pixels)` (perPixel values of T per pixel of `points`, for the listed pixels) at every
-// stride-th pixel of every stride-th row, then filtered: the edge-aware filter interpolates the pixels
-// between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),
-// and the pixels that have none are traced as well. With stride 1 every pixel is traced and filtered.
-// `bounds` holds all valid points.
-template <typename T, typename Trace>
-std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect& bounds,
-                           const Camera& camera, int stride, int perPixel, const DenoiseSettings& filter,
-                           Trace&& trace) {
-    if (stride <= 1) {
-        std::vector<T> values = trace(std::span<const uint32_t>{});
-        denoiseInPlace(values, perPixel, points, camera, filter, nullptr, &bounds);
-        return values;
-    }
-    std::vector<uint32_t> samples;
-    for (int y = (bounds.y0 + stride - 1) / stride * stride; y < bounds.y1; y += stride)
-        for (int x = (bounds.x0 + stride - 1) / stride * stride; x < bounds.x1; x += stride) {
-            const size_t i = static_cast<size_t>(y) * camera.width + x;
-            if (points[i].valid()) samples.push_back(static_cast<uint32_t>(i));
-        }
-    // An empty list would mean every pixel. Pixel 0 is a sample position, so here it is invalid: nothing.
-    if (samples.empty()) samples.push_back(0);
-    std::vector<T> values = trace(std::span<const uint32_t>(samples));
-    // The same number of samples as the filter at stride 1 (at least the 3x3 around each pixel), spaced out.
-    DenoiseSettings fill = filter;
-    fill.radius = std::max(filter.radius, 1);
-    fill.stride = stride;
-    std::vector<size_t> holes;
-    denoiseInPlace(values, perPixel, points, camera, fill, &holes, &bounds);
-    if (holes.empty()) return values;
-    const std::vector<uint32_t> holePixels(holes.begin(), holes.end());
-    const std::vector<T> filled = trace(std::span<const uint32_t>(holePixels));
-    for (size_t i : holes)
-        std::copy_n(filled.begin() + i * perPixel, perPixel, values.begin() + i * perPixel);
-    return values;
-}
-
-// Runs body(j) for the jobs at once (the real surfaces' and the objects'): each job's own passes are
-// parallel, but they end in small tails of work that leave a core idle; the other job fills them. The
-// results do not depend on the order (each job writes only its own).
-template <typename Body>
-void forEachJob(size_t jobs, Body&& body) {
-    parallelFor(0, static_cast<int64_t>(jobs), 1, [&](int64_t j) { body(static_cast<size_t>(j)); });
-}
-
-// Stage 6 for every job: shadow, diffuse and specular cones, each timed as one stage over all jobs, then the
-// sky light through the cones, with options `o` (the scene's, or the background's). Shadow and diffuse cones
-// are traced at options.shadow/diffuse.pixel_stride (relight_pixel_stride for real surfaces relit) and
-// filtered (traceSparse).
-std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, const Options& o,
-                                    std::span<const Light> directLights, StageTimer& timer) {
-    const int lights = static_cast<int>(directLights.size());
-    std::vector<ConeResults> results(jobs.size());
-    forEachJob(jobs.size(), [&](size_t j) {
-        const ConeJob& job = jobs[j];
-        results[j].shadows = traceSparse<ShadowOcclusion>(
-            job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
-            job.filter(o, job.shadowStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
-                if (o.shadow.method == "rays")
-                    return traceShadowRays(job.points, directLights, job.rays, o, job.mode, pixels,
-                                           job.pixelSamples, scene.camera.width);
-                return traceShadowCones(job.points, directLights, job.visibility, o,
-                                        job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
-            });
-    });
-    forEachJob(jobs.size(), [&](size_t j) {
-        const ConeJob& job = jobs[j];
-        if (!job.emitters || job.emitters->empty()) return;
-        results[j].areaLight = traceSparse<glm::vec3>(
-            job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-            job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
-                return traceAreaLightRays(job.points, *job.emitters, job.rays, o, job.mode, pixels);
-            });
-    });
-    forEachJob(jobs.size(), [&](size_t j) {
-        const ConeJob& job = jobs[j];
-        if (!job.environment) return;
-        addInto(
-            results[j].areaLight,
-            traceSparse<glm::vec3>(
-                job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-                job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
-                    return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode, pixels);
-                }));
-    });
-    timer.lap("shadow");
-    forEachJob(jobs.size(), [&](size_t j) {
-        const ConeJob& job = jobs[j];
-        if (!job.indirect) return;
-        results[j].diffuse = traceSparse<glm::vec3>(
-            job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
-            job.filter(o, job.diffuseStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
-                return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
-                                         job.objectLight, job.objectBounceByRays(o), job.diffuseAperture(o));
-            });
-        if (job.objectBounceByRays(o))
-            addInto(results[j].diffuse,
-                    traceSparse<glm::vec3>(
-                        job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-                        job.filter(o, job.areaLightStride(o, scene.camera)),
-                        [&](std::span<const uint32_t> pixels) {
-                            return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels);
-                        }));
-    });
-    timer.lap("diffuse");
-    forEachJob(jobs.size(), [&](size_t j) {
-        const ConeJob& job = jobs[j];
-        if (!job.indirect) return;
-        auto trace = [&](std::span<const uint32_t> pixels) {
-            return traceSpecularCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
-                                      job.objectLight);
-        };
-        // Rendered surfaces keep every pixel's reflection unfiltered; the real surfaces' change is sparse.
-        results[j].specular =
-            job.relit() ? traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
-                                                 job.specularStride(o, scene.camera), 1,
-                                                 job.filter(o, job.specularStride(o, scene.camera)), trace)
-                        : trace({});
-    });
-    timer.lap("specular");
-    // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
-    // filtered like the diffuse cones (it has the same jitter noise).
-    // (With the environment's light by rays, its direct light, sky included, is already in `areaLight`.)
-    if (scene.environment && !scene.environment->sky.empty() && o.shadow.method != "rays") {
-        const Environment& environment = *scene.environment;
-        forEachJob(jobs.size(), [&](size_t j) {
-            const ConeJob& job = jobs[j];
-            addInto(results[j].diffuse,
-                    traceSparse<glm::vec3>(job.points, job.bounds, scene.camera,
-                                           job.diffuseStride(o, scene.camera), 1,
-                                           job.filter(o, job.diffuseStride(o, scene.camera)),
-                                           [&](std::span<const uint32_t> pixels) {
-                                               return traceSkyCones(job.points, environment, job.visibility,
-                                                                    job.mode, o, SkyParts::Diffuse, pixels)
-                                                   .diffuse;
-                                           }));
-            addInto(results[j].specular,
-                    traceSkyCones(job.points, environment, job.visibility, job.mode, o, SkyParts::Specular)
-                        .specular);
-        });
-        timer.lap("sky");
-    }
-    return results;
 }
 
 // The static half of a frame: what depends only on the real scene, its lights, the camera, the options and

@@ -1,0 +1,120 @@
+// Stage 6 of a frame (§3.3) for its sets of surfaces: the shadow, diffuse and specular cones (or rays) of
+// the objects' pixels and of the real surfaces they relight, traced sparsely where a job asks and filtered
+// (denoise.h), the jobs run at once. renderer.cpp makes the jobs; this unit runs their passes.
+#pragma once
+
+#include <array>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "core/environment_sampling.h"
+#include "core/ray_scene.h"
+#include "deltagi/scene.h"
+#include "pipeline/area_light_rays.h"
+#include "pipeline/cone_trace.h"
+#include "pipeline/denoise.h"
+#include "pipeline/gbuffer.h"
+#include "pipeline/mipmap.h"
+#include "pipeline/shadow_rays.h"
+#include "pipeline/stage_timer.h"
+
+namespace deltagi {
+
+// One set of surfaces to trace cones from, against a light volume and visibility volumes.
+struct ConeJob {
+    std::span<const SurfacePoint> points;
+    const MipVolume* light;
+    VisibilityVolumes visibility;
+    bool indirect;  // trace diffuse and specular cones too
+    ShadowMode
+        mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
+    PixelRect bounds;                             // holds every valid point
+    SceneOcclusionCache* sceneShadows = nullptr;  // relit with DeltaShadow: the scene's share, kept
+    // Relit real surfaces: the filter's interpolation weights of the shadow, diffuse and specular passes,
+    // kept (their surfaces are the real G-buffer's), and the pixels whose points differ from it (covered).
+    std::array<InterpolationPlan, 5>* plans = nullptr;  // one per stride (filter())
+    PixelRect changed;
+    ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
+    // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
+    const MipVolume* fullLight = nullptr;
+    const MipVolume* objectLight = nullptr;  // with fullLight: the objects' share of it
+    // Emitting surfaces lighting the points through shadow rays (options.shadow.method "rays"), or none.
+    const AreaLights* emitters = nullptr;
+    // The environment map lighting the points through shadow rays (options.shadow.method "rays"), or none.
+    const EnvironmentSampler* environment = nullptr;
+    // Rendered objects: the sub-samples of their pixels, whose area the shadow rays sample; or none.
+    const PixelSamples* pixelSamples = nullptr;
+    bool relit() const {
+        return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
+    }
+    // The pixel strides of its shadow, specular (relit only) and diffuse cones, "auto" resolved for the
+    // camera's image.
+    // Emitters' and the environment's direct light: as the shadows when given, else their own "auto".
+    int areaLightStride(const Options& o, const Camera& c) const {
+        return relit() ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightAreaLightStride, c.width,
+                                        c.height)
+                       : pixelStrideFor(o.shadow.pixelStride, kAutoAreaLightStride, c.width, c.height);
+    }
+    int shadowStride(const Options& o, const Camera& c) const {
+        return relit()
+                   ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightShadowStride, c.width, c.height)
+                   : pixelStrideFor(o.shadow.pixelStride, kAutoShadowStride, c.width, c.height);
+    }
+    // The edge-aware filter of its sparse cones; the real surfaces' change varies slowly, so its pixels
+    // between samples are interpolated.
+    // The passes of one stride share their plan: their weights are the same.
+    DenoiseSettings filter(const Options& o, int stride) const {
+        DenoiseSettings s;
+        s.radius = o.render.denoiseRadius;
+        s.interpolate = relit();
+        if (plans) {
+            auto plan = std::find_if(plans->begin(), plans->end(),
+                                     [&](const InterpolationPlan& p) { return p.stride == stride; });
+            if (plan == plans->end())  // one not built yet
+                plan = std::find_if(plans->begin(), plans->end(),
+                                    [](const InterpolationPlan& p) { return p.stride == 0; });
+            if (plan != plans->end()) s.plan = &*plan;
+        }
+        s.planChanged = changed;
+        return s;
+    }
+    // The objects' light on relit real surfaces by rays (traceObjectBounceRays): only when the differential
+    // relit cones can leave it out.
+    bool objectBounceByRays(const Options& o) const {
+        return relit() && indirect && fullLight && objectLight && rays.scene && rays.objects &&
+               o.render.relightObjectLight == "rays";
+    }
+    // The virtual objects' diffuse cones have their own aperture; the others options.diffuse.aperture_deg.
+    std::optional<float> diffuseAperture(const Options& o) const {
+        if (mode == ShadowMode::Shaded) return o.diffuse.objectApertureDeg;
+        return std::nullopt;
+    }
+    int specularStride(const Options& o, const Camera& c) const {
+        return pixelStrideFor(o.specular.relightPixelStride, kAutoRelightSpecularStride, c.width, c.height);
+    }
+    int diffuseStride(const Options& o, const Camera& c) const {
+        return relit() ? pixelStrideFor(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride, c.width,
+                                        c.height)
+                       : pixelStrideFor(o.diffuse.pixelStride, kAutoDiffuseStride, c.width, c.height);
+    }
+};
+
+// What traceCones gives a job, per point of its surfaces (pixels of the image).
+struct ConeResults {
+    std::vector<ShadowOcclusion> shadows;      // points x lights
+    std::vector<glm::vec3> diffuse, specular;  // empty without indirect light
+    std::vector<glm::vec3> areaLight;          // direct light of emitting surfaces; empty without
+};
+
+// a += b, where an empty vector is zero.
+void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b);
+
+// The cone passes of every job, each pass timed as one stage over all jobs ("shadow", "diffuse", "specular",
+// then "sky" with a sky light), with options `o` (the scene's, or the background's), the direct light of
+// `directLights`.
+std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& scene, const Options& o,
+                                    std::span<const Light> directLights, StageTimer& timer);
+
+}  // namespace deltagi
