@@ -282,10 +282,19 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     if (emissive && !hadEmission) out.emission.assign(out.area.size(), glm::vec3(0.0f));
 
     const auto tris = toVoxelSpace(meshes, region, out.triangleMaterials);
+    // The triangles' bounds, by chunks in parallel (min and max: the same in any order).
+    constexpr size_t kBoundsChunk = 16384;
+    const size_t boundsChunks = (tris.size() + kBoundsChunk - 1) / kBoundsChunk;
+    std::vector<VoxelBox> chunkBounds(boundsChunks);
+    parallelFor(0, static_cast<int64_t>(boundsChunks), 1, [&](int64_t c) {
+        const size_t end = std::min(tris.size(), static_cast<size_t>(c + 1) * kBoundsChunk);
+        for (size_t i = static_cast<size_t>(c) * kBoundsChunk; i < end; ++i)
+            if (tris[i].touchesGrid()) chunkBounds[c].extend({tris[i].lo, tris[i].hi + 1});
+    });
     VoxelBox& box = out.bounds;
     box = {};
-    for (const VoxelTriangle& t : tris)
-        if (t.touchesGrid()) box.extend({t.lo, t.hi + 1});
+    for (const VoxelBox& b : chunkBounds)
+        if (!b.empty()) box.extend(b);
     if (box.empty()) return old;
     // Scatter in slabs of the box's layers.
     const int slabCount = (box.hi.z - box.lo.z + kSlabThickness - 1) / kSlabThickness;

@@ -6,11 +6,13 @@
 // cost.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
 
+#include "core/parallel.h"
 #include "deltagi/scene.h"
 #include "pipeline/volume.h"
 
@@ -69,19 +71,41 @@ struct SlabBins {
 };
 template <typename SlabRange>
 SlabBins binBySlab(size_t itemCount, size_t slabCount, SlabRange&& slabRange) {
+    // In chunks of items, in parallel: each chunk counts its items per slab, a prefix sum over slabs and then
+    // chunks gives every chunk its place in each slab, and each chunk writes its items there: the same
+    // order as one pass over the items (100k triangles were 1-2 ms of a frame on one core).
+    constexpr size_t kChunk = 8192;
+    const size_t chunks = (itemCount + kChunk - 1) / kChunk;
+    std::vector<uint32_t> counts(chunks * slabCount, 0);  // chunk-major
+    parallelFor(0, static_cast<int64_t>(chunks), 1, [&](int64_t c) {
+        uint32_t* count = &counts[static_cast<size_t>(c) * slabCount];
+        const size_t end = std::min(itemCount, static_cast<size_t>(c + 1) * kChunk);
+        for (size_t i = static_cast<size_t>(c) * kChunk; i < end; ++i) {
+            auto [first, last] = slabRange(i);
+            for (int s = first; s <= last; ++s) ++count[s];
+        }
+    });
     SlabBins bins;
     bins.offsets.assign(slabCount + 1, 0);
-    for (size_t i = 0; i < itemCount; ++i) {
-        auto [first, last] = slabRange(i);
-        for (int s = first; s <= last; ++s) ++bins.offsets[s + 1];
+    std::vector<uint32_t> cursor(counts.size());  // per chunk and slab: where its next item goes
+    uint32_t next = 0;
+    for (size_t s = 0; s < slabCount; ++s) {
+        bins.offsets[s] = next;
+        for (size_t c = 0; c < chunks; ++c) {
+            cursor[c * slabCount + s] = next;
+            next += counts[c * slabCount + s];
+        }
     }
-    for (size_t s = 0; s < slabCount; ++s) bins.offsets[s + 1] += bins.offsets[s];
-    bins.items.resize(bins.offsets[slabCount]);
-    std::vector<uint32_t> cursor(bins.offsets.begin(), bins.offsets.end() - 1);
-    for (size_t i = 0; i < itemCount; ++i) {
-        auto [first, last] = slabRange(i);
-        for (int s = first; s <= last; ++s) bins.items[cursor[s]++] = static_cast<uint32_t>(i);
-    }
+    bins.offsets[slabCount] = next;
+    bins.items.resize(next);
+    parallelFor(0, static_cast<int64_t>(chunks), 1, [&](int64_t c) {
+        uint32_t* at = &cursor[static_cast<size_t>(c) * slabCount];
+        const size_t end = std::min(itemCount, static_cast<size_t>(c + 1) * kChunk);
+        for (size_t i = static_cast<size_t>(c) * kChunk; i < end; ++i) {
+            auto [first, last] = slabRange(i);
+            for (int s = first; s <= last; ++s) bins.items[at[s]++] = static_cast<uint32_t>(i);
+        }
+    });
     return bins;
 }
 
