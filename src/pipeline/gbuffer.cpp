@@ -152,12 +152,13 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     const int width = camera.width, height = camera.height;
     const size_t count = static_cast<size_t>(width) * height;
     if (g.object.size() == count && g.coverage.size() == count && g.width == width && g.height == height) {
-        const PixelRect& w = g.written;
-        for (int y = w.y0; y < w.y1; ++y) {
+        // The last frame's rectangle cleared, in parallel (several MiB for a large object).
+        const PixelRect w = g.written;
+        parallelFor(w.y0, w.y1, 8, [&](int64_t y) {
             const size_t row = static_cast<size_t>(y) * width;
             std::fill(g.object.begin() + row + w.x0, g.object.begin() + row + w.x1, SurfacePoint{});
             std::fill(g.coverage.begin() + row + w.x0, g.coverage.begin() + row + w.x1, 0.0f);
-        }
+        });
     } else {  // a new camera: 15 MiB at 640 x 480, cleared in parallel
         g.object.resize(count);
         g.coverage.resize(count);
