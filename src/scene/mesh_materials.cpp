@@ -12,7 +12,6 @@
 #include <fmt/format.h>
 
 #include "deltagi/error.h"
-#include "io/image_encode.h"
 #include "scene/mesh_io.h"
 
 namespace deltagi {
@@ -87,18 +86,16 @@ std::shared_ptr<const Texture> embeddedTexture(const aiTexture& texture, Texture
         return Texture::decode(std::span<const std::byte>(bytes, texture.pcData ? texture.mWidth : 0),
                                texture.achFormatHint, encoding, where);
     }
+    // Kept as 8 bits, as a file's texels are (the Texture decodes them).
     const size_t count = static_cast<size_t>(texture.mWidth) * texture.mHeight;
-    std::vector<glm::vec4> texels(count);
-    auto decode = [&](uint8_t v) {
-        const float f = static_cast<float>(v) / 255.0f;
-        return encoding == TextureEncoding::Srgb ? srgbToLinearValue(f) : f;
-    };
+    std::vector<uint8_t> rgba(count * 4);
     for (size_t i = 0; i < count; ++i) {
         const aiTexel& t = texture.pcData[i];
-        texels[i] = glm::vec4(decode(t.r), decode(t.g), decode(t.b), static_cast<float>(t.a) / 255.0f);
+        rgba[4 * i] = t.r, rgba[4 * i + 1] = t.g, rgba[4 * i + 2] = t.b, rgba[4 * i + 3] = t.a;
     }
     return std::make_shared<const Texture>(static_cast<int>(texture.mWidth),
-                                           static_cast<int>(texture.mHeight), std::move(texels), where);
+                                           static_cast<int>(texture.mHeight), std::move(rgba), encoding,
+                                           where);
 }
 
 // The texture of `type` (its first), with its sampler and texture coordinate set; an empty slot when the

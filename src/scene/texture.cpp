@@ -71,8 +71,8 @@ const TexelDecoder& decoderFor(TextureEncoding encoding) {
 
 // The nearest 8-bit code of a linear value in [0, 1] (clamped), sRGB-encoded for colour.
 uint8_t encodeChannel(float linear, bool srgb) {
-    const float v = std::clamp(srgb ? linearToSrgbValue(std::clamp(linear, 0.0f, 1.0f)) : linear, 0.0f, 1.0f);
-    return static_cast<uint8_t>(std::lround(v * 255.0f));
+    const float clamped = std::clamp(linear, 0.0f, 1.0f);
+    return static_cast<uint8_t>(std::lround((srgb ? linearToSrgbValue(clamped) : clamped) * 255.0f));
 }
 
 uint32_t encodeTexel(glm::vec4 linear, TextureEncoding encoding) {
