@@ -257,13 +257,24 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const auto start = std::chrono::steady_clock::now();
     FrameRenderer renderer;
-    for (size_t i = 0; i < frames.size(); ++i) {
-        const SequenceFrame& frame = frames[i];
+    auto renderAt = [&](const SequenceFrame& frame, bool readPhoto) {
         scene.camera = frame.camera;
-        if (i > 0) scene.background = readFramePhoto(frame, scene.sequenceFile);
+        if (readPhoto) scene.background = readFramePhoto(frame, scene.sequenceFile);
         scene.backgroundFile = frame.photo;
         poseObjects(scene, frame.index);  // the keyframed objects (none: nothing moves)
-        const RenderOutput output = renderer.render(scene);
+        return renderer.render(scene);
+    };
+    // Temporal reuse averages a frame with the frames before it (options.render.temporal_frames): a range
+    // that starts later in the file renders those first, unwritten, so that a sequence rendered in chunks
+    // gives the frames it gives at once.
+    const int before = std::min(scene.options.render.temporalFrames - 1, frames.front().index);
+    if (before > 0)
+        for (const SequenceFrame& frame :
+             readTransforms(scene.sequenceFile, {frames.front().index - before, frames.front().index}))
+            renderAt(frame, true);
+    for (size_t i = 0; i < frames.size(); ++i) {
+        const SequenceFrame& frame = frames[i];
+        const RenderOutput output = renderAt(frame, i > 0 || before > 0);
         OutputFiles out;
         if (!args.output.empty()) out.image(output.composite, framePath(args.output, frame.index));
         if (!args.layers.empty()) out.layers(compositingLayers(output), framePath(args.layers, frame.index));

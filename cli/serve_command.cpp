@@ -404,7 +404,9 @@ void Server::renderLoop() {
             wanted.render.layers = layers;
             Options own = scene.options;
             own.render.layers = layers;
-            sameOptions = optionsToJson(wanted) == optionsToJson(own);
+            // An interactive frame with temporal reuse averages the frames before it: it is not render()'s
+            // image even with the scene's own options, so the idle refinement renders that one.
+            sameOptions = optionsToJson(wanted) == optionsToJson(own) && own.render.temporalFrames <= 1;
             if (session_.version() != interactiveVersion) {
                 if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
                     interactive = scene;
@@ -428,6 +430,8 @@ void Server::renderLoop() {
             }
         }
         try {
+            // The refined frame is a still: nothing of the frames before it is averaged in.
+            if (refining) fullFrames.clearHistory();
             RenderOutput out = refining ? fullFrames.render(full) : interactiveFrames.render(interactive);
             const auto encodeStart = Clock::now();
             auto frame = std::make_shared<Frame>();

@@ -203,7 +203,14 @@ PYBIND11_MODULE(deltagi, m) {
             py::arg("scene"),
             "One frame: a dict of composite, background, delta (H x W x 3 float32), object_mask (H x W), "
             "timings_ms and total_ms. The GIL is released while it renders.")
-        .def("clear", [](PyFrameRenderer& r) { r.renderer.clear(); });
+        .def(
+            "clear", [](PyFrameRenderer& r) { r.renderer.clear(); },
+            "Forgets everything kept: a cold frame next.")
+        .def(
+            "clear_history", [](PyFrameRenderer& r) { r.renderer.clearHistory(); },
+            "Forgets the frames temporal reuse averages over (options.render.temporal_frames): the next "
+            "frame "
+            "is render()'s image, for a frame that does not follow the ones before it.");
 
     m.def(
         "render",

@@ -157,6 +157,10 @@ struct RenderOptions {
     // "relight_indirect": add the indirect change (delta volume cones) to real surfaces. false keeps only the
     // object's shadow on them (the "shadow only" baseline of the evaluation); the object is shaded in full.
     bool relightIndirect = true;
+    // "temporal_frames": frames of a sequence (FrameRenderer) each pixel's lighting is averaged over, this
+    // one and those before it, reprojected and clamped to this frame's neighbourhood
+    // (pipeline/temporal_reuse.h); 1 turns it off. A single render() has no frames before it.
+    int temporalFrames = 4;
     // "relight_cones": how the real surfaces' indirect change is traced. "differential" (the default): each
     // cone is the full light volume seen through both visibility volumes (the scene's surfaces and the
     // objects' each shining with their own radiance) minus the real scene's own light (full - delta) seen

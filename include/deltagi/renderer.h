@@ -67,9 +67,12 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 // objects' voxels, the full and delta light volumes and their mipmaps are kept too and redone only where the
 // objects change them (their voxels, and the voxels lit differently because of them); so are the objects'
 // half of the G-buffer (redone where they were and are) and their BVH (refit when only their vertices moved).
-// The RSM texels the objects can change and the cones are redone every frame. The images are the same as
-// render()'s, bit for bit, but for one case: a refit BVH may find the other of two triangles that a ray meets
-// on their shared edge, at the same point to rounding (tests/core/ray_scene_test.cpp).
+// The RSM texels the objects can change and the cones are redone every frame. With
+// options.render.temporal_frames = 1 the images are the same as render()'s, bit for bit, but for one case: a
+// refit BVH may find the other of two triangles that a ray meets on their shared edge, at the same point to
+// rounding (tests/core/ray_scene_test.cpp). With more (the default, 4) each frame's lighting is the mean of
+// its own and that of the temporal_frames - 1 frames before it, reprojected (pipeline/temporal_reuse.h): the
+// first frame, and every frame once the scene has stood still for temporal_frames frames, is render()'s.
 class FrameRenderer {
   public:
     FrameRenderer();
@@ -81,6 +84,10 @@ class FrameRenderer {
     RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
     // Forgets everything kept: the next frame is a cold one.
     void clear();
+    // Forgets the frames that temporal reuse averages over (options.render.temporal_frames) and keeps the
+    // rest: the next frame is render()'s image, with the kept work's speed. For a frame that does not follow
+    // the ones before it in time.
+    void clearHistory();
     // What the last frame kept from the frames before: the real scene's world-space work (its voxels, RSMs
     // and light, with virtual objects in the scene) and its camera-space work.
     struct KeptWork {

@@ -151,20 +151,24 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                           int samplesPerPixel, GBuffer& g) {
     const int width = camera.width, height = camera.height;
     const size_t count = static_cast<size_t>(width) * height;
-    if (g.object.size() == count && g.coverage.size() == count && g.width == width && g.height == height) {
+    if (g.object.size() == count && g.coverage.size() == count && g.objectIds.size() == count &&
+        g.width == width && g.height == height) {
         // The last frame's rectangle cleared, in parallel (several MiB for a large object).
         const PixelRect w = g.written;
         parallelFor(w.y0, w.y1, 8, [&](int64_t y) {
             const size_t row = static_cast<size_t>(y) * width;
             std::fill(g.object.begin() + row + w.x0, g.object.begin() + row + w.x1, SurfacePoint{});
+            std::fill(g.objectIds.begin() + row + w.x0, g.objectIds.begin() + row + w.x1, SurfaceId{});
             std::fill(g.coverage.begin() + row + w.x0, g.coverage.begin() + row + w.x1, 0.0f);
         });
     } else {  // a new camera: 15 MiB at 640 x 480, cleared in parallel
         g.object.resize(count);
+        g.objectIds.resize(count);
         g.coverage.resize(count);
         parallelFor(0, height, 16, [&](int64_t y) {
             const size_t row = static_cast<size_t>(y) * width;
             std::fill(g.object.begin() + row, g.object.begin() + row + width, SurfacePoint{});
+            std::fill(g.objectIds.begin() + row, g.objectIds.begin() + row + width, SurfaceId{});
             std::fill(g.coverage.begin() + row, g.coverage.begin() + row + width, 0.0f);
         });
     }
@@ -192,6 +196,8 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
         visibleObjectHits(all, eye, directions, hits);
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
+            const RayHit& hit = hits[x - x0];
+            if (hit.hit()) g.objectIds[i] = {hit.mesh, hit.triangle, hit.barycentric};
             if (toSurfacePoint(hits[x - x0], directions[x - x0], pixelAngleOf(camera), g.object[i], k == 1))
                 deferred[inRect(y, x)] = 1;
             g.coverage[i] = g.object[i].valid() ? 1.0f : 0.0f;

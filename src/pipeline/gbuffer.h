@@ -63,9 +63,18 @@ struct PixelSamples {
 
 // The virtual half of the G-buffer; the real half (renderRealSurfaces) is kept apart, since it does not
 // change while only the objects move.
+// Where on a virtual object a pixel centre's ray lands: the mesh, its triangle and the barycentric weights of
+// the triangle's second and third vertices. Temporal reuse follows the point from frame to frame by it.
+struct SurfaceId {
+    const TriangleMesh* mesh = nullptr;  // null: the centre shows no virtual object
+    uint32_t triangle = 0;
+    glm::vec2 barycentric{0.0f};
+};
+
 struct GBuffer {
     int width = 0, height = 0;
     std::vector<SurfacePoint> object;  // the virtual surface seen in the pixel, where coverage > 0
+    std::vector<SurfaceId> objectIds;  // the virtual surface at the pixel's centre (per pixel, like object)
     std::vector<float> coverage;       // fraction of sub-samples that see a virtual object first
     // The pixels that renderObjectSurfaces wrote: outside them object and coverage are empty, so they hold
     // every virtual point, and a G-buffer kept from frame to frame is cleared there only.

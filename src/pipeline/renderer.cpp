@@ -26,6 +26,7 @@
 #include "pipeline/shadow_rays.h"
 #include "pipeline/sky_light.h"
 #include "pipeline/stage_timer.h"
+#include "pipeline/temporal_reuse.h"
 #include "pipeline/voxelize.h"
 
 namespace deltagi {
@@ -428,7 +429,8 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
 }
 
 // One frame; `kept` holds the static half from an earlier frame of the same scene, or nothing.
-RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallback& onStage) {
+RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallback& onStage,
+                         TemporalReuse* temporal = nullptr) {
     RenderOutput out;
     const auto start = std::chrono::steady_clock::now();
     StageTimer timer(out.timings, onStage);
@@ -563,12 +565,20 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     addInto(realShadow, std::move(real.areaLight));
     timer.lap("shading");
 
+    // Beyond the paper: the frames before this one, reprojected, smooth the steps of the cones and rays
+    // over time (FrameRenderer).
+    if (temporal) {
+        temporal->apply(o.render.temporalFrames, {&camera, scene.virtuals, &gbuffer, realPoints},
+                        {objectRadiance, realShadow, realIndirect});
+        timer.lap("temporal");
+    }
+    if (!o.render.layers) addInto(realShadow, std::move(realIndirect));  // one change, without the layers
+
     // The background: the photo, or the real scene rendered alone.
     out.background = background();
     timer.lap("background");
 
     // 8. Differential composite, and its layers.
-    if (!o.render.layers) addInto(realShadow, std::move(realIndirect));
     CompositeImages images =
         o.render.layers
             ? differentialComposite(out.background, gbuffer, objectRadiance, realShadow, realIndirect)
@@ -640,6 +650,7 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage) {
 struct FrameRenderer::State {
     StaticWork kept;
     KeptWork lastKept;
+    TemporalReuse temporal;
 };
 
 FrameRenderer::FrameRenderer() : state_(std::make_unique<State>()) {}
@@ -647,6 +658,11 @@ FrameRenderer::~FrameRenderer() = default;
 
 void FrameRenderer::clear() {
     state_->kept = StaticWork{};
+    state_->temporal.clear();
+}
+
+void FrameRenderer::clearHistory() {
+    state_->temporal.clear();
 }
 
 FrameRenderer::KeptWork FrameRenderer::lastFrameKept() const {
@@ -660,6 +676,7 @@ RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onSt
     if (world != kept.signature) {
         kept = StaticWork{};
         kept.signature = world;
+        state_->temporal.clear();  // frames of another scene, lights or options
     }
     const uint64_t camera = cameraSignature(scene.camera);
     state_->lastKept.camera = camera == kept.cameraSignature;
@@ -670,7 +687,7 @@ RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onSt
     }
     keepWorldWork(scene, viewpointOf(scene), kept);
     state_->lastKept.world = kept.sceneRsms.has_value();
-    return renderFrame(scene, kept, onStage);
+    return renderFrame(scene, kept, onStage, &state_->temporal);
 }
 
 }  // namespace deltagi

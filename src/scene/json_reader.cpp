@@ -335,7 +335,7 @@ void readTrace(const JsonNode& node, TraceOptions& trace) {
 
 void readRender(const JsonNode& node, RenderOptions& render) {
     node.allowKeys({"samples_per_pixel", "indirect", "double_shadow_fix", "relight_indirect", "relight_cones",
-                    "light_bounces", "denoise_radius", "relight_object_light", "layers"});
+                    "light_bounces", "denoise_radius", "relight_object_light", "layers", "temporal_frames"});
     if (auto n = node.find("samples_per_pixel")) {
         int spp = n->integer(1, 16);
         if (spp != 1 && spp != 4 && spp != 9 && spp != 16)
@@ -348,6 +348,7 @@ void readRender(const JsonNode& node, RenderOptions& render) {
     if (auto n = node.find("layers")) render.layers = n->boolean();
     if (auto n = node.find("denoise_radius")) render.denoiseRadius = n->integer(0, 8);
     if (auto n = node.find("light_bounces")) render.lightBounces = n->integer(1, 8);
+    if (auto n = node.find("temporal_frames")) render.temporalFrames = n->integer(1, 8);
     if (auto n = node.find("relight_cones")) {
         std::string mode = n->string();
         if (mode != "differential" && mode != "delta_volume")
@@ -511,6 +512,7 @@ json optionsToJson(const Options& o) {
           {"relight_object_light", o.render.relightObjectLight},
           {"light_bounces", o.render.lightBounces},
           {"denoise_radius", o.render.denoiseRadius},
+          {"temporal_frames", o.render.temporalFrames},
           {"layers", o.render.layers}}},
         {"environment",
          {{"light_count", o.environment.lightCount},

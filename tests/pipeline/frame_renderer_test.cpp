@@ -22,6 +22,9 @@ Scene ballOverFloor() {
         placed(makeSphere(0.2f, 24), {0.1f, 0.3f, 0.0f}, diffuse({0.2f, 0.3f, 0.9f}), "ball"));
     s.options.volume.center = glm::vec3(0.0f, 0.3f, 0.0f);  // fixed: the real scene's voxels can be kept
     s.options.volume.size = 1.6f;
+    // What is kept must give render()'s image exactly: temporal reuse, which averages frames on purpose, is
+    // tested on its own (temporal_reuse_test.cpp).
+    s.options.render.temporalFrames = 1;
     return s;
 }
 

@@ -1,0 +1,319 @@
+#include "pipeline/temporal_reuse.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+
+#include "core/parallel.h"
+
+namespace deltagi {
+
+namespace {
+
+// A kept frame's pixel shows the same surface when its depth is within this fraction of the reprojected one.
+constexpr float kDepthTolerance = 0.02f;
+// Bilinear weights below this in all (the accepted pixels' share) count as no history.
+constexpr float kMinWeight = 1e-3f;
+
+// Where a world point lands in a camera's image: pixel-centre coordinates (pixel (i, j)'s centre is (i, j))
+// and its depth along the camera's axis; false behind the camera.
+class Projector {
+  public:
+    explicit Projector(const Camera& camera)
+        : camera_(&camera), cameraFromWorld_(glm::inverse(camera.worldFromCamera)) {}
+    bool project(glm::vec3 p, glm::vec2& pixel, float& depth) const {
+        const glm::vec3 q = glm::vec3(cameraFromWorld_ * glm::vec4(p, 1.0f));
+        if (!(q.z < -1e-6f)) return false;
+        depth = -q.z;
+        glm::vec2 n(q.x / depth, -q.y / depth);
+        if (!camera_->distortion.none()) n = camera_->distortion.distort(n);
+        pixel = {camera_->cx + camera_->fx * n.x - 0.5f, camera_->cy + camera_->fy * n.y - 0.5f};
+        return std::isfinite(pixel.x) && std::isfinite(pixel.y);
+    }
+    float depth(glm::vec3 p) const { return -(cameraFromWorld_ * glm::vec4(p, 1.0f)).z; }
+
+  private:
+    const Camera* camera_;
+    glm::mat4 cameraFromWorld_;
+};
+
+bool sameCamera(const Camera& a, const Camera& b) {
+    return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
+           a.cy == b.cy && a.worldFromCamera == b.worldFromCamera &&
+           a.distortion.model == b.distortion.model && a.distortion.k1 == b.distortion.k1 &&
+           a.distortion.k2 == b.distortion.k2 && a.distortion.k3 == b.distortion.k3 &&
+           a.distortion.k4 == b.distortion.k4 && a.distortion.p1 == b.distortion.p1 &&
+           a.distortion.p2 == b.distortion.p2;
+}
+
+struct Taps {
+    std::array<size_t, 4> index{};
+    std::array<float, 4> weight{};
+    int count = 0;
+};
+
+// The bilinear taps around `pixel` (pixel-centre coordinates) that `accept(x, y)` takes (x, y in the image),
+// their weights normalized; none when their share is below kMinWeight.
+template <typename Accept>
+Taps bilinearTaps(glm::vec2 pixel, int width, int height, Accept&& accept) {
+    Taps taps;
+    if (!(pixel.x > -1.0f && pixel.y > -1.0f && pixel.x < static_cast<float>(width) &&
+          pixel.y < static_cast<float>(height)))
+        return taps;
+    const float fx = std::floor(pixel.x), fy = std::floor(pixel.y);
+    const int x0 = static_cast<int>(fx), y0 = static_cast<int>(fy);
+    const float ax = pixel.x - fx, ay = pixel.y - fy;
+    float total = 0.0f;
+    for (int dy = 0; dy <= 1; ++dy)
+        for (int dx = 0; dx <= 1; ++dx) {
+            const int x = x0 + dx, y = y0 + dy;
+            if (x < 0 || y < 0 || x >= width || y >= height) continue;
+            const float w = (dx ? ax : 1.0f - ax) * (dy ? ay : 1.0f - ay);
+            if (w <= 0.0f || !accept(x, y)) continue;
+            taps.index[taps.count] = static_cast<size_t>(y) * width + x;
+            taps.weight[taps.count++] = w;
+            total += w;
+        }
+    if (total < kMinWeight) {
+        taps.count = 0;
+        return taps;
+    }
+    for (int k = 0; k < taps.count; ++k) taps.weight[k] /= total;
+    return taps;
+}
+
+glm::vec3 fetch(const Taps& taps, const std::vector<glm::vec3>& values) {
+    glm::vec3 sum(0.0f);
+    for (int k = 0; k < taps.count; ++k) sum += taps.weight[k] * values[taps.index[k]];
+    return sum;
+}
+
+bool closeDepth(float kept, float depth) {
+    return kept >= 0.0f && std::abs(kept - depth) <= kDepthTolerance * depth;
+}
+
+// The range of `values` over the 3 x 3 pixels around (x, y) that `same(j)` takes (the centre always does).
+struct Range {
+    glm::vec3 lo, hi;
+    bool flat() const { return lo == hi; }
+    glm::vec3 clamp(glm::vec3 v) const { return glm::clamp(v, lo, hi); }
+};
+template <typename Same>
+Range neighbourhood(const std::vector<glm::vec3>& values, size_t centre, int x, int y, int width, int height,
+                    Same&& same) {
+    Range r{values[centre], values[centre]};
+    for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int xx = x + dx, yy = y + dy;
+            if (xx < 0 || yy < 0 || xx >= width || yy >= height) continue;
+            const size_t j = static_cast<size_t>(yy) * width + xx;
+            if (!same(j)) continue;
+            r.lo = glm::min(r.lo, values[j]);
+            r.hi = glm::max(r.hi, values[j]);
+        }
+    return r;
+}
+
+// This frame's own values and surfaces, into `f` (its memory reused).
+void record(const TemporalSurfaces& s, const TemporalValues& v, TemporalReuse::Frame& f) {
+    const Camera& camera = *s.camera;
+    const int width = camera.width, height = camera.height;
+    const size_t count = static_cast<size_t>(width) * height;
+    f.camera = camera;
+    f.width = width;
+    f.height = height;
+    f.realDepth.resize(count);
+    f.realShadow.assign(v.realShadow.begin(), v.realShadow.end());
+    f.realIndirect.assign(v.realIndirect.begin(), v.realIndirect.end());
+    const Projector projector(camera);
+    parallelFor(0, height, 16, [&](int64_t y) {
+        for (size_t i = static_cast<size_t>(y) * width, end = i + width; i < end; ++i)
+            f.realDepth[i] = s.realPoints[i].valid() ? projector.depth(s.realPoints[i].position) : -1.0f;
+    });
+    const GBuffer& g = *s.gbuffer;
+    f.rect = g.written;
+    const size_t rectWidth = f.rect.empty() ? 0 : static_cast<size_t>(f.rect.x1 - f.rect.x0);
+    const size_t rectCount = f.rect.empty() ? 0 : rectWidth * static_cast<size_t>(f.rect.y1 - f.rect.y0);
+    f.objectDepth.resize(rectCount);
+    f.objectIndex.resize(rectCount);
+    f.objectRadiance.resize(rectCount);
+    parallelFor(f.rect.y0, f.rect.y1, 8, [&](int64_t y) {
+        size_t k = static_cast<size_t>(y - f.rect.y0) * rectWidth;
+        for (int x = f.rect.x0; x < f.rect.x1; ++x, ++k) {
+            const size_t i = static_cast<size_t>(y) * width + x;
+            const SurfaceId& id = g.objectIds[i];
+            const ptrdiff_t object = id.mesh ? id.mesh - s.objects.data() : -1;
+            const bool known =
+                object >= 0 && object < static_cast<ptrdiff_t>(s.objects.size()) && g.object[i].valid();
+            f.objectIndex[k] = known ? static_cast<int32_t>(object) : -1;
+            f.objectDepth[k] = known ? projector.depth(g.object[i].position) : -1.0f;
+            f.objectRadiance[k] = known ? v.objectRadiance[i] : glm::vec3(0.0f);
+        }
+    });
+    f.positions.resize(s.objects.size());
+    for (size_t m = 0; m < s.objects.size(); ++m) f.positions[m] = s.objects[m].positions;
+}
+
+}  // namespace
+
+TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, TemporalValues v) {
+    TemporalStats stats;
+    if (frames <= 1) {
+        history_.clear();
+        return stats;
+    }
+    const Camera& camera = *s.camera;
+    const int width = camera.width, height = camera.height;
+    // Frames of another size are of no use.
+    while (!history_.empty() && (history_.back().width != width || history_.back().height != height ||
+                                 static_cast<int>(history_.size()) > frames - 1)) {
+        spare_.push_back(std::move(history_.back()));
+        history_.pop_back();
+    }
+    Frame current;
+    if (!spare_.empty()) {
+        current = std::move(spare_.back());
+        spare_.pop_back();
+    }
+    record(s, v, current);
+
+    if (!history_.empty()) {
+        const GBuffer& g = *s.gbuffer;
+        const Projector here(camera);
+        std::vector<Projector> there;
+        std::vector<uint8_t> still;  // the kept frame's camera is this one: real points stay at their pixel
+        // ... and the kept frame's object is where it is now: its points stay at their pixel too.
+        std::vector<std::vector<uint8_t>> objectStill;
+        for (const Frame& h : history_) {
+            there.emplace_back(h.camera);
+            still.push_back(sameCamera(h.camera, camera));
+            std::vector<uint8_t>& same = objectStill.emplace_back(s.objects.size(), 0);
+            for (size_t m = 0; m < s.objects.size() && still.back() && m < h.positions.size(); ++m)
+                same[m] = h.positions[m] == s.objects[m].positions;
+        }
+        const bool indirect = !v.realIndirect.empty();
+        // The real surfaces' change.
+        std::atomic<size_t> realSeen{0}, realAveraged{0}, objectSeen{0}, objectAveraged{0};
+        parallelFor(0, height, 4, [&](int64_t y64) {
+            const int y = static_cast<int>(y64);
+            size_t seen = 0, averaged = 0;
+            for (int x = 0; x < width; ++x) {
+                const size_t i = static_cast<size_t>(y) * width + x;
+                if (current.realDepth[i] < 0.0f) continue;
+                auto real = [&](size_t j) { return current.realDepth[j] >= 0.0f; };
+                const Range shadow = neighbourhood(current.realShadow, i, x, y, width, height, real);
+                const Range bounce =
+                    indirect ? neighbourhood(current.realIndirect, i, x, y, width, height, real) : Range{};
+                if (shadow.flat() && (!indirect || bounce.flat())) continue;
+                // Sums of the kept values' differences from this frame's: where they agree, the value stays
+                // exactly this frame's.
+                const glm::vec3 shadowNow = current.realShadow[i];
+                const glm::vec3 bounceNow = indirect ? current.realIndirect[i] : glm::vec3(0.0f);
+                glm::vec3 shadowSum(0.0f), bounceSum(0.0f);
+                float n = 1.0f;
+                for (size_t k = 0; k < history_.size(); ++k) {
+                    const Frame& h = history_[k];
+                    Taps taps;
+                    if (still[k]) {
+                        if (h.realDepth[i] >= 0.0f) {
+                            taps.index[0] = i;
+                            taps.weight[0] = 1.0f;
+                            taps.count = 1;
+                        }
+                    } else {
+                        glm::vec2 pixel;
+                        float depth;
+                        if (!there[k].project(s.realPoints[i].position, pixel, depth)) continue;
+                        taps = bilinearTaps(pixel, h.width, h.height, [&](int tx, int ty) {
+                            return closeDepth(h.realDepth[static_cast<size_t>(ty) * h.width + tx], depth);
+                        });
+                    }
+                    if (taps.count == 0) continue;
+                    shadowSum += shadow.clamp(fetch(taps, h.realShadow)) - shadowNow;
+                    if (indirect && h.realIndirect.size() == h.realShadow.size())
+                        bounceSum += bounce.clamp(fetch(taps, h.realIndirect)) - bounceNow;
+                    n += 1.0f;
+                }
+                v.realShadow[i] = shadowNow + shadowSum / n;
+                if (indirect) v.realIndirect[i] = bounceNow + bounceSum / n;
+                ++seen;
+                averaged += n > 1.0f;
+            }
+            realSeen += seen;
+            realAveraged += averaged;
+        });
+        // The objects' radiance, following each point on its triangle.
+        const PixelRect& r = current.rect;
+        const int rectWidth = r.x1 - r.x0;
+        parallelFor(r.y0, r.y1, 4, [&](int64_t y64) {
+            const int y = static_cast<int>(y64);
+            size_t seen = 0, averaged = 0;
+            for (int x = r.x0; x < r.x1; ++x) {
+                const size_t k = static_cast<size_t>(y - r.y0) * rectWidth + (x - r.x0);
+                const int32_t object = current.objectIndex[k];
+                if (object < 0) continue;
+                const TriangleMesh& mesh = s.objects[object];
+                const size_t i = static_cast<size_t>(y) * width + x;
+                const SurfaceId& id = g.objectIds[i];
+                if (id.triangle >= mesh.triangles.size()) continue;
+                const Range range =
+                    neighbourhood(current.objectRadiance, k, x - r.x0, y - r.y0, rectWidth, r.y1 - r.y0,
+                                  [&](size_t j) { return current.objectIndex[j] == object; });
+                if (range.flat()) continue;
+                const glm::uvec3 tri = mesh.triangles[id.triangle];
+                const float u = id.barycentric.x, w = id.barycentric.y;
+                const glm::vec3 now = current.objectRadiance[k];
+                glm::vec3 sum(0.0f);
+                float n = 1.0f;
+                for (size_t f = 0; f < history_.size(); ++f) {
+                    const Frame& h = history_[f];
+                    if (static_cast<size_t>(object) >= h.positions.size() || h.rect.empty()) continue;
+                    const std::vector<glm::vec3>& p = h.positions[object];
+                    if (p.size() != mesh.positions.size()) continue;
+                    const int hw = h.rect.x1 - h.rect.x0;
+                    auto accept = [&](int tx, int ty, float depth) {
+                        const size_t j = static_cast<size_t>(ty) * hw + tx;
+                        return h.objectIndex[j] == object && closeDepth(h.objectDepth[j], depth);
+                    };
+                    Taps taps;
+                    if (objectStill[f][object]) {
+                        // Where it was: the same pixel, exactly.
+                        const int tx = x - h.rect.x0, ty = y - h.rect.y0;
+                        if (tx >= 0 && ty >= 0 && tx < hw && ty < h.rect.y1 - h.rect.y0 &&
+                            accept(tx, ty, current.objectDepth[k])) {
+                            taps.index[0] = static_cast<size_t>(ty) * hw + tx;
+                            taps.weight[0] = 1.0f;
+                            taps.count = 1;
+                        }
+                    } else {
+                        const glm::vec3 point = (1.0f - u - w) * p[tri.x] + u * p[tri.y] + w * p[tri.z];
+                        glm::vec2 pixel;
+                        float depth;
+                        if (!there[f].project(point, pixel, depth)) continue;
+                        taps =
+                            bilinearTaps(pixel - glm::vec2(h.rect.x0, h.rect.y0), hw, h.rect.y1 - h.rect.y0,
+                                         [&](int tx, int ty) { return accept(tx, ty, depth); });
+                    }
+                    if (taps.count == 0) continue;
+                    sum += range.clamp(fetch(taps, h.objectRadiance)) - now;
+                    n += 1.0f;
+                }
+                v.objectRadiance[i] = now + sum / n;
+                ++seen;
+                averaged += n > 1.0f;
+            }
+            objectSeen += seen;
+            objectAveraged += averaged;
+        });
+        stats = {realSeen, realAveraged, objectSeen, objectAveraged};
+    }
+    history_.push_front(std::move(current));
+    while (static_cast<int>(history_.size()) > frames - 1) {
+        spare_.push_back(std::move(history_.back()));
+        history_.pop_back();
+    }
+    return stats;
+}
+
+}  // namespace deltagi
