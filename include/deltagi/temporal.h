@@ -27,6 +27,10 @@ struct MotionOptions {
     // The camera turns this many degrees each frame about the vertical axis through the objects' centre (0:
     // still).
     float cameraStepDeg = 0.0f;
+    // Frames rendered first and not returned, the motion continued backwards: -1 renders
+    // options.render.temporal_frames - 1 of them, so that every returned frame averages as many frames
+    // before it as in a session that has been running (temporal reuse); 0 starts with the first frame.
+    int warmUpFrames = -1;
 };
 
 // Renders options.frames frames of `scene` with one FrameRenderer, as a session would, moving its objects and

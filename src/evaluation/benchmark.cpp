@@ -26,6 +26,7 @@ const std::vector<BenchRow>& benchRows() {
         {"gbuffer_ms", {"gbuffer"}, -1.0},
         {"shading_ms", {"shading"}, -1.0},
         {"background_ms", {"background"}, -1.0},
+        {"temporal_ms", {"temporal"}, -1.0},
         {"composite_ms", {"composite"}, -1.0},
         {"total_ms", {}, 90.2},
     };

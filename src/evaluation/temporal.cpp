@@ -29,9 +29,12 @@ std::vector<RenderOutput> renderMotion(Scene& scene, const MotionOptions& option
     };
     FrameRenderer renderer;
     std::vector<RenderOutput> frames;
-    for (int f = 0; f < options.frames; ++f) {
+    const int warmUp =
+        options.warmUpFrames >= 0 ? options.warmUpFrames : scene.options.render.temporalFrames - 1;
+    for (int f = -warmUp; f < options.frames; ++f) {
         place(f);
-        frames.push_back(renderer.render(scene));
+        RenderOutput frame = renderer.render(scene);
+        if (f >= 0) frames.push_back(std::move(frame));
     }
     place(0);
     scene.camera = camera;

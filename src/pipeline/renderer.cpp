@@ -565,11 +565,11 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     addInto(realShadow, std::move(real.areaLight));
     timer.lap("shading");
 
-    // Beyond the paper: the frames before this one, reprojected, smooth the steps of the cones and rays
-    // over time (FrameRenderer).
+    // Beyond the paper: the frames before this one, reprojected, smooth over time the steps of the objects'
+    // shading and of their shadows on real surfaces (FrameRenderer).
     if (temporal) {
         temporal->apply(o.render.temporalFrames, {&camera, scene.virtuals, &gbuffer, realPoints},
-                        {objectRadiance, realShadow, realIndirect});
+                        {objectRadiance, realShadow});
         timer.lap("temporal");
     }
     if (!o.render.layers) addInto(realShadow, std::move(realIndirect));  // one change, without the layers

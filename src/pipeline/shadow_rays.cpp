@@ -164,7 +164,11 @@ ShadowOcclusion pixelAreaOcclusion(std::span<const SurfacePoint* const> points, 
         byScene += scene ? weight : 0.0f;
         byEither += object || scene ? weight : 0.0f;
     }
-    if (total > 0.0f) o = {byScene / total, byObjects / total, byEither / total};
+    // Every ray below its sub-sample's horizon: the pixel faces away from the light, its own attached
+    // shadow. Occluded, not unoccluded: the edge-aware filter would otherwise spread the light's full
+    // visibility from it into the lit-facing pixels next to it (a bright speck inside a torus' shadowed rim).
+    o = total > 0.0f ? ShadowOcclusion{byScene / total, byObjects / total, byEither / total}
+                     : ShadowOcclusion{1.0f, 1.0f, 1.0f};
     return o;
 }
 
@@ -204,7 +208,13 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
                 continue;
             }
             const LightSample centre = sampleLight(light, p.position);
-            if (glm::dot(centre.wi, p.normal) <= 0.0f || centre.irradiance == glm::vec3(0.0f)) continue;
+            if (centre.irradiance == glm::vec3(0.0f)) continue;
+            if (glm::dot(centre.wi, p.normal) <= 0.0f) {
+                // Facing away: its attached shadow (as pixelAreaOcclusion). Relit points carry the change
+                // the objects make, none here.
+                if (!relit) out[i * lights.size() + l] = {1.0f, 1.0f, 1.0f};
+                continue;
+            }
             // Relit points whose rays cannot reach the objects do not change: no rays at all.
             bool mayMeetObjects = objects != nullptr && !sceneOnly;
             if (mayMeetObjects && relit) {

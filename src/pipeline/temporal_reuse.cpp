@@ -115,6 +115,36 @@ Range neighbourhood(const std::vector<glm::vec3>& values, size_t centre, int x, 
     return r;
 }
 
+// How an object's vertices moved from a kept frame to this one.
+struct ObjectMotion {
+    enum class Kind { Still, Shifted, Deformed, Changed };
+    Kind kind = Kind::Changed;  // Changed: another mesh (vertex count), nothing to follow
+    glm::vec3 shift{0.0f};      // Shifted: now - then, the same for every vertex (to float rounding)
+};
+ObjectMotion motionOf(const std::vector<glm::vec3>& then, const std::vector<glm::vec3>& now,
+                      bool sameCamera) {
+    ObjectMotion m;
+    if (then.size() != now.size() || now.empty()) return m;
+    if (sameCamera && then == now) {
+        m.kind = ObjectMotion::Kind::Still;
+        return m;
+    }
+    // One shift for all (the rounding of adding it to each vertex aside): the points need no vertex then.
+    const glm::vec3 shift = now[0] - then[0];
+    for (size_t v = 0; v < now.size(); ++v) {
+        const glm::vec3 error = glm::abs(now[v] - then[v] - shift);
+        const glm::vec3 a = glm::abs(now[v]);
+        const float scale = 1e-5f * (1.0f + std::max({a.x, a.y, a.z}));
+        if (error.x > scale || error.y > scale || error.z > scale) {
+            m.kind = ObjectMotion::Kind::Deformed;
+            return m;
+        }
+    }
+    m.kind = ObjectMotion::Kind::Shifted;
+    m.shift = shift;
+    return m;
+}
+
 // This frame's own values and surfaces, into `f` (its memory reused).
 void record(const TemporalSurfaces& s, const TemporalValues& v, TemporalReuse::Frame& f) {
     const Camera& camera = *s.camera;
@@ -125,7 +155,6 @@ void record(const TemporalSurfaces& s, const TemporalValues& v, TemporalReuse::F
     f.height = height;
     f.realDepth.resize(count);
     f.realShadow.assign(v.realShadow.begin(), v.realShadow.end());
-    f.realIndirect.assign(v.realIndirect.begin(), v.realIndirect.end());
     const Projector projector(camera);
     parallelFor(0, height, 16, [&](int64_t y) {
         for (size_t i = static_cast<size_t>(y) * width, end = i + width; i < end; ++i)
@@ -183,34 +212,44 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
         const Projector here(camera);
         std::vector<Projector> there;
         std::vector<uint8_t> still;  // the kept frame's camera is this one: real points stay at their pixel
-        // ... and the kept frame's object is where it is now: its points stay at their pixel too.
-        std::vector<std::vector<uint8_t>> objectStill;
+        // How each object moved since the kept frame: not at all (and the camera is the same: its points stay
+        // at their pixel), by one shift of every vertex (a point was where it is now minus the shift), or
+        // otherwise (a point was at its barycentric place between the kept vertices).
+        std::vector<std::vector<ObjectMotion>> motion;
         for (const Frame& h : history_) {
             there.emplace_back(h.camera);
             still.push_back(sameCamera(h.camera, camera));
-            std::vector<uint8_t>& same = objectStill.emplace_back(s.objects.size(), 0);
-            for (size_t m = 0; m < s.objects.size() && still.back() && m < h.positions.size(); ++m)
-                same[m] = h.positions[m] == s.objects[m].positions;
+            std::vector<ObjectMotion>& moved = motion.emplace_back(s.objects.size());
+            for (size_t m = 0; m < s.objects.size() && m < h.positions.size(); ++m)
+                moved[m] = motionOf(h.positions[m], s.objects[m].positions, still.back());
         }
-        const bool indirect = !v.realIndirect.empty();
-        // The real surfaces' change.
+        // The real surfaces' change. Where it is 0 over the pixel's neighbourhood (most of the image: the
+        // objects' shadows are small), the kept values clamp to 0 too: nothing to do.
+        std::vector<uint8_t> zero(current.realShadow.size());
+        parallelFor(0, height, 16, [&](int64_t y) {
+            for (size_t i = static_cast<size_t>(y) * width, end = i + width; i < end; ++i)
+                zero[i] = current.realDepth[i] < 0.0f || current.realShadow[i] == glm::vec3(0.0f);
+        });
+        auto zeroAround = [&](int x, int y) {
+            for (int yy = std::max(y - 1, 0); yy <= std::min(y + 1, height - 1); ++yy)
+                for (int xx = std::max(x - 1, 0); xx <= std::min(x + 1, width - 1); ++xx)
+                    if (!zero[static_cast<size_t>(yy) * width + xx]) return false;
+            return true;
+        };
         std::atomic<size_t> realSeen{0}, realAveraged{0}, objectSeen{0}, objectAveraged{0};
         parallelFor(0, height, 4, [&](int64_t y64) {
             const int y = static_cast<int>(y64);
             size_t seen = 0, averaged = 0;
             for (int x = 0; x < width; ++x) {
                 const size_t i = static_cast<size_t>(y) * width + x;
-                if (current.realDepth[i] < 0.0f) continue;
-                auto real = [&](size_t j) { return current.realDepth[j] >= 0.0f; };
-                const Range shadow = neighbourhood(current.realShadow, i, x, y, width, height, real);
-                const Range bounce =
-                    indirect ? neighbourhood(current.realIndirect, i, x, y, width, height, real) : Range{};
-                if (shadow.flat() && (!indirect || bounce.flat())) continue;
-                // Sums of the kept values' differences from this frame's: where they agree, the value stays
-                // exactly this frame's.
-                const glm::vec3 shadowNow = current.realShadow[i];
-                const glm::vec3 bounceNow = indirect ? current.realIndirect[i] : glm::vec3(0.0f);
-                glm::vec3 shadowSum(0.0f), bounceSum(0.0f);
+                if (current.realDepth[i] < 0.0f || zeroAround(x, y)) continue;
+                const Range range = neighbourhood(current.realShadow, i, x, y, width, height,
+                                                  [&](size_t j) { return current.realDepth[j] >= 0.0f; });
+                if (range.flat()) continue;
+                // The sum of the kept values' differences from this frame's: where they agree, the value
+                // stays exactly this frame's.
+                const glm::vec3 now = current.realShadow[i];
+                glm::vec3 sum(0.0f);
                 float n = 1.0f;
                 for (size_t k = 0; k < history_.size(); ++k) {
                     const Frame& h = history_[k];
@@ -230,13 +269,10 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
                         });
                     }
                     if (taps.count == 0) continue;
-                    shadowSum += shadow.clamp(fetch(taps, h.realShadow)) - shadowNow;
-                    if (indirect && h.realIndirect.size() == h.realShadow.size())
-                        bounceSum += bounce.clamp(fetch(taps, h.realIndirect)) - bounceNow;
+                    sum += range.clamp(fetch(taps, h.realShadow)) - now;
                     n += 1.0f;
                 }
-                v.realShadow[i] = shadowNow + shadowSum / n;
-                if (indirect) v.realIndirect[i] = bounceNow + bounceSum / n;
+                v.realShadow[i] = now + sum / n;
                 ++seen;
                 averaged += n > 1.0f;
             }
@@ -261,23 +297,21 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
                     neighbourhood(current.objectRadiance, k, x - r.x0, y - r.y0, rectWidth, r.y1 - r.y0,
                                   [&](size_t j) { return current.objectIndex[j] == object; });
                 if (range.flat()) continue;
-                const glm::uvec3 tri = mesh.triangles[id.triangle];
-                const float u = id.barycentric.x, w = id.barycentric.y;
                 const glm::vec3 now = current.objectRadiance[k];
                 glm::vec3 sum(0.0f);
                 float n = 1.0f;
                 for (size_t f = 0; f < history_.size(); ++f) {
                     const Frame& h = history_[f];
                     if (static_cast<size_t>(object) >= h.positions.size() || h.rect.empty()) continue;
-                    const std::vector<glm::vec3>& p = h.positions[object];
-                    if (p.size() != mesh.positions.size()) continue;
+                    const ObjectMotion& moved = motion[f][object];
+                    if (moved.kind == ObjectMotion::Kind::Changed) continue;
                     const int hw = h.rect.x1 - h.rect.x0;
                     auto accept = [&](int tx, int ty, float depth) {
                         const size_t j = static_cast<size_t>(ty) * hw + tx;
                         return h.objectIndex[j] == object && closeDepth(h.objectDepth[j], depth);
                     };
                     Taps taps;
-                    if (objectStill[f][object]) {
+                    if (moved.kind == ObjectMotion::Kind::Still) {
                         // Where it was: the same pixel, exactly.
                         const int tx = x - h.rect.x0, ty = y - h.rect.y0;
                         if (tx >= 0 && ty >= 0 && tx < hw && ty < h.rect.y1 - h.rect.y0 &&
@@ -287,7 +321,13 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
                             taps.count = 1;
                         }
                     } else {
-                        const glm::vec3 point = (1.0f - u - w) * p[tri.x] + u * p[tri.y] + w * p[tri.z];
+                        glm::vec3 point = g.object[i].position - moved.shift;
+                        if (moved.kind == ObjectMotion::Kind::Deformed) {
+                            const std::vector<glm::vec3>& p = h.positions[object];
+                            const glm::uvec3 tri = mesh.triangles[id.triangle];
+                            const float u = id.barycentric.x, w = id.barycentric.y;
+                            point = (1.0f - u - w) * p[tri.x] + u * p[tri.y] + w * p[tri.z];
+                        }
                         glm::vec2 pixel;
                         float depth;
                         if (!there[f].project(point, pixel, depth)) continue;

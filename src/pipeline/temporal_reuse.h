@@ -37,8 +37,9 @@ struct TemporalSurfaces {
 // The values reused, per pixel (width x height), changed in place.
 struct TemporalValues {
     std::span<glm::vec3> objectRadiance;  // where gbuffer.objectIds names an object
-    std::span<glm::vec3> realShadow;      // where realPoints are valid
-    std::span<glm::vec3> realIndirect;    // the same; may be empty
+    // The real surfaces' change of direct light (the objects' shadows; see renderer.cpp) where realPoints
+    // are valid. Their indirect change is left as it is: it does not flicker (README, "Stable frames").
+    std::span<glm::vec3> realShadow;
 };
 
 // What one frame's reuse did: of the pixels whose neighbourhood's values differ (elsewhere a pixel keeps its
@@ -67,7 +68,7 @@ struct TemporalReuse::Frame {
     Camera camera;
     int width = 0, height = 0;
     std::vector<float> realDepth;  // per pixel: the real surface's depth, or -1 where none shows
-    std::vector<glm::vec3> realShadow, realIndirect;
+    std::vector<glm::vec3> realShadow;
     // Over the pixels the objects' G-buffer was written (rect), row by row: the object's depth at the pixel
     // centre, which object (-1: none) and its radiance.
     PixelRect rect;
