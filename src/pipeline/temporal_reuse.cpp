@@ -155,10 +155,19 @@ void record(const TemporalSurfaces& s, const TemporalValues& v, TemporalReuse::F
     f.height = height;
     f.realDepth.resize(count);
     f.realShadow.assign(v.realShadow.begin(), v.realShadow.end());
+    f.zeroShadow.resize(count);
+    f.columns.resize(height);
     const Projector projector(camera);
     parallelFor(0, height, 16, [&](int64_t y) {
-        for (size_t i = static_cast<size_t>(y) * width, end = i + width; i < end; ++i)
-            f.realDepth[i] = s.realPoints[i].valid() ? projector.depth(s.realPoints[i].position) : -1.0f;
+        glm::ivec2 span(width, -1);
+        for (int x = 0; x < width; ++x) {
+            const size_t i = static_cast<size_t>(y) * width + x;
+            const bool real = s.realPoints[i].valid();
+            f.realDepth[i] = real ? projector.depth(s.realPoints[i].position) : -1.0f;
+            f.zeroShadow[i] = !real || f.realShadow[i] == glm::vec3(0.0f);
+            if (!f.zeroShadow[i]) span = {std::min(span.x, x), x};
+        }
+        f.columns[y] = span;
     });
     const GBuffer& g = *s.gbuffer;
     f.rect = g.written;
@@ -225,11 +234,8 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
         }
         // The real surfaces' change. Where it is 0 over the pixel's neighbourhood (most of the image: the
         // objects' shadows are small), the kept values clamp to 0 too: nothing to do.
-        std::vector<uint8_t> zero(current.realShadow.size());
-        parallelFor(0, height, 16, [&](int64_t y) {
-            for (size_t i = static_cast<size_t>(y) * width, end = i + width; i < end; ++i)
-                zero[i] = current.realDepth[i] < 0.0f || current.realShadow[i] == glm::vec3(0.0f);
-        });
+        const std::vector<uint8_t>& zero = current.zeroShadow;
+        const std::vector<glm::ivec2>& columns = current.columns;
         auto zeroAround = [&](int x, int y) {
             for (int yy = std::max(y - 1, 0); yy <= std::min(y + 1, height - 1); ++yy)
                 for (int xx = std::max(x - 1, 0); xx <= std::min(x + 1, width - 1); ++xx)
@@ -240,7 +246,11 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
         parallelFor(0, height, 4, [&](int64_t y64) {
             const int y = static_cast<int>(y64);
             size_t seen = 0, averaged = 0;
-            for (int x = 0; x < width; ++x) {
+            // Only the columns next to a non-zero value in this row or the ones above and below.
+            glm::ivec2 span(width, -1);
+            for (int yy = std::max(y - 1, 0); yy <= std::min(y + 1, height - 1); ++yy)
+                span = {std::min(span.x, columns[yy].x), std::max(span.y, columns[yy].y)};
+            for (int x = std::max(span.x - 1, 0); x <= std::min(span.y + 1, width - 1); ++x) {
                 const size_t i = static_cast<size_t>(y) * width + x;
                 if (current.realDepth[i] < 0.0f || zeroAround(x, y)) continue;
                 const Range range = neighbourhood(current.realShadow, i, x, y, width, height,

@@ -69,6 +69,10 @@ struct TemporalReuse::Frame {
     int width = 0, height = 0;
     std::vector<float> realDepth;  // per pixel: the real surface's depth, or -1 where none shows
     std::vector<glm::vec3> realShadow;
+    // Per pixel, whether realShadow is 0 (or no real surface shows); per row, the columns [first, last]
+    // where it is not (first > last: none). Most of an image: the objects' shadows are small.
+    std::vector<uint8_t> zeroShadow;
+    std::vector<glm::ivec2> columns;
     // Over the pixels the objects' G-buffer was written (rect), row by row: the object's depth at the pixel
     // centre, which object (-1: none) and its radiance.
     PixelRect rect;
