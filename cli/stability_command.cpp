@@ -18,7 +18,10 @@ CLI::App* addStabilityCommand(CLI::App& app, StabilityArgs& args, int maxThreads
         "Measure flicker: render frames in which the objects (and the camera) move steadily, and report "
         "temporal_instability = RMS(D[t+1] - 2 D[t] + D[t-1]) / RMS((D[t+1] - D[t-1]) / 2)");
     command->add_option("scene", args.scene, "Scene file (JSON)")->required();
-    command->add_option("--frames", args.motion.frames, "Frames to render (default 8)")
+    command
+        ->add_option("--frames", args.motion.frames,
+                     "Frames to measure (default 8); options.render.temporal_frames - 1 frames are rendered "
+                     "before them, the motion continued backwards, as in a running session")
         ->check(CLI::Range(3, 10000));
     command
         ->add_option("--object-step", args.motion.objectStepVoxels,
