@@ -115,6 +115,33 @@ Range neighbourhood(const std::vector<glm::vec3>& values, size_t centre, int x, 
     return r;
 }
 
+// A pixel's mean over the window: this frame's value and the kept ones, each clamped to `range`, summed as
+// differences from this frame's (where they agree, the mean is this frame's value exactly).
+class WindowMean {
+  public:
+    WindowMean(glm::vec3 now, const Range& range) : now_(now), range_(range) {}
+    void add(glm::vec3 kept) {
+        sum_ += range_.clamp(kept) - now_;
+        n_ += 1.0f;
+    }
+    glm::vec3 mean() const { return now_ + sum_ / n_; }
+    bool averaged() const { return n_ > 1.0f; }
+
+  private:
+    glm::vec3 now_, sum_{0.0f};
+    Range range_;
+    float n_ = 1.0f;
+};
+
+// The one tap of a point that stayed at its pixel.
+Taps samePixel(size_t index) {
+    Taps taps;
+    taps.index[0] = index;
+    taps.weight[0] = 1.0f;
+    taps.count = 1;
+    return taps;
+}
+
 // How an object's vertices moved from a kept frame to this one.
 struct ObjectMotion {
     enum class Kind { Still, Shifted, Deformed, Changed };
@@ -256,20 +283,12 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
                 const Range range = neighbourhood(current.realShadow, i, x, y, width, height,
                                                   [&](size_t j) { return current.realDepth[j] >= 0.0f; });
                 if (range.flat()) continue;
-                // The sum of the kept values' differences from this frame's: where they agree, the value
-                // stays exactly this frame's.
-                const glm::vec3 now = current.realShadow[i];
-                glm::vec3 sum(0.0f);
-                float n = 1.0f;
+                WindowMean window(current.realShadow[i], range);
                 for (size_t k = 0; k < history_.size(); ++k) {
                     const Frame& h = history_[k];
                     Taps taps;
                     if (still[k]) {
-                        if (h.realDepth[i] >= 0.0f) {
-                            taps.index[0] = i;
-                            taps.weight[0] = 1.0f;
-                            taps.count = 1;
-                        }
+                        if (h.realDepth[i] >= 0.0f) taps = samePixel(i);
                     } else {
                         glm::vec2 pixel;
                         float depth;
@@ -278,13 +297,11 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
                             return closeDepth(h.realDepth[static_cast<size_t>(ty) * h.width + tx], depth);
                         });
                     }
-                    if (taps.count == 0) continue;
-                    sum += range.clamp(fetch(taps, h.realShadow)) - now;
-                    n += 1.0f;
+                    if (taps.count > 0) window.add(fetch(taps, h.realShadow));
                 }
-                v.realShadow[i] = now + sum / n;
+                v.realShadow[i] = window.mean();
                 ++seen;
-                averaged += n > 1.0f;
+                averaged += window.averaged();
             }
             realSeen += seen;
             realAveraged += averaged;
@@ -307,9 +324,7 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
                     neighbourhood(current.objectRadiance, k, x - r.x0, y - r.y0, rectWidth, r.y1 - r.y0,
                                   [&](size_t j) { return current.objectIndex[j] == object; });
                 if (range.flat()) continue;
-                const glm::vec3 now = current.objectRadiance[k];
-                glm::vec3 sum(0.0f);
-                float n = 1.0f;
+                WindowMean window(current.objectRadiance[k], range);
                 for (size_t f = 0; f < history_.size(); ++f) {
                     const Frame& h = history_[f];
                     if (static_cast<size_t>(object) >= h.positions.size() || h.rect.empty()) continue;
@@ -325,11 +340,8 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
                         // Where it was: the same pixel, exactly.
                         const int tx = x - h.rect.x0, ty = y - h.rect.y0;
                         if (tx >= 0 && ty >= 0 && tx < hw && ty < h.rect.y1 - h.rect.y0 &&
-                            accept(tx, ty, current.objectDepth[k])) {
-                            taps.index[0] = static_cast<size_t>(ty) * hw + tx;
-                            taps.weight[0] = 1.0f;
-                            taps.count = 1;
-                        }
+                            accept(tx, ty, current.objectDepth[k]))
+                            taps = samePixel(static_cast<size_t>(ty) * hw + tx);
                     } else {
                         glm::vec3 point = g.object[i].position - moved.shift;
                         if (moved.kind == ObjectMotion::Kind::Deformed) {
@@ -345,13 +357,11 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
                             bilinearTaps(pixel - glm::vec2(h.rect.x0, h.rect.y0), hw, h.rect.y1 - h.rect.y0,
                                          [&](int tx, int ty) { return accept(tx, ty, depth); });
                     }
-                    if (taps.count == 0) continue;
-                    sum += range.clamp(fetch(taps, h.objectRadiance)) - now;
-                    n += 1.0f;
+                    if (taps.count > 0) window.add(fetch(taps, h.objectRadiance));
                 }
-                v.objectRadiance[i] = now + sum / n;
+                v.objectRadiance[i] = window.mean();
                 ++seen;
-                averaged += n > 1.0f;
+                averaged += window.averaged();
             }
             objectSeen += seen;
             objectAveraged += averaged;
