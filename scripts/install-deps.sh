@@ -8,7 +8,7 @@ set -euo pipefail
 packages=(
   cmake ninja-build g++ pkg-config
   libembree-dev libtbb-dev libassimp-dev libopenimageio-dev openimageio-tools
-  nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev
+  nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev libxxhash-dev
   libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
   libgtest-dev libgmock-dev libbenchmark-dev assimp-testmodels
   pybind11-dev python3-dev python3-numpy python3-pytest
