@@ -517,6 +517,20 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
     }
 }
 
+// options.render.temporal_frames: 4 by default, 1 to 8, written back; anything else refused naming the key.
+TEST_F(SceneIoTest, TemporalFramesAreReadAndChecked) {
+    json doc = baseScene();
+    EXPECT_EQ(load(doc).options.render.temporalFrames, 4);
+    doc["options"] = json::parse(R"({"render": {"temporal_frames": 1}})");
+    const Options options = load(doc).options;
+    EXPECT_EQ(options.render.temporalFrames, 1);
+    EXPECT_EQ(optionsToJson(options)["render"]["temporal_frames"], 1);
+    for (const char* bad : {"0", "9", "2.5", "\"all\"", "true"}) {
+        doc["options"] = json::parse(std::string(R"({"render": {"temporal_frames": )") + bad + "}}");
+        expectContains(loadError(doc), {"scene.json: options.render.temporal_frames"});
+    }
+}
+
 // Pixel strides: "auto" (the default, 0) scales the 640x480 strides with the image; explicit ones are powers
 // of two up to 32 and are used as given.
 TEST_F(SceneIoTest, RsmResolutionIsAutoOrAnInteger) {
