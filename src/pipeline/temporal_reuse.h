@@ -1,7 +1,9 @@
-// Temporal reuse (beyond the paper): each pixel's lighting averaged with the same surface point's in the last
-// frames, found by reprojection. The cone and ray results of one frame change in steps as the objects move
-// through the voxel grid and a shadow ray's visibility flips; the mean over a few frames follows the motion
-// smoothly (README, "Stable frames").
+// Temporal reuse (beyond the paper): the objects' radiance and the real surfaces' change of direct light (their
+// shadows) averaged at each pixel with the same surface point's in the last frames, found by reprojection. The
+// cone and ray results of one frame change in steps as the objects move through the voxel grid and a shadow
+// ray's visibility flips; the mean over a few frames follows the motion smoothly (README, "Stable frames").
+// The real surfaces' indirect change is left alone: it barely flickers, and it is non-zero almost everywhere
+// (averaging it cost about 10 ms a frame).
 //
 // A window, not a running average: a frame's result is the mean of its own values and those of at most
 // `frames - 1` frames before it, each the value that frame computed itself (never one already averaged). So
@@ -10,7 +12,8 @@
 // still render of that pose exactly.
 //
 // Reprojection: a real surface point is where it was (the real scene does not move); a virtual one is the
-// same barycentric point of the same triangle, at that frame's vertex positions. A kept frame's value counts
+// same barycentric point of the same triangle, at that frame's vertex positions (or, when every vertex moved
+// by one shift, the point shifted back: no vertex lookups). A kept frame's value counts
 // where that frame showed the same kind of surface (the same object) at the reprojected depth (within 2 %),
 // interpolated bilinearly over its pixels that did. Each kept value is clamped to the range of the current
 // frame's values over the pixel's 3 x 3 neighbourhood (of the same surface kind): the history follows the
