@@ -230,9 +230,10 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
     }
     const Camera& camera = *s.camera;
     const int width = camera.width, height = camera.height;
-    // Frames of another size are of no use.
-    while (!history_.empty() && (history_.back().width != width || history_.back().height != height ||
-                                 static_cast<int>(history_.size()) > frames - 1)) {
+    // Frames of another size are of no use (nor the ones before them); more than frames - 1 are not needed.
+    const bool resized =
+        !history_.empty() && (history_.front().width != width || history_.front().height != height);
+    while (!history_.empty() && (resized || static_cast<int>(history_.size()) > frames - 1)) {
         spare_.push_back(std::move(history_.back()));
         history_.pop_back();
     }
@@ -245,7 +246,6 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
 
     if (!history_.empty()) {
         const GBuffer& g = *s.gbuffer;
-        const Projector here(camera);
         std::vector<Projector> there;
         std::vector<uint8_t> still;  // the kept frame's camera is this one: real points stay at their pixel
         // How each object moved since the kept frame: not at all (and the camera is the same: its points stay

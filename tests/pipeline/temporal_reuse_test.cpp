@@ -210,6 +210,27 @@ TEST(TemporalReuse, AveragesWhatChangesFromFrameToFrameAndKeepsAStillFrameExactl
     EXPECT_EQ(maxDifference(once.shadow, valuesOf(f, centre, 0.3f).shadow), 0.0f);
 }
 
+// A frame of another size starts over: the kept frames are dropped, nothing is averaged.
+TEST(TemporalReuse, AnotherImageSizeStartsOver) {
+    Scene s = ballOverFloor();
+    TemporalReuse reuse;
+    const glm::vec3 centre(0.1f, 0.3f, 0.0f);
+    for (int frame = 0; frame < 2; ++frame) {
+        Surfaces f(s);
+        Values v = valuesOf(f, centre, 0.01f * static_cast<float>(frame));
+        applyTo(reuse, s, f, v);
+    }
+    EXPECT_EQ(reuse.keptFrames(), 2u);
+    s.camera = test::lookAtCamera({0.0f, 1.6f, 1.6f}, {0, 0, 0}, 48, 36, 60.0f);
+    Surfaces f(s);
+    const Values before = valuesOf(f, centre, 0.5f);
+    Values v = before;
+    const TemporalStats stats = applyTo(reuse, s, f, v);
+    EXPECT_EQ(stats.realAveraged + stats.objectAveraged, 0u);
+    EXPECT_EQ(maxDifference(v.shadow, before.shadow), 0.0f);
+    EXPECT_EQ(reuse.keptFrames(), 1u);
+}
+
 TEST(TemporalReuse, WhenTheObjectsStopTheFramesAreTheStillRenderWithinTemporalFrames) {
     Scene s = ballOverFloor();
     ASSERT_EQ(s.options.render.temporalFrames, 4);
