@@ -1,10 +1,10 @@
-// Temporal reuse (beyond the paper): the objects' radiance and the real surfaces' change of direct light (their
-// shadows) averaged at each pixel with the same surface point's in the last frames, found by reprojection. The
-// cone and ray results of one frame change in steps as the objects move through the voxel grid and a shadow
-// ray's visibility flips; the mean over a few frames follows the motion smoothly (README, "Stable frames").
-// The real surfaces' indirect change is left alone: it is non-zero almost everywhere, and averaging it too
-// cost about 10 ms a frame for a smaller gain (Cornell box, objects along x: 0.46 -> 0.43 on real pixels;
-// along y 0.96 -> 0.75).
+// Temporal reuse (beyond the paper): the objects' radiance and the real surfaces' change of direct light
+// (their shadows) averaged at each pixel with the same surface point's in the last frames, found by
+// reprojection. The cone and ray results of one frame change in steps as the objects move through the voxel
+// grid and a shadow ray's visibility flips; the mean over a few frames follows the motion smoothly (README,
+// "Stable frames"). The real surfaces' indirect change is left alone: it is non-zero almost everywhere, and
+// averaging it too cost about 10 ms a frame for a smaller gain (Cornell box, objects along x: 0.46 -> 0.43 on
+// real pixels; along y 0.96 -> 0.75).
 //
 // A window, not a running average: a frame's result is the mean of its own values and those of at most
 // `frames - 1` frames before it, each the value that frame computed itself (never one already averaged). So

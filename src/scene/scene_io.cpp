@@ -30,8 +30,8 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kMaxImageSide = 16384;         // camera width and height
-constexpr int kMaxShapeSegments = 4096;      // sphere and torus tessellation
+constexpr int kMaxImageSide = 16384;     // camera width and height
+constexpr int kMaxShapeSegments = 4096;  // sphere and torus tessellation
 
 }  // namespace
 
