@@ -127,6 +127,7 @@ struct LensDistortion {
     glm::vec2 distort(glm::vec2 undistorted) const;
     // The undistorted point that distort() takes to `distorted` (Newton's method; to about 1e-6).
     glm::vec2 undistort(glm::vec2 distorted) const;
+    bool operator==(const LensDistortion&) const = default;
 };
 
 struct Camera {
@@ -151,6 +152,14 @@ struct Camera {
         if (!distortion.none()) n = distortion.undistort(n);
         return glm::mat3(worldFromCamera) * glm::vec3(n.x, -n.y, -1.0f);
     }
+    // The image point (pixels) of camera-space point q in front of the camera (q.z < 0), through the
+    // distortion: rayDirection's inverse.
+    glm::vec2 imagePoint(glm::vec3 q) const {
+        glm::vec2 n(q.x / -q.z, q.y / q.z);
+        if (!distortion.none()) n = distortion.distort(n);
+        return {cx + fx * n.x, cy + fy * n.y};
+    }
+    bool operator==(const Camera&) const = default;
 };
 
 struct Light {

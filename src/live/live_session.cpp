@@ -403,9 +403,8 @@ json Session::state() const {
         const glm::vec3 c = glm::vec3(cameraFromWorld * glm::vec4(contact_[k], 1.0f));
         json anchor = nullptr;
         if (c.z < 0.0f) {
-            glm::vec2 n(c.x / -c.z, c.y / c.z);
-            if (!camera.distortion.none()) n = camera.distortion.distort(n);
-            anchor = {camera.fx * n.x + camera.cx, camera.fy * n.y + camera.cy};
+            const glm::vec2 pixel = camera.imagePoint(c);
+            anchor = {pixel.x, pixel.y};
         }
         objects.push_back({{"name", names_[k]}, {"anchor", anchor}, {"contact", toJson(contact_[k])}});
     }

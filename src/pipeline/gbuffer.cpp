@@ -107,7 +107,8 @@ std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
         const glm::vec3 p(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y, c & 4 ? b.max.z : b.min.z);
         const glm::vec3 q = glm::vec3(cameraFromWorld * glm::vec4(p, 1.0f));
         if (q.z > -1e-6f) return all;  // at or behind the camera plane
-        const float x = camera.cx + camera.fx * (q.x / -q.z), y = camera.cy - camera.fy * (q.y / -q.z);
+        const glm::vec2 pixel = camera.imagePoint(q);  // no distortion here
+        const float x = pixel.x, y = pixel.y;
         xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y),
         yMax = std::max(yMax, y);
     }

@@ -26,9 +26,7 @@ class Projector {
         const glm::vec3 q = glm::vec3(cameraFromWorld_ * glm::vec4(p, 1.0f));
         if (!(q.z < -1e-6f)) return false;
         depth = -q.z;
-        glm::vec2 n(q.x / depth, -q.y / depth);
-        if (!camera_->distortion.none()) n = camera_->distortion.distort(n);
-        pixel = {camera_->cx + camera_->fx * n.x - 0.5f, camera_->cy + camera_->fy * n.y - 0.5f};
+        pixel = camera_->imagePoint(q) - glm::vec2(0.5f);
         return std::isfinite(pixel.x) && std::isfinite(pixel.y);
     }
     float depth(glm::vec3 p) const { return -(cameraFromWorld_ * glm::vec4(p, 1.0f)).z; }
@@ -37,15 +35,6 @@ class Projector {
     const Camera* camera_;
     glm::mat4 cameraFromWorld_;
 };
-
-bool sameCamera(const Camera& a, const Camera& b) {
-    return a.width == b.width && a.height == b.height && a.fx == b.fx && a.fy == b.fy && a.cx == b.cx &&
-           a.cy == b.cy && a.worldFromCamera == b.worldFromCamera &&
-           a.distortion.model == b.distortion.model && a.distortion.k1 == b.distortion.k1 &&
-           a.distortion.k2 == b.distortion.k2 && a.distortion.k3 == b.distortion.k3 &&
-           a.distortion.k4 == b.distortion.k4 && a.distortion.p1 == b.distortion.p1 &&
-           a.distortion.p2 == b.distortion.p2;
-}
 
 struct Taps {
     std::array<size_t, 4> index{};
@@ -233,10 +222,7 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
     // Frames of another size are of no use (nor the ones before them); more than frames - 1 are not needed.
     const bool resized =
         !history_.empty() && (history_.front().width != width || history_.front().height != height);
-    while (!history_.empty() && (resized || static_cast<int>(history_.size()) > frames - 1)) {
-        spare_.push_back(std::move(history_.back()));
-        history_.pop_back();
-    }
+    keepNewest(resized ? 0 : frames - 1);
     Frame current;
     if (!spare_.empty()) {
         current = std::move(spare_.back());
@@ -254,7 +240,7 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
         std::vector<std::vector<ObjectMotion>> motion;
         for (const Frame& h : history_) {
             there.emplace_back(h.camera);
-            still.push_back(sameCamera(h.camera, camera));
+            still.push_back(h.camera == camera);
             std::vector<ObjectMotion>& moved = motion.emplace_back(s.objects.size());
             for (size_t m = 0; m < s.objects.size() && m < h.positions.size(); ++m)
                 moved[m] = motionOf(h.positions[m], s.objects[m].positions, still.back());
@@ -369,11 +355,15 @@ TemporalStats TemporalReuse::apply(int frames, const TemporalSurfaces& s, Tempor
         stats = {realSeen, realAveraged, objectSeen, objectAveraged};
     }
     history_.push_front(std::move(current));
-    while (static_cast<int>(history_.size()) > frames - 1) {
+    keepNewest(frames - 1);
+    return stats;
+}
+
+void TemporalReuse::keepNewest(int count) {
+    while (static_cast<int>(history_.size()) > count) {
         spare_.push_back(std::move(history_.back()));
         history_.pop_back();
     }
-    return stats;
 }
 
 }  // namespace deltagi

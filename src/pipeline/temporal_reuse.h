@@ -64,6 +64,7 @@ class TemporalReuse {
     struct Frame;
 
   private:
+    void keepNewest(int count);  // drops the older frames into spare_
     std::deque<Frame> history_;  // the most recent first
     std::vector<Frame> spare_;   // memory of dropped frames, reused
 };

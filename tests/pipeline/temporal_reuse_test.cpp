@@ -117,61 +117,71 @@ TEST(TemporalReuse, AMovingCameraFindsTheRealSurfacesAgain) {
     EXPECT_LT(maxDifference(v.shadow, before.shadow), 0.01f);
 }
 
-TEST(TemporalReuse, AMovingObjectIsFollowedOnItsTriangles) {
-    Scene s = ballOverFloor();
+// Three frames of the ball, changed by `change` after each, then a fourth: the third frame's values (at the
+// same pixels), the fourth's own and what reuse makes of them. `values` gives a frame's values of its
+// surfaces.
+struct Followed {
+    Values previous, before, after;
+    TemporalStats stats;
+};
+template <typename ValuesOf, typename Change>
+Followed followBall(Scene& s, ValuesOf&& values, Change&& change) {
     TemporalReuse reuse;
-    glm::vec3 centre(0.1f, 0.3f, 0.0f);
-    Values previous;
+    Followed out;
     for (int frame = 0; frame < 3; ++frame) {
         Surfaces f(s);
-        previous = valuesOf(f, centre);
-        Values v = previous;
+        out.previous = values(f);
+        Values v = out.previous;
         applyTo(reuse, s, f, v);
-        for (glm::vec3& p : s.virtuals[0].positions) p += glm::vec3(0.02f, 0.0f, 0.01f);
-        centre += glm::vec3(0.02f, 0.0f, 0.01f);
+        change();
     }
     Surfaces f(s);
-    const Values before = valuesOf(f, centre);
-    Values v = before;
-    const TemporalStats stats = applyTo(reuse, s, f, v);
-    EXPECT_GT(stats.objectAveraged, 0.8 * stats.objectPixels);
-    EXPECT_GT(stats.objectPixels, 100u);
+    out.before = values(f);
+    out.after = out.before;
+    out.stats = applyTo(reuse, s, f, out.after);
+    return out;
+}
+
+TEST(TemporalReuse, AMovingObjectIsFollowedOnItsTriangles) {
+    Scene s = ballOverFloor();
+    glm::vec3 centre(0.1f, 0.3f, 0.0f);
+    const Followed ball = followBall(
+        s, [&](const Surfaces& f) { return valuesOf(f, centre); },
+        [&] {
+            for (glm::vec3& p : s.virtuals[0].positions) p += glm::vec3(0.02f, 0.0f, 0.01f);
+            centre += glm::vec3(0.02f, 0.0f, 0.01f);
+        });
+    EXPECT_GT(ball.stats.objectAveraged, 0.8 * ball.stats.objectPixels);
+    EXPECT_GT(ball.stats.objectPixels, 100u);
     // The ball's values move with it: its kept values are this frame's, to the bilinear interpolation over
     // a curved surface; at the same pixel they would not be.
-    const float samePixel = meanDifference(previous.object, before.object);
-    EXPECT_LT(meanDifference(v.object, before.object), 0.25f * samePixel);
+    const float samePixel = meanDifference(ball.previous.object, ball.before.object);
+    EXPECT_LT(meanDifference(ball.after.object, ball.before.object), 0.25f * samePixel);
 }
 
 // An object that does not only move (it grows here) is followed on its triangles, at the kept frames'
 // vertices.
 TEST(TemporalReuse, AGrowingObjectIsFollowedOnItsTriangles) {
     Scene s = ballOverFloor();
-    TemporalReuse reuse;
     const glm::vec3 centre(0.1f, 0.3f, 0.0f);
     float scale = 1.0f;
-    auto values = [&](const Surfaces& f) {
-        Values v = valuesOf(f, centre);
-        for (size_t i = 0; i < v.object.size(); ++i)
-            if (f.gbuffer.object[i].valid())
-                v.object[i] = objectValue(centre + (f.gbuffer.object[i].position - centre) / scale, centre);
-        return v;
-    };
-    Values previous;
-    for (int frame = 0; frame < 3; ++frame) {
-        Surfaces f(s);
-        previous = values(f);
-        Values v = previous;
-        applyTo(reuse, s, f, v);
-        for (glm::vec3& p : s.virtuals[0].positions) p = centre + 1.04f * (p - centre);
-        scale *= 1.04f;
-    }
-    Surfaces f(s);
-    const Values before = values(f);
-    Values v = before;
-    const TemporalStats stats = applyTo(reuse, s, f, v);
-    EXPECT_GT(stats.objectAveraged, 0.8 * stats.objectPixels);
-    const float samePixel = meanDifference(previous.object, before.object);
-    EXPECT_LT(meanDifference(v.object, before.object), 0.25f * samePixel);
+    const Followed ball = followBall(
+        s,
+        [&](const Surfaces& f) {
+            Values v = valuesOf(f, centre);
+            for (size_t i = 0; i < v.object.size(); ++i)
+                if (f.gbuffer.object[i].valid())
+                    v.object[i] =
+                        objectValue(centre + (f.gbuffer.object[i].position - centre) / scale, centre);
+            return v;
+        },
+        [&] {
+            for (glm::vec3& p : s.virtuals[0].positions) p = centre + 1.04f * (p - centre);
+            scale *= 1.04f;
+        });
+    EXPECT_GT(ball.stats.objectAveraged, 0.8 * ball.stats.objectPixels);
+    const float samePixel = meanDifference(ball.previous.object, ball.before.object);
+    EXPECT_LT(meanDifference(ball.after.object, ball.before.object), 0.25f * samePixel);
 }
 
 TEST(TemporalReuse, AveragesWhatChangesFromFrameToFrameAndKeepsAStillFrameExactly) {
