@@ -35,11 +35,12 @@
 #include "deltagi/keyframes.h"
 #include "deltagi/reference.h"
 #include "deltagi/renderer.h"
-#include "deltagi/scene_info.h"
 #include "deltagi/scene_io.h"
 #include "deltagi_version.h"
 #include "encode_command.h"
 #include "eval_suite.h"
+#include "info_command.h"
+#include "messages.h"
 #include "outputs.h"
 #include "serve_command.h"
 #include "stability_command.h"
@@ -57,6 +58,10 @@ namespace {
 
 using cli::kExitInputError;
 using cli::kExitUsageError;
+using cli::loadAndWarn;
+using cli::note;
+using cli::oneLine;
+using cli::plural;
 constexpr int kMaxThreads = 4096;  // a sanity bound for --threads, far above any machine this runs on
 
 struct RenderArgs {
@@ -94,12 +99,6 @@ struct CompareArgs {
     bool json = false;
 };
 
-struct InfoArgs {
-    fs::path scene;
-    std::vector<std::string> overrides;
-    bool json = false;
-};
-
 // A finite number, at least `lo` (above it when `open`). CLI11's NonNegativeNumber takes "nan" and prints its
 // range as the largest double in full; this names what is expected instead.
 CLI::Validator finiteNumber(double lo, bool open, const std::string& what) {
@@ -120,47 +119,9 @@ CLI::Validator finiteNumber(double lo, bool open, const std::string& what) {
         what);
 }
 
-// Progress and errors go to stderr; stdout holds only what `info` was asked for.
-template <typename... Args>
-void note(fmt::format_string<Args...> format, Args&&... args) {
-    fmt::print(stderr, format, std::forward<Args>(args)...);
-    std::fflush(stderr);
-}
-
-// One line, whatever the message holds: the lines of a multi-line message are joined with "; ", and a line
-// longer than kMaxMessageChars (a message that quotes a huge value from the input) is cut.
-constexpr size_t kMaxMessageChars = 1000;
-std::string oneLine(const std::string& message) {
-    std::string out;
-    bool lineBreak = false;
-    for (char c : message) {
-        if (c == '\n' || c == '\r') {
-            lineBreak = !out.empty();
-            continue;
-        }
-        if (lineBreak) out += "; ";
-        lineBreak = false;
-        out += c;
-    }
-    if (out.size() > kMaxMessageChars) out = out.substr(0, kMaxMessageChars - 3) + "...";
-    return out;
-}
-
 int reportError(const std::string& message, int exitCode) {
     note("deltagi: error: {}\n", oneLine(message));
     return exitCode;
-}
-
-// Loads a scene and prints what the loader accepted with a warning (always: a warning matters even with
-// --quiet).
-Scene loadAndWarn(const fs::path& file, const std::vector<std::string>& overrides) {
-    Scene scene = loadScene(file, overrides);
-    for (const std::string& warning : scene.warnings) note("deltagi: warning: {}\n", oneLine(warning));
-    return scene;
-}
-
-std::string plural(size_t count, const char* one, const char* many) {
-    return fmt::format("{} {}", count, count == 1 ? one : many);
 }
 
 std::string lowerExtension(const fs::path& path) {
@@ -582,77 +543,6 @@ int runEval(const ReferenceArgs& args) {
     return 0;
 }
 
-std::string formatVec(glm::vec3 v) {
-    return fmt::format("({:.4g}, {:.4g}, {:.4g})", v.x, v.y, v.z);
-}
-
-std::string formatBounds(const Bounds3f& bounds) {
-    if (bounds.empty()) return "empty";
-    return fmt::format("{} - {}, size {}", formatVec(bounds.min), formatVec(bounds.max),
-                       formatVec(bounds.diagonal()));
-}
-
-std::string formatBytes(size_t bytes) {
-    constexpr double kMiB = 1024.0 * 1024.0;
-    return fmt::format("{:.1f} MiB", static_cast<double>(bytes) / kMiB);
-}
-
-// A value of the options for the table: floats with the digits a float has ("0.98", not
-// "0.9800000190734863").
-std::string formatOptionValue(const nlohmann::json& value) {
-    if (value.is_number_float()) return fmt::format("{:.6g}", value.get<double>());
-    if (value.is_null()) return "(not set)";
-    if (!value.is_array()) return value.dump();
-    std::string items;
-    for (const nlohmann::json& item : value) items += (items.empty() ? "" : ", ") + formatOptionValue(item);
-    return "[" + items + "]";
-}
-
-// Options as "volume.resolution  128", one per line, in the order optionsToJson gives them.
-void printOptions(const nlohmann::json& json, const std::string& prefix) {
-    for (const auto& [key, value] : json.items()) {
-        const std::string name = prefix.empty() ? key : prefix + "." + key;
-        if (value.is_object())
-            printOptions(value, name);
-        else
-            fmt::print("  {:<30} {}\n", name, formatOptionValue(value));
-    }
-}
-
-void printInfoTable(const Scene& scene, const SceneInfo& info) {
-    const VolumeRegion& region = info.region;
-    fmt::print("{:<16} {}\n", "scene", scene.file.string());
-    fmt::print("{:<16} {}x{}\n", "camera", scene.camera.width, scene.camera.height);
-    fmt::print("{:<16} {} real ({}), {} virtual ({})\n", "triangles", info.realTriangles,
-               plural(info.realMeshes, "mesh", "meshes"), info.virtualTriangles,
-               plural(info.virtualMeshes, "mesh", "meshes"));
-    fmt::print("{:<16} {}\n", "lights", info.lights);
-    fmt::print("{:<16} {}\n", "real bounds", formatBounds(info.realBounds));
-    fmt::print("{:<16} {}\n", "virtual bounds", formatBounds(info.virtualBounds));
-    fmt::print("{:<16} origin {}, size {:.4g}\n", "volume region", formatVec(region.origin), region.size);
-    fmt::print("{:<16} {}^3, voxel size {:.4g}, {} mip levels\n", "resolution", region.resolution,
-               region.voxelSize(), info.mipLevels);
-    fmt::print("{:<16} {} per volume, {} for all four\n", "memory", formatBytes(info.bytesPerVolume),
-               formatBytes(info.bytesAllVolumes));
-    fmt::print("options\n");
-    printOptions(optionsToJson(scene.options), "");
-}
-
-int runInfo(const InfoArgs& args) {
-    const Scene scene = loadAndWarn(args.scene, args.overrides);
-    const SceneInfo info = sceneInfo(scene);
-    if (args.json) {
-        nlohmann::json json = toJson(info);
-        json["scene"] = scene.file.string();
-        json["camera"] = {{"width", scene.camera.width}, {"height", scene.camera.height}};
-        json["options"] = optionsToJson(scene.options);
-        fmt::print("{}\n", json.dump(2));
-    } else {
-        printInfoTable(scene, info);
-    }
-    return 0;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -707,12 +597,8 @@ int main(int argc, char** argv) {
         ->check(CLI::Range(1, kMaxThreads));
     renderCommand->add_flag("-q,--quiet", renderArgs.quiet, "Print nothing but errors");
 
-    InfoArgs infoArgs;
-    CLI::App* infoCommand =
-        app.add_subcommand("info", "Print a scene's size, volume region and effective options");
-    infoCommand->add_option("scene", infoArgs.scene, "Scene file (JSON)")->required();
-    infoCommand->add_option("--set", infoArgs.overrides, "Override a scene key: KEY=VALUE (repeatable)");
-    infoCommand->add_flag("--json", infoArgs.json, "Print JSON on stdout instead of a table");
+    cli::InfoArgs infoArgs;
+    cli::addInfoCommand(app, infoArgs);
 
     ReferenceArgs referenceArgs;
     CLI::App* referenceCommand = app.add_subcommand(
@@ -814,7 +700,7 @@ int main(int argc, char** argv) {
         if (*albedoCommand) return cli::runAlbedo(albedoArgs);
         if (*encodeCommand) return cli::runEncode(encodeArgs);
         if (*serveCommand) return cli::runServe(serveArgs);
-        return runInfo(infoArgs);
+        return cli::runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         removeTemporaryOutputs();            // output folders made for nothing
         return reportError(error.what(), kExitInputError);

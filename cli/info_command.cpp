@@ -1,0 +1,97 @@
+#include "info_command.h"
+
+#include <fmt/core.h>
+#include <nlohmann/json.hpp>
+
+#include "deltagi/renderer.h"
+#include "deltagi/scene_info.h"
+#include "deltagi/scene_io.h"
+#include "messages.h"
+
+namespace deltagi::cli {
+
+namespace {
+
+std::string formatVec(glm::vec3 v) {
+    return fmt::format("({:.4g}, {:.4g}, {:.4g})", v.x, v.y, v.z);
+}
+
+std::string formatBounds(const Bounds3f& bounds) {
+    if (bounds.empty()) return "empty";
+    return fmt::format("{} - {}, size {}", formatVec(bounds.min), formatVec(bounds.max),
+                       formatVec(bounds.diagonal()));
+}
+
+std::string formatBytes(size_t bytes) {
+    constexpr double kMiB = 1024.0 * 1024.0;
+    return fmt::format("{:.1f} MiB", static_cast<double>(bytes) / kMiB);
+}
+
+// A value of the options for the table: floats with the digits a float has ("0.98", not
+// "0.9800000190734863").
+std::string formatOptionValue(const nlohmann::json& value) {
+    if (value.is_number_float()) return fmt::format("{:.6g}", value.get<double>());
+    if (value.is_null()) return "(not set)";
+    if (!value.is_array()) return value.dump();
+    std::string items;
+    for (const nlohmann::json& item : value) items += (items.empty() ? "" : ", ") + formatOptionValue(item);
+    return "[" + items + "]";
+}
+
+// Options as "volume.resolution  128", one per line, in the order optionsToJson gives them.
+void printOptions(const nlohmann::json& json, const std::string& prefix) {
+    for (const auto& [key, value] : json.items()) {
+        const std::string name = prefix.empty() ? key : prefix + "." + key;
+        if (value.is_object())
+            printOptions(value, name);
+        else
+            fmt::print("  {:<30} {}\n", name, formatOptionValue(value));
+    }
+}
+
+void printInfoTable(const Scene& scene, const SceneInfo& info) {
+    const VolumeRegion& region = info.region;
+    fmt::print("{:<16} {}\n", "scene", scene.file.string());
+    fmt::print("{:<16} {}x{}\n", "camera", scene.camera.width, scene.camera.height);
+    fmt::print("{:<16} {} real ({}), {} virtual ({})\n", "triangles", info.realTriangles,
+               plural(info.realMeshes, "mesh", "meshes"), info.virtualTriangles,
+               plural(info.virtualMeshes, "mesh", "meshes"));
+    fmt::print("{:<16} {}\n", "lights", info.lights);
+    fmt::print("{:<16} {}\n", "real bounds", formatBounds(info.realBounds));
+    fmt::print("{:<16} {}\n", "virtual bounds", formatBounds(info.virtualBounds));
+    fmt::print("{:<16} origin {}, size {:.4g}\n", "volume region", formatVec(region.origin), region.size);
+    fmt::print("{:<16} {}^3, voxel size {:.4g}, {} mip levels\n", "resolution", region.resolution,
+               region.voxelSize(), info.mipLevels);
+    fmt::print("{:<16} {} per volume, {} for all four\n", "memory", formatBytes(info.bytesPerVolume),
+               formatBytes(info.bytesAllVolumes));
+    fmt::print("options\n");
+    printOptions(optionsToJson(scene.options), "");
+}
+
+}  // namespace
+
+CLI::App* addInfoCommand(CLI::App& app, InfoArgs& args) {
+    CLI::App* command =
+        app.add_subcommand("info", "Print a scene's size, volume region and effective options");
+    command->add_option("scene", args.scene, "Scene file (JSON)")->required();
+    command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
+    command->add_flag("--json", args.json, "Print JSON on stdout instead of a table");
+    return command;
+}
+
+int runInfo(const InfoArgs& args) {
+    const Scene scene = loadAndWarn(args.scene, args.overrides);
+    const SceneInfo info = sceneInfo(scene);
+    if (args.json) {
+        nlohmann::json json = toJson(info);
+        json["scene"] = scene.file.string();
+        json["camera"] = {{"width", scene.camera.width}, {"height", scene.camera.height}};
+        json["options"] = optionsToJson(scene.options);
+        fmt::print("{}\n", json.dump(2));
+    } else {
+        printInfoTable(scene, info);
+    }
+    return 0;
+}
+
+}  // namespace deltagi::cli

@@ -1,0 +1,39 @@
+#include "messages.h"
+
+#include "deltagi/scene_io.h"
+
+namespace deltagi::cli {
+
+namespace {
+
+constexpr size_t kMaxMessageChars = 1000;
+
+}  // namespace
+
+std::string oneLine(const std::string& message) {
+    std::string out;
+    bool lineBreak = false;
+    for (char c : message) {
+        if (c == '\n' || c == '\r') {
+            lineBreak = !out.empty();
+            continue;
+        }
+        if (lineBreak) out += "; ";
+        lineBreak = false;
+        out += c;
+    }
+    if (out.size() > kMaxMessageChars) out = out.substr(0, kMaxMessageChars - 3) + "...";
+    return out;
+}
+
+Scene loadAndWarn(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
+    Scene scene = loadScene(file, overrides);
+    for (const std::string& warning : scene.warnings) note("deltagi: warning: {}\n", oneLine(warning));
+    return scene;
+}
+
+std::string plural(size_t count, const char* one, const char* many) {
+    return fmt::format("{} {}", count, count == 1 ? one : many);
+}
+
+}  // namespace deltagi::cli

@@ -1,0 +1,35 @@
+// What the command line tells the user on stderr, shared by its commands: progress notes, one-line messages
+// and a scene's loader warnings.
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <fmt/core.h>
+
+#include "deltagi/scene.h"
+
+namespace deltagi::cli {
+
+// Progress and errors go to stderr; stdout holds only what `info` was asked for.
+template <typename... Args>
+void note(fmt::format_string<Args...> format, Args&&... args) {
+    fmt::print(stderr, format, std::forward<Args>(args)...);
+    std::fflush(stderr);
+}
+
+// One line, whatever the message holds: the lines of a multi-line message are joined with "; ", and a line
+// longer than 1000 characters (a message that quotes a huge value from the input) is cut.
+std::string oneLine(const std::string& message);
+
+// Loads a scene and prints what the loader accepted with a warning (always: a warning matters even with
+// --quiet).
+Scene loadAndWarn(const std::filesystem::path& file, const std::vector<std::string>& overrides);
+
+// "1 mesh", "2 meshes".
+std::string plural(size_t count, const char* one, const char* many);
+
+}  // namespace deltagi::cli
