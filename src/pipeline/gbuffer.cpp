@@ -106,7 +106,7 @@ std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
     for (int c = 0; c < 8; ++c) {
         const glm::vec3 p(c & 1 ? b.max.x : b.min.x, c & 2 ? b.max.y : b.min.y, c & 4 ? b.max.z : b.min.z);
         const glm::vec3 q = glm::vec3(cameraFromWorld * glm::vec4(p, 1.0f));
-        if (q.z > -1e-6f) return all;  // at or behind the camera plane
+        if (q.z > -1e-6f) return all;                  // at or behind the camera plane
         const glm::vec2 pixel = camera.imagePoint(q);  // no distortion here
         const float x = pixel.x, y = pixel.y;
         xMin = std::min(xMin, x), xMax = std::max(xMax, x), yMin = std::min(yMin, y),
