@@ -100,27 +100,34 @@ inline glm::vec3 evalGltfBrdf(glm::vec3 diffuseColor, glm::vec3 f0, float alpha,
 
 // The GGX alpha that shades a light of angular radius `lightAngle` (radians, the half-angle it subtends)
 // when the BRDF is evaluated at the light's centre, like phongLobeOverLight for the Phong lobe:
-//   alpha' = sqrt(alpha^2 + (lightAngle / 2)^2).
-// The half vector turns half as far as wi, so the light's disk has the radius rho = lightAngle / 2 in the
-// space of microfacet slopes, where D is 1 / (pi alpha^2 (1 + s^2 / alpha^2)^2); D averaged over a disk of
-// radius rho around its peak is exactly 1 / (pi (alpha^2 + rho^2)), the peak of D with alpha'. So the
-// widened lobe has the convolution's peak and, being a normalized D, its energy. (Small angles, near normal
-// incidence; away from the normal the half vector turns 1 / (2 v.h) as far across the plane of incidence.)
+//   alpha' = sqrt(alpha^2 + rho^2 / v.h),  rho = lightAngle / 2.
+// The half vector h = (wi + wo) / |wi + wo| turns half as far as wi across the plane of incidence and
+// 1 / (2 v.h) as far out of it (|wi + wo| = 2 v.h), so the light's disk is an ellipse of semi-axes rho and
+// rho / v.h in the space of microfacet slopes, where D is 1 / (pi alpha^2 (1 + s^2 / alpha^2)^2). D averaged
+// over a disk of radius rho around its peak is exactly 1 / (pi (alpha^2 + rho^2)), the peak of D with
+// alpha'; the ellipse is taken as the disk of its area. So the widened lobe has the convolution's peak and,
+// being a normalized D, its energy. Seen at grazing angles (a rim lit from above) the ellipse is twice as
+// wide or more: without 1 / v.h those highlights were half as wide as the path tracer's.
 // Not Karis 2013's "roughness widening" alpha + radius / (2 distance) with its energy factor
 // (alpha / alpha')^2: that is for his representative point, where the unwidened D is read at its peak; at
 // the light's centre, adding widths linearly dims a highlight 20 % where the disk barely changes it
-// (alpha 0.2, lightAngle 0.05), and the quadrature stays within 4 % there (tests/core/ggx_test.cpp).
-inline float ggxAlphaOverLight(float alpha, float lightAngle) {
+// (alpha 0.2, lightAngle 0.05), and the quadrature stays within 12 % of the peak
+// (tests/core/ggx_test.cpp).
+inline float ggxAlphaOverLight(float alpha, float lightAngle, float vDotH = 1.0f) {
     const float a = clampGgxAlpha(alpha);
     const float rho = 0.5f * std::max(lightAngle, 0.0f);
-    return clampGgxAlpha(std::sqrt(a * a + rho * rho));
+    return clampGgxAlpha(std::sqrt(a * a + rho * rho / std::clamp(vDotH, 0.05f, 1.0f)));
 }
 
 // f(wi, wo) for wi pointing at the centre of a light of angular radius `lightAngle` (0: a point light): the
 // BRDF averaged over the light's disk, approximately (ggxAlphaOverLight).
 inline glm::vec3 evalGltfBrdf(glm::vec3 diffuseColor, glm::vec3 f0, float alpha, glm::vec3 n, glm::vec3 wo,
                               glm::vec3 wi, float lightAngle) {
-    return evalGltfBrdf(diffuseColor, f0, ggxAlphaOverLight(alpha, lightAngle), n, wo, wi);
+    if (!(lightAngle > 0.0f)) return evalGltfBrdf(diffuseColor, f0, alpha, n, wo, wi);
+    const glm::vec3 sum = wi + wo;
+    const float length = glm::length(sum);
+    const float vDotH = length > 1e-6f ? glm::dot(wo, sum) / length : 1.0f;
+    return evalGltfBrdf(diffuseColor, f0, ggxAlphaOverLight(alpha, lightAngle, vDotH), n, wo, wi);
 }
 
 inline glm::vec3 evalGltfBrdf(const GltfLobes& lobes, glm::vec3 n, glm::vec3 wo, glm::vec3 wi,

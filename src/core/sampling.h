@@ -21,6 +21,22 @@ inline glm::mat3 frameAround(glm::vec3 z) {
     return glm::mat3(x, y, z);
 }
 
+// Shirley & Chiu's concentric map of the unit square onto the unit disk: keeps the grid's strata compact.
+inline glm::vec2 concentricDisk(float u, float v) {
+    const float a = 2.0f * u - 1.0f, b = 2.0f * v - 1.0f;
+    if (a == 0.0f && b == 0.0f) return glm::vec2(0.0f);
+    constexpr float kQuarterPi = std::numbers::pi_v<float> / 4.0f;
+    float r, phi;
+    if (std::abs(a) > std::abs(b)) {
+        r = a;
+        phi = kQuarterPi * (b / a);
+    } else {
+        r = b;
+        phi = 2.0f * kQuarterPi - kQuarterPi * (a / b);
+    }
+    return r * glm::vec2(std::cos(phi), std::sin(phi));
+}
+
 // Cosine-weighted direction on the hemisphere around +z; pdf cos(theta)/pi.
 inline glm::vec3 sampleCosineHemisphere(float u1, float u2) {
     const float r = std::sqrt(u1);

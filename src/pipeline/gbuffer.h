@@ -47,16 +47,27 @@ void forEachValidPoint(std::span<const SurfacePoint> points, std::span<const uin
 // The surfaces seen through a k x k grid of sub-pixel positions in every pixel of a rectangle: what the
 // objects' direct light is shaded over, so that a pixel shows the mean of its area as the path tracer's
 // does (a shadow edge or a fold inside a pixel), not the light at its centre alone.
+// Pixels whose glossy surface turns sharply inside them (a gilded rim, a crease, a bead narrower than a
+// pixel) have a grid twice as fine instead (`fine`): a highlight there covers a part of the pixel that k x k
+// samples miss or count twice (quality suite's cornell-textured, a gilded vase: object_rel_rmse 0.459 ->
+// 0.293, with shading's disk quadrature 0.243; 839 of its 14,700 object pixels).
 struct PixelSamples {
     int perPixel = 0;                  // k * k; 0: none
     PixelRect rect;                    // the pixels that have them
     std::vector<SurfacePoint> points;  // perPixel per pixel of `rect`, row by row; invalid: no object there
-    // The samples of image pixel `i` (of an image `width` wide), empty outside the rectangle.
+    int finePerPixel = 0;              // (2k)^2; 0: none
+    std::vector<int32_t> fineSlot;     // per pixel of `rect`: its slot in `fine`, or -1 (empty: none)
+    std::vector<SurfacePoint> fine;    // finePerPixel per slot
+    // The samples of image pixel `i` (of an image `width` wide): its fine ones where it has them; empty
+    // outside the rectangle.
     std::span<const SurfacePoint> of(size_t i, int width) const {
         if (perPixel == 0) return {};
         const int x = static_cast<int>(i % static_cast<size_t>(width)), y = static_cast<int>(i / width);
         if (x < rect.x0 || x >= rect.x1 || y < rect.y0 || y >= rect.y1) return {};
         const size_t k = static_cast<size_t>(y - rect.y0) * (rect.x1 - rect.x0) + (x - rect.x0);
+        if (!fineSlot.empty() && fineSlot[k] >= 0)
+            return std::span<const SurfacePoint>(fine).subspan(
+                static_cast<size_t>(fineSlot[k]) * finePerPixel, finePerPixel);
         return std::span<const SurfacePoint>(points).subspan(k * perPixel, perPixel);
     }
 };

@@ -16,22 +16,6 @@ constexpr int64_t kPointGrain = 64;
 // Random streams of hashToUnit for the per-pixel offset of the sample grid (two per light).
 constexpr uint32_t kShadowRayStream = 5000;
 
-// Shirley & Chiu's concentric map of the unit square onto the unit disk: keeps the grid's strata compact.
-glm::vec2 concentricDisk(float u, float v) {
-    const float a = 2.0f * u - 1.0f, b = 2.0f * v - 1.0f;
-    if (a == 0.0f && b == 0.0f) return glm::vec2(0.0f);
-    constexpr float kQuarterPi = std::numbers::pi_v<float> / 4.0f;
-    float r, phi;
-    if (std::abs(a) > std::abs(b)) {
-        r = a;
-        phi = kQuarterPi * (b / a);
-    } else {
-        r = b;
-        phi = 2.0f * kQuarterPi - kQuarterPi * (a / b);
-    }
-    return r * glm::vec2(std::cos(phi), std::sin(phi));
-}
-
 // The largest k x k grid of G-buffer sub-samples (options.render.samples_per_pixel 16).
 constexpr int kMaxPixelSamples = 16;
 // The random stream that rotates which sub-sample each of a pixel's rays starts from (one per light).

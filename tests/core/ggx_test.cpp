@@ -374,39 +374,47 @@ TEST(Ggx, TheConeHalfAngleIsWhereTheLobeFallsToHalf) {
 // lobe averaged over directions spread uniformly over the light's disk, as the path tracer's light samples
 // spread; while the disk is no more than about twice the lobe's width (a far wider disk makes a flat-topped
 // highlight that no GGX lobe follows).
+// Seen near the normal and at grazing angles, where the disk's half vectors spread 1 / v.h as far out of the
+// plane of incidence.
 TEST(Ggx, TheLobeOverALightsDiskIsTheLobeOfTheWidenedAlpha) {
-    const glm::vec3 wo = glm::normalize(glm::vec3(0.3f, 0.0f, 1.0f));
-    const glm::vec3 mirror = glm::reflect(-wo, kUp);
-    const glm::mat3 aroundMirror = frameAround(mirror);
-    const glm::vec3 white(1.0f), black(0.0f);
-    struct Case {
-        float alpha, lightAngle;
-    };
-    for (const Case c : {Case{0.05f, 0.05f}, Case{0.05f, 0.1f}, Case{0.1f, 0.05f}, Case{0.1f, 0.15f},
-                         Case{0.2f, 0.1f}, Case{0.2f, 0.3f}}) {
-        const float peak = evalGltfBrdf(black, white, c.alpha, kUp, wo, mirror, c.lightAngle).x;
-        for (const float offset : {0.0f, 0.5f * c.lightAngle, c.lightAngle, 2.0f * c.lightAngle}) {
-            const glm::vec3 centre = aroundMirror * glm::vec3(std::sin(offset), 0.0f, std::cos(offset));
-            const glm::mat3 aroundCentre = frameAround(centre);
-            double sum = 0.0;
-            constexpr int kSide = 100;
-            for (int i = 0; i < kSide; ++i)
-                for (int j = 0; j < kSide; ++j) {
-                    const float cosTheta = 1.0f - (i + 0.5f) / kSide * (1.0f - std::cos(c.lightAngle));
-                    const float sinTheta = std::sqrt(1.0f - cosTheta * cosTheta);
-                    const float phi = 2.0f * std::numbers::pi_v<float> * (j + 0.5f) / kSide;
-                    const glm::vec3 wi = aroundCentre * glm::vec3(sinTheta * std::cos(phi),
-                                                                  sinTheta * std::sin(phi), cosTheta);
-                    sum += evalGltfBrdf(black, white, c.alpha, kUp, wo, wi).x;
-                }
-            const float bruteForce = static_cast<float>(sum / (kSide * kSide));
-            const float widened = evalGltfBrdf(black, white, c.alpha, kUp, wo, centre, c.lightAngle).x;
-            SCOPED_TRACE(::testing::Message() << "alpha " << c.alpha << ", light " << c.lightAngle << " rad, "
-                                              << offset << " rad off: " << widened << " vs " << bruteForce);
-            EXPECT_NEAR(widened, bruteForce, 0.12f * peak);
-            // The point light's lobe is twice too bright at the centre of a disk twice its width.
-            if (c.alpha == 0.05f && c.lightAngle == 0.1f && offset == 0.0f)
-                EXPECT_GT(evalGltfBrdf(black, white, c.alpha, kUp, wo, centre).x, 1.8f * bruteForce);
+    for (const float viewDeg : {17.0f, 60.0f, 75.0f}) {
+        const float view = glm::radians(viewDeg);
+        const glm::vec3 wo(std::sin(view), 0.0f, std::cos(view));
+        const glm::vec3 mirror = glm::reflect(-wo, kUp);
+        const glm::mat3 aroundMirror = frameAround(mirror);
+        const glm::vec3 white(1.0f), black(0.0f);
+        struct Case {
+            float alpha, lightAngle;
+        };
+        for (const Case c : {Case{0.05f, 0.05f}, Case{0.05f, 0.1f}, Case{0.1f, 0.05f}, Case{0.1f, 0.15f},
+                             Case{0.2f, 0.1f}, Case{0.2f, 0.3f}}) {
+            const float peak = evalGltfBrdf(black, white, c.alpha, kUp, wo, mirror, c.lightAngle).x;
+            for (const float offset : {0.0f, 0.5f * c.lightAngle, c.lightAngle, 2.0f * c.lightAngle}) {
+                const glm::vec3 centre = aroundMirror * glm::vec3(std::sin(offset), 0.0f, std::cos(offset));
+                const glm::mat3 aroundCentre = frameAround(centre);
+                double sum = 0.0;
+                constexpr int kSide = 100;
+                for (int i = 0; i < kSide; ++i)
+                    for (int j = 0; j < kSide; ++j) {
+                        const float cosTheta = 1.0f - (i + 0.5f) / kSide * (1.0f - std::cos(c.lightAngle));
+                        const float sinTheta = std::sqrt(1.0f - cosTheta * cosTheta);
+                        const float phi = 2.0f * std::numbers::pi_v<float> * (j + 0.5f) / kSide;
+                        const glm::vec3 wi = aroundCentre * glm::vec3(sinTheta * std::cos(phi),
+                                                                      sinTheta * std::sin(phi), cosTheta);
+                        sum += evalGltfBrdf(black, white, c.alpha, kUp, wo, wi).x;
+                    }
+                const float bruteForce = static_cast<float>(sum / (kSide * kSide));
+                const float widened = evalGltfBrdf(black, white, c.alpha, kUp, wo, centre, c.lightAngle).x;
+                SCOPED_TRACE(::testing::Message()
+                             << "view " << viewDeg << " deg, alpha " << c.alpha << ", light " << c.lightAngle
+                             << " rad, " << offset << " rad off: " << widened << " vs " << bruteForce);
+                // At 75 degrees the ellipse is 3.9 times as long as wide, and no round lobe follows it
+                // closely (the disk without 1 / v.h was 2.1 times too bright there).
+                EXPECT_NEAR(widened, bruteForce, (viewDeg > 70.0f ? 0.2f : 0.12f) * peak);
+                // The point light's lobe is twice too bright at the centre of a disk twice its width.
+                if (c.alpha == 0.05f && c.lightAngle == 0.1f && offset == 0.0f)
+                    EXPECT_GT(evalGltfBrdf(black, white, c.alpha, kUp, wo, centre).x, 1.8f * bruteForce);
+            }
         }
     }
     EXPECT_EQ(ggxAlphaOverLight(0.3f, 0.0f), 0.3f);

@@ -55,6 +55,55 @@ TEST(GBuffer, PixelsThatShowAnObjectKeepTheirSubSamplesSurfaces) {
     EXPECT_TRUE(g.objectSamples.of(static_cast<size_t>(12) * w + 16, w).empty());
 }
 
+// A glossy box seen obliquely: the pixels across an edge between two of its faces, whose 2 x 2 samples
+// show the normal turn by 90 degrees, take the 4 x 4 grid (a highlight on either face may cover a part of the
+// pixel the 2 x 2 samples miss); pixels inside a face keep 2 x 2, and a matte box has no finer grids at all.
+TEST(GBuffer, GlossyPixelsWhoseNormalTurnsInsideThemTakeAFinerGrid) {
+    Scene scene = test::floorScene();
+    scene.camera = test::lookAtCamera({0.5f, 1.2f, 1.5f}, {0, 0.1f, 0}, 64, 48, 50.0f);
+    const int w = scene.camera.width;
+    Material glossy = diffuse(glm::vec3(0.2f));
+    glossy.specular = glm::vec3(0.5f);
+    glossy.roughness = 0.1f;  // Phong exponent 198
+    auto render = [&](const Material& m, GBuffer& g) {
+        scene.virtuals = {placed(makeBox({0.6f, 0.2f, 0.6f}), {0, 0.1f, 0}, m, "box")};
+        const RayScene realOnly(scene, SceneContent::RealOnly);
+        const RayScene all(scene, SceneContent::VirtualOnly, &realOnly);
+        renderObjectSurfaces(scene.camera, all, scene.virtuals[0].bounds(), 4, g);
+    };
+    GBuffer g;
+    render(glossy, g);
+    ASSERT_EQ(g.objectSamples.finePerPixel, 16);
+    int fine = 0, coarse = 0;
+    for (size_t i = 0; i < g.object.size(); ++i) {
+        const std::span<const SurfacePoint> samples = g.objectSamples.of(i, w);
+        if (samples.empty() || g.coverage[i] < 1.0f) continue;
+        float largestTurn = 0.0f;
+        for (const SurfacePoint& a : samples)
+            for (const SurfacePoint& b : samples)
+                if (a.valid() && b.valid())
+                    largestTurn = std::max(largestTurn, glm::length(a.normal - b.normal));
+        if (samples.size() == 16) {
+            ++fine;
+            EXPECT_NEAR(largestTurn, std::sqrt(2.0f), 1e-3f) << i;  // two faces at right angles
+            for (const SurfacePoint& s : samples)
+                if (s.valid())  // seen through the pixel itself
+                    EXPECT_EQ(test::project(scene.camera, s.position), glm::ivec2(i % w, i / w));
+        } else {
+            ASSERT_EQ(samples.size(), 4u);
+            EXPECT_LE(largestTurn * largestTurn, 0.03f)
+                << i;  // every pixel across an edge has the finer grid
+            if (largestTurn == 0.0f) ++coarse;
+        }
+    }
+    EXPECT_GE(fine, 10);
+    EXPECT_GE(coarse, 20);
+    GBuffer matte;
+    render(diffuse(glm::vec3(0.2f)), matte);
+    EXPECT_EQ(matte.objectSamples.finePerPixel, 0);
+    EXPECT_TRUE(matte.objectSamples.fine.empty());
+}
+
 // A red and white checker far finer than a pixel, on a box seen from above: every pixel inside the box shows
 // the checker's mean, pink (1, 0.5, 0.5), at its centre (the mean of its sub-samples, each filtered over its
 // quarter of the pixel) and at each sub-sample; a coarse checker keeps its squares apart.
