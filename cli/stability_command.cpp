@@ -53,11 +53,13 @@ int runStability(StabilityArgs args) {
     if (scene.virtuals.empty())
         throw InputError(args.scene.string(),
                          "virtual: the objects' motion needs at least one virtual object");
-    const std::vector<RenderOutput> frames = renderMotion(scene, args.motion);
-    const TemporalFigures figures = temporalInstability(frames);
+    const MotionFrames motion = renderMotion(scene, args.motion);
+    const TemporalFigures figures = temporalInstability(motion);
     fmt::print("{} frames of {}x{}, objects moving {} voxels a frame, camera turning {} deg a frame\n",
-               frames.size(), scene.camera.width, scene.camera.height, args.motion.objectStepVoxels,
+               motion.frames.size(), scene.camera.width, scene.camera.height, args.motion.objectStepVoxels,
                args.motion.cameraStepDeg);
+    if (figures.followsSurfaces)
+        fmt::print("following the surface points from frame to frame (the camera moves)\n");
     fmt::print("temporal_instability real pixels (delta):      {:.3f} ({} pixel-triples)\n",
                figures.realInstability, figures.realSamples);
     fmt::print("temporal_instability object pixels (composite): {:.3f} ({} pixel-triples)\n",

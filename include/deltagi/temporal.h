@@ -33,12 +33,22 @@ struct MotionOptions {
     int warmUpFrames = -1;
 };
 
+// Frames rendered in order, with the cameras they were rendered from and the objects' motion between them.
+struct MotionFrames {
+    std::vector<RenderOutput> frames;
+    std::vector<Camera> cameras;  // one per frame
+    glm::vec3 objectStep{0.0f};   // how far the objects moved from one frame to the next (world units)
+};
+
 // Renders options.frames frames of `scene` with one FrameRenderer, as a session would, moving its objects and
-// camera as `options` says (its meshes and camera are put back at the end).
-std::vector<RenderOutput> renderMotion(Scene& scene, const MotionOptions& options);
+// camera as `options` says (its meshes and camera are put back at the end). With a turning camera the frames
+// carry their depth layer (the measure below follows the surfaces with it).
+MotionFrames renderMotion(Scene& scene, const MotionOptions& options);
 
 struct TemporalFigures {
     // Over the real pixels (no object in any of the three frames of a triple), of the delta.
+    // followsSurfaces: measured along surface points (a moving camera), not pixel by pixel.
+    bool followsSurfaces = false;
     double realInstability = 0.0;
     // Over the objects' pixels (covered fully in all three frames), of the composite.
     double objectInstability = 0.0;
@@ -48,8 +58,18 @@ struct TemporalFigures {
     std::vector<double> meanDelta;
 };
 
-// The figures of frames rendered in order (at least 3, all of one size; InputError otherwise).
+// The figures of frames rendered in order (at least 3, all of one size; InputError otherwise), pixel by
+// pixel: for a still camera.
 TemporalFigures temporalInstability(std::span<const RenderOutput> frames);
+
+// The same for frames of renderMotion. With a still camera, pixel by pixel as above. With a moving camera a
+// fixed pixel sees the scene slide under it, and every edge that crosses it (a room's corner, a silhouette)
+// would count as flicker; so the measure follows surface points instead: each pixel of the middle frame of a
+// triple is taken back to its world point (by its depth), moved by the objects' step where it shows an
+// object, and looked up in the frames before and after it (projected into their cameras, bilinearly), where
+// all four pixels around it show the same kind of surface (real, or fully covered by an object) at that depth
+// (within 2 %). Points that are hidden, leave the image or lie on an edge in either frame are not counted.
+TemporalFigures temporalInstability(const MotionFrames& motion);
 
 // {"frames", "real_instability", "object_instability", "real_samples", "object_samples", "mean_delta":
 // [...]}.
