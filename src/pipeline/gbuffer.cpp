@@ -356,19 +356,14 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
 
     // The finer grids, in slots numbered in pixel order (the same whatever the thread count).
     const int m = 2 * k;
-    int32_t slots = 0;
-    for (const uint8_t f : finer) slots += f;
-    if (slots == 0) return;
+    std::vector<uint32_t> pixels;  // rect indices, in pixel order
+    for (size_t r = 0; r < finer.size(); ++r)
+        if (finer[r]) pixels.push_back(static_cast<uint32_t>(r));
+    if (pixels.empty()) return;
     samples.finePerPixel = m * m;
     samples.fineSlot.assign(finer.size(), -1);
-    samples.fine.resize(static_cast<size_t>(slots) * m * m);
-    std::vector<uint32_t> pixels;  // rect indices
-    pixels.reserve(static_cast<size_t>(slots));
-    for (size_t r = 0; r < finer.size(); ++r)
-        if (finer[r]) {
-            samples.fineSlot[r] = static_cast<int32_t>(pixels.size());
-            pixels.push_back(static_cast<uint32_t>(r));
-        }
+    samples.fine.resize(pixels.size() * m * m);
+    for (size_t s = 0; s < pixels.size(); ++s) samples.fineSlot[pixels[s]] = static_cast<int32_t>(s);
     parallelFor(0, static_cast<int64_t>(pixels.size()), 16, [&](int64_t s) {
         const int x = x0 + static_cast<int>(pixels[s] % rectWidth);
         const int y = y0 + static_cast<int>(pixels[s] / rectWidth);

@@ -14,6 +14,7 @@
 
 #include "core/rng.h"
 #include "pipeline/cone_trace.h"
+#include "test_disk.h"
 
 namespace deltagi {
 namespace {
@@ -391,19 +392,10 @@ TEST(Ggx, TheLobeOverALightsDiskIsTheLobeOfTheWidenedAlpha) {
             const float peak = evalGltfBrdf(black, white, c.alpha, kUp, wo, mirror, c.lightAngle).x;
             for (const float offset : {0.0f, 0.5f * c.lightAngle, c.lightAngle, 2.0f * c.lightAngle}) {
                 const glm::vec3 centre = aroundMirror * glm::vec3(std::sin(offset), 0.0f, std::cos(offset));
-                const glm::mat3 aroundCentre = frameAround(centre);
-                double sum = 0.0;
-                constexpr int kSide = 100;
-                for (int i = 0; i < kSide; ++i)
-                    for (int j = 0; j < kSide; ++j) {
-                        const float cosTheta = 1.0f - (i + 0.5f) / kSide * (1.0f - std::cos(c.lightAngle));
-                        const float sinTheta = std::sqrt(1.0f - cosTheta * cosTheta);
-                        const float phi = 2.0f * std::numbers::pi_v<float> * (j + 0.5f) / kSide;
-                        const glm::vec3 wi = aroundCentre * glm::vec3(sinTheta * std::cos(phi),
-                                                                      sinTheta * std::sin(phi), cosTheta);
-                        sum += evalGltfBrdf(black, white, c.alpha, kUp, wo, wi).x;
-                    }
-                const float bruteForce = static_cast<float>(sum / (kSide * kSide));
+                const float bruteForce =
+                    static_cast<float>(test::meanOverCone(centre, c.lightAngle, 100, [&](glm::vec3 wi) {
+                        return evalGltfBrdf(black, white, c.alpha, kUp, wo, wi).x;
+                    }));
                 const float widened = evalGltfBrdf(black, white, c.alpha, kUp, wo, centre, c.lightAngle).x;
                 SCOPED_TRACE(::testing::Message()
                              << "view " << viewDeg << " deg, alpha " << c.alpha << ", light " << c.lightAngle
