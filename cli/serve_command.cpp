@@ -371,6 +371,7 @@ void Server::renderLoop() {
     Scene interactive, full;
     FrameRenderer interactiveFrames, fullFrames;
     uint64_t interactiveVersion = 0, interactiveStructure = 0, fullStructure = 0;
+    int interactiveScale = 1;  // the interactive frames' reduction of the width and height
     bool refined = true;  // nothing to refine before the first frame
     Clock::time_point lastChange = Clock::now();
     uint64_t frameNumber = 0;
@@ -399,18 +400,22 @@ void Server::renderLoop() {
             client = session_.lastInputClient();
             seq = session_.lastInputSeq();
             version = session_.version();
+            const int scale =
+                live::canReduceResolution(scene.camera.width, scene.camera.height, args_.interactiveScale)
+                    ? args_.interactiveScale
+                    : 1;
             Options wanted = live::interactiveOptions(scene.options, scene.camera.width, scene.camera.height,
-                                                      scene.lights.size());
+                                                      scene.lights.size(), scale);
             wanted.render.layers = layers;
             Options own = scene.options;
             own.render.layers = layers;
             // An interactive frame with temporal reuse averages the frames before it: it is not render()'s
             // image even with the scene's own options, so the idle refinement renders that one.
-            sameOptions = optionsToJson(wanted) == optionsToJson(own) && own.render.temporalFrames <= 1;
+            sameOptions =
+                scale == 1 && optionsToJson(wanted) == optionsToJson(own) && own.render.temporalFrames <= 1;
             if (session_.version() != interactiveVersion) {
                 if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
-                    interactive = scene;
-                    interactive.options = wanted;
+                    interactiveScale = live::interactiveScene(scene, wanted, scale, interactive);
                     interactiveStructure = session_.structureVersion();
                 } else {
                     interactive.virtuals = scene.virtuals;
@@ -445,6 +450,7 @@ void Server::renderLoop() {
                          {"version", version},
                          {"view", live::viewName(view)},
                          {"refined", refining || sameOptions},
+                         {"scale", refining ? 1 : interactiveScale},
                          {"client", client},
                          {"seq", seq},
                          {"timings", live::timingsJson(out)},
@@ -559,6 +565,11 @@ CLI::App* addServeCommand(CLI::App& app, ServeArgs& args, int maxThreads) {
         ->check(CLI::Range(1, maxThreads));
     command->add_option("--jpeg-quality", args.jpegQuality, "Quality of the streamed frames (default 85)")
         ->check(CLI::Range(1, 100));
+    command
+        ->add_option("--interactive-scale", args.interactiveScale,
+                     "While something changes, render at 1/N of the width and height (default 2; 1: full "
+                     "size); the idle frame is always full size")
+        ->check(CLI::IsMember({1, 2, 4}));
     return command;
 }
 

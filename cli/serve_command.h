@@ -18,6 +18,7 @@ struct ServeArgs {
     int port = 8080;  // 0: any free port (printed)
     int threads = 0;
     int jpegQuality = 85;
+    int interactiveScale = 2;  // the frames while something changes at 1 / this of the width and height
 };
 
 CLI::App* addServeCommand(CLI::App& app, ServeArgs& args, int maxThreads);

@@ -79,11 +79,15 @@ async function draw(blob, info) {
   const bitmap = await createImageBitmap(blob);
   if (info.number < newestDrawn) return;
   newestDrawn = info.number;
-  if (canvas.width !== bitmap.width || canvas.height !== bitmap.height) {
-    canvas.width = bitmap.width;
-    canvas.height = bitmap.height;
+  // The canvas keeps the camera's size: frames rendered smaller while something moves (info.scale) are
+  // drawn stretched over it, so that pixel coordinates (the drag's) stay the camera's.
+  const width = bitmap.width * (info.scale || 1), height = bitmap.height * (info.scale || 1);
+  if (canvas.width !== width || canvas.height !== height) {
+    canvas.width = width;
+    canvas.height = height;
   }
-  context.drawImage(bitmap, 0, 0);
+  context.imageSmoothingEnabled = true;
+  context.drawImage(bitmap, 0, 0, width, height);
   bitmap.close();
   const now = performance.now();
   live.frames += 1;

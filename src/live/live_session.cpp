@@ -446,11 +446,11 @@ json Session::document() const {
     return out;
 }
 
-Options interactiveOptions(const Options& full, int width, int height, size_t lightCount) {
+Options interactiveOptions(const Options& full, int width, int height, size_t lightCount, int scale) {
     Options o = full;
     o.render.samplesPerPixel = 1;
     auto sparser = [&](int& option, int autoStride) {
-        option = std::min(2 * pixelStrideFor(option, autoStride, width, height), 32);
+        option = std::max(std::min(2 * pixelStrideFor(option, autoStride, width, height), 32) / scale, 1);
     };
     sparser(o.diffuse.pixelStride, kAutoDiffuseStride);
     sparser(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride);
@@ -466,6 +466,41 @@ Options interactiveOptions(const Options& full, int width, int height, size_t li
     o.diffuse.objectRays = std::min(o.diffuse.objectRays, 4);
     sparser(o.shadow.relightPixelStride, kAutoRelightShadowStride);
     return o;
+}
+
+bool canReduceResolution(int width, int height, int scale) {
+    return scale > 1 && width % scale == 0 && height % scale == 0 && width / scale >= 64 &&
+           height / scale >= 48;
+}
+
+int interactiveScene(const Scene& scene, const Options& options, int scale, Scene& out) {
+    out = scene;
+    out.options = options;
+    if (!canReduceResolution(scene.camera.width, scene.camera.height, scale)) return 1;
+    Camera& c = out.camera;
+    const float inverse = 1.0f / static_cast<float>(scale);
+    c.width /= scale;
+    c.height /= scale;
+    c.fx *= inverse;
+    c.fy *= inverse;
+    c.cx *= inverse;  // continuous image coordinates: the image's corners stay its corners
+    c.cy *= inverse;
+    if (scene.background) {
+        const Image& photo = *scene.background;
+        Image small(c.width, c.height, 3, 0.0f);
+        const float weight = inverse * inverse;
+        for (int y = 0; y < c.height; ++y)
+            for (int x = 0; x < c.width; ++x)
+                for (int ch = 0; ch < 3; ++ch) {
+                    float sum = 0.0f;
+                    for (int dy = 0; dy < scale; ++dy)
+                        for (int dx = 0; dx < scale; ++dx)
+                            sum += photo.at(x * scale + dx, y * scale + dy, ch);
+                    small.at(x, y, ch) = sum * weight;
+                }
+        out.background = std::move(small);
+    }
+    return scale;
 }
 
 namespace {

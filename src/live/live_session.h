@@ -121,7 +121,20 @@ class Session {
 // a single light, when "auto") and at most 4 rays for the objects' further bounce. On the benchmark scene
 // each of these about halves a stage: G-buffer, diffuse cones, shadows, RSM update and injection, the
 // objects' bounce. The idle frames use the scene's own options, which give `deltagi render`'s image.
-Options interactiveOptions(const Options& full, int width, int height, size_t lightCount);
+//
+// `scale` > 1: the interactive frames are rendered at 1 / scale of the width and height (interactiveScene);
+// the pixel strides, resolved for the full image as above, are divided by `scale` (at least 1), so that the
+// cones and shadow rays stay as dense on the surfaces as in full-size interactive frames.
+Options interactiveOptions(const Options& full, int width, int height, size_t lightCount, int scale = 1);
+
+// Whether a width x height camera can be rendered at 1 / scale of its size: both divisible by `scale`, and at
+// least 64 x 48 pixels after it.
+bool canReduceResolution(int width, int height, int scale);
+
+// The scene of the interactive frames: `scene` with `options`, its camera and photo reduced to 1 / scale of
+// their width and height (the photo averaged over scale x scale blocks) where canReduceResolution allows;
+// returns the scale used (1 or `scale`).
+int interactiveScene(const Scene& scene, const Options& options, int scale, Scene& out);
 
 // The picture of `view`, as 8-bit sRGB RGB pixels (width x height x 3), for the page.
 std::vector<uint8_t> viewPixels(const RenderOutput& output, View view);

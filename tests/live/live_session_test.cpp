@@ -331,6 +331,50 @@ TEST(LiveSessionImages, InteractiveOptionsTakeOneSamplePerPixelAndSparserCones) 
     EXPECT_EQ(optionsToJson(fast), optionsToJson(full));
 }
 
+// Interactive frames at half the width and height: the camera sees the same picture (a world point lands at
+// half its pixel coordinates), the photo is averaged over 2 x 2 blocks, the strides are halved so that the
+// cones stay as dense on the surfaces; sizes that do not divide, or would be too small, stay as they are.
+TEST(LiveSessionImages, InteractiveFramesAtHalfSizeShowTheSamePicture) {
+    Scene scene;
+    scene.camera.width = 640;
+    scene.camera.height = 480;
+    scene.camera.setFieldOfView(50.0);
+    scene.camera.cx += 3.0f;  // a principal point off the centre
+    scene.camera.worldFromCamera[3] = glm::vec4(0.1f, 0.2f, 2.0f, 1.0f);
+    Image photo(640, 480, 3, 0.0f);
+    for (int y = 0; y < 480; ++y)
+        for (int x = 0; x < 640; ++x)
+            photo.setRgb(x, y, {static_cast<float>(x % 2), static_cast<float>(y), 0.5f});
+    scene.background = photo;
+    Options options;
+    options.diffuse.pixelStride = 16;
+    Scene half;
+    ASSERT_EQ(interactiveScene(scene, options, 2, half), 2);
+    EXPECT_EQ(half.camera.width, 320);
+    EXPECT_EQ(half.camera.height, 240);
+    EXPECT_EQ(half.options.diffuse.pixelStride, 16);
+    const glm::vec3 point(0.3f, -0.1f, -1.0f);  // camera space
+    const glm::vec2 there = scene.camera.imagePoint(point), small = half.camera.imagePoint(point);
+    EXPECT_NEAR(small.x, 0.5f * there.x, 1e-4f);
+    EXPECT_NEAR(small.y, 0.5f * there.y, 1e-4f);
+    ASSERT_TRUE(half.background.has_value());
+    ASSERT_EQ(half.background->width(), 320);
+    EXPECT_FLOAT_EQ(half.background->at(5, 7, 0), 0.5f);   // columns 10 and 11: 0 and 1
+    EXPECT_FLOAT_EQ(half.background->at(5, 7, 1), 14.5f);  // rows 14 and 15
+    EXPECT_EQ(scene.camera.width, 640);                    // the session's own scene is untouched
+    // The strides, resolved for the full image, halved.
+    const Options full = interactiveOptions(Options{}, 640, 480, 1);
+    const Options smaller = interactiveOptions(Options{}, 640, 480, 1, 2);
+    EXPECT_EQ(smaller.diffuse.pixelStride, full.diffuse.pixelStride / 2);
+    EXPECT_EQ(smaller.shadow.relightPixelStride, full.shadow.relightPixelStride / 2);
+    EXPECT_EQ(smaller.shadow.pixelStride, std::max(full.shadow.pixelStride / 2, 1));
+    // Too small, or not divisible: full size.
+    EXPECT_FALSE(canReduceResolution(96, 72, 2));
+    EXPECT_FALSE(canReduceResolution(641, 480, 2));
+    EXPECT_EQ(interactiveScene(scene, options, 1, half), 1);
+    EXPECT_EQ(half.camera.width, 640);
+}
+
 TEST(LiveSessionImages, ViewsShowTheirImages) {
     RenderOutput out;
     out.composite = Image(4, 2, 3, 0.5f);

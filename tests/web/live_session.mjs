@@ -24,6 +24,7 @@ for (let i = 2; i < process.argv.length; i++) {
   else if (a === '--out') args.out = next();
   else if (a === '--screenshot') args.screenshot = next();
   else if (a === '--drag-seconds') args.dragSeconds = Number(next());
+  else if (a === '--interactive-scale') args.interactiveScale = next();
   else throw new Error(`unknown argument ${a}`);
 }
 if (!args.deltagi || !args.scene) throw new Error('usage: live_session.mjs --deltagi PATH --scene SCENE.json');
@@ -51,7 +52,8 @@ function check(condition, what) {
 }
 
 // ---- the server ------------------------------------------------------------------------------------------
-const serverArgs = ['serve', args.scene, '--port', '0', ...args.sets.flatMap((s) => ['--set', s])];
+const serverArgs = ['serve', args.scene, '--port', '0', ...args.sets.flatMap((s) => ['--set', s]),
+  ...(args.interactiveScale ? ['--interactive-scale', args.interactiveScale] : [])];
 log(`${args.deltagi} ${serverArgs.join(' ')}`);
 const server = spawn(args.deltagi, serverArgs, { stdio: ['ignore', 'pipe', 'pipe'] });
 let serverErr = '';
