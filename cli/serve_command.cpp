@@ -371,13 +371,13 @@ void Server::renderLoop() {
     Scene interactive, full;
     FrameRenderer interactiveFrames, fullFrames;
     uint64_t interactiveVersion = 0, interactiveStructure = 0, fullStructure = 0;
-    int interactiveScale = 1;  // the interactive frames' reduction of the width and height
     bool refined = true;  // nothing to refine before the first frame
     Clock::time_point lastChange = Clock::now();
     uint64_t frameNumber = 0;
     bool layers = false;
     for (;;) {
         bool refining = false, sameOptions = false;
+        int scale = 1;  // the interactive frames at 1 / scale of the camera's width and height
         View view;
         int client = 0;
         int64_t seq = 0;
@@ -400,10 +400,9 @@ void Server::renderLoop() {
             client = session_.lastInputClient();
             seq = session_.lastInputSeq();
             version = session_.version();
-            const int scale =
-                live::canReduceResolution(scene.camera.width, scene.camera.height, args_.interactiveScale)
-                    ? args_.interactiveScale
-                    : 1;
+            scale = live::canReduceResolution(scene.camera.width, scene.camera.height, args_.interactiveScale)
+                        ? args_.interactiveScale
+                        : 1;
             Options wanted = live::interactiveOptions(scene.options, scene.camera.width, scene.camera.height,
                                                       scene.lights.size(), scale);
             wanted.render.layers = layers;
@@ -415,7 +414,7 @@ void Server::renderLoop() {
                 scale == 1 && optionsToJson(wanted) == optionsToJson(own) && own.render.temporalFrames <= 1;
             if (session_.version() != interactiveVersion) {
                 if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
-                    interactiveScale = live::interactiveScene(scene, wanted, scale, interactive);
+                    live::interactiveScene(scene, wanted, scale, interactive);
                     interactiveStructure = session_.structureVersion();
                 } else {
                     interactive.virtuals = scene.virtuals;
@@ -450,7 +449,7 @@ void Server::renderLoop() {
                          {"version", version},
                          {"view", live::viewName(view)},
                          {"refined", refining || sameOptions},
-                         {"scale", refining ? 1 : interactiveScale},
+                         {"scale", refining ? 1 : scale},
                          {"client", client},
                          {"seq", seq},
                          {"timings", live::timingsJson(out)},

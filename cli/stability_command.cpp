@@ -32,9 +32,10 @@ CLI::App* addStabilityCommand(CLI::App& app, StabilityArgs& args, int maxThreads
         ->delimiter(',')
         ->expected(3);
     command
-        ->add_option("--camera-step", args.motion.cameraStepDeg,
-                     "Degrees the camera turns each frame about the objects' centre (default 0); the measure then "
-                     "follows the surface points from frame to frame instead of fixed pixels")
+        ->add_option(
+            "--camera-step", args.motion.cameraStepDeg,
+            "Degrees the camera turns each frame about the objects' centre (default 0); the measure then "
+            "follows the surface points from frame to frame instead of fixed pixels")
         ->check(CLI::Range(-45.0f, 45.0f));
     command->add_option("--json", args.json, "Also write the figures as JSON here");
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");

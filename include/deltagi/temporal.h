@@ -66,9 +66,10 @@ TemporalFigures temporalInstability(std::span<const RenderOutput> frames);
 // fixed pixel sees the scene slide under it, and every edge that crosses it (a room's corner, a silhouette)
 // would count as flicker; so the measure follows surface points instead: each pixel of the middle frame of a
 // triple is taken back to its world point (by its depth), moved by the objects' step where it shows an
-// object, and looked up in the frames before and after it (projected into their cameras, bilinearly), where
-// all four pixels around it show the same kind of surface (real, or fully covered by an object) at that depth
-// (within 2 %). Points that are hidden, leave the image or lie on an edge in either frame are not counted.
+// object, and looked up in the frames before and after it (projected into their cameras; Catmull-Rom over
+// the 4 x 4 pixels around it), where those pixels all show the same kind of surface (real, or fully covered
+// by an object), flat (no corner between them) and at the point's depth (within 2 %). Points that are
+// hidden, leave the image or lie on an edge or a crease in either frame are not counted.
 TemporalFigures temporalInstability(const MotionFrames& motion);
 
 // {"frames", "real_instability", "object_instability", "real_samples", "object_samples", "mean_delta":

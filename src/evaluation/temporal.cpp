@@ -98,13 +98,18 @@ std::array<float, 4> cubicWeights(float t) {
             0.5f * (-3.0f * t3 + 4.0f * t2 + t), 0.5f * (t3 - t2)};
 }
 
-// The value of `image` (3 channels) at world point `p` seen by `frame` from `camera`: a cubic lookup over the
+// What the measure follows: an object's pixels in the composite, the real ones' in the delta.
+const Image& measured(const RenderOutput& frame, bool object) {
+    return object ? frame.composite : frame.delta;
+}
+
+// The measured value (3 channels) at world point `p` seen by `frame` from `camera`: a cubic lookup over the
 // 4 x 4 pixels around its projection, each of which must show the same kind of surface (`object`: an
 // object's pixel covered fully; otherwise a real one) of one flat surface (no crease between them) at p's
-// depth. False where
-// any does not, or p's pixels leave the image.
-bool valueAt(const RenderOutput& frame, const Image& image, const Camera& camera,
-             const glm::mat4& cameraFromWorld, glm::vec3 p, bool object, Rgb& out) {
+// depth. False where any does not, or p's pixels leave the image.
+bool valueAt(const RenderOutput& frame, const Camera& camera, const glm::mat4& cameraFromWorld, glm::vec3 p,
+             bool object, Rgb& out) {
+    const Image& image = measured(frame, object);
     const glm::vec3 q = glm::vec3(cameraFromWorld * glm::vec4(p, 1.0f));
     if (!(q.z < -1e-6f)) return false;
     const float depth = -q.z;
@@ -221,18 +226,16 @@ TemporalFigures temporalInstability(const MotionFrames& motion) {
                 const glm::vec3 p = eye + depth * camera.rayDirection(static_cast<float>(x) + 0.5f,
                                                                       static_cast<float>(y) + 0.5f);
                 const glm::vec3 step = object ? motion.objectStep : glm::vec3(0.0f);
-                const Image& image = object ? b.composite : b.delta;
                 Rgb before, after;
-                if (!valueAt(a, object ? a.composite : a.delta, motion.cameras[t - 1], cameraFromWorld[t - 1],
-                             p - step, object, before) ||
-                    !valueAt(c, object ? c.composite : c.delta, motion.cameras[t + 1], cameraFromWorld[t + 1],
-                             p + step, object, after))
+                if (!valueAt(a, motion.cameras[t - 1], cameraFromWorld[t - 1], p - step, object, before) ||
+                    !valueAt(c, motion.cameras[t + 1], cameraFromWorld[t + 1], p + step, object, after))
                     continue;
+                const Rgb now = rgbAt(measured(b, object), x, y);
                 if (object) {
-                    accumulate(before, rgbAt(image, x, y), after, objectSecond, objectFirst);
+                    accumulate(before, now, after, objectSecond, objectFirst);
                     ++out.objectSamples;
                 } else {
-                    accumulate(before, rgbAt(image, x, y), after, realSecond, realFirst);
+                    accumulate(before, now, after, realSecond, realFirst);
                     ++out.realSamples;
                 }
             }
