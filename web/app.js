@@ -62,6 +62,9 @@ function connect() {
     else if (message.type === 'state') applyState(message);
     else if (message.type === 'error') {
       showError(message.message);
+      // A refused change leaves the control the user set showing it: every part is shown again.
+      for (const part of Object.keys(shown)) delete shown[part];
+      if (live.state) applyState(live.state);
       inFlight = [];  // a refused drag gets no frame
       flushDrag();
     } else if (message.type === 'frame') {
@@ -102,7 +105,14 @@ async function draw(blob, info) {
     return false;
   });
   $('scale').hidden = !['delta', 'shadow', 'indirect'].includes(info.view);
-  showTimings(info, now);
+  history.push(info.timings.stages);
+  if (history.length > 60) history.shift();
+  timingsFor = info;
+  if (!timingsTimer)
+    timingsTimer = setTimeout(() => {
+      timingsTimer = null;
+      showTimings(timingsFor, performance.now());
+    }, Math.max(0, lastTimingsShown + kTimingsInterval - now));
 }
 
 function median(values) {
@@ -111,7 +121,14 @@ function median(values) {
   return sorted[Math.floor(sorted.length / 2)];
 }
 
+// The frame-time line, the chart and its legend are drawn again at most every kTimingsInterval ms (for the
+// newest frame): each redraw lays the controls out again, which at every frame of a drag cost the browser
+// CPU that the renderer, on the same machine, lacked.
+const kTimingsInterval = 250;
+let lastTimingsShown = -Infinity, timingsTimer = null, timingsFor = null;
+
 function showTimings(info, now) {
+  lastTimingsShown = now;
   const recent = live.shownTimes.filter((t) => t > now - 1000).length;
   const latency = median(live.latencies.slice(-30));
   $('frame-time').textContent =
@@ -119,8 +136,6 @@ function showTimings(info, now) {
     `frame ${info.timings.total_ms.toFixed(1)} ms + JPEG ${info.encode_ms.toFixed(1)} ms · ` +
     `${recent} frames shown in the last second` +
     (Number.isFinite(latency) ? ` · input to frame ${latency.toFixed(0)} ms (median of the last 30)` : '');
-  history.push(info.timings.stages);
-  if (history.length > 60) history.shift();
   const chart = $('chart');
   const g = chart.getContext('2d');
   g.clearRect(0, 0, chart.width, chart.height);
@@ -165,14 +180,33 @@ function rangeFor(input, lo, hi) {
   input.max = String(hi);
 }
 
+// What each part of the controls last showed (JSON): a state that leaves a part as it was does not touch its
+// elements. A drag sends a state with every mouse move, and restyling the controls each time cost the
+// browser more than drawing the frames.
+const shown = {};
+function changed(part, value) {
+  const text = JSON.stringify(value);
+  if (shown[part] === text) return false;
+  shown[part] = text;
+  return true;
+}
+
 function applyState(state) {
   const first = !live.state;
   live.state = state;
-  $('scene-name').textContent = state.scene;
-  setOptions($('object'), state.objects.map((o) => o.name), state.selected);
+  if (changed('objects', [state.scene, state.objects.map((o) => o.name), state.selected])) {
+    $('scene-name').textContent = state.scene;
+    setOptions($('object'), state.objects.map((o) => o.name), state.selected);
+  }
   document.querySelector(`input[name=view][value=${state.view}]`).checked = true;
   const lightSelect = $('light');
   const lightIndex = Math.min(Number(lightSelect.value) || 0, Math.max(0, state.lights.length - 1));
+  if (changed('lights', [state.lights, state.bounds, lightIndex])) showLight(state, lightIndex, first);
+  if (changed('options', state.options)) showOptions(state.options);
+}
+
+function showLight(state, lightIndex, first) {
+  const lightSelect = $('light');
   setOptions(lightSelect, state.lights.map((l) => l.name), lightIndex);
   $('light-controls').hidden = state.lights.length === 0;
   const light = state.lights[lightIndex];
@@ -191,8 +225,11 @@ function applyState(state) {
     if (document.activeElement !== intensity) intensity.value = String(light.intensity);
     $('light-intensity-value').textContent = light.intensity.toFixed(3);
   }
+}
+
+function showOptions(options) {
   for (const control of document.querySelectorAll('[data-option]')) {
-    const value = state.options[control.dataset.option];
+    const value = options[control.dataset.option];
     const text = value === 0 || value === null ? 'auto' : String(value);
     if (control.tagName === 'SELECT' && ![...control.options].some((o) => o.value === text))
       control.append(new Option(text, text));

@@ -75,6 +75,25 @@ function cpuSeconds(pid) {  // user + system time of the process, from /proc
   const fields = fs.readFileSync(`/proc/${pid}/stat`, 'utf8').split(') ')[1].split(' ');
   return (Number(fields[11]) + Number(fields[12])) / 100;  // clock ticks, 100 per second on Linux
 }
+// The same summed over the descendants alive now of process `root`, but not over `skip`'s subtrees nor
+// `root` itself: the browser's processes (renderer, GPU, utilities) are this test's, as the server is.
+function descendantsCpuSeconds(root, skip) {
+  const parent = new Map();
+  for (const name of fs.readdirSync('/proc')) {
+    if (!/^\d+$/.test(name)) continue;
+    try {
+      parent.set(Number(name), Number(fs.readFileSync(`/proc/${name}/stat`, 'utf8').split(') ')[1].split(' ')[1]));
+    } catch { /* gone meanwhile */ }
+  }
+  let total = 0;
+  for (const pid of parent.keys()) {
+    let p = pid;
+    while (p > 1 && p !== root && !skip.includes(p)) p = parent.get(p) || 0;
+    if (p !== root || pid === root) continue;
+    try { total += cpuSeconds(pid); } catch { /* gone meanwhile */ }
+  }
+  return total;
+}
 
 const browser = await chromium.launch({
   executablePath: browserPath,
@@ -183,6 +202,8 @@ try {
     latencies: window.deltagi.latencies.length, t: performance.now() }));
   const since = await versionOf(page);
   const loadBefore = fs.readFileSync('/proc/loadavg', 'utf8').split(' ')[0];
+  const browserCpu = () => descendantsCpuSeconds(process.pid, [server.pid]);
+  const cpuBefore = { server: cpuSeconds(server.pid), browser: browserCpu(), driver: process.cpuUsage() };
   await page.mouse.move(startX, startY);
   await page.mouse.down();
   // A path that wanders (so that the whole drag renders) and ends at the move.
@@ -197,6 +218,11 @@ try {
     if (wait > 0) await new Promise((r) => setTimeout(r, wait));
   }
   await page.mouse.up();
+  const dragWall = (Date.now() - dragStart) / 1000;
+  const driverCpu = process.cpuUsage(cpuBefore.driver);
+  const cpuDuring = { server: cpuSeconds(server.pid) - cpuBefore.server,
+    browser: browserCpu() - cpuBefore.browser,
+    driver: (driverCpu.user + driverCpu.system) / 1e6 };
   const drag = await page.evaluate((c) => {
     const { drawn, latencies, frames } = window.deltagi;
     return { frames: frames - c.frames, seconds: (performance.now() - c.t) / 1000,
@@ -213,6 +239,9 @@ try {
     `render time per frame median ${[...drag.frameMs].sort((a, b) => a - b)[drag.frameMs.length >> 1]} ms; ` +
     `load average (1 min) ${loadBefore} before the drag, ${fs.readFileSync('/proc/loadavg', 'utf8').split(' ')[0]} ` +
     `after, on ${os.cpus().length} cores`);
+  log(`FIGURES: CPU during the drag (cores busy on average over ${dragWall.toFixed(2)} s): deltagi serve ` +
+    `${(cpuDuring.server / dragWall).toFixed(2)}, the browser ${(cpuDuring.browser / dragWall).toFixed(2)}, ` +
+    `this test's driver ${(cpuDuring.driver / dragWall).toFixed(2)}`);
   const stageMedians = {};
   for (const stages of drag.stages) for (const [name, ms] of stages) (stageMedians[name] ||= []).push(ms);
   log(`FIGURES: median ms per stage of the frames shown during the drag: ${Object.entries(stageMedians)
@@ -303,6 +332,10 @@ try {
   }), 'composite');
   const dim = await imageStats(page);
   check(dim.mean < bright.mean - 1, `light dimmed to a quarter: mean ${bright.mean.toFixed(1)} -> ${dim.mean.toFixed(1)}`);
+  // The page redraws a part of its controls only when the state changed it: the light's did change.
+  const shownIntensity = await page.evaluate(() => [document.getElementById('light-intensity-value').textContent,
+    window.deltagi.state.lights[Number(document.getElementById('light').value)].intensity.toFixed(3)]);
+  check(shownIntensity[0] === shownIntensity[1], `the intensity shown is the state's: ${shownIntensity.join(' = ')}`);
 
   // ---- an idle session uses no CPU ----------------------------------------------------------------------------
   const cpu0 = cpuSeconds(server.pid);
