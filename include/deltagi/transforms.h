@@ -33,5 +33,8 @@ Camera turnedCamera(const Camera& camera, glm::vec3 centre, float degrees);
 // object-space mesh for the next call. Its name and material are kept. Throws InputError naming the mesh for
 // a bad transform (checkTransform) or a mesh the reader would refuse (no triangles, non-finite vertices).
 void setTransform(TriangleMesh& mesh, const glm::mat4& worldFromObject);
+// setTransform's mesh, made without copying `mesh` itself when it has its object-space mesh (a 100k-triangle
+// statue's arrays are megabytes): `mesh` is left as it was.
+TriangleMesh placedMesh(const TriangleMesh& mesh, const glm::mat4& worldFromObject);
 
 }  // namespace deltagi

@@ -285,10 +285,7 @@ void Session::applyPlacements() {
         unplaced_[k] = false;
         std::vector<TriangleMesh> placed;
         try {
-            for (int m : meshes_[k]) {
-                placed.push_back(scene_->virtuals[m]);
-                setTransform(placed.back(), transforms_[k]);
-            }
+            for (int m : meshes_[k]) placed.push_back(placedMesh(scene_->virtuals[m], transforms_[k]));
         } catch (const std::exception&) {
             // Not expected (the transform was checked, the meshes are the loaded ones): the object stays
             // where its meshes are, and the document says so.

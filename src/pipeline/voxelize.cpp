@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include <glm/ext/vector_int3_sized.hpp>
+
 #include "core/parallel.h"
 #include "core/surface_material.h"
 
@@ -11,22 +13,31 @@ namespace deltagi {
 
 namespace {
 
-struct VoxelTriangle {
-    VoxelTriangle() {}   // not zeroed: toVoxelSpace writes every one it reads
-    glm::vec3 p[3];      // level-0 voxel coordinates
-    glm::vec3 normal;    // unit face normal (winding order)
-    float area;          // voxel units^2
-    bool oneVoxel;       // lies inside a single voxel of the grid
+// What the triangles of one mesh share: their material in the volumes.
+struct VoxelMesh {
     glm::vec3 emission;  // the material's emitted radiance
     glm::vec3 albedo;    // what the material reflects into the volumes (Material::volumeReflectance)
-    // Textured or vertex-coloured meshes: the mesh and the triangle's index, whose material is looked up
-    // over each piece in a voxel instead (null: the constant emission and albedo above hold everywhere).
+    // Textured or vertex-coloured meshes: the mesh, whose material is looked up over each piece of a triangle
+    // in a voxel instead (null: the constant emission and albedo above hold everywhere).
     const TriangleMesh* varying;
-    uint32_t index;
-    // Its voxel material when kept (VoxelGeometry::triangleMaterials), for every piece of it: a triangle
-    // smaller than a voxel is looked up once, at its centre, over a voxel's footprint (which covers it).
+    // Its triangles' voxel materials when kept (VoxelGeometry::triangleMaterials), or null.
     const std::array<glm::vec3, 2>* cached;
-    glm::ivec3 lo, hi;  // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
+};
+
+// 76 bytes (128 with the mesh's material in each triangle: the scatter's and binning's reads of 100k of them
+// were a fifth of their time).
+struct VoxelTriangle {
+    VoxelTriangle() {}  // not zeroed: toVoxelSpace writes every one it reads
+    glm::vec3 p[3];     // level-0 voxel coordinates
+    glm::vec3 normal;   // unit face normal (winding order)
+    float area;         // voxel units^2
+    uint32_t index;     // in its mesh
+    uint32_t mesh;      // its VoxelMesh
+    bool oneVoxel;      // lies inside a single voxel of the grid
+    // Its voxel material is its mesh's kept one (VoxelMesh::cached[index]), for every piece of it: a triangle
+    // smaller than a voxel is looked up once, at its centre, over a voxel's footprint (which covers it).
+    bool cachedMaterial;
+    glm::i16vec3 lo, hi;  // voxel bounds, clamped to the grid; hi < lo: no voxel (degenerate or outside)
     bool touchesGrid() const { return hi.x >= lo.x; }
 };
 
@@ -190,64 +201,76 @@ std::vector<const std::array<glm::vec3, 2>*> keptTriangleMaterials(
     return kept;
 }
 
-// Every triangle of `meshes` in voxel space, in mesh and triangle order; in parallel (a detailed object has
-// many).
-std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> toVoxelSpace(
-    std::span<const TriangleMesh> meshes, const VolumeRegion& region,
-    std::vector<VoxelGeometry::TriangleMaterials>& cache) {
+// Every triangle of `meshes` in voxel space, in mesh and triangle order, their meshes' shared part, and the
+// voxels their bounding boxes touch; in parallel (a detailed object has many).
+struct VoxelTriangles {
+    std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> triangles;
+    std::vector<VoxelMesh> meshes;
+    VoxelBox bounds;
+};
+
+VoxelTriangles toVoxelSpace(std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                            std::vector<VoxelGeometry::TriangleMaterials>& cache) {
     constexpr size_t kChunk = 4096;
     struct Chunk {
-        const TriangleMesh* mesh;
-        size_t first, last, out;                 // triangles [first, last) of mesh, written from `out` on
-        const std::array<glm::vec3, 2>* cached;  // the mesh's kept triangle materials, or null
+        uint32_t mesh;
+        size_t first, last, out;  // triangles [first, last) of mesh, written from `out` on
+        VoxelBox bounds;          // of its triangles' voxels
     };
     const std::vector<const std::array<glm::vec3, 2>*> kept =
         keptTriangleMaterials(meshes, region.voxelSize(), cache);
+    VoxelTriangles result;
     std::vector<Chunk> chunks;
     size_t total = 0;
     for (size_t k = 0; k < meshes.size(); ++k) {
         const TriangleMesh& mesh = meshes[k];
+        result.meshes.push_back({mesh.material.emission, mesh.material.volumeReflectance(),
+                                 variesOverSurface(mesh) ? &mesh : nullptr, kept[k]});
         for (size_t first = 0; first < mesh.triangles.size(); first += kChunk) {
             const size_t last = std::min(first + kChunk, mesh.triangles.size());
-            chunks.push_back({&mesh, first, last, total, kept[k]});
+            chunks.push_back({static_cast<uint32_t>(k), first, last, total, {}});
             total += last - first;
         }
     }
-    std::vector<VoxelTriangle, LargeBlockAllocator<VoxelTriangle>> tris(total);
+    auto& tris = result.triangles;
+    tris.resize(total);
     const float invVoxel = 1.0f / region.voxelSize();
     const int n = region.resolution;
     parallelFor(0, static_cast<int64_t>(chunks.size()), 1, [&](int64_t c) {
-        const Chunk& chunk = chunks[c];
-        const TriangleMesh& mesh = *chunk.mesh;
+        Chunk& chunk = chunks[c];
+        const TriangleMesh& mesh = meshes[chunk.mesh];
+        const bool cachedMesh = kept[chunk.mesh] != nullptr;
         for (size_t i = chunk.first; i < chunk.last; ++i) {
             const glm::uvec3& t = mesh.triangles[i];
             VoxelTriangle& vt = tris[chunk.out + (i - chunk.first)];
-            vt.lo = glm::ivec3(0);
-            vt.hi = glm::ivec3(-1);
+            vt.lo = glm::i16vec3(0);
+            vt.hi = glm::i16vec3(-1);
             for (int k = 0; k < 3; ++k) vt.p[k] = (mesh.positions[t[k]] - region.origin) * invVoxel;
             glm::vec3 cr = glm::cross(vt.p[1] - vt.p[0], vt.p[2] - vt.p[0]);
             float len = glm::length(cr);
             if (!(len > 0.0f)) continue;  // degenerate: covers no area
             vt.normal = cr / len;
             vt.area = 0.5f * len;
-            vt.emission = mesh.material.emission;
-            vt.albedo = mesh.material.volumeReflectance();
-            vt.varying = variesOverSurface(mesh) ? &mesh : nullptr;
             vt.index = static_cast<uint32_t>(i);
-            vt.cached = nullptr;
+            vt.mesh = chunk.mesh;
+            vt.cachedMaterial = false;
             glm::vec3 mn = glm::min(vt.p[0], glm::min(vt.p[1], vt.p[2]));
             glm::vec3 mx = glm::max(vt.p[0], glm::max(vt.p[1], vt.p[2]));
             if (mx.x < 0 || mx.y < 0 || mx.z < 0 || mn.x > n || mn.y > n || mn.z > n) continue;
-            vt.lo = glm::clamp(glm::ivec3(glm::floor(mn)), glm::ivec3(0), glm::ivec3(n - 1));
-            vt.hi = glm::clamp(glm::ivec3(glm::floor(mx)), glm::ivec3(0), glm::ivec3(n - 1));
-            if (chunk.cached && glm::all(glm::lessThanEqual(mx - mn, glm::vec3(1.0f))))
-                vt.cached = chunk.cached + i;
+            const glm::ivec3 lo = glm::clamp(glm::ivec3(glm::floor(mn)), glm::ivec3(0), glm::ivec3(n - 1));
+            const glm::ivec3 hi = glm::clamp(glm::ivec3(glm::floor(mx)), glm::ivec3(0), glm::ivec3(n - 1));
+            vt.lo = glm::i16vec3(lo);
+            vt.hi = glm::i16vec3(hi);
+            chunk.bounds.extend({lo, hi + 1});
+            vt.cachedMaterial = cachedMesh && glm::all(glm::lessThanEqual(mx - mn, glm::vec3(1.0f)));
             vt.oneVoxel = glm::ivec3(glm::floor(mn)) == glm::ivec3(glm::floor(mx)) &&
                           glm::all(glm::greaterThanEqual(mn, glm::vec3(0.0f))) &&
                           glm::all(glm::lessThan(mx, glm::vec3(static_cast<float>(n))));
         }
     });
-    return tris;
+    for (const Chunk& chunk : chunks)
+        if (!chunk.bounds.empty()) result.bounds.extend(chunk.bounds);
+    return result;
 }
 
 }  // namespace
@@ -281,20 +304,10 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     if (!emissive) out.emission.clear();
     if (emissive && !hadEmission) out.emission.assign(out.area.size(), glm::vec3(0.0f));
 
-    const auto tris = toVoxelSpace(meshes, region, out.triangleMaterials);
-    // The triangles' bounds, by chunks in parallel (min and max: the same in any order).
-    constexpr size_t kBoundsChunk = 16384;
-    const size_t boundsChunks = (tris.size() + kBoundsChunk - 1) / kBoundsChunk;
-    std::vector<VoxelBox> chunkBounds(boundsChunks);
-    parallelFor(0, static_cast<int64_t>(boundsChunks), 1, [&](int64_t c) {
-        const size_t end = std::min(tris.size(), static_cast<size_t>(c + 1) * kBoundsChunk);
-        for (size_t i = static_cast<size_t>(c) * kBoundsChunk; i < end; ++i)
-            if (tris[i].touchesGrid()) chunkBounds[c].extend({tris[i].lo, tris[i].hi + 1});
-    });
+    const VoxelTriangles voxelTriangles = toVoxelSpace(meshes, region, out.triangleMaterials);
+    const auto& tris = voxelTriangles.triangles;
     VoxelBox& box = out.bounds;
-    box = {};
-    for (const VoxelBox& b : chunkBounds)
-        if (!b.empty()) box.extend(b);
+    box = voxelTriangles.bounds;
     if (box.empty()) return old;
     // Scatter in slabs of the box's layers.
     const int slabCount = (box.hi.z - box.lo.z + kSlabThickness - 1) / kSlabThickness;
@@ -309,13 +322,14 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
         // The emission and albedo of a textured triangle's piece `where` (voxel space): its material at the
         // piece's centre, its textures filtered over a voxel (the voxel averages all its pieces anyway; a
         // piece's own, smaller footprint reads finer mip levels, for nothing but cache misses).
-        auto materialOf = [&](const VoxelTriangle& t, glm::vec3 where) {
+        auto materialOf = [&](const VoxelTriangle& t, const VoxelMesh& mesh, glm::vec3 where) {
             const glm::vec2 uv = barycentricOf(t, where);
             const SurfaceMaterial m =
-                surfaceMaterialAt(*t.varying, t.index, uv.x, uv.y, region.voxelSize(), nullptr);
+                surfaceMaterialAt(*mesh.varying, t.index, uv.x, uv.y, region.voxelSize(), nullptr);
             return std::pair{m.emission, m.volumeReflectance()};
         };
         auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a, glm::vec3 where) {
+            const VoxelMesh& mesh = voxelTriangles.meshes[t.mesh];
             const size_t i = out.visibility.index(x, y, z);
             glm::vec4& v = out.visibility[i];
             v.x = 1.0f;
@@ -323,15 +337,16 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             v.z += t.normal.y * a;
             v.w += t.normal.z * a;
             out.area[i] += a;
-            if (t.varying && (emissive || withAlbedo)) {
+            if (mesh.varying && (emissive || withAlbedo)) {
                 const auto [emission, albedo] =
-                    t.cached ? std::pair{(*t.cached)[0], (*t.cached)[1]} : materialOf(t, where);
+                    t.cachedMaterial ? std::pair{mesh.cached[t.index][0], mesh.cached[t.index][1]}
+                                     : materialOf(t, mesh, where);
                 if (emissive) out.emission[i] += emission * a;
                 if (withAlbedo) out.albedo[i] += albedo * a;
                 return;
             }
-            if (emissive) out.emission[i] += t.emission * a;
-            if (withAlbedo) out.albedo[i] += t.albedo * a;
+            if (emissive) out.emission[i] += mesh.emission * a;
+            if (withAlbedo) out.albedo[i] += mesh.albedo * a;
         };
         for (uint32_t ti : bins.slab(s)) {
             const VoxelTriangle& t = tris[ti];
@@ -340,10 +355,12 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
                 add(t.lo.x, t.lo.y, t.lo.z, t, t.area, (t.p[0] + t.p[1] + t.p[2]) / 3.0f);
                 continue;
             }
-            forEachTouchedVoxel(t, std::max(zBegin, t.lo.z), std::min(zEnd, t.hi.z + 1),
+            forEachTouchedVoxel(t, std::max(zBegin, static_cast<int>(t.lo.z)), std::min(zEnd, t.hi.z + 1),
                                 [&](int x, int y, int z, const Polygon& piece) {
                                     add(x, y, z, t, piece.area(),
-                                        t.varying && !t.cached ? piece.vertexMean() : glm::vec3(0.0f));
+                                        voxelTriangles.meshes[t.mesh].varying && !t.cachedMaterial
+                                            ? piece.vertexMean()
+                                            : glm::vec3(0.0f));
                                 });
         }
     });

@@ -78,6 +78,10 @@ glm::mat4 lookAtPose(glm::vec3 position, glm::vec3 lookAt, glm::vec3 up) {
 }
 
 void setTransform(TriangleMesh& mesh, const glm::mat4& worldFromObject) {
+    mesh = placedMesh(mesh, worldFromObject);
+}
+
+TriangleMesh placedMesh(const TriangleMesh& mesh, const glm::mat4& worldFromObject) {
     const std::string where = "mesh '" + mesh.name + "'";
     try {
         checkTransform(worldFromObject);
@@ -105,7 +109,7 @@ void setTransform(TriangleMesh& mesh, const glm::mat4& worldFromObject) {
     cleanMesh(placed, where);
     placed.objectSpace = std::move(objectSpace);
     placed.worldFromObject = worldFromObject;
-    mesh = std::move(placed);
+    return placed;
 }
 
 Camera turnedCamera(const Camera& camera, glm::vec3 centre, float degrees) {
