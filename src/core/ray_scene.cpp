@@ -280,6 +280,7 @@ void RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 
         result.normal = shadingNormal(mesh, tri, u, v, result.geometricNormal);
     }
     result.isVirtual = ref.isVirtual;
+    result.varies = ref.varying;
 }
 
 void lookUpMaterial(RayHit& hit, float footprint) {

@@ -33,6 +33,7 @@ struct RayHit {
     unsigned triangle = 0;
     glm::vec2 barycentric{0.0f};
     bool isVirtual = false;
+    bool varies = false;  // its mesh's material varies over the surface (variesOverSurface)
     bool hit() const { return material != nullptr; }
 };
 
