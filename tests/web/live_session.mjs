@@ -225,7 +225,7 @@ try {
     driver: (driverCpu.user + driverCpu.system) / 1e6 };
   const drag = await page.evaluate((c) => {
     const { drawn, latencies, frames } = window.deltagi;
-    return { frames: frames - c.frames, seconds: (performance.now() - c.t) / 1000,
+    return { frames: frames - c.frames, seconds: (performance.now() - c.t) / 1000, upAt: performance.now(),
       latencies: latencies.slice(c.latencies), frameMs: drawn.filter(([t]) => t > c.t).map(([, ms]) => ms),
       stages: drawn.filter(([t]) => t > c.t).map(([, , , stages, jpeg]) => [...stages, ['jpeg', jpeg]]) };
   }, countsBefore);
@@ -247,6 +247,11 @@ try {
   log(`FIGURES: median ms per stage of the frames shown during the drag: ${Object.entries(stageMedians)
     .map(([name, v]) => `${name} ${v.sort((a, b) => a - b)[v.length >> 1].toFixed(1)}`).join(', ')}`);
   check(drag.frames >= 3 && sorted.length >= 3, 'frames were shown during the drag');
+  const refinedAfter = await page.evaluate((upAt) => window.deltagi.drawn.find(([t, , refined]) => t > upAt &&
+    refined), drag.upAt);
+  if (refinedAfter)
+    log(`FIGURES: the refined frame after the drag: rendered in ${refinedAfter[1].toFixed(1)} ms, shown ` +
+      `${((refinedAfter[0] - drag.upAt) / 1000).toFixed(2)} s after the mouse was released`);
 
   const state1 = await page.evaluate(() => window.deltagi.state);
   const anchor1 = state1.objects[state1.selected].anchor;
