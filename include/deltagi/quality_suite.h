@@ -43,8 +43,8 @@ struct QualitySuite {
     std::vector<SuiteScene> scenes;
     uint64_t seed = 0;  // "seed": the path tracer's random sequence, for every reference of the suite
     // "fit_spp": the low-sample references that measure the path tracer's noise (each below a scene's spp
-    // counts); see fitNoiseConstant().
-    std::vector<int> fitSamples{1, 4, 16};
+    // counts; the largest gives it); see noiseConstantOf().
+    std::vector<int> fitSamples{1, 4, 16, 64};
 };
 
 // A suite file ({"scenes": [{"scene": "cornell-box.json", "spp": 512, "set": [...]}, ...]}, see
@@ -86,10 +86,20 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
 
 // The path tracer's delta error falls as c / sqrt(spp). Measured against a reference of `referenceSpp`
 // samples rendered from the same random sequence (the n-sample image is the mean of the reference's first n
-// samples), its expected square is c^2 (1/n - 1/referenceSpp). Fits c by least squares on the logarithm
-// (a line of slope -1/2): the geometric mean of the points' c. Points with n >= referenceSpp or an error
-// that is not finite and > 0 are left out; NaN when none is left.
-double fitNoiseConstant(std::span<const int> samples, std::span<const double> errors, int referenceSpp);
+// samples), its expected square is c^2 (1/n - 1/referenceSpp): each point gives c. Where every sample is
+// about as bright as the next the points agree; where rare bright paths dominate (caustics: a glossy glaze
+// that mirrors a small lamp onto the floor) the figures of a few samples fall faster than 1/sqrt(n) and
+// overstate c (cornell-textured: 40, 22 and 11 from 1, 4 and 16 samples, 10.6 from 256). So c is the point's
+// with the most samples (below referenceSpp), the nearest to the reference's own regime. Points with
+// n >= referenceSpp or an error that is not finite and > 0 are left out; NaN when none is left.
+double noiseConstantOf(std::span<const int> samples, std::span<const double> errors, int referenceSpp);
+// The c of each point (NaN for a point left out), in the order given.
+std::vector<double> pointNoiseConstants(std::span<const int> samples, std::span<const double> errors,
+                                        int referenceSpp);
+// The first point whose c is more than 1.5 times the one used (noiseConstantOf()): the figures of few samples
+// do not fall as 1/sqrt(spp). The suite warns then.
+std::optional<size_t> overstatingPoint(std::span<const int> samples, std::span<const double> errors,
+                                       int referenceSpp);
 
 // Samples per pixel at which the path tracer's expected delta error equals `error`, DGI's error measured
 // against a reference of `referenceSpp` samples: the reference's own noise c / sqrt(referenceSpp) is taken
@@ -129,7 +139,7 @@ struct SceneQuality {
     double referenceMs = 0.0;  // when the reference was rendered (both renders), from the cache
     std::vector<int> fitSamples;
     std::vector<double> fitDeltaErrors, fitObjectErrors;      // of the low-sample references
-    double noiseConstant = 0.0, objectNoiseConstant = 0.0;    // c of the fit, for Δ and the object
+    double noiseConstant = 0.0, objectNoiseConstant = 0.0;    // c (noiseConstantOf), for Δ and the object
     double referenceNoise = 0.0, objectReferenceNoise = 0.0;  // c / sqrt(referenceSpp)
     double equalErrorSpp = 0.0, equalErrorMs = 0.0;
     size_t cacheHits = 0, cacheMisses = 0;

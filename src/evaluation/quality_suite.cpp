@@ -165,17 +165,39 @@ QualitySuite loadSuite(const fs::path& fileOrFolder) {
     return suite;
 }
 
-double fitNoiseConstant(std::span<const int> samples, std::span<const double> errors, int referenceSpp) {
-    double sumLog = 0.0;
-    int count = 0;
+// How far a point's c may lie above the one used before the suite says the noise is not well behaved.
+constexpr double kNoiseConstantSpread = 1.5;
+
+std::vector<double> pointNoiseConstants(std::span<const int> samples, std::span<const double> errors,
+                                        int referenceSpp) {
+    std::vector<double> c;
     for (size_t i = 0; i < std::min(samples.size(), errors.size()); ++i) {
         const double n = samples[i], e = errors[i];
-        if (!(n < referenceSpp) || !(n >= 1.0) || !std::isfinite(e) || !(e > 0.0)) continue;
-        // log e = log c + 0.5 log(1/n - 1/N): with the slope fixed, least squares gives the mean of log c.
-        sumLog += std::log(e) - 0.5 * std::log(1.0 / n - 1.0 / referenceSpp);
-        ++count;
+        const bool usable = n < referenceSpp && n >= 1.0 && std::isfinite(e) && e > 0.0;
+        c.push_back(usable ? e / std::sqrt(1.0 / n - 1.0 / referenceSpp) : kNaN);
     }
-    return count > 0 ? std::exp(sumLog / count) : kNaN;
+    return c;
+}
+
+double noiseConstantOf(std::span<const int> samples, std::span<const double> errors, int referenceSpp) {
+    const std::vector<double> c = pointNoiseConstants(samples, errors, referenceSpp);
+    double best = kNaN;
+    int most = 0;
+    for (size_t i = 0; i < c.size(); ++i)
+        if (!std::isnan(c[i]) && samples[i] > most) {
+            most = samples[i];
+            best = c[i];
+        }
+    return best;
+}
+
+std::optional<size_t> overstatingPoint(std::span<const int> samples, std::span<const double> errors,
+                                       int referenceSpp) {
+    const double c = noiseConstantOf(samples, errors, referenceSpp);
+    const std::vector<double> points = pointNoiseConstants(samples, errors, referenceSpp);
+    for (size_t i = 0; i < points.size(); ++i)
+        if (c > 0.0 && points[i] > kNoiseConstantSpread * c) return i;
+    return std::nullopt;
 }
 
 double equalErrorSamples(double c, double error, int referenceSpp) {
@@ -249,8 +271,8 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
         q.fitDeltaErrors.push_back(f.deltaRelError);
         q.fitObjectErrors.push_back(f.objectRelRmse);
     }
-    q.noiseConstant = fitNoiseConstant(q.fitSamples, q.fitDeltaErrors, q.referenceSpp);
-    q.objectNoiseConstant = fitNoiseConstant(q.fitSamples, q.fitObjectErrors, q.referenceSpp);
+    q.noiseConstant = noiseConstantOf(q.fitSamples, q.fitDeltaErrors, q.referenceSpp);
+    q.objectNoiseConstant = noiseConstantOf(q.fitSamples, q.fitObjectErrors, q.referenceSpp);
     q.referenceNoise = q.noiseConstant / std::sqrt(q.referenceSpp);
     q.objectReferenceNoise = q.objectNoiseConstant / std::sqrt(q.referenceSpp);
     q.equalErrorSpp = equalErrorSamples(q.noiseConstant, q.dgi.deltaRelError, q.referenceSpp);
@@ -269,6 +291,15 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
             fmt::format("{}: no reference noise estimate: every fit_spp is at least the "
                         "scene's spp ({})",
                         entry.file.string(), q.referenceSpp));
+    // Points that disagree: the noise of a few samples is not the reference's (noiseConstantOf()).
+    if (const auto i = overstatingPoint(q.fitSamples, q.fitDeltaErrors, q.referenceSpp))
+        q.warnings.push_back(fmt::format(
+            "{}: the path tracer's error falls faster than 1/sqrt(spp) (c {:.2f} from {} spp, {:.2f} from "
+            "the "
+            "largest fit_spp): rare bright paths (caustics) dominate the figures of few samples, so the "
+            "noise and the equal-error figures come from the largest",
+            entry.file.string(), pointNoiseConstants(q.fitSamples, q.fitDeltaErrors, q.referenceSpp)[*i],
+            q.fitSamples[*i], q.noiseConstant));
     checkNoise("delta_rel_error", q.referenceNoise, q.dgi.deltaRelError);
     checkNoise("object_rel_rmse", q.objectReferenceNoise, q.dgi.objectRelRmse);
     return q;

@@ -34,23 +34,39 @@ TEST(EqualErrorFit, RecoversTheNoiseConstantOfExactPoints) {
     const std::vector<int> spp{1, 4, 16};
     std::vector<double> errors;
     for (const int n : spp) errors.push_back(c * std::sqrt(1.0 / n - 1.0 / referenceSpp));
-    EXPECT_NEAR(fitNoiseConstant(spp, errors, referenceSpp), c, 1e-12);
+    EXPECT_NEAR(noiseConstantOf(spp, errors, referenceSpp), c, 1e-12);
+    for (const double point : pointNoiseConstants(spp, errors, referenceSpp)) EXPECT_NEAR(point, c, 1e-12);
 }
 
-TEST(EqualErrorFit, AveragesScatteredPointsOnTheLogarithm) {
-    // Points 10 % above and below the curve: the geometric mean of their c cancels the scatter.
+TEST(EqualErrorFit, TakesThePointWithTheMostSamples) {
+    // Figures of few samples that fall as 1/spp (caustics), not 1/sqrt(spp): the largest point's c, whatever
+    // the order of the points.
     const double c = 0.8;
-    const std::vector<int> spp{4, 16};
-    const std::vector<double> errors{1.1 * c * std::sqrt(1.0 / 4 - 1.0 / 1024),
-                                     c / 1.1 * std::sqrt(1.0 / 16 - 1.0 / 1024)};
-    EXPECT_NEAR(fitNoiseConstant(spp, errors, 1024), c, 1e-12);
+    const std::vector<int> spp{16, 1, 256, 4};
+    const std::vector<double> errors{
+        4.0 * c * std::sqrt(1.0 / 16 - 1.0 / 1024), 64.0 * c * std::sqrt(1.0 - 1.0 / 1024),
+        c * std::sqrt(1.0 / 256 - 1.0 / 1024), 16.0 * c * std::sqrt(1.0 / 4 - 1.0 / 1024)};
+    EXPECT_NEAR(noiseConstantOf(spp, errors, 1024), c, 1e-12);
+    const std::vector<double> points = pointNoiseConstants(spp, errors, 1024);
+    ASSERT_EQ(points.size(), 4u);
+    EXPECT_NEAR(points[0], 4.0 * c, 1e-12);
+    EXPECT_NEAR(points[1], 64.0 * c, 1e-12);
+    // The suite says so: the first point (16 spp) is 4 times c.
+    EXPECT_EQ(overstatingPoint(spp, errors, 1024), std::optional<size_t>(0));
+    // Points that scatter by 10 % around the curve are well behaved.
+    const std::vector<double> scattered{
+        1.1 * c * std::sqrt(1.0 / 16 - 1.0 / 1024), 0.9 * c * std::sqrt(1.0 - 1.0 / 1024),
+        c * std::sqrt(1.0 / 256 - 1.0 / 1024), c * std::sqrt(1.0 / 4 - 1.0 / 1024)};
+    EXPECT_FALSE(overstatingPoint(spp, scattered, 1024).has_value());
 }
 
 TEST(EqualErrorFit, LeavesOutPointsAtOrAboveTheReferenceAndBadErrors) {
     const std::vector<int> spp{1, 4, 64, 16};
     const std::vector<double> errors{2.0 * std::sqrt(1.0 - 1.0 / 64), std::nan(""), 0.5, 0.0};
-    EXPECT_NEAR(fitNoiseConstant(spp, errors, 64), 2.0, 1e-12);
-    EXPECT_TRUE(std::isnan(fitNoiseConstant(std::vector<int>{64}, std::vector<double>{0.3}, 64)));
+    EXPECT_NEAR(noiseConstantOf(spp, errors, 64), 2.0, 1e-12);
+    EXPECT_TRUE(std::isnan(noiseConstantOf(std::vector<int>{64}, std::vector<double>{0.3}, 64)));
+    const std::vector<double> points = pointNoiseConstants(spp, errors, 64);
+    EXPECT_TRUE(std::isnan(points[1]) && std::isnan(points[2]) && std::isnan(points[3]));
 }
 
 TEST(EqualErrorFit, EqualErrorSamplesTakeTheReferenceNoiseOut) {
