@@ -295,8 +295,7 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     if (const auto i = overstatingPoint(q.fitSamples, q.fitDeltaErrors, q.referenceSpp))
         q.warnings.push_back(fmt::format(
             "{}: the path tracer's error falls faster than 1/sqrt(spp) (c {:.2f} from {} spp, {:.2f} from "
-            "the "
-            "largest fit_spp): rare bright paths (caustics) dominate the figures of few samples, so the "
+            "the largest fit_spp): rare bright paths (caustics) dominate the figures of few samples, so the "
             "noise and the equal-error figures come from the largest",
             entry.file.string(), pointNoiseConstants(q.fitSamples, q.fitDeltaErrors, q.referenceSpp)[*i],
             q.fitSamples[*i], q.noiseConstant));
