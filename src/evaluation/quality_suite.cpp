@@ -179,8 +179,10 @@ std::vector<double> pointNoiseConstants(std::span<const int> samples, std::span<
     return c;
 }
 
-double noiseConstantOf(std::span<const int> samples, std::span<const double> errors, int referenceSpp) {
-    const std::vector<double> c = pointNoiseConstants(samples, errors, referenceSpp);
+namespace {
+
+// The c of the usable point with the most samples, from the points' c (pointNoiseConstants()).
+double constantOfMostSamples(std::span<const int> samples, std::span<const double> c) {
     double best = kNaN;
     int most = 0;
     for (size_t i = 0; i < c.size(); ++i)
@@ -191,10 +193,16 @@ double noiseConstantOf(std::span<const int> samples, std::span<const double> err
     return best;
 }
 
+}  // namespace
+
+double noiseConstantOf(std::span<const int> samples, std::span<const double> errors, int referenceSpp) {
+    return constantOfMostSamples(samples, pointNoiseConstants(samples, errors, referenceSpp));
+}
+
 std::optional<size_t> overstatingPoint(std::span<const int> samples, std::span<const double> errors,
                                        int referenceSpp) {
-    const double c = noiseConstantOf(samples, errors, referenceSpp);
     const std::vector<double> points = pointNoiseConstants(samples, errors, referenceSpp);
+    const double c = constantOfMostSamples(samples, points);
     for (size_t i = 0; i < points.size(); ++i)
         if (c > 0.0 && points[i] > kNoiseConstantSpread * c) return i;
     return std::nullopt;
