@@ -2,7 +2,9 @@
 //
 // A frame allocates and frees a few hundred MiB of such arrays; fresh pages from the kernel must be faulted
 // in and zeroed by it every time, which was a seventh of a frame's time. Freed blocks are therefore kept (up
-// to kMaxKeptBytes) and handed out again for the next allocation of the same size. Blocks are 2 MiB aligned,
+// to kMaxKeptBytes) and handed out again for the next allocation of the same size; a new block's pages are
+// faulted in by one system call when it is mapped (a process's first render, `deltagi render
+// examples/cornell-buddha.json`: 236,000 page faults -> 92,000, 3.26 -> 2.65 s). Blocks are 2 MiB aligned,
 // so that the kernel may back them with transparent huge pages where its policy is "always". (Asking for huge
 // pages with madvise was tried: with the "madvise" defrag policy of this project's machines, the first touch
 // of new blocks then stalled in page compaction, doubling a single render's time in one run out of two.)
