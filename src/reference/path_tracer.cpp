@@ -64,8 +64,8 @@ glm::vec3 PathTracer::offsetOrigin(const RayHit& hit, glm::vec3 towards) const {
     return hit.position + (side * settings_.rayOffset) * hit.normal;
 }
 
-glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
-    glm::vec3 sum(0.0f);
+template <typename Add>
+void PathTracer::sampleLights(const RayHit& hit, glm::vec3 wo, Rng& rng, Add&& add) const {
     for (const Light& light : lights_) {
         const float u1 = rng.uniform(), u2 = rng.uniform();
         if (light.fromEnvironment) continue;  // its light is in the map, sampled below
@@ -74,50 +74,81 @@ glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) con
         if (cosTheta <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
         const glm::vec3 origin = offsetOrigin(hit, s.wi);
         const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * settings_.rayOffset : s.distance;
-        if (tMax <= 0.0f || rays_.intersect(origin, s.wi, 0.0f, tMax).hit()) continue;
-        sum += evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.irradiance * cosTheta;
+        if (tMax <= 0.0f) continue;
+        add(origin, s.wi, tMax, evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.irradiance * cosTheta);
     }
-    if (environment_) {
-        const float u1 = rng.uniform(), u2 = rng.uniform();
-        sum += environmentLight(hit, wo, u1, u2);
-    }
+    if (!environment_) return;
+    const float u1 = rng.uniform(), u2 = rng.uniform();
+    const EnvironmentSampler::Sample s = environment_->sample(u1, u2);
+    const float cosTheta = glm::dot(s.wi, hit.normal);
+    if (!(s.pdf > 0.0f) || cosTheta <= 0.0f || s.radiance == glm::vec3(0.0f)) return;
+    const float weight = powerHeuristic(s.pdf, brdfPdf(hit.surface, hit.normal, wo, s.wi));
+    add(offsetOrigin(hit, s.wi), s.wi, std::numeric_limits<float>::infinity(),
+        evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.radiance * (cosTheta * weight / s.pdf));
+}
+
+glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
+    glm::vec3 sum(0.0f);
+    sampleLights(hit, wo, rng, [&](glm::vec3 origin, glm::vec3 direction, float tMax, glm::vec3 light) {
+        if (!rays_.occluded(origin, direction, 0.0f, tMax)) sum += light;
+    });
     return sum;
 }
 
-glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
-    const float uTriangle = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+template <typename Add>
+void PathTracer::sampleEmitters(const RayHit& hit, glm::vec3 wo, float uTriangle, float u1, float u2,
+                                Add&& add) const {
     const SurfaceMaterial& m = hit.surface;
-    if (areaLights_.empty() || (m.diffuse == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f)))
-        return glm::vec3(0.0f);
+    if (areaLights_.empty() || (m.diffuse == glm::vec3(0.0f) && m.specular == glm::vec3(0.0f))) return;
     const AreaLightSample s = areaLights_.sample(uTriangle, u1, u2);
     const glm::vec3 toLight = s.position - hit.position;
     const float d2 = glm::dot(toLight, toLight);
-    if (!(d2 > 0.0f)) return glm::vec3(0.0f);
+    if (!(d2 > 0.0f)) return;
     const float d = std::sqrt(d2);
     const glm::vec3 wi = toLight / d;
     const float cosSurface = glm::dot(wi, hit.normal);
     const float cosLight = std::abs(glm::dot(wi, s.normal));
-    if (cosSurface <= 0.0f || !(cosLight > 0.0f)) return glm::vec3(0.0f);
+    if (cosSurface <= 0.0f || !(cosLight > 0.0f)) return;
     // The shadow ray aims at the point from the offset origin: a ray parallel to wi would meet the emitter's
     // plane short of the point at grazing angles, and the emitter would shadow itself.
     const glm::vec3 origin = offsetOrigin(hit, wi);
     const glm::vec3 toPoint = s.position - origin;
     const float distance = glm::length(toPoint);
     const float tMax = distance - 2.0f * settings_.rayOffset;
-    if (tMax <= 0.0f || rays_.intersect(origin, toPoint / distance, 0.0f, tMax).hit()) return glm::vec3(0.0f);
+    if (tMax <= 0.0f) return;
     const float pdfLight = s.pdfArea * d2 / cosLight;  // per unit solid angle at the hit
-    if (!(pdfLight > 0.0f) || !std::isfinite(pdfLight)) return glm::vec3(0.0f);
+    if (!(pdfLight > 0.0f) || !std::isfinite(pdfLight)) return;
     const float weight = powerHeuristic(pdfLight, brdfPdf(m, hit.normal, wo, wi));
-    return evalBrdf(m, hit.normal, wo, wi) * s.radiance * (cosSurface * weight / pdfLight);
+    add(origin, toPoint / distance, tMax,
+        evalBrdf(m, hit.normal, wo, wi) * s.radiance * (cosSurface * weight / pdfLight));
 }
 
-glm::vec3 PathTracer::environmentLight(const RayHit& hit, glm::vec3 wo, float u1, float u2) const {
-    const EnvironmentSampler::Sample s = environment_->sample(u1, u2);
-    const float cosTheta = glm::dot(s.wi, hit.normal);
-    if (!(s.pdf > 0.0f) || cosTheta <= 0.0f || s.radiance == glm::vec3(0.0f)) return glm::vec3(0.0f);
-    if (rays_.intersect(offsetOrigin(hit, s.wi), s.wi).hit()) return glm::vec3(0.0f);
-    const float weight = powerHeuristic(s.pdf, brdfPdf(hit.surface, hit.normal, wo, s.wi));
-    return evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.radiance * (cosTheta * weight / s.pdf);
+glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
+    const float uTriangle = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+    glm::vec3 light(0.0f);
+    sampleEmitters(hit, wo, uTriangle, u1, u2,
+                   [&](glm::vec3 origin, glm::vec3 direction, float tMax, glm::vec3 l) {
+                       if (!rays_.occluded(origin, direction, 0.0f, tMax)) light = l;
+                   });
+    return light;
+}
+
+float PathTracer::emitterWeight(const RayHit& at, glm::vec3 direction, glm::vec3 previousPosition,
+                                float previousPdf) const {
+    const glm::vec3 step = at.position - previousPosition;
+    const float cosLight = std::abs(glm::dot(at.geometricNormal, direction));
+    const float pdfLight = cosLight > 0.0f ? areaLights_.pdfArea(triangleEmission(*at.mesh, at.triangle)) *
+                                                 glm::dot(step, step) / cosLight
+                                           : std::numeric_limits<float>::infinity();
+    return powerHeuristic(previousPdf, pdfLight);
+}
+
+glm::vec3 PathTracer::lastBounceLight(const RayHit& hit, const BrdfSample& s, const RayHit& next) const {
+    if (!next.hit() && environment_)
+        return s.weight * environment_->radiance(s.wi) * powerHeuristic(s.pdf, environment_->pdf(s.wi));
+    if (next.hit() && next.surface.emits())
+        return s.weight * next.surface.emission * emitterWeight(next, s.wi, hit.position, s.pdf);
+    return glm::vec3(0.0f);
 }
 
 glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const {
@@ -126,28 +157,26 @@ glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) 
 
 glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const {
     if (!firstHit.hit()) return environment_ ? environment_->radiance(direction) : glm::vec3(0.0f);
-    glm::vec3 radiance(0.0f), throughput(1.0f);
-    RayHit hit = firstHit;
-    glm::vec3 previousPosition(0.0f);
-    float previousPdf = 0.0f;  // of the BRDF sample that led to `hit`
-    // An emitter reached by a BRDF sample from `previousPosition`: its MIS share against emittedLight().
-    auto emitterWeight = [&](const RayHit& at, glm::vec3 dir) {
-        const glm::vec3 step = at.position - previousPosition;
-        const float cosLight = std::abs(glm::dot(at.geometricNormal, dir));
-        const float pdfLight = cosLight > 0.0f
-                                   ? areaLights_.pdfArea(triangleEmission(*at.mesh, at.triangle)) *
-                                         glm::dot(step, step) / cosLight
-                                   : std::numeric_limits<float>::infinity();
-        return powerHeuristic(previousPdf, pdfLight);
-    };
-    for (int bounce = 0; hit.hit(); ++bounce) {
-        const glm::vec3 wo = -direction;
+    PathState path;
+    path.hit = firstHit;
+    path.direction = direction;
+    trace(path, rng);
+    return path.radiance;
+}
+
+void PathTracer::trace(PathState& p, Rng& rng) const {
+    for (; p.hit.hit(); ++p.bounce) {
+        const RayHit& hit = p.hit;
+        const glm::vec3 wo = -p.direction;
         // Seen by the camera: all of it.
         if (hit.surface.emits())
-            radiance +=
-                throughput * hit.surface.emission * (bounce > 0 ? emitterWeight(hit, direction) : 1.0f);
-        radiance += throughput * (directLight(hit, wo, rng) + emittedLight(hit, wo, rng));
-        const bool lastBounce = bounce + 1 >= settings_.maxBounces;
+            p.radiance +=
+                p.throughput * hit.surface.emission *
+                (p.bounce > 0 ? emitterWeight(hit, p.direction, p.previousPosition, p.previousPdf) : 1.0f);
+        // The emitters' numbers first, then the lights' (the order of the references rendered before).
+        const glm::vec3 emitted = emittedLight(hit, wo, rng);
+        p.radiance += p.throughput * (directLight(hit, wo, rng) + emitted);
+        const bool lastBounce = p.bounce + 1 >= settings_.maxBounces;
         // Always four numbers per bounce, whatever happens, to keep the two correlated paths in step.
         const float uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), uRoulette = rng.uniform();
         const BrdfSample s = sampleBrdf(hit.surface, hit.normal, wo, uLobe, u1, u2);
@@ -156,34 +185,143 @@ glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 directio
             // The bounce limit (a direct-light-only reference: maxBounces 1): the BRDF sample still brings
             // its MIS share of the direct light, the environment or an emitter it meets, and nothing beyond.
             // Without it the light sample's share alone fell short of the map's direct light.
-            const RayHit next = rays_.intersect(offsetOrigin(hit, s.wi), s.wi);
-            if (!next.hit() && environment_)
-                radiance += throughput * s.weight * environment_->radiance(s.wi) *
-                            powerHeuristic(s.pdf, environment_->pdf(s.wi));
-            if (next.hit() && next.surface.emits()) {
-                previousPosition = hit.position;
-                previousPdf = s.pdf;
-                radiance += throughput * s.weight * next.surface.emission * emitterWeight(next, s.wi);
-            }
+            p.radiance +=
+                p.throughput * lastBounceLight(hit, s, rays_.intersect(offsetOrigin(hit, s.wi), s.wi));
             break;
         }
-        throughput *= s.weight;
-        if (bounce + 1 >= settings_.rouletteStartBounce) {
-            const float survive = std::min(maxComponent(throughput), kMaxSurvivalProbability);
+        p.throughput *= s.weight;
+        if (p.bounce + 1 >= settings_.rouletteStartBounce) {
+            const float survive = std::min(maxComponent(p.throughput), kMaxSurvivalProbability);
             if (!(uRoulette < survive)) break;
-            throughput /= survive;
+            p.throughput /= survive;
         }
-        direction = s.wi;
-        previousPosition = hit.position;
-        previousPdf = s.pdf;
-        hit = rays_.intersect(offsetOrigin(hit, s.wi), direction);
+        p.direction = s.wi;
+        p.previousPosition = hit.position;
+        p.previousPdf = s.pdf;
+        p.hit = rays_.intersect(offsetOrigin(hit, s.wi), p.direction);
         // A path that leaves the scene sees the environment, weighted against the light sample of
         // directLight().
-        if (!hit.hit() && environment_)
-            radiance += throughput * environment_->radiance(direction) *
-                        powerHeuristic(s.pdf, environment_->pdf(direction));
+        if (!p.hit.hit() && environment_)
+            p.radiance += p.throughput * environment_->radiance(p.direction) *
+                          powerHeuristic(s.pdf, environment_->pdf(p.direction));
     }
-    return radiance;
+}
+
+DifferentialPathTracer::DifferentialPathTracer(const PathTracer& with, const PathTracer& without,
+                                               const RayScene& objects)
+    : with_(with),
+      without_(without),
+      objects_(objects),
+      sameEmitters_(with.areaLights_.size() == without.areaLights_.size()) {}
+
+DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 origin, glm::vec3 direction,
+                                                                  const RayHit& firstHit, Rng& rng) const {
+    Radiance r;
+    if (!firstHit.hit()) {  // the same environment (or nothing) in both
+        r.with = r.without = with_.radianceFromHit(firstHit, direction, rng);
+        return r;
+    }
+    if (firstHit.isVirtual) {  // apart from the start
+        Rng rngWithout = rng;
+        r.with = with_.radianceFromHit(firstHit, direction, rng);
+        r.without = without_.radiance(origin, direction, rngWithout);
+        return r;
+    }
+    const RayScene& real = without_.rays_;
+    const PathTracer& shared = with_;  // the settings, lights and environment are the same in both
+    // Shadow rays: blocked in the real scene (and so in both), or by an object (in `with` alone).
+    glm::vec3 directWith(0.0f), directWithout(0.0f), emittedWith(0.0f), emittedWithout(0.0f);
+    auto intoBoth = [&real, this](glm::vec3& with, glm::vec3& without) {
+        return [&real, this, w = &with, wo = &without](glm::vec3 from, glm::vec3 towards, float tMax,
+                                                       glm::vec3 light) {
+            if (real.occluded(from, towards, 0.0f, tMax)) return;
+            *wo += light;
+            if (!objects_.occluded(from, towards, 0.0f, tMax)) *w += light;
+        };
+    };
+    PathState p;  // the shared path; its radiance is `with`'s, `without` gathers apart
+    p.hit = firstHit;
+    p.direction = direction;
+    glm::vec3 without(0.0f);
+    for (; p.hit.hit(); ++p.bounce) {
+        const RayHit& hit = p.hit;
+        const glm::vec3 wo = -p.direction;
+        if (hit.surface.emits()) {
+            p.radiance +=
+                p.throughput * hit.surface.emission *
+                (p.bounce > 0 ? with_.emitterWeight(hit, p.direction, p.previousPosition, p.previousPdf)
+                              : 1.0f);
+            without +=
+                p.throughput * hit.surface.emission *
+                (p.bounce > 0 ? without_.emitterWeight(hit, p.direction, p.previousPosition, p.previousPdf)
+                              : 1.0f);
+        }
+        directWith = directWithout = emittedWith = emittedWithout = glm::vec3(0.0f);
+        const float uTriangle = rng.uniform(), uEmitter1 = rng.uniform(), uEmitter2 = rng.uniform();
+        if (sameEmitters_) {
+            shared.sampleEmitters(hit, wo, uTriangle, uEmitter1, uEmitter2,
+                                  intoBoth(emittedWith, emittedWithout));
+        } else {  // an object emits: each samples its own emitters, with the same numbers
+            glm::vec3 unused(0.0f);
+            with_.sampleEmitters(hit, wo, uTriangle, uEmitter1, uEmitter2, intoBoth(emittedWith, unused));
+            without_.sampleEmitters(hit, wo, uTriangle, uEmitter1, uEmitter2,
+                                    [&](glm::vec3 from, glm::vec3 towards, float tMax, glm::vec3 light) {
+                                        if (!real.occluded(from, towards, 0.0f, tMax)) emittedWithout = light;
+                                    });
+        }
+        shared.sampleLights(hit, wo, rng, intoBoth(directWith, directWithout));
+        p.radiance += p.throughput * (directWith + emittedWith);
+        without += p.throughput * (directWithout + emittedWithout);
+        const bool lastBounce = p.bounce + 1 >= shared.settings_.maxBounces;
+        const float uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), uRoulette = rng.uniform();
+        const BrdfSample s = sampleBrdf(hit.surface, hit.normal, wo, uLobe, u1, u2);
+        if (!s.valid()) break;
+        const glm::vec3 from = shared.offsetOrigin(hit, s.wi);
+        if (lastBounce) {
+            const RayHit next = with_.rays_.intersect(from, s.wi);
+            p.radiance += p.throughput * with_.lastBounceLight(hit, s, next);
+            without += p.throughput *
+                       without_.lastBounceLight(hit, s, next.isVirtual ? real.intersect(from, s.wi) : next);
+            break;
+        }
+        p.throughput *= s.weight;
+        if (p.bounce + 1 >= shared.settings_.rouletteStartBounce) {
+            const float survive = std::min(maxComponent(p.throughput), kMaxSurvivalProbability);
+            if (!(uRoulette < survive)) break;
+            p.throughput /= survive;
+        }
+        p.direction = s.wi;
+        p.previousPosition = hit.position;
+        p.previousPdf = s.pdf;
+        const RayHit next = with_.rays_.intersect(from, p.direction);
+        if (next.isVirtual) {
+            // The paths part: each continues from here with the same random numbers.
+            PathState apart = p;
+            apart.radiance = without;
+            apart.hit = real.intersect(from, p.direction);
+            if (!apart.hit.hit() && shared.environment_)
+                apart.radiance += apart.throughput * shared.environment_->radiance(apart.direction) *
+                                  powerHeuristic(s.pdf, shared.environment_->pdf(apart.direction));
+            ++apart.bounce;
+            Rng rngWithout = rng;
+            without_.trace(apart, rngWithout);
+            without = apart.radiance;
+            p.hit = next;
+            ++p.bounce;
+            with_.trace(p, rng);
+            break;
+        }
+        p.hit = next;
+        if (!p.hit.hit() && shared.environment_) {
+            const glm::vec3 sky = p.throughput * shared.environment_->radiance(p.direction) *
+                                  powerHeuristic(s.pdf, shared.environment_->pdf(p.direction));
+            p.radiance += sky;
+            without += sky;
+        }
+    }
+    r.with = p.radiance;
+    r.without = without;
+    return r;
 }
 
 namespace {
@@ -256,6 +394,8 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     const EnvironmentSampler* sampler = environment ? &*environment : nullptr;
     const PathTracer withTracer(all, allEmitters, scene.lights, settings, sampler);
     const PathTracer withoutTracer(realOnly, realEmitters, scene.lights, settings, sampler);
+    const RayScene objects(scene, SceneContent::VirtualOnly);
+    const DifferentialPathTracer tracer(withTracer, withoutTracer, objects);
 
     const int w = camera.width, h = camera.height;
     std::vector<PixelSums> sums(static_cast<size_t>(w) * h);
@@ -272,11 +412,7 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
                 const glm::vec3 dir = glm::normalize(camera.rayDirection(x + jx, static_cast<float>(y) + jy));
                 const RayHit first = all.intersect(eye, dir);
                 // The same random numbers for both paths: their difference is the object's effect alone.
-                Rng rngWith = pixelRng, rngWithout = pixelRng;
-                glm::vec3 with = withTracer.radianceFromHit(first, dir, rngWith);
-                // A real first hit is the same surface in the scene without the objects.
-                glm::vec3 without = first.isVirtual ? withoutTracer.radiance(eye, dir, rngWithout)
-                                                    : withoutTracer.radianceFromHit(first, dir, rngWithout);
+                auto [with, without] = tracer.radiance(eye, dir, first, pixelRng);
                 if (!isFinite(with) || !isFinite(without)) with = without = glm::vec3(0.0f);  // never NaN
                 PixelSums& s = sums[i];
                 s.with += glm::dvec3(with);

@@ -2,8 +2,8 @@
 // every vertex, BRDF importance sampling (brdf_sampling.h) and Russian roulette. Emissive surfaces are lit by
 // both strategies, next-event estimation of one point on the emitters (area_lights.h) and the BRDF-sampled
 // ray that hits one, weighted by multiple importance sampling (Veach 1997, the power heuristic).
-// renderReference() (include/deltagi/reference.h) runs it twice per camera sample, with and without the
-// virtual objects.
+// renderReference() (include/deltagi/reference.h) takes two paths per camera sample, with and without the
+// virtual objects (DifferentialPathTracer: one path while they are the same).
 #pragma once
 
 #include <span>
@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 
 #include "core/area_lights.h"
+#include "core/brdf_sampling.h"
 #include "core/environment_sampling.h"
 #include "core/lights.h"
 #include "core/ray_scene.h"
@@ -29,6 +30,18 @@ struct PathSettings {
     int rouletteStartBounce = 3;  // vertices from this index on (0 = first hit) continue with probability q
     int maxBounces = 256;         // a safety bound
     float rayOffset = 1e-4f;      // world units; see kRayOffsetScale (core/ray_scene.h)
+};
+
+// A path between two vertices: the hit it is at (vertex `bounce`, 0 = the camera ray's), what it carries and
+// what it has gathered so far.
+struct PathState {
+    RayHit hit;
+    glm::vec3 direction{0.0f};  // of the ray that reached `hit`
+    glm::vec3 throughput{1.0f};
+    glm::vec3 radiance{0.0f};
+    glm::vec3 previousPosition{0.0f};  // the vertex before, and the pdf of the BRDF sample that left it
+    float previousPdf = 0.0f;
+    int bounce = 0;
 };
 
 class PathTracer {
@@ -50,6 +63,8 @@ class PathTracer {
     glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
     // The same, when the first hit along `direction` is already known.
     glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
+    // Continues `path` (at a hit) until it ends, adding what it gathers to path.radiance.
+    void trace(PathState& path, Rng& rng) const;
     // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
     // drawn, so that paths with and without the objects consume the same sequence), and one sample of the
     // environment (2 more numbers) weighted against BRDF sampling by the power heuristic (MIS).
@@ -59,14 +74,55 @@ class PathTracer {
     glm::vec3 emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
 
   private:
+    friend class DifferentialPathTracer;
     glm::vec3 offsetOrigin(const RayHit& hit, glm::vec3 towards) const;
-    glm::vec3 environmentLight(const RayHit& hit, glm::vec3 wo, float u1, float u2) const;
+    // The light samples of directLight(): add(origin, direction, tMax, value) for each that brings light if
+    // nothing lies between (origin + t direction, t < tMax; the caller tests the visibility).
+    template <typename Add>
+    void sampleLights(const RayHit& hit, glm::vec3 wo, Rng& rng, Add&& add) const;
+    // The emitter sample of emittedLight() for its three random numbers, the same way.
+    template <typename Add>
+    void sampleEmitters(const RayHit& hit, glm::vec3 wo, float uTriangle, float u1, float u2,
+                        Add&& add) const;
+    // The MIS weight of an emitter that a BRDF sample of pdf `previousPdf` from `previousPosition` met at
+    // `at` along `direction`, against emittedLight()'s sample of it.
+    float emitterWeight(const RayHit& at, glm::vec3 direction, glm::vec3 previousPosition,
+                        float previousPdf) const;
+    // What the BRDF sample (s, from `hit`) of a path's last allowed vertex brings from `next`, the surface
+    // it meets (or the environment it leaves to), with MIS weights; nothing beyond.
+    glm::vec3 lastBounceLight(const RayHit& hit, const BrdfSample& s, const RayHit& next) const;
 
     const RayScene& rays_;
     const AreaLights& areaLights_;
     std::span<const Light> lights_;
     PathSettings settings_;
     const EnvironmentSampler* environment_;
+};
+
+// The two paths of a camera sample in the differential render, with and without the virtual objects, traced
+// as one while they are the same path: they draw the same random numbers, so until a ray of the path meets
+// an object they visit the same vertices, and only their shadow rays (and the emitters' MIS weights, when an
+// object emits) can differ. The shared vertices are traced once, with two visibility tests per shadow ray
+// (the real scene, then the objects); where a bounce ray meets an object the two continue apart. The same
+// result as two PathTracers run with copies of one random sequence, at about the cost of one.
+class DifferentialPathTracer {
+  public:
+    // `with` traces the scene with the objects (its RayScene holds real and virtual meshes), `without` the
+    // real scene alone; `objects` holds the virtual meshes alone. All must outlive this.
+    DifferentialPathTracer(const PathTracer& with, const PathTracer& without, const RayScene& objects);
+
+    struct Radiance {
+        glm::vec3 with{0.0f}, without{0.0f};
+    };
+    // Both radiances arriving at `origin` from `direction`, whose first hit in the scene with the objects is
+    // `firstHit`.
+    Radiance radiance(glm::vec3 origin, glm::vec3 direction, const RayHit& firstHit, Rng& rng) const;
+
+  private:
+    const PathTracer& with_;
+    const PathTracer& without_;
+    const RayScene& objects_;
+    bool sameEmitters_;  // no object emits: both sample the same emitters
 };
 
 }  // namespace deltagi

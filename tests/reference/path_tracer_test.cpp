@@ -10,6 +10,8 @@
 #include <tbb/global_control.h>
 
 #include "core/brdf_sampling.h"
+#include "core/environment_sampling.h"
+#include "deltagi/environment.h"
 #include "deltagi/reference.h"
 #include "test_scenes.h"
 
@@ -440,6 +442,75 @@ TEST(Reference, TimeLimitStopsAfterWholePasses) {
     o.samplesPerPixel = 1;
     o.timeLimitSeconds = 0.0;
     expectIdentical(limited.composite, renderReference(s, o).composite, "1 pass");
+}
+
+// The differential render traces a camera sample's two paths as one while they are the same path
+// (DifferentialPathTracer): it must give exactly what the two tracers give run apart with copies of one
+// random sequence. A scene with every kind of light (a sphere light, an emitting real panel, a sky) and a
+// glossy wall, with and without an emitting object (each set of emitters then samples its own), and with one
+// bounce (the last-bounce light) or many.
+TEST(Reference, DifferentialPathsAreTheTwoTracersRunApart) {
+    for (bool objectEmits : {false, true})
+        for (int maxBounces : {1, 256}) {
+            Scene s = ballOverFloor({0, 0.3f, 0});
+            s.camera = test::lookAtCamera({0.0f, 1.6f, 1.6f}, {0, 0, 0}, 64, 48, 60.0f);
+            s.lights[0].radius = 0.1f;
+            Material wall = diffuse(glm::vec3(0.4f));
+            wall.specular = glm::vec3(0.3f);
+            wall.roughness = 0.3f;
+            TriangleMesh back = placed(makeQuad({2.0f, 2.0f}), {0, 0, 0}, wall, "back");
+            for (glm::vec3& p : back.positions) p = glm::vec3(p.x, p.z + 1.0f, -1.0f);
+            for (glm::vec3& n : back.normals) n = glm::vec3(0, 0, 1);
+            s.real.push_back(back);
+            Material panel = diffuse(glm::vec3(0.0f));
+            panel.emission = glm::vec3(2.0f, 1.5f, 1.0f);
+            s.real.push_back(placed(makeQuad({0.5f, 0.5f}), {0.4f, 1.3f, 0.0f}, panel, "panel"));
+            if (objectEmits) {
+                Material glow = diffuse(glm::vec3(0.2f));
+                glow.emission = glm::vec3(0.5f, 2.0f, 0.5f);
+                s.virtuals.push_back(placed(makeQuad({0.3f, 0.3f}), {-0.5f, 0.6f, 0.2f}, glow, "glow"));
+            }
+            s.options.environment.lightCount = 0;
+            Environment sky;
+            sky.radiance = Image(32, 16, 3, 0.3f);
+            setEnvironment(s, std::move(sky));
+
+            const RayScene all(s, SceneContent::RealAndVirtual), real(s, SceneContent::RealOnly),
+                objects(s, SceneContent::VirtualOnly);
+            const AreaLights allEmitters(s, SceneContent::RealAndVirtual),
+                realEmitters(s, SceneContent::RealOnly);
+            ASSERT_EQ(allEmitters.size() != realEmitters.size(), objectEmits);
+            const EnvironmentSampler environment(*s.environment);
+            PathSettings settings;
+            settings.maxBounces = maxBounces;
+            settings.rayOffset = kRayOffsetScale * all.bounds().maxExtent();
+            const PathTracer with(all, allEmitters, s.lights, settings, &environment);
+            const PathTracer without(real, realEmitters, s.lights, settings, &environment);
+            const DifferentialPathTracer both(with, without, objects);
+            const glm::vec3 eye = s.camera.position();
+            int virtualFirst = 0, changed = 0;
+            for (int sample = 0; sample < 2; ++sample)
+                for (int y = 0; y < s.camera.height; ++y)
+                    for (int x = 0; x < s.camera.width; ++x) {
+                        const size_t i = static_cast<size_t>(y) * s.camera.width + x;
+                        const glm::vec3 dir = glm::normalize(s.camera.rayDirection(x + 0.5f, y + 0.5f));
+                        const RayHit first = all.intersect(eye, dir);
+                        Rng rng(i, sample, 0), rngWith = rng, rngWithout = rng;
+                        const DifferentialPathTracer::Radiance joint = both.radiance(eye, dir, first, rng);
+                        const glm::vec3 apartWith = with.radianceFromHit(first, dir, rngWith);
+                        const glm::vec3 apartWithout = first.isVirtual
+                                                           ? without.radiance(eye, dir, rngWithout)
+                                                           : without.radianceFromHit(first, dir, rngWithout);
+                        ASSERT_EQ(joint.with, apartWith) << x << ", " << y << " sample " << sample;
+                        ASSERT_EQ(joint.without, apartWithout) << x << ", " << y << " sample " << sample;
+                        virtualFirst += first.isVirtual;
+                        changed += !first.isVirtual && joint.with != joint.without;
+                    }
+            // The scene tests what it should: pixels of the object, and real pixels that it changes.
+            EXPECT_GT(virtualFirst, 100);
+            EXPECT_GT(changed, 150) << changed << " changed; emitting object " << objectEmits << ", bounces "
+                                    << maxBounces;
+        }
 }
 
 TEST(Reference, SphereLightSamplesLieOnItsDiskAndKeepTheIntensity) {
