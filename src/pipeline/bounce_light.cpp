@@ -1,5 +1,7 @@
 #include "pipeline/bounce_light.h"
 
+#include <cmath>
+
 #include "core/brdf_sampling.h"
 #include "core/parallel.h"
 #include "pipeline/cone_trace.h"
@@ -200,9 +202,10 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
     return gatherAtObjectVoxels(
         objects, objectVisibility, box, level,
         [&](size_t index, glm::vec3 centre, glm::vec3 normal, float size) {
-            // The objects' outer surface in the voxel: the first one met coming in along the normal.
+            // The objects' outer surface in the voxel: the first one met coming in along the normal. Its hits
+            // and the gathering rays' need only where they land (volumeRadianceAt): no texture lookups.
             const RayHit surface =
-                scene.intersectTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
+                scene.intersectTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size, true);
             if (!surface.hit())
                 return gatherAtVoxel(centre, normal, size, index, light, occluders, cones, settings);
             const glm::vec3 origin = surface.position + offset * normal;
@@ -213,7 +216,7 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
             for (int k = 0; k < count; ++k) {
                 const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
                 const glm::vec3 wi = frame * sampleCosineHemisphere(u1, u2);
-                const RayHit hit = scene.intersect(origin, wi, offset);
+                const RayHit hit = scene.intersect(origin, wi, offset, INFINITY, true);
                 if (!hit.hit()) continue;
                 sum += volumeRadianceAt(light, hit);
             }

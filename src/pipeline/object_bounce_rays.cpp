@@ -64,7 +64,8 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
                 if (cosSurface <= 0.0f) continue;
                 weight = cosSurface * 2.0f * (1.0f - cosMax);  // cos / (pi * 1 / (2 pi (1 - cosMax)))
             }
-            const RayHit hit = rays.objects->intersectTopLayer(origin, wi);
+            // Only where it lands counts (volumeRadianceAt): no texture lookups.
+            const RayHit hit = rays.objects->intersectTopLayer(origin, wi, 0.0f, INFINITY, true);
             if (!hit.hit()) continue;
             if (rays.scene->occluded(origin, wi, 0.0f, hit.t)) continue;
             sum += volumeRadianceAt(objectLight, hit) * weight;

@@ -158,7 +158,8 @@ class MapLayout {
 // The texel `index` made from its ray's closest hit, if that hit is on a surface inside the region (and, with
 // a viewpoint, on the viewpoint's side of a real surface).
 // The hit's textures are looked up here, filtered over the texel's area on the surface (its rays are cast
-// with texturesLater).
+// with texturesLater): those of its reflectance only, which is all the texel carries into the light volume (a
+// normal map's lookup cost the textured benchmark torus's maps ~1 ms a frame for a normal nothing read).
 std::optional<RsmTexel> texelFromHit(RayHit hit, const TexelRay& ray, const Bounds3f& regionBounds,
                                      uint32_t index, const std::optional<glm::vec3>& viewpoint) {
     if (!hit.hit() || !regionBounds.contains(hit.position)) return std::nullopt;
@@ -166,7 +167,9 @@ std::optional<RsmTexel> texelFromHit(RayHit hit, const TexelRay& ray, const Boun
         return std::nullopt;
     const float cosTheta = std::max(glm::dot(hit.normal, -ray.dir), kMinCos);
     const float area = (ray.areaConst + ray.areaPerT2 * hit.t * hit.t) / cosTheta;
-    if (variesOverSurface(*hit.mesh)) lookUpMaterial(hit, std::sqrt(area));
+    if (variesOverSurface(*hit.mesh))
+        hit.surface = surfaceMaterialAt(*hit.mesh, hit.triangle, hit.barycentric.x, hit.barycentric.y,
+                                        std::sqrt(area), nullptr);
     return RsmTexel{hit.position, hit.normal, hit.surface.volumeReflectance() * ray.fluxIn, area, index};
 }
 

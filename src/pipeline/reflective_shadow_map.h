@@ -15,7 +15,7 @@ namespace deltagi {
 
 struct RsmTexel {
     glm::vec3 position{0.0f};
-    glm::vec3 normal{0.0f};  // facing the light
+    glm::vec3 normal{0.0f};  // the shading normal (without normal maps), facing the light
     glm::vec3 flux{
         0.0f};          // reflected flux (W): Material::volumeReflectance() * flux arriving through the texel
     float area = 0.0f;  // surface area the texel covers (world units^2)
