@@ -104,7 +104,8 @@ class PathTracer {
 // an object they visit the same vertices, and only their shadow rays (and the emitters' MIS weights, when an
 // object emits) can differ. The shared vertices are traced once, with two visibility tests per shadow ray
 // (the real scene, then the objects); where a bounce ray meets an object the two continue apart. The same
-// result as two PathTracers run with copies of one random sequence, at about the cost of one.
+// result as two PathTracers run with copies of one random sequence (but for a ray that meets an edge between
+// two triangles, which the real scene alone may find on the other one), in about two thirds of the time.
 class DifferentialPathTracer {
   public:
     // `with` traces the scene with the objects (its RayScene holds real and virtual meshes), `without` the
