@@ -31,26 +31,6 @@ struct TextureSampler {
     TextureFilter magFilter = TextureFilter::Linear;
     TextureFilter minFilter = TextureFilter::Linear;
     bool mipmaps = true;  // minification selects (and blends) mip levels by the lookup's footprint
-    bool operator==(const TextureSampler&) const = default;
-};
-
-// The texels a filtered lookup reads and their weights, for a texture of a given size and sampler: what
-// Texture::sample() works out from (uv, footprint) before it reads anything. The maps of a material are
-// looked up at the same point with the same footprint, so maps of the same size and sampler read the same
-// texels: Texture::texelsAt() once, then Texture::sample(const TexelTaps&) for each (the same values as
-// sample(uv, footprint, sampler)).
-struct TexelTaps {
-    enum class Filter { None, Average, Nearest, Bilinear, Trilinear };
-    Filter filter = Filter::None;  // None: not worked out yet
-    int width = 0, height = 0;     // of the texture it was worked out for (level 0), and its sampler
-    TextureSampler sampler;
-    struct Level {
-        int level = 0;
-        uint32_t texel[4] = {0, 0, 0, 0};  // indices into the level: top-left, top-right, bottom-left, -right
-        float fx = 0.0f, fy = 0.0f;        // bilinear weights of the right and bottom texels
-    };
-    Level fine, coarse;  // Nearest reads fine.texel[0]; Trilinear blends fine and coarse by `blend`
-    float blend = 0.0f;
 };
 
 // An immutable image with its mip chain (box-filtered halvings down to 1x1, any size: odd sizes round
@@ -90,15 +70,6 @@ class Texture {
     // bilinear lookups of the two nearest levels (trilinear). Wrap modes as the sampler says; a non-finite
     // uv gives the mean texel (average()).
     glm::vec4 sample(glm::vec2 uv, float footprint, const TextureSampler& sampler = {}) const;
-    // The texels that sample(uv, footprint, sampler) reads, and their weights.
-    TexelTaps texelsAt(glm::vec2 uv, float footprint, const TextureSampler& sampler = {}) const;
-    // Whether `taps` were worked out for a texture of this size with `sampler` (and so read alike here).
-    bool readsLike(const TexelTaps& taps, const TextureSampler& sampler) const {
-        return taps.filter != TexelTaps::Filter::None && taps.width == width_ && taps.height == height_ &&
-               taps.sampler == sampler;
-    }
-    // The filtered value from texels worked out before (readsLike(taps, ...) must hold).
-    glm::vec4 sample(const TexelTaps& taps) const;
     // The mean of all texels (the 1x1 level).
     glm::vec4 average() const;
     // The texel (x, y) of mip level `level` (no filtering, no wrapping; x, y in range).
@@ -129,12 +100,6 @@ struct TextureSlot {
     int texCoord = 0;
     explicit operator bool() const { return texture != nullptr; }
     glm::vec4 sample(glm::vec2 uv, float footprint) const { return texture->sample(uv, footprint, sampler); }
-    // The same, reusing `taps` when they were worked out (at this uv and footprint) for a texture of this
-    // one's size and sampler, else working them out into `taps`.
-    glm::vec4 sample(glm::vec2 uv, float footprint, TexelTaps& taps) const {
-        if (!texture->readsLike(taps, sampler)) taps = texture->texelsAt(uv, footprint, sampler);
-        return texture->sample(taps);
-    }
 };
 
 }  // namespace deltagi

@@ -122,19 +122,16 @@ SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle,
     glm::vec3 base = m.albedo;
     if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
     if (!m.textured() || mesh.uvs.empty()) return fromFactors(m, base, m.metallic, m.roughness);
-    // Each texture coordinate set interpolated once, when a texture reads it; the texels a lookup reads
-    // worked out once for the maps of one size and sampler (a base colour and a normal map of 512 x 512: the
-    // textured benchmark torus's sub-samples).
+    // Each texture coordinate set interpolated once, when a texture reads it.
     glm::vec2 uvs[2];
     bool interpolated[2] = {false, false};
-    TexelTaps taps[2];
     auto lookup = [&](const TextureSlot& slot) {
         const int set = slot.texCoord == 1 ? 1 : 0;
         if (!interpolated[set]) {
             uvs[set] = textureCoordinatesAt(mesh, triangle, u, v, slot.texCoord);
             interpolated[set] = true;
         }
-        return slot.sample(uvs[set], uvFootprint, taps[set]);
+        return slot.sample(uvs[set], uvFootprint);
     };
     float metallic = m.metallic, roughness = m.roughness;
     if (m.baseColorTexture) base *= glm::vec3(lookup(m.baseColorTexture));

@@ -433,120 +433,77 @@ glm::vec4 Texture::texel(int level, int x, int y) const {
 
 namespace {
 
-// The texels of one level that a lookup reads; `u`, `v` already reduced (reduceCoordinate). Texel centres lie
-// at (i + 0.5) / size.
-TexelTaps::Level nearestTaps(int level, int width, int height, float u, float v, const TextureSampler& s) {
-    TexelTaps::Level t;
-    t.level = level;
-    const int x = wrapIndex(static_cast<int>(std::floor(u * width)), width, s.wrapS);
-    const int y = wrapIndex(static_cast<int>(std::floor(v * height)), height, s.wrapT);
-    t.texel[0] = static_cast<uint32_t>(y) * static_cast<uint32_t>(width) + static_cast<uint32_t>(x);
-    return t;
-}
+// The lookups of one level; `u`, `v` already reduced (reduceCoordinate). Texel centres lie at (i + 0.5) /
+// size.
+struct LevelLookup {
+    int width, height;
+    const glm::vec4* texels;  // linear values, or
+    const uint32_t* packed;   // 8-bit texels decoded by `decoder`
+    const TexelDecoder* decoder;
+    TextureWrap wrapS, wrapT;
 
-TexelTaps::Level bilinearTaps(int level, int width, int height, float u, float v, const TextureSampler& s) {
-    TexelTaps::Level t;
-    t.level = level;
-    const float sx = u * width - 0.5f, sy = v * height - 0.5f;
-    const float x0 = std::floor(sx), y0 = std::floor(sy);
-    t.fx = sx - x0;
-    t.fy = sy - y0;
-    const int x = static_cast<int>(x0), y = static_cast<int>(y0);
-    // Each of the two columns and rows wrapped once (not each of the four texels' indices).
-    const auto w = static_cast<uint32_t>(width);
-    const auto left = static_cast<uint32_t>(wrapIndex(x, width, s.wrapS));
-    const auto right = static_cast<uint32_t>(wrapIndex(x + 1, width, s.wrapS));
-    const uint32_t top = static_cast<uint32_t>(wrapIndex(y, height, s.wrapT)) * w;
-    const uint32_t bottom = static_cast<uint32_t>(wrapIndex(y + 1, height, s.wrapT)) * w;
-    t.texel[0] = top + left;
-    t.texel[1] = top + right;
-    t.texel[2] = bottom + left;
-    t.texel[3] = bottom + right;
-    return t;
-}
-
-// The bilinear blend of a level's four texels, read by `fetch(index)`.
-template <typename Fetch>
-glm::vec4 blendBilinear(const TexelTaps::Level& t, Fetch&& fetch) {
-    return glm::mix(glm::mix(fetch(t.texel[0]), fetch(t.texel[1]), t.fx),
-                    glm::mix(fetch(t.texel[2]), fetch(t.texel[3]), t.fx), t.fy);
-}
+    glm::vec4 fetch(size_t i) const { return packed ? (*decoder)(packed[i]) : texels[i]; }
+    glm::vec4 at(int x, int y) const {
+        return fetch(static_cast<size_t>(wrapIndex(y, height, wrapT)) * width + wrapIndex(x, width, wrapS));
+    }
+    glm::vec4 nearest(float u, float v) const {
+        return at(static_cast<int>(std::floor(u * width)), static_cast<int>(std::floor(v * height)));
+    }
+    glm::vec4 bilinear(float u, float v) const {
+        float s = u * width - 0.5f, t = v * height - 0.5f;
+        float x0 = std::floor(s), y0 = std::floor(t);
+        float fx = s - x0, fy = t - y0;
+        const int x = static_cast<int>(x0), y = static_cast<int>(y0);
+        // Each of the two columns and rows wrapped once (not each of the four texels' indices).
+        const size_t left = static_cast<size_t>(wrapIndex(x, width, wrapS));
+        const size_t right = static_cast<size_t>(wrapIndex(x + 1, width, wrapS));
+        const size_t top = static_cast<size_t>(wrapIndex(y, height, wrapT)) * width;
+        const size_t bottom = static_cast<size_t>(wrapIndex(y + 1, height, wrapT)) * width;
+        return glm::mix(glm::mix(fetch(top + left), fetch(top + right), fx),
+                        glm::mix(fetch(bottom + left), fetch(bottom + right), fx), fy);
+    }
+};
 
 }  // namespace
 
-TexelTaps Texture::texelsAt(glm::vec2 uv, float footprint, const TextureSampler& sampler) const {
-    TexelTaps taps;
-    taps.width = width_;
-    taps.height = height_;
-    taps.sampler = sampler;
-    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {
-        taps.filter = TexelTaps::Filter::Average;
-        return taps;
-    }
-    const float u = reduceCoordinate(uv.x, sampler.wrapS), v = reduceCoordinate(uv.y, sampler.wrapT);
-    auto atLevel = [&](int level, TextureFilter filter) {
+glm::vec4 Texture::sample(glm::vec2 uv, float footprint, const TextureSampler& sampler) const {
+    if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) return average();
+    float u = reduceCoordinate(uv.x, sampler.wrapS), v = reduceCoordinate(uv.y, sampler.wrapT);
+    auto lookup = [&](int level) {
         const Level& l = levels_[level];
-        taps.filter =
-            filter == TextureFilter::Nearest ? TexelTaps::Filter::Nearest : TexelTaps::Filter::Bilinear;
-        taps.fine = filter == TextureFilter::Nearest ? nearestTaps(level, l.width, l.height, u, v, sampler)
-                                                     : bilinearTaps(level, l.width, l.height, u, v, sampler);
-        return taps;
+        return LevelLookup{l.width,
+                           l.height,
+                           eightBit_ ? nullptr : l.texels.data(),
+                           eightBit_ ? l.packed.data() : nullptr,
+                           &decoderFor(encoding_),
+                           sampler.wrapS,
+                           sampler.wrapT};
     };
     // The level of detail: log2 of the footprint in texels of level 0 (OpenGL 4.6, section 8.14.1, with the
     // larger side's scale). Magnification at or below 0; a NaN footprint counts as 0.
     float lod =
         footprint > 0.0f ? std::log2(footprint * static_cast<float>(std::max(width_, height_))) : 0.0f;
-    if (!(lod > 0.0f)) return atLevel(0, sampler.magFilter);
-    if (!sampler.mipmaps) return atLevel(0, sampler.minFilter);
-    const int last = levels() - 1;
+    if (!(lod > 0.0f)) {
+        LevelLookup finest = lookup(0);
+        return sampler.magFilter == TextureFilter::Nearest ? finest.nearest(u, v) : finest.bilinear(u, v);
+    }
+    if (!sampler.mipmaps) {
+        LevelLookup finest = lookup(0);
+        return sampler.minFilter == TextureFilter::Nearest ? finest.nearest(u, v) : finest.bilinear(u, v);
+    }
+    int last = levels() - 1;
     lod = std::min(lod, static_cast<float>(last));
     if (sampler.minFilter == TextureFilter::Nearest) {
         // NEAREST_MIPMAP_NEAREST: the level nearest lod (OpenGL's ceil(lod + 0.5) - 1, 0.5 rounding down).
-        return atLevel(std::clamp(static_cast<int>(std::ceil(lod + 0.5f)) - 1, 0, last),
-                       TextureFilter::Nearest);
+        int level = std::clamp(static_cast<int>(std::ceil(lod + 0.5f)) - 1, 0, last);
+        return lookup(level).nearest(u, v);
     }
     // LINEAR_MIPMAP_LINEAR: bilinear lookups of the two levels around lod, blended (trilinear).
-    const int level = static_cast<int>(std::floor(lod));
-    const float blend = lod - static_cast<float>(level);
-    atLevel(level, TextureFilter::Linear);
-    if (level >= last || blend <= 0.0f) return taps;
-    const Level& coarse = levels_[level + 1];
-    taps.coarse = bilinearTaps(level + 1, coarse.width, coarse.height, u, v, sampler);
-    taps.blend = blend;
-    taps.filter = TexelTaps::Filter::Trilinear;
-    return taps;
-}
-
-glm::vec4 Texture::sample(const TexelTaps& taps) const {
-    assert(readsLike(taps, taps.sampler));
-    auto read = [&](const TexelTaps::Level& t, auto&& filter) {
-        const Level& l = levels_[t.level];
-        if (eightBit_) {
-            const TexelDecoder& decoder = decoderFor(encoding_);
-            const uint32_t* packed = l.packed.data();
-            return filter(t, [&](uint32_t i) { return decoder(packed[i]); });
-        }
-        const glm::vec4* texels = l.texels.data();
-        return filter(t, [&](uint32_t i) { return texels[i]; });
-    };
-    auto nearest = [](const TexelTaps::Level& t, auto&& fetch) { return fetch(t.texel[0]); };
-    auto bilinear = [](const TexelTaps::Level& t, auto&& fetch) { return blendBilinear(t, fetch); };
-    switch (taps.filter) {
-        case TexelTaps::Filter::Nearest:
-            return read(taps.fine, nearest);
-        case TexelTaps::Filter::Bilinear:
-            return read(taps.fine, bilinear);
-        case TexelTaps::Filter::Trilinear:
-            return glm::mix(read(taps.fine, bilinear), read(taps.coarse, bilinear), taps.blend);
-        case TexelTaps::Filter::Average:
-        case TexelTaps::Filter::None:
-            break;
-    }
-    return average();
-}
-
-glm::vec4 Texture::sample(glm::vec2 uv, float footprint, const TextureSampler& sampler) const {
-    return sample(texelsAt(uv, footprint, sampler));
+    int level = static_cast<int>(std::floor(lod));
+    float blend = lod - static_cast<float>(level);
+    glm::vec4 fine = lookup(level).bilinear(u, v);
+    if (level >= last || blend <= 0.0f) return fine;
+    return glm::mix(fine, lookup(level + 1).bilinear(u, v), blend);
 }
 
 }  // namespace deltagi

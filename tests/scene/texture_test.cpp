@@ -9,7 +9,6 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
-#include <memory>
 #include <string>
 #include <vector>
 
@@ -345,57 +344,6 @@ TEST(TextureSample, NonFiniteCoordinatesGiveTheAverage) {
         glm::vec4 v = texture.sample({1e30f, -3e38f}, 0.01f, samplerOf(wrap, wrap, TextureFilter::Linear));
         for (int c = 0; c < 4; ++c) EXPECT_TRUE(std::isfinite(v[c]));
     }
-}
-
-// A material's maps of one size and sampler read the same texels: TextureSlot::sample(uv, footprint, taps)
-// works them out for the first and reuses them for the next, with exactly the values of a lookup of its own;
-// a map of another size or sampler works them out again.
-TEST(TextureSample, MapsOfOneSizeShareTheirTexelTaps) {
-    uint32_t state = 12345;
-    auto next = [&state] {
-        state = state * 1664525u + 1013904223u;
-        return state >> 24;
-    };
-    auto bytes = [&](int width, int height) {
-        std::vector<uint8_t> b(static_cast<size_t>(width) * height * 4);
-        for (uint8_t& v : b) v = static_cast<uint8_t>(next());
-        return b;
-    };
-    std::vector<glm::vec4> floats(37 * 20);
-    for (glm::vec4& t : floats) t = glm::vec4(next(), next(), next(), next()) / 255.0f;
-    TextureSlot colour, data, other;
-    colour.texture = std::make_shared<const Texture>(37, 20, bytes(37, 20), TextureEncoding::Srgb, "colour");
-    data.texture = std::make_shared<const Texture>(37, 20, floats, "data");
-    other.texture = std::make_shared<const Texture>(16, 16, bytes(16, 16), TextureEncoding::Linear, "other");
-    TextureSampler noMips;
-    noMips.mipmaps = false;
-    TextureSampler nearestMips;
-    nearestMips.minFilter = TextureFilter::Nearest;
-    int shared = 0;
-    for (const TextureSampler& sampler :
-         {TextureSampler{},
-          samplerOf(TextureWrap::ClampToEdge, TextureWrap::MirroredRepeat, TextureFilter::Linear),
-          samplerOf(TextureWrap::Repeat, TextureWrap::Repeat, TextureFilter::Nearest), noMips, nearestMips}) {
-        colour.sampler = data.sampler = other.sampler = sampler;
-        for (glm::vec2 uv : {glm::vec2(0.3f, 0.7f), glm::vec2(-1.26f, 2.51f), glm::vec2(0.999f, 0.001f),
-                             glm::vec2(kNaN, 0.5f)})
-            for (float footprint : {0.0f, 0.01f, 0.04f, 0.11f, 0.5f, 3.0f}) {
-                TexelTaps taps;
-                expectEqual(colour.sample(uv, footprint, taps), colour.sample(uv, footprint));
-                EXPECT_TRUE(data.texture->readsLike(taps, data.sampler));
-                shared += data.texture->readsLike(taps, data.sampler);
-                expectEqual(data.sample(uv, footprint, taps), data.sample(uv, footprint));
-                EXPECT_FALSE(other.texture->readsLike(taps, other.sampler));
-                expectEqual(other.sample(uv, footprint, taps), other.sample(uv, footprint));
-                EXPECT_FALSE(colour.texture->readsLike(taps, colour.sampler));
-                TextureSlot clamped = colour;
-                clamped.sampler.wrapS = sampler.wrapS == TextureWrap::ClampToEdge ? TextureWrap::Repeat
-                                                                                  : TextureWrap::ClampToEdge;
-                EXPECT_FALSE(clamped.texture->readsLike(colour.texture->texelsAt(uv, footprint, sampler),
-                                                        clamped.sampler));
-            }
-    }
-    EXPECT_EQ(shared, 5 * 4 * 6);
 }
 
 // The mean of a level, in double.
