@@ -151,6 +151,19 @@ glm::vec3 PathTracer::lastBounceLight(const RayHit& hit, const BrdfSample& s, co
     return glm::vec3(0.0f);
 }
 
+bool PathTracer::scatter(PathState& p, const BrdfSample& s, float uRoulette) const {
+    p.throughput *= s.weight;
+    if (p.bounce + 1 >= settings_.rouletteStartBounce) {
+        const float survive = std::min(maxComponent(p.throughput), kMaxSurvivalProbability);
+        if (!(uRoulette < survive)) return false;
+        p.throughput /= survive;
+    }
+    p.direction = s.wi;
+    p.previousPosition = p.hit.position;
+    p.previousPdf = s.pdf;
+    return true;
+}
+
 glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const {
     return radianceFromHit(rays_.intersect(origin, direction), direction, rng);
 }
@@ -189,16 +202,9 @@ void PathTracer::trace(PathState& p, Rng& rng) const {
                 p.throughput * lastBounceLight(hit, s, rays_.intersect(offsetOrigin(hit, s.wi), s.wi));
             break;
         }
-        p.throughput *= s.weight;
-        if (p.bounce + 1 >= settings_.rouletteStartBounce) {
-            const float survive = std::min(maxComponent(p.throughput), kMaxSurvivalProbability);
-            if (!(uRoulette < survive)) break;
-            p.throughput /= survive;
-        }
-        p.direction = s.wi;
-        p.previousPosition = hit.position;
-        p.previousPdf = s.pdf;
-        p.hit = rays_.intersect(offsetOrigin(hit, s.wi), p.direction);
+        const glm::vec3 from = offsetOrigin(hit, s.wi);
+        if (!scatter(p, s, uRoulette)) break;
+        p.hit = rays_.intersect(from, p.direction);
         // A path that leaves the scene sees the environment, weighted against the light sample of
         // directLight().
         if (!p.hit.hit() && environment_)
@@ -284,15 +290,7 @@ DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 orig
                        without_.lastBounceLight(hit, s, next.isVirtual ? real.intersect(from, s.wi) : next);
             break;
         }
-        p.throughput *= s.weight;
-        if (p.bounce + 1 >= shared.settings_.rouletteStartBounce) {
-            const float survive = std::min(maxComponent(p.throughput), kMaxSurvivalProbability);
-            if (!(uRoulette < survive)) break;
-            p.throughput /= survive;
-        }
-        p.direction = s.wi;
-        p.previousPosition = hit.position;
-        p.previousPdf = s.pdf;
+        if (!shared.scatter(p, s, uRoulette)) break;
         const RayHit next = with_.rays_.intersect(from, p.direction);
         if (next.isVirtual) {
             // The paths part: each continues from here with the same random numbers.

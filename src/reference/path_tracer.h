@@ -91,6 +91,9 @@ class PathTracer {
     // What the BRDF sample (s, from `hit`) of a path's last allowed vertex brings from `next`, the surface
     // it meets (or the environment it leaves to), with MIS weights; nothing beyond.
     glm::vec3 lastBounceLight(const RayHit& hit, const BrdfSample& s, const RayHit& next) const;
+    // Carries `path` over the BRDF sample `s` taken at its hit: its throughput, Russian roulette (uRoulette)
+    // and the direction and MIS state of the next vertex. False when the roulette ends the path.
+    bool scatter(PathState& path, const BrdfSample& s, float uRoulette) const;
 
     const RayScene& rays_;
     const AreaLights& areaLights_;
