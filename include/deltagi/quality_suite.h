@@ -10,6 +10,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -73,14 +74,18 @@ struct CachedReference {
     ReferenceOutput output;  // composite, background and objectMask (the images an evaluation reads)
     bool hit = false;        // read from the cache; false: rendered now and stored
     std::filesystem::path folder;
+    size_t snapshotsStored = 0;  // of `snapshots`, the references stored from this render's first samples
 };
 
 // The reference of `scene` with `options` from `folder` when it holds one rendered with the same samples,
 // seed and bounces (written by an earlier call), else rendered and stored there. The caller names the folder
 // by the scene's content (referenceContentKey()). A time limit is not allowed (the cache holds whole
-// renders only).
+// renders only). `snapshots`: (n, folder) of references of the same settings with n < the samples asked
+// for; those their folders do not hold yet are stored there from the render's first n samples (the same
+// images as renders of their own, ReferenceOptions::snapshotSamples), when it renders.
 CachedReference cachedReference(const Scene& scene, const ReferenceOptions& options,
-                                const std::filesystem::path& folder, const ReferenceProgress& onPass = {});
+                                const std::filesystem::path& folder, const ReferenceProgress& onPass = {},
+                                const std::vector<std::pair<int, std::filesystem::path>>& snapshots = {});
 
 // ---- The path tracer's equal-error samples ----
 

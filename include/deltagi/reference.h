@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "deltagi/image.h"
 #include "deltagi/scene.h"
@@ -20,6 +21,10 @@ struct ReferenceOptions {
     uint64_t seed = 0;            // the same seed gives the same image, whatever the thread count
     int rouletteStartBounce = 3;  // Russian roulette from this bounce on (bounce 0 is the camera hit)
     int maxBounces = 256;         // a safety bound only; roulette ends paths long before
+    // Sample counts below samplesPerPixel at which the render also hands its image so far to the caller
+    // (ReferenceSnapshot): exactly the image of a render of that many samples with the same seed, which
+    // takes the same first samples. The quality suite's low-sample references come from its full one so.
+    std::vector<int> snapshotSamples;
 };
 
 struct ReferenceOutput {
@@ -35,6 +40,9 @@ struct ReferenceOutput {
 
 // Called after each pass: samples per pixel done so far, the number asked for, and the seconds spent.
 using ReferenceProgress = std::function<void(int done, int total, double seconds)>;
+// Called with the image of the first n samples (n = samplesPerPixel, totalMs the time spent so far) at each
+// of ReferenceOptions::snapshotSamples that the render reaches.
+using ReferenceSnapshot = std::function<void(const ReferenceOutput& soFar)>;
 
 // Lights: point and spot lights with a radius are spheres of that radius (shadow rays aim at a uniformly
 // chosen point of the disk they show to the shading point, which gives the penumbra); without a radius, and
@@ -45,6 +53,6 @@ using ReferenceProgress = std::function<void(int done, int total, double seconds
 // proportion to its radiance, combined with BRDF sampling by multiple importance sampling; the lights
 // extracted from the map for the DGI pipeline are not used.
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
-                                const ReferenceProgress& onPass = {});
+                                const ReferenceProgress& onPass = {}, const ReferenceSnapshot& onSnapshot = {});
 
 }  // namespace deltagi

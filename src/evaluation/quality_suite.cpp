@@ -233,7 +233,8 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
                       ? std::max(q.referenceSpp / kDirectSamplesDivisor, 1)
                       : std::min(entry.directSamplesPerPixel, q.referenceSpp);
 
-    auto reference = [&](const char* kind, int samples, int maxBounces) {
+    // `snapshots`: sample counts of the same kind whose references this one's first samples give (the fit's).
+    auto reference = [&](const char* kind, int samples, int maxBounces, const std::vector<int>& snapshots = {}) {
         ReferenceOptions settings;
         settings.samplesPerPixel = samples;
         settings.seed = seed;
@@ -242,7 +243,12 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
         std::error_code error;
         if (!fs::exists(folder / "reference.json", error))
             log(options, fmt::format("  {}: rendering the {} reference, {} spp", q.name, kind, samples));
-        CachedReference r = cachedReference(scene, settings, folder, options.onPass);
+        std::vector<std::pair<int, fs::path>> snapshotFolders;
+        for (const int n : snapshots) snapshotFolders.emplace_back(n, cache / settingsFolder(kind, n, seed));
+        CachedReference r = cachedReference(scene, settings, folder, options.onPass, snapshotFolders);
+        if (r.snapshotsStored > 0)
+            log(options, fmt::format("  {}: {} of the fit's references stored from its first samples", q.name,
+                                     r.snapshotsStored));
         log(options,
             fmt::format("  {}: {} reference, {} spp: {} {}", q.name, kind, samples,
                         r.hit ? "cache hit" : fmt::format("rendered in {:.1f} s,", r.output.totalMs / 1000.0),
@@ -252,7 +258,7 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     };
 
     // The full reference, DGI and its baselines (evaluate()).
-    const Evaluation e = evaluate(scene, reference("full", q.referenceSpp, 0));
+    const Evaluation e = evaluate(scene, reference("full", q.referenceSpp, 0, suite.fitSamples));
     q.dgi = e.dgi;
     q.shadowOnly = e.shadowOnly;
     q.noRelight = e.noRelight;

@@ -202,8 +202,39 @@ std::string referenceContentKey(const fs::path& sceneFile, const std::vector<std
     return hasher.hex();
 }
 
+namespace {
+
+// Removes the folder's record first: a render or a write cut short leaves no cache entry behind.
+void prepareFolder(const fs::path& folder) {
+    std::error_code error;
+    fs::remove(folder / kMetaFile, error);
+    fs::create_directories(folder, error);
+    if (error) throw InputError(folder.string(), "cannot create folder: " + error.message());
+}
+
+void storeReference(const fs::path& folder, const Scene& scene, const ReferenceOptions& options,
+                    const ReferenceOutput& output) {
+    prepareFolder(folder);
+    writeImage(output.composite, folder / kCompositeFile);
+    writeImage(output.background, folder / kBackgroundFile);
+    writeImage(output.objectMask, folder / kObjectMaskFile);
+    nlohmann::ordered_json meta;
+    meta["version"] = kReferenceCacheVersion;
+    meta["limited_version"] = limitedVersion(options);
+    meta["scene"] = scene.file.string();
+    meta["spp"] = options.samplesPerPixel;
+    meta["seed"] = options.seed;
+    meta["max_bounces"] = options.maxBounces;
+    meta["roulette_start_bounce"] = options.rouletteStartBounce;
+    meta["ms"] = output.totalMs;
+    writeText(folder / kMetaFile, meta.dump(2) + "\n");
+}
+
+}  // namespace
+
 CachedReference cachedReference(const Scene& scene, const ReferenceOptions& options, const fs::path& folder,
-                                const ReferenceProgress& onPass) {
+                                const ReferenceProgress& onPass,
+                                const std::vector<std::pair<int, fs::path>>& snapshots) {
     if (options.timeLimitSeconds > 0.0)
         throw InputError(folder.string(), "a cached reference cannot have a time limit");
     CachedReference cached;
@@ -213,24 +244,29 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
         cached.hit = true;
         return cached;
     }
-    std::error_code error;
-    fs::remove(folder / kMetaFile, error);
-    fs::create_directories(folder, error);
-    if (error) throw InputError(folder.string(), "cannot create folder: " + error.message());
-    cached.output = renderReference(scene, options, onPass);
-    writeImage(cached.output.composite, folder / kCompositeFile);
-    writeImage(cached.output.background, folder / kBackgroundFile);
-    writeImage(cached.output.objectMask, folder / kObjectMaskFile);
-    nlohmann::ordered_json meta;
-    meta["version"] = kReferenceCacheVersion;
-    meta["limited_version"] = limitedVersion(options);
-    meta["scene"] = scene.file.string();
-    meta["spp"] = options.samplesPerPixel;
-    meta["seed"] = options.seed;
-    meta["max_bounces"] = options.maxBounces;
-    meta["roulette_start_bounce"] = options.rouletteStartBounce;
-    meta["ms"] = cached.output.totalMs;
-    writeText(folder / kMetaFile, meta.dump(2) + "\n");
+    // The snapshots not in the cache yet come from this render's first samples.
+    ReferenceOptions settings = options;
+    settings.snapshotSamples.clear();
+    auto withSamples = [&options](int n) {
+        ReferenceOptions o = options;
+        o.samplesPerPixel = n;
+        o.snapshotSamples.clear();
+        return o;
+    };
+    std::vector<std::pair<int, fs::path>> wanted;
+    for (const auto& [n, snapshotFolder] : snapshots) {
+        if (n <= 0 || n >= options.samplesPerPixel || readCached(snapshotFolder, withSamples(n), scene.camera))
+            continue;
+        wanted.emplace_back(n, snapshotFolder);
+        settings.snapshotSamples.push_back(n);
+    }
+    prepareFolder(folder);
+    cached.output = renderReference(scene, settings, onPass, [&](const ReferenceOutput& soFar) {
+        for (const auto& [n, snapshotFolder] : wanted)
+            if (n == soFar.samplesPerPixel) storeReference(snapshotFolder, scene, withSamples(n), soFar);
+    });
+    storeReference(folder, scene, options, cached.output);
+    cached.snapshotsStored = wanted.size();
     return cached;
 }
 

@@ -374,7 +374,7 @@ ReferenceOutput assemble(const Scene& scene, std::span<const PixelSums> sums, in
 }  // namespace
 
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
-                                const ReferenceProgress& onPass) {
+                                const ReferenceProgress& onPass, const ReferenceSnapshot& onSnapshot) {
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
     const Camera& camera = scene.camera;
@@ -425,6 +425,13 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
         });
         ++done;
         const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+        if (onSnapshot && done < total &&
+            std::find(options.snapshotSamples.begin(), options.snapshotSamples.end(), done) !=
+                options.snapshotSamples.end()) {
+            ReferenceOutput soFar = assemble(scene, sums, done);
+            soFar.totalMs = 1000.0 * seconds;
+            onSnapshot(soFar);
+        }
         if (onPass) onPass(done, total, seconds);
         if (options.timeLimitSeconds > 0.0 && seconds >= options.timeLimitSeconds) break;
     }

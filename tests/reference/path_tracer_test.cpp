@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -511,6 +512,32 @@ TEST(Reference, DifferentialPathsAreTheTwoTracersRunApart) {
             EXPECT_GT(changed, 150) << changed << " changed; emitting object " << objectEmits << ", bounces "
                                     << maxBounces;
         }
+}
+
+// A render's snapshot after n samples is the image of a render of n samples: the same first samples.
+TEST(Reference, SnapshotsAreTheRendersOfThatManySamples) {
+    const Scene s = ballOverFloor({0, 0.35f, 0});
+    ReferenceOptions o;
+    o.samplesPerPixel = 5;
+    o.snapshotSamples = {1, 3, 5, 9};  // 5 is the render itself, 9 it never reaches: no snapshot
+    std::vector<ReferenceOutput> snapshots;
+    const ReferenceOutput full =
+        renderReference(s, o, {}, [&](const ReferenceOutput& soFar) { snapshots.push_back(soFar); });
+    ASSERT_EQ(snapshots.size(), 2u);
+    for (const ReferenceOutput& snapshot : snapshots) {
+        ReferenceOptions alone;
+        alone.samplesPerPixel = snapshot.samplesPerPixel;
+        const ReferenceOutput expected = renderReference(s, alone);
+        expectIdentical(snapshot.composite, expected.composite, "composite");
+        expectIdentical(snapshot.with, expected.with, "with");
+        expectIdentical(snapshot.without, expected.without, "without");
+        expectIdentical(snapshot.objectMask, expected.objectMask, "object mask");
+        EXPECT_GT(snapshot.totalMs, 0.0);
+        EXPECT_LE(snapshot.totalMs, full.totalMs);
+    }
+    EXPECT_EQ(snapshots[0].samplesPerPixel, 1);
+    EXPECT_EQ(snapshots[1].samplesPerPixel, 3);
+    EXPECT_EQ(full.samplesPerPixel, 5);
 }
 
 TEST(Reference, SphereLightSamplesLieOnItsDiskAndKeepTheIntensity) {
