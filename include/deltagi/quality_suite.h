@@ -75,6 +75,7 @@ struct CachedReference {
     bool hit = false;        // read from the cache; false: rendered now and stored
     std::filesystem::path folder;
     size_t snapshotsStored = 0;  // of `snapshots`, the references stored from this render's first samples
+    std::filesystem::path resumedFrom;  // the earlier reference it went on from (empty: none)
 };
 
 // The reference of `scene` with `options` from `folder` when it holds one rendered with the same samples,
@@ -82,10 +83,14 @@ struct CachedReference {
 // by the scene's content (referenceContentKey()). A time limit is not allowed (the cache holds whole
 // renders only). `snapshots`: (n, folder) of references of the same settings with n < the samples asked
 // for; those their folders do not hold yet are stored there from the render's first n samples (the same
-// images as renders of their own, ReferenceOptions::snapshotSamples), when it renders.
+// images as renders of their own, ReferenceOptions::snapshotSamples), when it renders. `earlier`: (n, folder)
+// of references of the same settings with n < the samples asked for; when it renders, it goes on from the
+// one with the most samples that kept its sums (ReferenceSums, `sums.bin`), rendering only the samples it
+// lacks (the same image as a render of all of them).
 CachedReference cachedReference(const Scene& scene, const ReferenceOptions& options,
                                 const std::filesystem::path& folder, const ReferenceProgress& onPass = {},
-                                const std::vector<std::pair<int, std::filesystem::path>>& snapshots = {});
+                                const std::vector<std::pair<int, std::filesystem::path>>& snapshots = {},
+                                const std::vector<std::pair<int, std::filesystem::path>>& earlier = {});
 
 // ---- The path tracer's equal-error samples ----
 

@@ -27,6 +27,20 @@ struct ReferenceOptions {
     std::vector<int> snapshotSamples;
 };
 
+// The per-pixel sums a differential render's images are made from, over its first `samples` samples: with
+// them a render goes on where an earlier one stopped (renderReference's `from`), and gives exactly the image of
+// a render of all the samples at once (the same samples, added in the same order).
+struct ReferenceSums {
+    static constexpr int kValuesPerPixel = 13;  // with (RGB), without, object, change, virtual samples
+    int width = 0, height = 0;
+    int samples = 0;
+    std::vector<double> values;  // kValuesPerPixel per pixel, row by row
+    bool fits(const Camera& camera) const {
+        return width == camera.width && height == camera.height && samples >= 0 &&
+               values.size() == static_cast<size_t>(width) * height * kValuesPerPixel;
+    }
+};
+
 struct ReferenceOutput {
     Image composite;          // the differential composite, linear RGB, never below 0
     Image with;               // the scene with the virtual objects, path traced
@@ -36,6 +50,7 @@ struct ReferenceOutput {
     Image delta;              // composite - background
     int samplesPerPixel = 0;  // samples actually taken (fewer than asked when the time limit stopped it)
     double totalMs = 0.0;
+    ReferenceSums sums;  // what the images are made from (not filled in the snapshots)
 };
 
 // Called after each pass: samples per pixel done so far, the number asked for, and the seconds spent.
@@ -52,7 +67,10 @@ using ReferenceSnapshot = std::function<void(const ReferenceOutput& soFar)>;
 // environment map lights it directly: rays that leave the scene see it, and every vertex samples it in
 // proportion to its radiance, combined with BRDF sampling by multiple importance sampling; the lights
 // extracted from the map for the DGI pipeline are not used.
+// `from`: the sums of an earlier render of the same scene with the same seed and bounces (and the same
+// camera), of fewer samples than asked for: the render goes on from them, with samples from->samples on.
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
-                                const ReferenceProgress& onPass = {}, const ReferenceSnapshot& onSnapshot = {});
+                                const ReferenceProgress& onPass = {}, const ReferenceSnapshot& onSnapshot = {},
+                                const ReferenceSums* from = nullptr);
 
 }  // namespace deltagi

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cctype>
 #include <fstream>
 #include <limits>
 
@@ -91,6 +92,28 @@ glm::dvec3 change(const Image& composite, const Image& background, int x, int y)
 
 std::string settingsFolder(const char* kind, int samples, uint64_t seed) {
     return fmt::format("{}-{}spp-seed{}", kind, samples, seed);
+}
+
+// The cache's folders of references of this kind and seed with fewer samples than `samples`: (samples,
+// folder), the ones a new reference may go on from.
+std::vector<std::pair<int, fs::path>> earlierFolders(const fs::path& cache, const char* kind, int samples,
+                                                     uint64_t seed) {
+    std::vector<std::pair<int, fs::path>> found;
+    std::error_code error;
+    if (!fs::is_directory(cache, error)) return found;
+    const std::string prefix = std::string(kind) + "-", suffix = fmt::format("spp-seed{}", seed);
+    for (const fs::directory_entry& entry : fs::directory_iterator(cache, error)) {
+        const std::string name = entry.path().filename().string();
+        if (name.size() <= prefix.size() + suffix.size() || !name.starts_with(prefix) || !name.ends_with(suffix))
+            continue;
+        const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+        if (digits.empty() || digits.size() > 9 ||
+            !std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); }))
+            continue;
+        const int n = std::stoi(digits);
+        if (n > 0 && n < samples && settingsFolder(kind, n, seed) == name) found.emplace_back(n, entry.path());
+    }
+    return found;
 }
 
 void log(const SuiteRunOptions& options, const std::string& line) {
@@ -245,7 +268,10 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
             log(options, fmt::format("  {}: rendering the {} reference, {} spp", q.name, kind, samples));
         std::vector<std::pair<int, fs::path>> snapshotFolders;
         for (const int n : snapshots) snapshotFolders.emplace_back(n, cache / settingsFolder(kind, n, seed));
-        CachedReference r = cachedReference(scene, settings, folder, options.onPass, snapshotFolders);
+        CachedReference r =
+            cachedReference(scene, settings, folder, options.onPass, snapshotFolders, earlierFolders(cache, kind, samples, seed));
+        if (!r.resumedFrom.empty())
+            log(options, fmt::format("  {}: went on from the samples of {}", q.name, r.resumedFrom.string()));
         if (r.snapshotsStored > 0)
             log(options, fmt::format("  {}: {} of the fit's references stored from its first samples", q.name,
                                      r.snapshotsStored));

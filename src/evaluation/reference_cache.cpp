@@ -1,9 +1,11 @@
 // The quality suite's cache of path-traced references (include/deltagi/quality_suite.h): a folder per
 // reference, keyed by what the path tracer reads, so that a suite re-renders only what changed.
+#include <algorithm>
 #include <cctype>
 #include <cstdint>
 #include <fstream>
 #include <iterator>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -212,9 +214,48 @@ void prepareFolder(const fs::path& folder) {
     if (error) throw InputError(folder.string(), "cannot create folder: " + error.message());
 }
 
+// The sums a reference's images are made from (ReferenceSums), so that a render with more samples can go on
+// from them: a header (magic, width, height, samples, values per pixel) and the values, native doubles.
+constexpr const char* kSumsFile = "sums.bin";
+constexpr char kSumsMagic[8] = {'d', 'g', 's', 'u', 'm', 's', '0', '1'};
+
+void writeSums(const ReferenceSums& sums, const fs::path& path) {
+    std::ofstream out(path, std::ios::binary);
+    const int32_t header[4] = {sums.width, sums.height, sums.samples, ReferenceSums::kValuesPerPixel};
+    out.write(kSumsMagic, sizeof kSumsMagic);
+    out.write(reinterpret_cast<const char*>(header), sizeof header);
+    out.write(reinterpret_cast<const char*>(sums.values.data()),
+              static_cast<std::streamsize>(sums.values.size() * sizeof(double)));
+    if (!out) throw InputError(path.string(), "cannot write file");
+}
+
+// The sums in `folder` if they are those of `samples` samples over the camera's image; else nothing.
+std::optional<ReferenceSums> readSums(const fs::path& folder, int samples, const Camera& camera) {
+    std::ifstream in(folder / kSumsFile, std::ios::binary);
+    char magic[sizeof kSumsMagic];
+    int32_t header[4];
+    if (!in.read(magic, sizeof magic) || !std::equal(magic, magic + sizeof magic, kSumsMagic) ||
+        !in.read(reinterpret_cast<char*>(header), sizeof header))
+        return std::nullopt;
+    ReferenceSums sums;
+    sums.width = header[0];
+    sums.height = header[1];
+    sums.samples = header[2];
+    if (header[3] != ReferenceSums::kValuesPerPixel || sums.samples != samples || sums.width != camera.width ||
+        sums.height != camera.height)
+        return std::nullopt;
+    sums.values.resize(static_cast<size_t>(sums.width) * sums.height * ReferenceSums::kValuesPerPixel);
+    if (!in.read(reinterpret_cast<char*>(sums.values.data()),
+                 static_cast<std::streamsize>(sums.values.size() * sizeof(double))))
+        return std::nullopt;
+    return sums;
+}
+
 void storeReference(const fs::path& folder, const Scene& scene, const ReferenceOptions& options,
                     const ReferenceOutput& output) {
     prepareFolder(folder);
+    if (output.sums.samples == options.samplesPerPixel && output.sums.fits(scene.camera))
+        writeSums(output.sums, folder / kSumsFile);
     writeImage(output.composite, folder / kCompositeFile);
     writeImage(output.background, folder / kBackgroundFile);
     writeImage(output.objectMask, folder / kObjectMaskFile);
@@ -234,7 +275,8 @@ void storeReference(const fs::path& folder, const Scene& scene, const ReferenceO
 
 CachedReference cachedReference(const Scene& scene, const ReferenceOptions& options, const fs::path& folder,
                                 const ReferenceProgress& onPass,
-                                const std::vector<std::pair<int, fs::path>>& snapshots) {
+                                const std::vector<std::pair<int, fs::path>>& snapshots,
+                                const std::vector<std::pair<int, fs::path>>& earlier) {
     if (options.timeLimitSeconds > 0.0)
         throw InputError(folder.string(), "a cached reference cannot have a time limit");
     CachedReference cached;
@@ -260,11 +302,27 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
         wanted.emplace_back(n, snapshotFolder);
         settings.snapshotSamples.push_back(n);
     }
+    // The earlier reference with the most samples that kept its sums, to go on from.
+    std::optional<ReferenceSums> from;
+    for (const auto& [n, earlierFolder] : earlier) {
+        if (n <= 0 || n >= options.samplesPerPixel || (from && from->samples >= n) ||
+            !readCached(earlierFolder, withSamples(n), scene.camera))
+            continue;
+        if (std::optional<ReferenceSums> sums = readSums(earlierFolder, n, scene.camera)) {
+            from = std::move(sums);
+            cached.resumedFrom = earlierFolder;
+        }
+    }
+    std::erase_if(wanted, [&](const auto& w) { return from && w.first <= from->samples; });
+    std::erase_if(settings.snapshotSamples, [&](int n) { return from && n <= from->samples; });
     prepareFolder(folder);
-    cached.output = renderReference(scene, settings, onPass, [&](const ReferenceOutput& soFar) {
-        for (const auto& [n, snapshotFolder] : wanted)
-            if (n == soFar.samplesPerPixel) storeReference(snapshotFolder, scene, withSamples(n), soFar);
-    });
+    cached.output = renderReference(
+        scene, settings, onPass,
+        [&](const ReferenceOutput& soFar) {
+            for (const auto& [n, snapshotFolder] : wanted)
+                if (n == soFar.samplesPerPixel) storeReference(snapshotFolder, scene, withSamples(n), soFar);
+        },
+        from ? &*from : nullptr);
     storeReference(folder, scene, options, cached.output);
     cached.snapshotsStored = wanted.size();
     return cached;

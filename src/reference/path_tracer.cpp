@@ -330,6 +330,17 @@ struct PixelSums {
     glm::dvec3 object{0.0};  // `with` of the samples whose first hit is virtual
     glm::dvec3 change{0.0};  // with - without of the other samples
     int virtualSamples = 0;
+    // As ReferenceSums holds them: ReferenceSums::kValuesPerPixel values.
+    void write(double* v) const {
+        for (int c = 0; c < 3; ++c) v[c] = with[c], v[3 + c] = without[c], v[6 + c] = object[c], v[9 + c] = change[c];
+        v[12] = virtualSamples;
+    }
+    static PixelSums read(const double* v) {
+        PixelSums s;
+        for (int c = 0; c < 3; ++c) s.with[c] = v[c], s.without[c] = v[3 + c], s.object[c] = v[6 + c], s.change[c] = v[9 + c];
+        s.virtualSamples = static_cast<int>(v[12]);
+        return s;
+    }
 };
 
 glm::vec3 toVec3(glm::dvec3 v) {
@@ -374,7 +385,8 @@ ReferenceOutput assemble(const Scene& scene, std::span<const PixelSums> sums, in
 }  // namespace
 
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
-                                const ReferenceProgress& onPass, const ReferenceSnapshot& onSnapshot) {
+                                const ReferenceProgress& onPass, const ReferenceSnapshot& onSnapshot,
+                                const ReferenceSums* from) {
     using Clock = std::chrono::steady_clock;
     const auto start = Clock::now();
     const Camera& camera = scene.camera;
@@ -400,6 +412,10 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     const glm::vec3 eye = camera.position();
     const int total = std::max(options.samplesPerPixel, 1);
     int done = 0;
+    if (from && from->fits(camera) && from->samples < total) {
+        for (size_t i = 0; i < sums.size(); ++i) sums[i] = PixelSums::read(&from->values[i * ReferenceSums::kValuesPerPixel]);
+        done = from->samples;
+    }
     while (done < total) {
         const int sample = done;
         parallelFor(0, h, kRowGrain, [&](int64_t y) {
@@ -437,6 +453,11 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     }
     ReferenceOutput out = assemble(scene, sums, done);
     out.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+    out.sums.width = w;
+    out.sums.height = h;
+    out.sums.samples = done;
+    out.sums.values.resize(sums.size() * ReferenceSums::kValuesPerPixel);
+    for (size_t i = 0; i < sums.size(); ++i) sums[i].write(&out.sums.values[i * ReferenceSums::kValuesPerPixel]);
     return out;
 }
 

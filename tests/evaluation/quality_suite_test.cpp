@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -17,6 +18,7 @@
 #include <gtest/gtest.h>
 
 #include "deltagi/error.h"
+#include "deltagi/scene_io.h"
 #include "test_files.h"
 #include "test_scene_json.h"
 
@@ -265,6 +267,33 @@ TEST_F(QualitySuiteTest, TheCacheIsReusedUntilTheSceneChanges) {
     EXPECT_EQ(more.cacheMisses, 2u);
     EXPECT_EQ(more.cacheHits, 2u);
     EXPECT_EQ(more.referenceSpp, 8);
+}
+
+// A reference of more samples goes on from the sums an earlier one kept: the same image as a render of all
+// its samples at once; without usable sums (a damaged file) it renders them all.
+TEST_F(QualitySuiteTest, AReferenceGoesOnFromAnEarlierOnesSums) {
+    write("grey.json", tinyScene(0.5).dump(2));
+    const Scene scene = loadScene(dir_ / "grey.json");
+    ReferenceOptions four, seven;
+    four.samplesPerPixel = 4;
+    seven.samplesPerPixel = 7;
+    const fs::path a = dir_ / "refs" / "full-4spp-seed0", b = dir_ / "refs" / "full-7spp-seed0";
+    ASSERT_TRUE(cachedReference(scene, four, a).resumedFrom.empty());
+    ASSERT_TRUE(fs::is_regular_file(a / "sums.bin"));
+    const ReferenceOutput whole = renderReference(scene, seven);
+    const CachedReference more = cachedReference(scene, seven, b, {}, {}, {{4, a}, {2, dir_ / "none"}});
+    EXPECT_EQ(more.resumedFrom, a);
+    EXPECT_EQ(more.output.samplesPerPixel, 7);
+    EXPECT_EQ(more.output.sums.values, whole.sums.values);
+    EXPECT_TRUE(std::ranges::equal(more.output.composite.data(), whole.composite.data()));
+    EXPECT_TRUE(std::ranges::equal(more.output.objectMask.data(), whole.objectMask.data()));
+
+    // Truncated sums: rendered from the start, to the same image.
+    fs::remove_all(b);
+    fs::resize_file(a / "sums.bin", fs::file_size(a / "sums.bin") / 2);
+    const CachedReference again = cachedReference(scene, seven, b, {}, {}, {{4, a}});
+    EXPECT_TRUE(again.resumedFrom.empty());
+    EXPECT_TRUE(std::ranges::equal(again.output.composite.data(), whole.composite.data()));
 }
 
 TEST_F(QualitySuiteTest, TheKeyFollowsTheContentOfReferencedFiles) {

@@ -540,6 +540,30 @@ TEST(Reference, SnapshotsAreTheRendersOfThatManySamples) {
     EXPECT_EQ(full.samplesPerPixel, 5);
 }
 
+// A render that goes on from an earlier one's sums gives exactly the render of all the samples at once.
+TEST(Reference, GoingOnFromEarlierSumsIsTheWholeRender) {
+    const Scene s = ballOverFloor({0, 0.35f, 0});
+    ReferenceOptions o;
+    o.samplesPerPixel = 2;
+    const ReferenceOutput two = renderReference(s, o);
+    ASSERT_EQ(two.sums.samples, 2);
+    o.samplesPerPixel = 5;
+    const ReferenceOutput whole = renderReference(s, o);
+    std::vector<int> passes;
+    const ReferenceOutput onFrom =
+        renderReference(s, o, [&](int done, int, double) { passes.push_back(done); }, {}, &two.sums);
+    EXPECT_EQ(passes, (std::vector<int>{3, 4, 5}));  // only the samples the earlier render lacked
+    EXPECT_EQ(onFrom.samplesPerPixel, 5);
+    EXPECT_EQ(onFrom.sums.values, whole.sums.values);
+    expectIdentical(onFrom.composite, whole.composite, "composite");
+    expectIdentical(onFrom.with, whole.with, "with");
+    expectIdentical(onFrom.objectMask, whole.objectMask, "object mask");
+    // Sums of another image size are not used: the render starts over.
+    ReferenceSums other = two.sums;
+    other.width += 1;
+    expectIdentical(renderReference(s, o, {}, {}, &other).composite, whole.composite, "started over");
+}
+
 TEST(Reference, SphereLightSamplesLieOnItsDiskAndKeepTheIntensity) {
     Light light = test::pointLight({0, 2, 0}, 3.0f);
     light.radius = 0.5f;
