@@ -28,8 +28,8 @@ struct ReferenceOptions {
 };
 
 // The per-pixel sums a differential render's images are made from, over its first `samples` samples: with
-// them a render goes on where an earlier one stopped (renderReference's `from`), and gives exactly the image of
-// a render of all the samples at once (the same samples, added in the same order).
+// them a render goes on where an earlier one stopped (renderReference's `from`), and gives exactly the image
+// of a render of all the samples at once (the same samples, added in the same order).
 struct ReferenceSums {
     static constexpr int kValuesPerPixel = 13;  // with (RGB), without, object, change, virtual samples
     int width = 0, height = 0;
@@ -70,7 +70,8 @@ using ReferenceSnapshot = std::function<void(const ReferenceOutput& soFar)>;
 // `from`: the sums of an earlier render of the same scene with the same seed and bounces (and the same
 // camera), of fewer samples than asked for: the render goes on from them, with samples from->samples on.
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
-                                const ReferenceProgress& onPass = {}, const ReferenceSnapshot& onSnapshot = {},
+                                const ReferenceProgress& onPass = {},
+                                const ReferenceSnapshot& onSnapshot = {},
                                 const ReferenceSums* from = nullptr);
 
 }  // namespace deltagi

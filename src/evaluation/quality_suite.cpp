@@ -3,8 +3,8 @@
 #include "evaluation/quality_suite.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
+#include <cmath>
 #include <fstream>
 #include <limits>
 
@@ -104,14 +104,16 @@ std::vector<std::pair<int, fs::path>> earlierFolders(const fs::path& cache, cons
     const std::string prefix = std::string(kind) + "-", suffix = fmt::format("spp-seed{}", seed);
     for (const fs::directory_entry& entry : fs::directory_iterator(cache, error)) {
         const std::string name = entry.path().filename().string();
-        if (name.size() <= prefix.size() + suffix.size() || !name.starts_with(prefix) || !name.ends_with(suffix))
+        if (name.size() <= prefix.size() + suffix.size() || !name.starts_with(prefix) ||
+            !name.ends_with(suffix))
             continue;
         const std::string digits = name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
         if (digits.empty() || digits.size() > 9 ||
             !std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); }))
             continue;
         const int n = std::stoi(digits);
-        if (n > 0 && n < samples && settingsFolder(kind, n, seed) == name) found.emplace_back(n, entry.path());
+        if (n > 0 && n < samples && settingsFolder(kind, n, seed) == name)
+            found.emplace_back(n, entry.path());
     }
     return found;
 }
@@ -257,7 +259,8 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
                       : std::min(entry.directSamplesPerPixel, q.referenceSpp);
 
     // `snapshots`: sample counts of the same kind whose references this one's first samples give (the fit's).
-    auto reference = [&](const char* kind, int samples, int maxBounces, const std::vector<int>& snapshots = {}) {
+    auto reference = [&](const char* kind, int samples, int maxBounces,
+                         const std::vector<int>& snapshots = {}) {
         ReferenceOptions settings;
         settings.samplesPerPixel = samples;
         settings.seed = seed;
@@ -268,8 +271,8 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
             log(options, fmt::format("  {}: rendering the {} reference, {} spp", q.name, kind, samples));
         std::vector<std::pair<int, fs::path>> snapshotFolders;
         for (const int n : snapshots) snapshotFolders.emplace_back(n, cache / settingsFolder(kind, n, seed));
-        CachedReference r =
-            cachedReference(scene, settings, folder, options.onPass, snapshotFolders, earlierFolders(cache, kind, samples, seed));
+        CachedReference r = cachedReference(scene, settings, folder, options.onPass, snapshotFolders,
+                                            earlierFolders(cache, kind, samples, seed));
         if (!r.resumedFrom.empty())
             log(options, fmt::format("  {}: went on from the samples of {}", q.name, r.resumedFrom.string()));
         if (r.snapshotsStored > 0)

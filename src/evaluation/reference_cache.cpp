@@ -241,8 +241,8 @@ std::optional<ReferenceSums> readSums(const fs::path& folder, int samples, const
     sums.width = header[0];
     sums.height = header[1];
     sums.samples = header[2];
-    if (header[3] != ReferenceSums::kValuesPerPixel || sums.samples != samples || sums.width != camera.width ||
-        sums.height != camera.height)
+    if (header[3] != ReferenceSums::kValuesPerPixel || sums.samples != samples ||
+        sums.width != camera.width || sums.height != camera.height)
         return std::nullopt;
     sums.values.resize(static_cast<size_t>(sums.width) * sums.height * ReferenceSums::kValuesPerPixel);
     if (!in.read(reinterpret_cast<char*>(sums.values.data()),
@@ -297,7 +297,8 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     };
     std::vector<std::pair<int, fs::path>> wanted;
     for (const auto& [n, snapshotFolder] : snapshots) {
-        if (n <= 0 || n >= options.samplesPerPixel || readCached(snapshotFolder, withSamples(n), scene.camera))
+        if (n <= 0 || n >= options.samplesPerPixel ||
+            readCached(snapshotFolder, withSamples(n), scene.camera))
             continue;
         wanted.emplace_back(n, snapshotFolder);
         settings.snapshotSamples.push_back(n);
@@ -305,13 +306,12 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     // The earlier reference with the most samples that kept its sums, to go on from.
     std::optional<ReferenceSums> from;
     for (const auto& [n, earlierFolder] : earlier) {
-        if (n <= 0 || n >= options.samplesPerPixel || (from && from->samples >= n) ||
-            !readCached(earlierFolder, withSamples(n), scene.camera))
-            continue;
-        if (std::optional<ReferenceSums> sums = readSums(earlierFolder, n, scene.camera)) {
-            from = std::move(sums);
-            cached.resumedFrom = earlierFolder;
-        }
+        if (n <= 0 || n >= options.samplesPerPixel || (from && from->samples >= n)) continue;
+        // The sums first: most earlier folders (the fit's) have none, and their images are not read then.
+        std::optional<ReferenceSums> sums = readSums(earlierFolder, n, scene.camera);
+        if (!sums || !readCached(earlierFolder, withSamples(n), scene.camera)) continue;
+        from = std::move(sums);
+        cached.resumedFrom = earlierFolder;
     }
     std::erase_if(wanted, [&](const auto& w) { return from && w.first <= from->samples; });
     std::erase_if(settings.snapshotSamples, [&](int n) { return from && n <= from->samples; });

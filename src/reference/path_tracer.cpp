@@ -332,12 +332,14 @@ struct PixelSums {
     int virtualSamples = 0;
     // As ReferenceSums holds them: ReferenceSums::kValuesPerPixel values.
     void write(double* v) const {
-        for (int c = 0; c < 3; ++c) v[c] = with[c], v[3 + c] = without[c], v[6 + c] = object[c], v[9 + c] = change[c];
+        for (int c = 0; c < 3; ++c)
+            v[c] = with[c], v[3 + c] = without[c], v[6 + c] = object[c], v[9 + c] = change[c];
         v[12] = virtualSamples;
     }
     static PixelSums read(const double* v) {
         PixelSums s;
-        for (int c = 0; c < 3; ++c) s.with[c] = v[c], s.without[c] = v[3 + c], s.object[c] = v[6 + c], s.change[c] = v[9 + c];
+        for (int c = 0; c < 3; ++c)
+            s.with[c] = v[c], s.without[c] = v[3 + c], s.object[c] = v[6 + c], s.change[c] = v[9 + c];
         s.virtualSamples = static_cast<int>(v[12]);
         return s;
     }
@@ -413,7 +415,8 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     const int total = std::max(options.samplesPerPixel, 1);
     int done = 0;
     if (from && from->fits(camera) && from->samples < total) {
-        for (size_t i = 0; i < sums.size(); ++i) sums[i] = PixelSums::read(&from->values[i * ReferenceSums::kValuesPerPixel]);
+        for (size_t i = 0; i < sums.size(); ++i)
+            sums[i] = PixelSums::read(&from->values[i * ReferenceSums::kValuesPerPixel]);
         done = from->samples;
     }
     while (done < total) {
@@ -457,7 +460,8 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     out.sums.height = h;
     out.sums.samples = done;
     out.sums.values.resize(sums.size() * ReferenceSums::kValuesPerPixel);
-    for (size_t i = 0; i < sums.size(); ++i) sums[i].write(&out.sums.values[i * ReferenceSums::kValuesPerPixel]);
+    for (size_t i = 0; i < sums.size(); ++i)
+        sums[i].write(&out.sums.values[i * ReferenceSums::kValuesPerPixel]);
     return out;
 }
 

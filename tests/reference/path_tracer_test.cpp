@@ -550,8 +550,8 @@ TEST(Reference, GoingOnFromEarlierSumsIsTheWholeRender) {
     o.samplesPerPixel = 5;
     const ReferenceOutput whole = renderReference(s, o);
     std::vector<int> passes;
-    const ReferenceOutput onFrom =
-        renderReference(s, o, [&](int done, int, double) { passes.push_back(done); }, {}, &two.sums);
+    const ReferenceOutput onFrom = renderReference(
+        s, o, [&](int done, int, double) { passes.push_back(done); }, {}, &two.sums);
     EXPECT_EQ(passes, (std::vector<int>{3, 4, 5}));  // only the samples the earlier render lacked
     EXPECT_EQ(onFrom.samplesPerPixel, 5);
     EXPECT_EQ(onFrom.sums.values, whole.sums.values);
