@@ -305,12 +305,17 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     }
     // The earlier reference with the most samples that kept its sums, to go on from.
     std::optional<ReferenceSums> from;
+    double earlierMs = 0.0;  // the time its samples took, which this reference's samples include
     for (const auto& [n, earlierFolder] : earlier) {
         if (n <= 0 || n >= options.samplesPerPixel || (from && from->samples >= n)) continue;
         // The sums first: most earlier folders (the fit's) have none, and their images are not read then.
         std::optional<ReferenceSums> sums = readSums(earlierFolder, n, scene.camera);
-        if (!sums || !readCached(earlierFolder, withSamples(n), scene.camera)) continue;
+        if (!sums) continue;
+        const std::optional<ReferenceOutput> earlierOutput =
+            readCached(earlierFolder, withSamples(n), scene.camera);
+        if (!earlierOutput) continue;
         from = std::move(sums);
+        earlierMs = earlierOutput->totalMs;
         cached.resumedFrom = earlierFolder;
     }
     std::erase_if(wanted, [&](const auto& w) { return from && w.first <= from->samples; });
@@ -319,10 +324,18 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     cached.output = renderReference(
         scene, settings, onPass,
         [&](const ReferenceOutput& soFar) {
-            for (const auto& [n, snapshotFolder] : wanted)
-                if (n == soFar.samplesPerPixel) storeReference(snapshotFolder, scene, withSamples(n), soFar);
+            for (const auto& [n, snapshotFolder] : wanted) {
+                if (n != soFar.samplesPerPixel) continue;
+                ReferenceOutput snapshot = soFar;
+                snapshot.totalMs += earlierMs;
+                storeReference(snapshotFolder, scene, withSamples(n), snapshot);
+            }
         },
         from ? &*from : nullptr);
+    // A reference's time is that of all its samples, the earlier render's included: what rendering them at
+    // once would have taken (the suite's path tracing time per sample comes from it).
+    cached.output.totalMs += earlierMs;
+    cached.resumedMs = earlierMs;
     storeReference(folder, scene, options, cached.output);
     cached.snapshotsStored = wanted.size();
     return cached;

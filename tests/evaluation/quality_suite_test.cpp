@@ -284,6 +284,13 @@ TEST_F(QualitySuiteTest, AReferenceGoesOnFromAnEarlierOnesSums) {
     const CachedReference more = cachedReference(scene, seven, b, {}, {}, {{4, a}, {2, dir_ / "none"}});
     EXPECT_EQ(more.resumedFrom, a);
     EXPECT_EQ(more.output.samplesPerPixel, 7);
+    // Its time is that of all 7 samples: the 4 of the earlier render, kept with it, and the 3 added.
+    const double earlierMs = nlohmann::json::parse(std::ifstream(a / "reference.json"))["ms"].get<double>();
+    EXPECT_GT(earlierMs, 0.0);
+    EXPECT_EQ(more.resumedMs, earlierMs);
+    EXPECT_GT(more.output.totalMs, earlierMs);
+    EXPECT_EQ(nlohmann::json::parse(std::ifstream(b / "reference.json"))["ms"].get<double>(),
+              more.output.totalMs);
     EXPECT_EQ(more.output.sums.values, whole.sums.values);
     EXPECT_TRUE(std::ranges::equal(more.output.composite.data(), whole.composite.data()));
     EXPECT_TRUE(std::ranges::equal(more.output.objectMask.data(), whole.objectMask.data()));
