@@ -76,7 +76,7 @@ struct CachedReference {
     std::filesystem::path folder;
     size_t snapshotsStored = 0;  // of `snapshots`, the references stored from this render's first samples
     std::filesystem::path resumedFrom;  // the earlier reference it went on from (empty: none)
-    double resumedMs = 0.0;  // the earlier reference's time, which output.totalMs includes
+    double resumedMs = 0.0;             // the earlier reference's time, which output.totalMs includes
 };
 
 // The reference of `scene` with `options` from `folder` when it holds one rendered with the same samples,

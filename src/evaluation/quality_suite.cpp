@@ -278,13 +278,13 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
         if (r.snapshotsStored > 0)
             log(options, fmt::format("  {}: {} of the fit's references stored from its first samples", q.name,
                                      r.snapshotsStored));
-        log(options,
-            fmt::format("  {}: {} reference, {} spp: {} {}", q.name, kind, samples,
-                        r.hit                  ? "cache hit"
-                        : r.resumedFrom.empty() ? fmt::format("rendered in {:.1f} s,", r.output.totalMs / 1000.0)
-                                                : fmt::format("rendered in {:.1f} s ({:.1f} s of them before),",
-                                                              r.output.totalMs / 1000.0, r.resumedMs / 1000.0),
-                        r.hit ? r.folder.string() : "stored in " + r.folder.string()));
+        log(options, fmt::format("  {}: {} reference, {} spp: {} {}", q.name, kind, samples,
+                                 r.hit ? "cache hit"
+                                 : r.resumedFrom.empty()
+                                     ? fmt::format("rendered in {:.1f} s,", r.output.totalMs / 1000.0)
+                                     : fmt::format("rendered in {:.1f} s ({:.1f} s of them before),",
+                                                   r.output.totalMs / 1000.0, r.resumedMs / 1000.0),
+                                 r.hit ? r.folder.string() : "stored in " + r.folder.string()));
         ++(r.hit ? q.cacheHits : q.cacheMisses);
         return std::move(r.output);
     };
