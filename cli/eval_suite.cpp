@@ -60,6 +60,12 @@ void addSuiteOptions(CLI::App& eval, SuiteArgs& args) {
                     "With --suite: the table as Markdown (default out/quality/quality.md)");
     eval.add_option("--cache", args.cache,
                     "With --suite: the folder of the cached references (default out/quality/refs)");
+    eval.add_option("--checkpoint-minutes", args.checkpointMinutes,
+                    fmt::format("With --suite: minutes of rendering between a reference's checkpoints, which "
+                                "an interrupted suite goes on from (default {:g}; 0: none)",
+                                kDefaultCheckpointMinutes))
+        ->check(CLI::NonNegativeNumber)
+        ->needs("--suite");
 }
 
 int runSuite(const CLI::App& eval, const SuiteArgs& args) {
@@ -71,6 +77,7 @@ int runSuite(const CLI::App& eval, const SuiteArgs& args) {
 
     SuiteRunOptions options;
     options.cacheFolder = args.cache;
+    options.checkpointMinutes = args.checkpointMinutes;
     if (eval.count("--set") > 0) options.overrides = eval.get_option("--set")->as<std::vector<std::string>>();
     if (eval.count("--spp") > 0) options.samplesPerPixel = eval.get_option("--spp")->as<int>();
     if (eval.count("--seed") > 0) options.seed = eval.get_option("--seed")->as<uint64_t>();

@@ -87,11 +87,17 @@ struct CachedReference {
 // images as renders of their own, ReferenceOptions::snapshotSamples), when it renders. `earlier`: (n, folder)
 // of references of the same settings with n < the samples asked for; when it renders, it goes on from the
 // one with the most samples that kept its sums (ReferenceSums, `sums.bin`), rendering only the samples it
-// lacks (the same image as a render of all of them).
-CachedReference cachedReference(const Scene& scene, const ReferenceOptions& options,
-                                const std::filesystem::path& folder, const ReferenceProgress& onPass = {},
-                                const std::vector<std::pair<int, std::filesystem::path>>& snapshots = {},
-                                const std::vector<std::pair<int, std::filesystem::path>>& earlier = {});
+// lacks (the same image as a render of all of them). `checkpointFolder`: with options.checkpointSeconds,
+// where the render stores its checkpoints (the folder of a reference of that many samples, named so that the
+// caller finds it among `earlier` the next time): a reference of n samples with its sums, marked as a
+// checkpoint. Only the newest is kept; it is removed when the render is stored, and so is a checkpoint the
+// render went on from. A folder that holds a reference already is left as it is.
+CachedReference cachedReference(
+    const Scene& scene, const ReferenceOptions& options, const std::filesystem::path& folder,
+    const ReferenceProgress& onPass = {},
+    const std::vector<std::pair<int, std::filesystem::path>>& snapshots = {},
+    const std::vector<std::pair<int, std::filesystem::path>>& earlier = {},
+    const std::function<std::filesystem::path(int samples)>& checkpointFolder = {});
 
 // ---- The path tracer's equal-error samples ----
 
@@ -120,6 +126,9 @@ double equalErrorSamples(double c, double error, int referenceSpp);
 
 // ---- Running the suite ----
 
+// The suite's references keep a checkpoint this often (minutes of rendering).
+constexpr double kDefaultCheckpointMinutes = 10.0;
+
 struct SuiteRunOptions {
     std::filesystem::path cacheFolder = "out/quality/refs";
     std::vector<std::string> overrides;           // applied to every scene after its own "set"
@@ -127,6 +136,9 @@ struct SuiteRunOptions {
     std::optional<uint64_t> seed;                 // instead of the suite's "seed"
     std::function<void(const std::string&)> log;  // one line per step (cache hits, renders)
     ReferenceProgress onPass;                     // progress of each reference being rendered
+    // Minutes of rendering between a reference's checkpoints (cachedReference's), 0 = none: an interrupted
+    // suite goes on from the last one.
+    double checkpointMinutes = kDefaultCheckpointMinutes;
 };
 
 // The share of the noise in a figure above which the suite warns (the reference noise must stay under 5 %

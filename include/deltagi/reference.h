@@ -25,6 +25,12 @@ struct ReferenceOptions {
     // (ReferenceSnapshot): exactly the image of a render of that many samples with the same seed, which
     // takes the same first samples. The quality suite's low-sample references come from its full one so.
     std::vector<int> snapshotSamples;
+    // Seconds of rendering between checkpoints; 0 = none. After the first whole pass past each multiple
+    // (and before the last pass) the render hands its image so far to the caller with its sums
+    // (ReferenceSnapshot, `sums` filled): a render cut short can go on from the last one (`from`), so a
+    // reference of hours is not lost to an interruption. Sample counts are taken as they come; the images
+    // do not depend on when the checkpoints fall.
+    double checkpointSeconds = 0.0;
 };
 
 // The per-pixel sums a differential render's images are made from, over its first `samples` samples: with
@@ -50,13 +56,14 @@ struct ReferenceOutput {
     Image delta;              // composite - background
     int samplesPerPixel = 0;  // samples actually taken (fewer than asked when the time limit stopped it)
     double totalMs = 0.0;
-    ReferenceSums sums;  // what the images are made from (not filled in the snapshots)
+    ReferenceSums sums;  // what the images are made from (in the snapshots, filled for checkpoints only)
 };
 
 // Called after each pass: samples per pixel done so far, the number asked for, and the seconds spent.
 using ReferenceProgress = std::function<void(int done, int total, double seconds)>;
 // Called with the image of the first n samples (n = samplesPerPixel, totalMs the time spent so far) at each
-// of ReferenceOptions::snapshotSamples that the render reaches.
+// of ReferenceOptions::snapshotSamples that the render reaches, and at each checkpoint
+// (ReferenceOptions::checkpointSeconds; then with its sums, sums.samples = n). Once for a pass that is both.
 using ReferenceSnapshot = std::function<void(const ReferenceOutput& soFar)>;
 
 // Lights: point and spot lights with a radius are spheres of that radius (shadow rays aim at a uniformly

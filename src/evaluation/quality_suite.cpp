@@ -264,6 +264,7 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
         ReferenceOptions settings;
         settings.samplesPerPixel = samples;
         settings.seed = seed;
+        settings.checkpointSeconds = 60.0 * std::max(options.checkpointMinutes, 0.0);
         if (maxBounces > 0) settings.maxBounces = maxBounces;
         const fs::path folder = cache / settingsFolder(kind, samples, seed);
         std::error_code error;
@@ -272,7 +273,8 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
         std::vector<std::pair<int, fs::path>> snapshotFolders;
         for (const int n : snapshots) snapshotFolders.emplace_back(n, cache / settingsFolder(kind, n, seed));
         CachedReference r = cachedReference(scene, settings, folder, options.onPass, snapshotFolders,
-                                            earlierFolders(cache, kind, samples, seed));
+                                            earlierFolders(cache, kind, samples, seed),
+                                            [&](int n) { return cache / settingsFolder(kind, n, seed); });
         if (!r.resumedFrom.empty())
             log(options, fmt::format("  {}: went on from the samples of {}", q.name, r.resumedFrom.string()));
         if (r.snapshotsStored > 0)

@@ -251,8 +251,10 @@ std::optional<ReferenceSums> readSums(const fs::path& folder, int samples, const
     return sums;
 }
 
+// `checkpoint`: a render's checkpoint (ReferenceOptions::checkpointSeconds), removed when the render it
+// was made for is stored.
 void storeReference(const fs::path& folder, const Scene& scene, const ReferenceOptions& options,
-                    const ReferenceOutput& output) {
+                    const ReferenceOutput& output, bool checkpoint = false) {
     prepareFolder(folder);
     if (output.sums.samples == options.samplesPerPixel && output.sums.fits(scene.camera))
         writeSums(output.sums, folder / kSumsFile);
@@ -268,7 +270,17 @@ void storeReference(const fs::path& folder, const Scene& scene, const ReferenceO
     meta["max_bounces"] = options.maxBounces;
     meta["roulette_start_bounce"] = options.rouletteStartBounce;
     meta["ms"] = output.totalMs;
+    if (checkpoint) meta["checkpoint"] = true;
     writeText(folder / kMetaFile, meta.dump(2) + "\n");
+}
+
+// Whether `folder` holds a checkpoint (storeReference's `checkpoint`).
+bool isCheckpoint(const fs::path& folder) {
+    try {
+        return nlohmann::json::parse(readBytes(folder / kMetaFile)).value("checkpoint", false);
+    } catch (const std::exception&) {
+        return false;
+    }
 }
 
 }  // namespace
@@ -276,7 +288,8 @@ void storeReference(const fs::path& folder, const Scene& scene, const ReferenceO
 CachedReference cachedReference(const Scene& scene, const ReferenceOptions& options, const fs::path& folder,
                                 const ReferenceProgress& onPass,
                                 const std::vector<std::pair<int, fs::path>>& snapshots,
-                                const std::vector<std::pair<int, fs::path>>& earlier) {
+                                const std::vector<std::pair<int, fs::path>>& earlier,
+                                const std::function<fs::path(int samples)>& checkpointFolder) {
     if (options.timeLimitSeconds > 0.0)
         throw InputError(folder.string(), "a cached reference cannot have a time limit");
     CachedReference cached;
@@ -320,16 +333,35 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     }
     std::erase_if(wanted, [&](const auto& w) { return from && w.first <= from->samples; });
     std::erase_if(settings.snapshotSamples, [&](int n) { return from && n <= from->samples; });
+    if (!checkpointFolder) settings.checkpointSeconds = 0.0;
     prepareFolder(folder);
+    fs::path lastCheckpoint;  // the newest checkpoint of this render
+    auto removeFolder = [](const fs::path& f) {
+        std::error_code error;
+        fs::remove(f / kMetaFile, error);  // first: what is left of it is never read as a reference
+        fs::remove_all(f, error);
+    };
     cached.output = renderReference(
         scene, settings, onPass,
         [&](const ReferenceOutput& soFar) {
-            for (const auto& [n, snapshotFolder] : wanted) {
-                if (n != soFar.samplesPerPixel) continue;
-                ReferenceOutput snapshot = soFar;
-                snapshot.totalMs += earlierMs;
-                storeReference(snapshotFolder, scene, withSamples(n), snapshot);
-            }
+            const int n = soFar.samplesPerPixel;
+            ReferenceOutput stored = soFar;
+            stored.totalMs += earlierMs;
+            bool snapshot = false;
+            for (const auto& [samples, snapshotFolder] : wanted)
+                if (samples == n) {
+                    storeReference(snapshotFolder, scene, withSamples(n), stored);
+                    snapshot = true;
+                }
+            if (stored.sums.samples != n || snapshot) return;
+            // A checkpoint: where a render cut short goes on from (as from an earlier reference); never over
+            // a reference already there.
+            const fs::path checkpoint = checkpointFolder(n);
+            std::error_code error;
+            if (checkpoint.empty() || fs::exists(checkpoint / kMetaFile, error)) return;
+            storeReference(checkpoint, scene, withSamples(n), stored, true);
+            if (!lastCheckpoint.empty()) removeFolder(lastCheckpoint);
+            lastCheckpoint = checkpoint;
         },
         from ? &*from : nullptr);
     // A reference's time is that of all its samples, the earlier render's included: what rendering them at
@@ -338,6 +370,9 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     cached.resumedMs = earlierMs;
     storeReference(folder, scene, options, cached.output);
     cached.snapshotsStored = wanted.size();
+    // The checkpoints served their purpose: this render's, and the one it went on from.
+    if (!lastCheckpoint.empty()) removeFolder(lastCheckpoint);
+    if (!cached.resumedFrom.empty() && isCheckpoint(cached.resumedFrom)) removeFolder(cached.resumedFrom);
     return cached;
 }
 

@@ -384,6 +384,15 @@ ReferenceOutput assemble(const Scene& scene, std::span<const PixelSums> sums, in
     return out;
 }
 
+// The pixels' sums as a ReferenceSums of `samples` samples.
+void writeSums(std::span<const PixelSums> sums, int w, int h, int samples, ReferenceSums& out) {
+    out.width = w;
+    out.height = h;
+    out.samples = samples;
+    out.values.resize(sums.size() * ReferenceSums::kValuesPerPixel);
+    for (size_t i = 0; i < sums.size(); ++i) sums[i].write(&out.values[i * ReferenceSums::kValuesPerPixel]);
+}
+
 }  // namespace
 
 ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& options,
@@ -419,6 +428,7 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
             sums[i] = PixelSums::read(&from->values[i * ReferenceSums::kValuesPerPixel]);
         done = from->samples;
     }
+    double lastCheckpoint = 0.0;  // seconds
     while (done < total) {
         const int sample = done;
         parallelFor(0, h, kRowGrain, [&](int64_t y) {
@@ -444,11 +454,17 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
         });
         ++done;
         const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-        if (onSnapshot && done < total &&
-            std::find(options.snapshotSamples.begin(), options.snapshotSamples.end(), done) !=
-                options.snapshotSamples.end()) {
+        const bool snapshot = std::find(options.snapshotSamples.begin(), options.snapshotSamples.end(),
+                                        done) != options.snapshotSamples.end();
+        const bool checkpoint =
+            options.checkpointSeconds > 0.0 && seconds - lastCheckpoint >= options.checkpointSeconds;
+        if (onSnapshot && done < total && (snapshot || checkpoint)) {
             ReferenceOutput soFar = assemble(scene, sums, done);
             soFar.totalMs = 1000.0 * seconds;
+            if (checkpoint) {
+                writeSums(sums, w, h, done, soFar.sums);
+                lastCheckpoint = seconds;
+            }
             onSnapshot(soFar);
         }
         if (onPass) onPass(done, total, seconds);
@@ -456,12 +472,7 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
     }
     ReferenceOutput out = assemble(scene, sums, done);
     out.totalMs = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-    out.sums.width = w;
-    out.sums.height = h;
-    out.sums.samples = done;
-    out.sums.values.resize(sums.size() * ReferenceSums::kValuesPerPixel);
-    for (size_t i = 0; i < sums.size(); ++i)
-        sums[i].write(&out.sums.values[i * ReferenceSums::kValuesPerPixel]);
+    writeSums(sums, w, h, done, out.sums);
     return out;
 }
 

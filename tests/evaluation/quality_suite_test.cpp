@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include "deltagi/error.h"
@@ -301,6 +302,55 @@ TEST_F(QualitySuiteTest, AReferenceGoesOnFromAnEarlierOnesSums) {
     const CachedReference again = cachedReference(scene, seven, b, {}, {}, {{4, a}});
     EXPECT_TRUE(again.resumedFrom.empty());
     EXPECT_TRUE(std::ranges::equal(again.output.composite.data(), whole.composite.data()));
+}
+
+// A render cut short goes on from its last checkpoint, to the same image; the checkpoints are gone once the
+// reference is stored, and a checkpoint never replaces a reference already in the cache.
+TEST_F(QualitySuiteTest, AnInterruptedReferenceGoesOnFromItsLastCheckpoint) {
+    write("grey.json", tinyScene(0.5).dump(2));
+    const Scene scene = loadScene(dir_ / "grey.json");
+    ReferenceOptions six;
+    six.samplesPerPixel = 6;
+    six.checkpointSeconds = 1e-9;  // after every pass
+    const fs::path refs = dir_ / "refs";
+    const auto checkpointFolder = [&](int n) { return refs / fmt::format("full-{}spp-seed0", n); };
+    const fs::path target = checkpointFolder(6);
+    // A reference of 2 samples is in the cache already: the checkpoint of pass 2 leaves it alone.
+    ReferenceOptions two;
+    two.samplesPerPixel = 2;
+    ASSERT_FALSE(cachedReference(scene, two, checkpointFolder(2)).hit);
+    const std::string twoMeta = readText(checkpointFolder(2) / "reference.json");
+
+    struct Interrupted {};
+    EXPECT_THROW(cachedReference(
+                     scene, six, target,
+                     [](int done, int, double) {
+                         if (done == 4) throw Interrupted{};
+                     },
+                     {}, {}, checkpointFolder),
+                 Interrupted);
+    EXPECT_FALSE(fs::exists(target / "reference.json"));
+    EXPECT_EQ(readText(checkpointFolder(2) / "reference.json"), twoMeta);
+    EXPECT_FALSE(fs::exists(checkpointFolder(1)));  // only the newest checkpoint is kept
+    EXPECT_FALSE(fs::exists(checkpointFolder(3)));
+    ASSERT_TRUE(fs::is_regular_file(checkpointFolder(4) / "sums.bin"));
+    EXPECT_TRUE(json::parse(readText(checkpointFolder(4) / "reference.json")).value("checkpoint", false));
+
+    std::vector<int> passes;
+    const CachedReference resumed = cachedReference(
+        scene, six, target, [&](int done, int, double) { passes.push_back(done); }, {},
+        {{2, checkpointFolder(2)}, {4, checkpointFolder(4)}}, checkpointFolder);
+    EXPECT_EQ(resumed.resumedFrom, checkpointFolder(4));
+    EXPECT_EQ(passes, (std::vector<int>{5, 6}));
+    ReferenceOptions plain;
+    plain.samplesPerPixel = 6;
+    const ReferenceOutput whole = renderReference(scene, plain);
+    EXPECT_EQ(resumed.output.sums.values, whole.sums.values);
+    EXPECT_TRUE(std::ranges::equal(resumed.output.composite.data(), whole.composite.data()));
+    EXPECT_TRUE(fs::exists(target / "reference.json"));
+    EXPECT_FALSE(fs::exists(checkpointFolder(4)));  // the checkpoint it went on from
+    EXPECT_FALSE(fs::exists(checkpointFolder(5)));  // its own
+    EXPECT_EQ(readText(checkpointFolder(2) / "reference.json"), twoMeta);
 }
 
 TEST_F(QualitySuiteTest, TheKeyFollowsTheContentOfReferencedFiles) {

@@ -564,6 +564,39 @@ TEST(Reference, GoingOnFromEarlierSumsIsTheWholeRender) {
     expectIdentical(renderReference(s, o, {}, {}, &other).composite, whole.composite, "started over");
 }
 
+// Checkpoints hand over the sums so far, before the last pass; a render that goes on from one is the whole
+// render. A checkpoint that falls on a snapshot's pass comes once, with its sums.
+TEST(Reference, CheckpointsHandOverTheSumsToGoOnFrom) {
+    const Scene s = ballOverFloor({0, 0.35f, 0});
+    ReferenceOptions o;
+    o.samplesPerPixel = 4;
+    const ReferenceOutput whole = renderReference(s, o);
+    o.checkpointSeconds = 1e-9;  // after every pass
+    o.snapshotSamples = {2};
+    std::vector<ReferenceOutput> checkpoints;
+    const ReferenceOutput full =
+        renderReference(s, o, {}, [&](const ReferenceOutput& soFar) { checkpoints.push_back(soFar); });
+    EXPECT_EQ(full.sums.values, whole.sums.values);  // checkpoints change nothing
+    ASSERT_EQ(checkpoints.size(), 3u);               // passes 1, 2 and 3; not the last
+    for (size_t i = 0; i < checkpoints.size(); ++i) {
+        const ReferenceOutput& c = checkpoints[i];
+        EXPECT_EQ(c.samplesPerPixel, static_cast<int>(i) + 1);
+        ASSERT_EQ(c.sums.samples, c.samplesPerPixel);
+        ASSERT_TRUE(c.sums.fits(s.camera));
+        ReferenceOptions rest;
+        rest.samplesPerPixel = 4;
+        const ReferenceOutput onFrom = renderReference(s, rest, {}, {}, &c.sums);
+        EXPECT_EQ(onFrom.sums.values, whole.sums.values) << "from checkpoint " << c.samplesPerPixel;
+        expectIdentical(onFrom.composite, whole.composite, "composite");
+    }
+    // Without checkpoints the snapshots carry no sums.
+    o.checkpointSeconds = 0.0;
+    checkpoints.clear();
+    renderReference(s, o, {}, [&](const ReferenceOutput& soFar) { checkpoints.push_back(soFar); });
+    ASSERT_EQ(checkpoints.size(), 1u);
+    EXPECT_EQ(checkpoints[0].sums.samples, 0);
+}
+
 TEST(Reference, SphereLightSamplesLieOnItsDiskAndKeepTheIntensity) {
     Light light = test::pointLight({0, 2, 0}, 3.0f);
     light.radius = 0.5f;
