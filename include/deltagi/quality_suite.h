@@ -165,6 +165,12 @@ struct SceneQuality {
     double noiseConstant = 0.0, objectNoiseConstant = 0.0;    // c (noiseConstantOf), for Δ and the object
     double referenceNoise = 0.0, objectReferenceNoise = 0.0;  // c / sqrt(referenceSpp)
     double equalErrorSpp = 0.0, equalErrorMs = 0.0;
+    // The path tracer's time per sample that equalErrorMs is made from: the largest fit reference's (a
+    // render of its own, or the full reference's first samples: one run, setup included), so that a full
+    // reference grown over several runs, or rendered while the machine was busy, does not change it; the full
+    // reference's ms / spp without a fit. `timedSpp`: that reference's samples.
+    double pathTracerMsPerSpp = 0.0;
+    int timedSpp = 0;
     size_t cacheHits = 0, cacheMisses = 0;
     std::vector<std::string> warnings;  // the scene's (loader) and the suite's (reference noise)
 };

@@ -309,10 +309,17 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     q.referenceShadowShare = split.referenceShadowShare;
     q.referenceIndirectShare = split.referenceIndirectShare;
 
-    // The path tracer's noise, from its first n samples against all of them.
+    // The path tracer's noise, from its first n samples against all of them; its time per sample, from the
+    // largest of them.
+    q.timedSpp = q.referenceSpp;
+    q.pathTracerMsPerSpp = q.referenceMs / q.referenceSpp;
     for (const int n : suite.fitSamples) {
         if (n >= q.referenceSpp) continue;
         const ReferenceOutput low = reference("full", n, 0);
+        if (low.totalMs > 0.0 && (q.timedSpp == q.referenceSpp || n > q.timedSpp)) {
+            q.timedSpp = n;
+            q.pathTracerMsPerSpp = low.totalMs / n;
+        }
         const DeltaFigures f = deltaFigures(onBackground(low, e.reference.background), e.reference.composite,
                                             e.reference.background, e.classes);
         q.fitSamples.push_back(n);
@@ -324,7 +331,7 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     q.referenceNoise = q.noiseConstant / std::sqrt(q.referenceSpp);
     q.objectReferenceNoise = q.objectNoiseConstant / std::sqrt(q.referenceSpp);
     q.equalErrorSpp = equalErrorSamples(q.noiseConstant, q.dgi.deltaRelError, q.referenceSpp);
-    q.equalErrorMs = q.equalErrorSpp * q.referenceMs / q.referenceSpp;
+    q.equalErrorMs = q.equalErrorSpp * q.pathTracerMsPerSpp;
 
     const auto checkNoise = [&](const char* what, double noise, double figure) {
         if (std::isfinite(noise) && noise > kMaxReferenceNoiseShare * figure)
@@ -386,6 +393,8 @@ nlohmann::ordered_json sceneJson(const SceneQuality& q) {
                       {"fit", fit}};
     j["equal_error"] = {{"spp", q.equalErrorSpp},
                         {"ms", q.equalErrorMs},
+                        {"ms_per_spp", q.pathTracerMsPerSpp},
+                        {"timed_spp", q.timedSpp},
                         {"ms_over_dgi_ms", q.dgiMs > 0.0 ? q.equalErrorMs / q.dgiMs : kNaN}};
     j["cache"] = {{"hits", q.cacheHits}, {"misses", q.cacheMisses}};
     j["warnings"] = q.warnings;
@@ -441,21 +450,23 @@ std::string suiteMarkdown(std::span<const SceneQuality> scenes, const std::strin
                           cell(100.0 * q.referenceNoise / q.dgi.deltaRelError, "{:.1f} %"));
     md +=
         "\n## The references\n\n"
-        "| scene | spp | ms | ms / spp | shadow share of Δref | indirect share of Δref | c (Δ) | c (object) "
-        "| "
-        "object noise (share) | fit: spp → delta_rel_error | cache key |\n"
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
+        "| scene | spp | ms | ms / spp | equal-error ms / spp (timed at spp) | shadow share of Δref | "
+        "indirect "
+        "share of Δref | c (Δ) | c (object) | object noise (share) | fit: spp → delta_rel_error | cache key "
+        "|\n"
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
     for (const SceneQuality& q : scenes) {
         std::string fit;
         for (size_t i = 0; i < q.fitSamples.size(); ++i)
             fit +=
                 fmt::format("{}{} → {}", fit.empty() ? "" : ", ", q.fitSamples[i], cell(q.fitDeltaErrors[i]));
-        md += fmt::format("| {} | {} | {:.0f} | {:.0f} | {} | {} | {} | {} | {} ({}) | {} | `{}` |\n", q.name,
-                          q.referenceSpp, q.referenceMs, q.referenceMs / q.referenceSpp,
-                          cell(q.referenceShadowShare), cell(q.referenceIndirectShare), cell(q.noiseConstant),
-                          cell(q.objectNoiseConstant), cell(q.objectReferenceNoise),
-                          cell(100.0 * q.objectReferenceNoise / q.dgi.objectRelRmse, "{:.1f} %"),
-                          fit.empty() ? "none" : fit, q.key);
+        md += fmt::format(
+            "| {} | {} | {:.0f} | {:.0f} | {:.0f} ({}) | {} | {} | {} | {} | {} ({}) | {} | `{}` |\n", q.name,
+            q.referenceSpp, q.referenceMs, q.referenceMs / q.referenceSpp, q.pathTracerMsPerSpp, q.timedSpp,
+            cell(q.referenceShadowShare), cell(q.referenceIndirectShare), cell(q.noiseConstant),
+            cell(q.objectNoiseConstant), cell(q.objectReferenceNoise),
+            cell(100.0 * q.objectReferenceNoise / q.dgi.objectRelRmse, "{:.1f} %"),
+            fit.empty() ? "none" : fit, q.key);
     }
     std::string warnings;
     for (const SceneQuality& q : scenes)

@@ -268,6 +268,15 @@ TEST_F(QualitySuiteTest, TheCacheIsReusedUntilTheSceneChanges) {
     EXPECT_EQ(more.cacheMisses, 2u);
     EXPECT_EQ(more.cacheHits, 2u);
     EXPECT_EQ(more.referenceSpp, 8);
+    // The path tracer's time per sample is the largest fit reference's (2 samples, kept), whatever the full
+    // one's samples and time.
+    EXPECT_EQ(changed.timedSpp, 2);
+    const double fitMs =
+        json::parse(readText(dir_ / "refs" / changed.key / "full-2spp-seed3" / "reference.json"))["ms"];
+    EXPECT_EQ(changed.pathTracerMsPerSpp, fitMs / 2);
+    EXPECT_EQ(changed.equalErrorMs, changed.equalErrorSpp * changed.pathTracerMsPerSpp);
+    EXPECT_EQ(more.timedSpp, 2);
+    EXPECT_EQ(more.pathTracerMsPerSpp, changed.pathTracerMsPerSpp);
 }
 
 // A reference of more samples goes on from the sums an earlier one kept: the same image as a render of all
