@@ -90,8 +90,8 @@ struct CachedReference {
 // lacks (the same image as a render of all of them). `checkpointFolder`: with options.checkpointSeconds,
 // where the render stores its checkpoints (the folder of a reference of that many samples, named so that the
 // caller finds it among `earlier` the next time): a reference of n samples with its sums, marked as a
-// checkpoint. Only the newest is kept; it is removed when the render is stored, and so is a checkpoint the
-// render went on from. A folder that holds a reference already is left as it is.
+// checkpoint. Only the newest is kept; it is removed when the render is stored, and so are the checkpoints
+// among `earlier`. A folder that holds a reference already is left as it is.
 CachedReference cachedReference(
     const Scene& scene, const ReferenceOptions& options, const std::filesystem::path& folder,
     const ReferenceProgress& onPass = {},

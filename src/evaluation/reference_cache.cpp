@@ -370,9 +370,11 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     cached.resumedMs = earlierMs;
     storeReference(folder, scene, options, cached.output);
     cached.snapshotsStored = wanted.size();
-    // The checkpoints served their purpose: this render's, and the one it went on from.
+    // The checkpoints served their purpose: this render's, and the earlier ones (the one it went on from, and
+    // any an interruption left between writing a checkpoint and removing the one before).
     if (!lastCheckpoint.empty()) removeFolder(lastCheckpoint);
-    if (!cached.resumedFrom.empty() && isCheckpoint(cached.resumedFrom)) removeFolder(cached.resumedFrom);
+    for (const auto& [n, earlierFolder] : earlier)
+        if (n < options.samplesPerPixel && isCheckpoint(earlierFolder)) removeFolder(earlierFolder);
     return cached;
 }
 

@@ -705,6 +705,70 @@ TEST_F(CliTest, InterruptedReferenceWritesNothing) {
     }
 }
 
+// A suite stopped by SIGTERM while it path-traces leaves its last checkpoint in the cache (a reference of the
+// samples done, with its sums); the next run goes on from it and removes it.
+TEST_F(CliTest, AnInterruptedSuiteGoesOnFromItsCheckpoint) {
+    writeScene(tinyScene(), "tiny.json");
+    writeText(dir_ / "suite.json", R"({"fit_spp": [1], "scenes": [{"scene": "tiny.json", "spp": 1000000}]})");
+    const fs::path refs = dir_ / "refs";
+    const std::vector<std::string> args = {"eval",
+                                           "--suite",
+                                           (dir_ / "suite.json").string(),
+                                           "--cache",
+                                           refs.string(),
+                                           "--checkpoint-minutes",
+                                           "0.002",
+                                           "--json",
+                                           (dir_ / "q.json").string(),
+                                           "--markdown",
+                                           (dir_ / "q.md").string()};
+    // The complete checkpoint folders (full-NNNspp-seed0 marked "checkpoint"): (samples, folder), the most
+    // samples last.
+    const auto checkpoints = [&] {
+        std::vector<std::pair<int, fs::path>> found;
+        std::error_code error;
+        for (auto it = fs::recursive_directory_iterator(refs, error); !error && it != fs::end(it);
+             it.increment(error)) {
+            if (it->path().filename() != "reference.json") continue;
+            try {
+                const json meta = json::parse(readText(it->path()));
+                if (meta.value("checkpoint", false))
+                    found.emplace_back(meta.at("spp").get<int>(), it->path().parent_path());
+            } catch (const std::exception&) {
+            }
+        }
+        std::sort(found.begin(), found.end());
+        return found;
+    };
+    const pid_t pid = startCli(args, dir_);
+    ASSERT_GT(pid, 0);
+    const bool made = waitFor([&] { return !checkpoints().empty(); });
+    kill(pid, SIGTERM);
+    int status = 0;
+    waitpid(pid, &status, 0);
+    ASSERT_TRUE(made) << readText(dir_ / "stderr.txt");
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
+    const auto kept = checkpoints();
+    ASSERT_FALSE(kept.empty());
+    const auto [done, newest] = kept.back();
+    EXPECT_TRUE(fs::is_regular_file(newest / "sums.bin"));
+    EXPECT_EQ(newest.filename(), "full-" + std::to_string(done) + "spp-seed0");
+    ASSERT_GT(done, 1);
+
+    // Two samples more than it has: the next run renders only those.
+    std::vector<std::string> more = args;
+    more.insert(more.end(), {"--spp", std::to_string(done + 2)});
+    const pid_t again = startCli(more, dir_);
+    ASSERT_GT(again, 0);
+    waitpid(again, &status, 0);
+    const std::string err = readText(dir_ / "stderr.txt");
+    ASSERT_TRUE(WIFEXITED(status));
+    ASSERT_EQ(WEXITSTATUS(status), 0) << err;
+    EXPECT_NE(err.find("went on from the samples of " + newest.string()), std::string::npos) << err;
+    EXPECT_TRUE(checkpoints().empty());
+}
+
 // Two renders of different images onto one EXR at once: both succeed and the file is one of the two, whole.
 TEST_F(CliTest, ConcurrentRendersLeaveOneWholeImage) {
     const std::string scene = quote(writeScene(tinyScene()).string());
