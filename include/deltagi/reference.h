@@ -27,10 +27,9 @@ struct ReferenceOptions {
     std::vector<int> snapshotSamples;
     // Seconds of rendering between checkpoints; 0 = none. After the first whole pass that ends this long
     // after the start or the last checkpoint (but not the last pass) the render hands its image so far to
-    // the caller with its sums
-    // (ReferenceSnapshot, `sums` filled): a render cut short can go on from the last one (`from`), so a
-    // reference of hours is not lost to an interruption. Sample counts are taken as they come; the images
-    // do not depend on when the checkpoints fall.
+    // the caller with its sums (ReferenceSnapshot, `sums` filled): a render cut short can go on from the
+    // last one (`from`), so a reference of hours is not lost to an interruption. Sample counts are taken as
+    // they come; the images do not depend on when the checkpoints fall.
     double checkpointSeconds = 0.0;
 };
 
