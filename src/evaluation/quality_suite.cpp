@@ -311,15 +311,12 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
 
     // The path tracer's noise, from its first n samples against all of them; its time per sample, from the
     // largest of them.
-    q.timedSpp = q.referenceSpp;
-    q.pathTracerMsPerSpp = q.referenceMs / q.referenceSpp;
+    int timedFit = 0;  // samples of the largest fit reference with a time, and its time
+    double timedFitMs = 0.0;
     for (const int n : suite.fitSamples) {
         if (n >= q.referenceSpp) continue;
         const ReferenceOutput low = reference("full", n, 0);
-        if (low.totalMs > 0.0 && (q.timedSpp == q.referenceSpp || n > q.timedSpp)) {
-            q.timedSpp = n;
-            q.pathTracerMsPerSpp = low.totalMs / n;
-        }
+        if (low.totalMs > 0.0 && n > timedFit) timedFit = n, timedFitMs = low.totalMs;
         const DeltaFigures f = deltaFigures(onBackground(low, e.reference.background), e.reference.composite,
                                             e.reference.background, e.classes);
         q.fitSamples.push_back(n);
@@ -331,6 +328,8 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     q.referenceNoise = q.noiseConstant / std::sqrt(q.referenceSpp);
     q.objectReferenceNoise = q.objectNoiseConstant / std::sqrt(q.referenceSpp);
     q.equalErrorSpp = equalErrorSamples(q.noiseConstant, q.dgi.deltaRelError, q.referenceSpp);
+    q.timedSpp = timedFit > 0 ? timedFit : q.referenceSpp;
+    q.pathTracerMsPerSpp = (timedFit > 0 ? timedFitMs : q.referenceMs) / q.timedSpp;
     q.equalErrorMs = q.equalErrorSpp * q.pathTracerMsPerSpp;
 
     const auto checkNoise = [&](const char* what, double noise, double figure) {
@@ -450,10 +449,9 @@ std::string suiteMarkdown(std::span<const SceneQuality> scenes, const std::strin
                           cell(100.0 * q.referenceNoise / q.dgi.deltaRelError, "{:.1f} %"));
     md +=
         "\n## The references\n\n"
-        "| scene | spp | ms | ms / spp | equal-error ms / spp (timed at spp) | shadow share of Δref | "
-        "indirect "
-        "share of Δref | c (Δ) | c (object) | object noise (share) | fit: spp → delta_rel_error | cache key "
-        "|\n"
+        "| scene | spp | ms | ms / spp | equal-error ms / spp (timed at spp) | shadow share of Δref "
+        "| indirect share of Δref | c (Δ) | c (object) | object noise (share) | fit: spp → delta_rel_error "
+        "| cache key |\n"
         "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
     for (const SceneQuality& q : scenes) {
         std::string fit;

@@ -251,10 +251,11 @@ std::optional<ReferenceSums> readSums(const fs::path& folder, int samples, const
     return sums;
 }
 
+// `ms`: the time of all its samples (output.totalMs, plus an earlier render's when it went on from one).
 // `checkpoint`: a render's checkpoint (ReferenceOptions::checkpointSeconds), removed when the render it
 // was made for is stored.
 void storeReference(const fs::path& folder, const Scene& scene, const ReferenceOptions& options,
-                    const ReferenceOutput& output, bool checkpoint = false) {
+                    const ReferenceOutput& output, double ms, bool checkpoint = false) {
     prepareFolder(folder);
     if (output.sums.samples == options.samplesPerPixel && output.sums.fits(scene.camera))
         writeSums(output.sums, folder / kSumsFile);
@@ -269,7 +270,7 @@ void storeReference(const fs::path& folder, const Scene& scene, const ReferenceO
     meta["seed"] = options.seed;
     meta["max_bounces"] = options.maxBounces;
     meta["roulette_start_bounce"] = options.rouletteStartBounce;
-    meta["ms"] = output.totalMs;
+    meta["ms"] = ms;
     if (checkpoint) meta["checkpoint"] = true;
     writeText(folder / kMetaFile, meta.dump(2) + "\n");
 }
@@ -345,21 +346,20 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
         scene, settings, onPass,
         [&](const ReferenceOutput& soFar) {
             const int n = soFar.samplesPerPixel;
-            ReferenceOutput stored = soFar;
-            stored.totalMs += earlierMs;
+            const double ms = soFar.totalMs + earlierMs;
             bool snapshot = false;
             for (const auto& [samples, snapshotFolder] : wanted)
                 if (samples == n) {
-                    storeReference(snapshotFolder, scene, withSamples(n), stored);
+                    storeReference(snapshotFolder, scene, withSamples(n), soFar, ms);
                     snapshot = true;
                 }
-            if (stored.sums.samples != n || snapshot) return;
+            if (soFar.sums.samples != n || snapshot) return;
             // A checkpoint: where a render cut short goes on from (as from an earlier reference); never over
             // a reference already there.
             const fs::path checkpoint = checkpointFolder(n);
             std::error_code error;
             if (checkpoint.empty() || fs::exists(checkpoint / kMetaFile, error)) return;
-            storeReference(checkpoint, scene, withSamples(n), stored, true);
+            storeReference(checkpoint, scene, withSamples(n), soFar, ms, true);
             if (!lastCheckpoint.empty()) removeFolder(lastCheckpoint);
             lastCheckpoint = checkpoint;
         },
@@ -368,7 +368,7 @@ CachedReference cachedReference(const Scene& scene, const ReferenceOptions& opti
     // once would have taken (the suite's path tracing time per sample comes from it).
     cached.output.totalMs += earlierMs;
     cached.resumedMs = earlierMs;
-    storeReference(folder, scene, options, cached.output);
+    storeReference(folder, scene, options, cached.output, cached.output.totalMs);
     cached.snapshotsStored = wanted.size();
     // The checkpoints served their purpose: this render's, and the earlier ones (the one it went on from, and
     // any an interruption left between writing a checkpoint and removing the one before).
