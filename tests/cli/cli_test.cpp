@@ -1,24 +1,17 @@
 // The `deltagi` command end to end: bad input gives one `deltagi: error:` line naming the file and key and a
 // non-zero exit; a tiny scene renders with every AOV; `info --json` is valid JSON; outputs are never inputs,
-// are checked before the work, and survive interruptions whole.
+// are checked before the work, and two runs onto one output leave it whole (interruptions:
+// interruption_test.cpp).
 #include <arpa/inet.h>
-#include <fcntl.h>
 #include <netinet/in.h>
-#include <spawn.h>
 #include <sys/socket.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
-#include <csignal>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <regex>
-#include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -27,107 +20,21 @@
 
 #include "deltagi/image.h"
 #include "deltagi/scene_info.h"
+#include "test_cli.h"
 #include "test_files.h"
-#include "test_scene_json.h"
 
 namespace fs = std::filesystem;
+using deltagi::test::CliResult;
+using deltagi::test::CliTest;
+using deltagi::test::expectOneErrorLine;
+using deltagi::test::lineCount;
+using deltagi::test::quote;
 using deltagi::test::readText;
+using deltagi::test::tinyScene;
 using deltagi::test::writeText;
 using nlohmann::json;
 
 namespace {
-
-struct CliResult {
-    int exitCode = -1;
-    std::string out;  // stdout
-    std::string err;  // stderr
-};
-
-// Single-quotes an argument for /bin/sh.
-std::string quote(const std::string& arg) {
-    std::string quoted = "'";
-    for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
-
-size_t lineCount(const std::string& text) {
-    return static_cast<size_t>(std::count(text.begin(), text.end(), '\n'));
-}
-
-// The tiny test scene at 64x48 with a blue box.
-json tinyScene() {
-    return deltagi::test::tinySceneJson(64, 48, {0.1, 0.2, 0.8});
-}
-
-class CliTest : public ::testing::Test {
-  protected:
-    void SetUp() override {
-        const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-        dir_ = fs::temp_directory_path() /
-               ("deltagi_cli_test_" + std::string(test->name()) + "_" + std::to_string(getpid()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override {
-        std::error_code ignored;
-        fs::remove_all(dir_, ignored);
-    }
-
-    // Runs `deltagi ARGS` (already quoted as needed), capturing stdout and stderr; `environment` is put
-    // before the command ("NAME=VALUE ").
-    CliResult run(const std::string& args, const std::string& environment = "") const {
-        const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string command = environment + quote(DELTAGI_CLI) + " " + args + " >" +
-                                    quote(out.string()) + " 2>" + quote(err.string());
-        const int status = std::system(command.c_str());
-        CliResult result;
-        result.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-        result.out = readText(out);
-        result.err = readText(err);
-        return result;
-    }
-
-    // The temporary output files left anywhere under the test's folder.
-    std::vector<fs::path> temporaries() const {
-        std::vector<fs::path> found;
-        for (const auto& entry : fs::recursive_directory_iterator(dir_))
-            if (entry.path().filename().string().find(".tmp-") != std::string::npos) found.push_back(entry);
-        return found;
-    }
-
-    fs::path writeScene(const json& scene, const std::string& name = "scene.json") const {
-        const fs::path path = dir_ / name;
-        writeText(path, scene.dump(2));
-        return path;
-    }
-
-    std::string renderArgs(const fs::path& scene) const {
-        return "render " + quote(scene.string()) + " -o " + quote((dir_ / "out.png").string());
-    }
-
-    // `deltagi info` on a shipped example: it loads and covers the box with the region it asks for.
-    void expectExampleLoads(const std::string& name) const {
-        const fs::path scene = fs::path(DELTAGI_SOURCE_DIR) / "examples" / (name + ".json");
-        const CliResult result = run("info --json " + quote(scene.string()));
-        ASSERT_EQ(result.exitCode, 0) << name << ": " << result.err;
-        const json info = json::parse(result.out);
-        EXPECT_EQ(info.at("real").at("meshes"), 7) << name;
-        EXPECT_EQ(info.at("lights"), 1) << name;
-        EXPECT_EQ(info.at("volume").at("resolution"), 128) << name;
-        EXPECT_NEAR(info.at("volume").at("size").get<double>(), 0.6, 1e-6) << name;
-    }
-
-    fs::path dir_;
-};
-
-// The contract of every input error: a non-zero exit, and one line on stderr that names what was wrong.
-void expectOneErrorLine(const CliResult& result, std::initializer_list<std::string> mustName) {
-    EXPECT_NE(result.exitCode, 0);
-    EXPECT_EQ(lineCount(result.err), 1u) << result.err;
-    EXPECT_EQ(result.err.rfind("deltagi: error:", 0), 0u) << result.err;
-    for (const std::string& name : mustName)
-        EXPECT_NE(result.err.find(name), std::string::npos) << result.err;
-}
 
 TEST_F(CliTest, VersionNamesTheGitRevision) {
     const CliResult result = run("--version");
@@ -589,184 +496,6 @@ TEST_F(CliTest, FailedBenchKeepsThePreviousFigures) {
                            quote(figures.string())),
                        {"virtual"});
     EXPECT_EQ(readText(figures), previous);
-}
-
-// A signal when an output is complete but not yet renamed into place (DELTAGI_TEST_SIGNAL_BEFORE_RENAME):
-// exit 128 + signal, the previous file still whole, no temporary left, nor a folder the run created.
-TEST_F(CliTest, SignalBeforeRenameLeavesThePreviousOutput) {
-    const fs::path scene = writeScene(tinyScene());
-    const fs::path output = dir_ / "out.png";
-    deltagi::writeImage(deltagi::Image(4, 4, 3, 0.1f), output);
-    const std::string previous = readText(output);
-    fs::create_directories(dir_ / "aov");
-    writeText(dir_ / "aov" / "timings.json", "{\"previous\": true}\n");
-    const auto signalling = [](int signal) {
-        return "DELTAGI_TEST_SIGNAL_BEFORE_RENAME=" + std::to_string(signal) + " ";
-    };
-    for (int signal : {SIGTERM, SIGINT}) {
-        CliResult result =
-            run(renderArgs(scene) + " --aov " + quote((dir_ / "aov").string()), signalling(signal));
-        EXPECT_EQ(result.exitCode, 128 + signal) << result.err;
-        EXPECT_NE(result.err.find("interrupted"), std::string::npos) << result.err;
-        // The outputs are renamed into place together, after all are written: none is replaced.
-        EXPECT_EQ(readText(output), previous);
-        EXPECT_EQ(readText(dir_ / "aov" / "timings.json"), "{\"previous\": true}\n");
-        EXPECT_FALSE(fs::exists(dir_ / "aov" / "composite.exr"));
-        EXPECT_TRUE(temporaries().empty());
-        // Into folders that do not exist yet: they go again.
-        const fs::path fresh = dir_ / "fresh";
-        result = run("render " + quote(scene.string()) + " -o " + quote((fresh / "out.png").string()) +
-                         " --aov " + quote((fresh / "aov").string()),
-                     signalling(signal));
-        EXPECT_EQ(result.exitCode, 128 + signal) << result.err;
-        EXPECT_FALSE(fs::exists(fresh));
-    }
-    // bench's JSON alike.
-    const fs::path figures = dir_ / "bench.json";
-    writeText(figures, "{\"previous\": true}\n");
-    const CliResult bench =
-        run("bench " + quote(scene.string()) + " --frames 1 --warmup 0 -q --json " + quote(figures.string()),
-            signalling(SIGTERM));
-    EXPECT_EQ(bench.exitCode, 128 + SIGTERM) << bench.err;
-    EXPECT_EQ(readText(figures), "{\"previous\": true}\n");
-    EXPECT_TRUE(temporaries().empty());
-    // SIGKILL cannot be caught: its temporary stays behind, but the output is still the previous one.
-    const CliResult killed = run(renderArgs(scene), signalling(SIGKILL));
-    EXPECT_TRUE(killed.exitCode == -1 || killed.exitCode == 128 + SIGKILL) << killed.exitCode;
-    EXPECT_EQ(readText(output), previous);
-}
-
-// Starts `deltagi ARGS` with stdout and stderr into files in `dir`; returns its pid.
-pid_t startCli(const std::vector<std::string>& args, const fs::path& dir) {
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, (dir / "stdout.txt").c_str(),
-                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, (dir / "stderr.txt").c_str(),
-                                     O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<std::string> all{DELTAGI_CLI};
-    all.insert(all.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& arg : all) argv.push_back(arg.data());
-    argv.push_back(nullptr);
-    pid_t pid = -1;
-    if (posix_spawn(&pid, DELTAGI_CLI, &actions, nullptr, argv.data(), environ) != 0) pid = -1;
-    posix_spawn_file_actions_destroy(&actions);
-    return pid;
-}
-
-// A field of /proc/PID/status ("SigCgt", "Threads"); empty once the process is gone.
-std::string procStatus(pid_t pid, const std::string& field) {
-    std::ifstream in("/proc/" + std::to_string(pid) + "/status");
-    for (std::string line; std::getline(in, line);)
-        if (line.rfind(field + ":", 0) == 0) return line.substr(field.size() + 1);
-    return {};
-}
-
-// Polls `done` for up to 10 s.
-template <typename Done>
-bool waitFor(Done done) {
-    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(10);
-    while (!done()) {
-        if (std::chrono::steady_clock::now() > end) return false;
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    return true;
-}
-
-// SIGTERM or SIGINT while `reference` path-traces (once it catches the signal and its worker threads run):
-// exit 143 or 130, the previous output untouched, no temporary, no AOV folder.
-TEST_F(CliTest, InterruptedReferenceWritesNothing) {
-    const fs::path scene = writeScene(tinyScene());
-    const fs::path output = dir_ / "ref.exr", aov = dir_ / "aov";
-    writeText(output, "the previous output\n");
-    for (int signal : {SIGTERM, SIGINT}) {
-        const pid_t pid = startCli({"reference", scene.string(), "-o", output.string(), "--aov", aov.string(),
-                                    "--spp", "1000000", "--threads", "2"},
-                                   dir_);
-        ASSERT_GT(pid, 0);
-        EXPECT_TRUE(waitFor([&] {
-            const std::string caught = procStatus(pid, "SigCgt");
-            return !caught.empty() && (std::stoull(caught, nullptr, 16) >> (SIGTERM - 1) & 1) != 0;
-        }));
-        EXPECT_TRUE(waitFor([&] {
-            const std::string threads = procStatus(pid, "Threads");
-            return threads.empty() || std::stoi(threads) >= 2;
-        }));
-        kill(pid, signal);
-        int status = 0;
-        waitpid(pid, &status, 0);
-        ASSERT_TRUE(WIFEXITED(status)) << "status " << status;
-        EXPECT_EQ(WEXITSTATUS(status), 128 + signal) << readText(dir_ / "stderr.txt");
-        EXPECT_NE(readText(dir_ / "stderr.txt").find("interrupted"), std::string::npos);
-        EXPECT_EQ(readText(output), "the previous output\n");
-        EXPECT_FALSE(fs::exists(aov));
-        EXPECT_TRUE(temporaries().empty());
-    }
-}
-
-// A suite stopped by SIGTERM while it path-traces leaves its last checkpoint in the cache (a reference of the
-// samples done, with its sums); the next run goes on from it and removes it.
-TEST_F(CliTest, AnInterruptedSuiteGoesOnFromItsCheckpoint) {
-    writeScene(tinyScene(), "tiny.json");
-    writeText(dir_ / "suite.json", R"({"fit_spp": [1], "scenes": [{"scene": "tiny.json", "spp": 1000000}]})");
-    const fs::path refs = dir_ / "refs";
-    const std::vector<std::string> args = {"eval",
-                                           "--suite",
-                                           (dir_ / "suite.json").string(),
-                                           "--cache",
-                                           refs.string(),
-                                           "--checkpoint-minutes",
-                                           "0.002",
-                                           "--json",
-                                           (dir_ / "q.json").string(),
-                                           "--markdown",
-                                           (dir_ / "q.md").string()};
-    // The complete checkpoint folders (full-NNNspp-seed0 marked "checkpoint"): (samples, folder), the most
-    // samples last.
-    const auto checkpoints = [&] {
-        std::vector<std::pair<int, fs::path>> found;
-        std::error_code error;
-        for (auto it = fs::recursive_directory_iterator(refs, error); !error && it != fs::end(it);
-             it.increment(error)) {
-            if (it->path().filename() != "reference.json") continue;
-            try {
-                const json meta = json::parse(readText(it->path()));
-                if (meta.value("checkpoint", false))
-                    found.emplace_back(meta.at("spp").get<int>(), it->path().parent_path());
-            } catch (const std::exception&) {
-            }
-        }
-        std::sort(found.begin(), found.end());
-        return found;
-    };
-    const pid_t pid = startCli(args, dir_);
-    ASSERT_GT(pid, 0);
-    const bool made = waitFor([&] { return !checkpoints().empty(); });
-    kill(pid, SIGTERM);
-    int status = 0;
-    waitpid(pid, &status, 0);
-    ASSERT_TRUE(made) << readText(dir_ / "stderr.txt");
-    ASSERT_TRUE(WIFEXITED(status));
-    EXPECT_EQ(WEXITSTATUS(status), 128 + SIGTERM);
-    const auto kept = checkpoints();
-    ASSERT_FALSE(kept.empty());
-    const auto [done, newest] = kept.back();
-    EXPECT_TRUE(fs::is_regular_file(newest / "sums.bin"));
-    EXPECT_EQ(newest.filename(), "full-" + std::to_string(done) + "spp-seed0");
-    ASSERT_GT(done, 1);
-
-    // Two samples more than it has: the next run renders only those.
-    std::vector<std::string> more = args;
-    more.insert(more.end(), {"--spp", std::to_string(done + 2)});
-    const pid_t again = startCli(more, dir_);
-    ASSERT_GT(again, 0);
-    waitpid(again, &status, 0);
-    const std::string err = readText(dir_ / "stderr.txt");
-    ASSERT_TRUE(WIFEXITED(status));
-    ASSERT_EQ(WEXITSTATUS(status), 0) << err;
-    EXPECT_NE(err.find("went on from the samples of " + newest.string()), std::string::npos) << err;
-    EXPECT_TRUE(checkpoints().empty());
 }
 
 // Two renders of different images onto one EXR at once: both succeed and the file is one of the two, whole.

@@ -20,6 +20,7 @@
 
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
+#include "test_cli.h"
 #include "test_files.h"
 #include "test_scene_json.h"
 
@@ -458,11 +459,7 @@ struct CliResult {
     std::string err;
 };
 
-std::string quote(const std::string& arg) {
-    std::string quoted = "'";
-    for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return quoted + "'";
-}
+using test::quote;
 
 class EvalSuiteCliTest : public QualitySuiteTest {
   protected:
