@@ -5,6 +5,7 @@
 // Texture coordinates follow glTF: (0, 0) is the image's top-left corner, u to the right, v down.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <filesystem>
@@ -31,6 +32,7 @@ struct TextureSampler {
     TextureFilter magFilter = TextureFilter::Linear;
     TextureFilter minFilter = TextureFilter::Linear;
     bool mipmaps = true;  // minification selects (and blends) mip levels by the lookup's footprint
+    bool operator==(const TextureSampler&) const = default;
 };
 
 // An immutable image with its mip chain (box-filtered halvings down to 1x1, any size: odd sizes round
@@ -70,6 +72,22 @@ class Texture {
     // bilinear lookups of the two nearest levels (trilinear). Wrap modes as the sampler says; a non-finite
     // uv gives the mean texel (average()).
     glm::vec4 sample(glm::vec2 uv, float footprint, const TextureSampler& sampler = {}) const;
+    // sample() in two halves, for the lookups of several textures at one point (a material's maps): where
+    // the texels lie and how they blend, the same for every texture of this size at that uv with that
+    // footprint and sampler; then the blend of a texture's texels there. read() takes a Lookup of this
+    // texture or of one of the same width and height (sameSize()); sample() is read(locate()).
+    struct Lookup {
+        bool average = false;  // a non-finite uv: the mean texel
+        bool bilinear = true;  // else the nearest texel, index[slot][0]
+        int levels = 1;        // 2: trilinear, the second level weighing levelBlend
+        float levelBlend = 0.0f;
+        std::array<int, 2> level{};
+        std::array<std::array<size_t, 4>, 2> index{};  // per level: top left, top right, bottom left, right
+        std::array<float, 2> fx{}, fy{};               // per level: the bilinear weights along x and y
+    };
+    Lookup locate(glm::vec2 uv, float footprint, const TextureSampler& sampler) const;
+    glm::vec4 read(const Lookup& lookup) const;
+    bool sameSize(const Texture& other) const { return width_ == other.width_ && height_ == other.height_; }
     // The mean of all texels (the 1x1 level).
     glm::vec4 average() const;
     // The texel (x, y) of mip level `level` (no filtering, no wrapping; x, y in range).

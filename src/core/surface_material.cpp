@@ -35,6 +35,7 @@ glm::vec3 mappedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float 
                        glm::vec3 texel, float scale) {
     glm::vec3 tangent;
     float handedness = 1.0f;
+    float lengthScale = 1.0f;  // the tangent's length is this many times dp/du's
     if (!mesh.tangents.empty()) {
         const glm::vec4 t = interpolate(mesh.tangents, tri, u, v);
         tangent = glm::vec3(t);
@@ -47,23 +48,26 @@ glm::vec3 mappedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float 
         const glm::vec2 d1 = uvs[tri.y] - uvs[tri.x], d2 = uvs[tri.z] - uvs[tri.x];
         const float det = d1.x * d2.y - d2.x * d1.y;
         if (!(std::abs(det) > 1e-20f)) return n;
-        tangent = (e1 * d2.y - e2 * d1.y) / det;
-        const glm::vec3 bitangent = (e2 * d1.x - e1 * d2.x) / det;
+        // dp/du and dp/dv up to the positive factor 1 / |det| (only their directions are used).
+        const float sign = det < 0.0f ? -1.0f : 1.0f;
+        lengthScale = std::abs(det);
+        tangent = (e1 * d2.y - e2 * d1.y) * sign;
+        const glm::vec3 bitangent = (e2 * d1.x - e1 * d2.x) * sign;
         // glTF's v runs down the image while its bitangent points up (+v in OpenGL's convention): the
         // texture's green channel points towards -dp/dv.
         handedness = glm::dot(glm::cross(n, tangent), -bitangent) < 0.0f ? -1.0f : 1.0f;
     }
     tangent -= n * glm::dot(n, tangent);
     const float length = glm::length(tangent);
-    if (!(length > 1e-12f)) return n;
-    tangent /= length;
+    if (!(length > 1e-12f * lengthScale)) return n;
+    tangent *= 1.0f / length;
     const glm::vec3 bitangent = handedness * glm::cross(n, tangent);
     glm::vec3 local = texel * 2.0f - 1.0f;
     local.x *= scale;
     local.y *= scale;
     const glm::vec3 mapped = local.x * tangent + local.y * bitangent + local.z * n;
     const float mappedLength = glm::length(mapped);
-    return mappedLength > 1e-12f && std::isfinite(mappedLength) ? mapped / mappedLength : n;
+    return mappedLength > 1e-12f && std::isfinite(mappedLength) ? mapped * (1.0f / mappedLength) : n;
 }
 
 }  // namespace
@@ -122,16 +126,24 @@ SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle,
     glm::vec3 base = m.albedo;
     if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
     if (!m.textured() || mesh.uvs.empty()) return fromFactors(m, base, m.metallic, m.roughness);
-    // Each texture coordinate set interpolated once, when a texture reads it.
+    // Each texture coordinate set interpolated once, when a texture reads it; the texels' places and weights
+    // worked out once for the maps of one size, set and sampler (a glTF material's usually are).
     glm::vec2 uvs[2];
     bool interpolated[2] = {false, false};
+    const TextureSlot* located = nullptr;
+    Texture::Lookup where;
     auto lookup = [&](const TextureSlot& slot) {
         const int set = slot.texCoord == 1 ? 1 : 0;
         if (!interpolated[set]) {
             uvs[set] = textureCoordinatesAt(mesh, triangle, u, v, slot.texCoord);
             interpolated[set] = true;
         }
-        return slot.sample(uvs[set], uvFootprint);
+        if (!located || located->texCoord != slot.texCoord || !(located->sampler == slot.sampler) ||
+            !located->texture->sameSize(*slot.texture)) {
+            where = slot.texture->locate(uvs[set], uvFootprint, slot.sampler);
+            located = &slot;
+        }
+        return slot.texture->read(where);
     };
     float metallic = m.metallic, roughness = m.roughness;
     if (m.baseColorTexture) base *= glm::vec3(lookup(m.baseColorTexture));

@@ -129,6 +129,35 @@ TEST(SurfaceMaterial, MetallicRoughnessTextureReadsBlueAndGreen) {
     expectNear(s.specular, glm::mix(glm::vec3(0.04f), m.albedo, 0.5f));
 }
 
+// The maps of one material are looked up together (one Texture::Lookup for maps of one size, texture
+// coordinate set and sampler): each still reads its own texels where its size or sampler differs from the
+// map before it.
+TEST(SurfaceMaterial, EachMapIsReadWithItsOwnSizeAndSampler) {
+    Material m;
+    m.model = MaterialModel::MetallicRoughness;
+    m.metallic = 1.0f;
+    m.roughness = 1.0f;
+    m.albedo = glm::vec3(1.0f);
+    m.baseColorTexture.texture = checker(8);
+    m.baseColorTexture.sampler.magFilter = TextureFilter::Nearest;
+    // Of the base colour's size, bilinear: its own weights, not the nearest texel's.
+    std::vector<glm::vec4> ramp;
+    for (int i = 0; i < 64; ++i) ramp.emplace_back(0.0f, (i % 8) / 7.0f, 1.0f - (i / 8) / 7.0f, 1.0f);
+    m.metallicRoughnessTexture.texture = textureOf(8, 8, ramp);
+    // Another size.
+    m.emissiveTexture.texture = checker(3);
+    m.emission = glm::vec3(1.0f);
+    const glm::vec3 p(0.13f, 0.0f, -0.41f);
+    const SurfaceMaterial s = materialAt(texturedQuad(m), p);
+    const glm::vec2 uv((p.x + 1.0f) / 2.0f, (p.z + 1.0f) / 2.0f);
+    const glm::vec4 base = m.baseColorTexture.sample(uv, 0.0f);
+    const glm::vec4 metallicRoughness = m.metallicRoughnessTexture.sample(uv, 0.0f);
+    EXPECT_NEAR(s.roughness, metallicRoughness.y, kTolerance);
+    expectNear(s.diffuse, glm::vec3(base) * (1.0f - metallicRoughness.z));
+    expectNear(s.emission, glm::vec3(m.emissiveTexture.sample(uv, 0.0f)));
+    EXPECT_NE(metallicRoughness.y, m.metallicRoughnessTexture.texture->texel(0, 4, 2).y);  // blended
+}
+
 // MTL's scalar maps: map_Pr multiplies the roughness, map_Ns the Phong exponent.
 TEST(SurfaceMaterial, MtlRoughnessAndShininessMapsScaleTheLobe) {
     Material m;

@@ -427,9 +427,12 @@ TEST(TextureEightBit, LevelZeroIsExactAndMipsWithinHalfAStep) {
                     }
                 }
         }
-        // Lookups read the same texels: a bilinear lookup at level 0 between four texel centres.
-        const glm::vec2 uv((1.0f + 0.5f) / kWidth, (2.0f + 0.5f) / kHeight);
-        expectNear(eight.sample(uv, 0.0f), floats.sample(uv, 0.0f), 1e-6f, "bilinear lookup");
+        // Lookups read the same texels: a bilinear lookup at level 0 at a texel centre and between four
+        // texels (8-bit linear texels are blended as codes and divided by 255 after the blend).
+        const glm::vec2 centre((1.0f + 0.5f) / kWidth, (2.0f + 0.5f) / kHeight);
+        expectNear(eight.sample(centre, 0.0f), floats.sample(centre, 0.0f), 1e-6f, "at a texel centre");
+        const glm::vec2 between((1.0f + 0.8f) / kWidth, (2.0f + 0.3f) / kHeight);
+        expectNear(eight.sample(between, 0.0f), floats.sample(between, 0.0f), 1e-6f, "bilinear lookup");
     }
 }
 
@@ -560,4 +563,35 @@ TEST(TextureErrors, AbsurdSizesAreRefusedBeforeReading) {
 }
 
 }  // namespace
+
+// A material's maps of one size are read through one Lookup (Texture::locate, then read for each): reading
+// another texture of the same size through it gives exactly that texture's own lookup, for every filter,
+// wrap mode and footprint, 8-bit and float.
+TEST(Texture, ALookupOfOneTextureReadsAnotherOfTheSameSize) {
+    constexpr int kWidth = 12, kHeight = 6;
+    std::vector<uint8_t> bytes(kWidth * kHeight * 4);
+    for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<uint8_t>((i * 131 + 7) % 256);
+    std::vector<glm::vec4> values(kWidth * kHeight);
+    for (size_t i = 0; i < values.size(); ++i) values[i] = glm::vec4(0.01f * i, 1.0f, 0.5f, 0.25f);
+    const Texture located(kWidth, kHeight, bytes, TextureEncoding::Srgb, "located");
+    const Texture others[] = {Texture(kWidth, kHeight, bytes, TextureEncoding::Linear, "linear"),
+                              Texture(kWidth, kHeight, values, "floats")};
+    for (TextureFilter filter : {TextureFilter::Linear, TextureFilter::Nearest})
+        for (TextureWrap wrap : {TextureWrap::Repeat, TextureWrap::ClampToEdge, TextureWrap::MirroredRepeat})
+            for (float footprint : {0.0f, 0.5f / kWidth, 2.5f / kWidth, 100.0f})
+                for (glm::vec2 uv :
+                     {glm::vec2(0.37f, 0.81f), glm::vec2(-0.02f, 1.3f), glm::vec2(0.999f, 0.0f)}) {
+                    TextureSampler sampler;
+                    sampler.minFilter = sampler.magFilter = filter;
+                    sampler.wrapS = sampler.wrapT = wrap;
+                    const Texture::Lookup lookup = located.locate(uv, footprint, sampler);
+                    for (const Texture& other : others) {
+                        const glm::vec4 shared = other.read(lookup),
+                                        own = other.sample(uv, footprint, sampler);
+                        for (int c = 0; c < 4; ++c)
+                            EXPECT_EQ(shared[c], own[c]) << other.name() << " channel " << c;
+                    }
+                }
+}
+
 }  // namespace deltagi
