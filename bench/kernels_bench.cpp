@@ -167,27 +167,38 @@ void BM_ObjectSurfaces(benchmark::State& state) {
 }
 BENCHMARK(BM_ObjectSurfaces)->Unit(benchmark::kMillisecond);
 
-// The same with a base colour and a normal texture on the ball (512 x 512, 8-bit, procedural: a checker of
-// 32 squares and a ripple), as the glTF example's vase has: the texture lookups' share of the G-buffer.
+// A base colour and a normal texture of the glTF example vase's size and encodings (512 x 512, 8-bit; sRGB
+// and linear), procedural: a checker of 32 squares and a ripple.
+struct VaseLikeMaps {
+    std::shared_ptr<const Texture> baseColour, normal;
+    VaseLikeMaps() {
+        constexpr int kSize = 512;
+        std::vector<uint8_t> colour(kSize * kSize * 4), normals(kSize * kSize * 4);
+        for (int y = 0; y < kSize; ++y)
+            for (int x = 0; x < kSize; ++x) {
+                uint8_t* c = &colour[(static_cast<size_t>(y) * kSize + x) * 4];
+                const bool white = ((x / 16) + (y / 16)) % 2 == 0;
+                c[0] = 230, c[1] = white ? 230 : 40, c[2] = white ? 230 : 40, c[3] = 255;
+                uint8_t* n = &normals[(static_cast<size_t>(y) * kSize + x) * 4];
+                const float slope = 0.3f * std::sin(static_cast<float>(x) * 0.2f);
+                n[0] = static_cast<uint8_t>(std::lround(127.5f + 127.5f * slope));
+                n[1] = 128, n[2] = 240, n[3] = 255;
+            }
+        baseColour = std::make_shared<const Texture>(kSize, kSize, std::move(colour), TextureEncoding::Srgb,
+                                                     "checker");
+        normal = std::make_shared<const Texture>(kSize, kSize, std::move(normals), TextureEncoding::Linear,
+                                                 "ripple");
+    }
+};
+
+// The same with the vase-like base colour and normal textures on the ball: the texture lookups' share of
+// the G-buffer.
 void BM_ObjectSurfacesTextured(benchmark::State& state) {
     KernelScene k(128, 316);
-    constexpr int kSize = 512;
-    std::vector<uint8_t> colour(kSize * kSize * 4), normals(kSize * kSize * 4);
-    for (int y = 0; y < kSize; ++y)
-        for (int x = 0; x < kSize; ++x) {
-            uint8_t* c = &colour[(static_cast<size_t>(y) * kSize + x) * 4];
-            const bool white = ((x / 16) + (y / 16)) % 2 == 0;
-            c[0] = 230, c[1] = white ? 230 : 40, c[2] = white ? 230 : 40, c[3] = 255;
-            uint8_t* n = &normals[(static_cast<size_t>(y) * kSize + x) * 4];
-            const float slope = 0.3f * std::sin(static_cast<float>(x) * 0.2f);
-            n[0] = static_cast<uint8_t>(std::lround(127.5f + 127.5f * slope));
-            n[1] = 128, n[2] = 240, n[3] = 255;
-        }
+    const VaseLikeMaps maps;
     Material& m = k.scene.virtuals[0].material;
-    m.baseColorTexture.texture =
-        std::make_shared<const Texture>(kSize, kSize, std::move(colour), TextureEncoding::Srgb, "checker");
-    m.normalTexture.texture =
-        std::make_shared<const Texture>(kSize, kSize, std::move(normals), TextureEncoding::Linear, "ripple");
+    m.baseColorTexture.texture = maps.baseColour;
+    m.normalTexture.texture = maps.normal;
     const RayScene realOnly(k.scene, SceneContent::RealOnly);
     const RayScene all(k.scene, SceneContent::VirtualOnly, &realOnly);
     Camera camera;
@@ -214,27 +225,12 @@ void BM_MaterialLookups(benchmark::State& state) {
                             glm::rotate(glm::mat4(1.0f), glm::radians(90.0f), glm::vec3(1, 0, 0));
     for (glm::vec3& p : torus.positions) p = glm::vec3(place * glm::vec4(p, 1.0f));
     for (glm::vec3& n : torus.normals) n = glm::normalize(glm::vec3(place * glm::vec4(n, 0.0f)));
-    constexpr int kSize = 512;
-    std::vector<uint8_t> colour(kSize * kSize * 4), normals(kSize * kSize * 4);
-    for (int y = 0; y < kSize; ++y)
-        for (int x = 0; x < kSize; ++x) {
-            uint8_t* c = &colour[(static_cast<size_t>(y) * kSize + x) * 4];
-            const bool white = ((x / 16) + (y / 16)) % 2 == 0;
-            c[0] = 230, c[1] = white ? 230 : 40, c[2] = white ? 230 : 40, c[3] = 255;
-            uint8_t* n = &normals[(static_cast<size_t>(y) * kSize + x) * 4];
-            const float slope = 0.3f * std::sin(static_cast<float>(x) * 0.2f);
-            n[0] = static_cast<uint8_t>(std::lround(127.5f + 127.5f * slope));
-            n[1] = 128, n[2] = 240, n[3] = 255;
-        }
+    const VaseLikeMaps vase;
     torus.material.model = MaterialModel::MetallicRoughness;
     torus.material.roughness = 0.4f;
     const int64_t maps = state.range(0);  // 1: the base colour, 2: the normal map, 3: both
-    if (maps & 1)
-        torus.material.baseColorTexture.texture = std::make_shared<const Texture>(
-            kSize, kSize, std::move(colour), TextureEncoding::Srgb, "checker");
-    if (maps & 2)
-        torus.material.normalTexture.texture = std::make_shared<const Texture>(
-            kSize, kSize, std::move(normals), TextureEncoding::Linear, "ripple");
+    if (maps & 1) torus.material.baseColorTexture.texture = vase.baseColour;
+    if (maps & 2) torus.material.normalTexture.texture = vase.normal;
     scene.virtuals.push_back(std::move(torus));
     const RayScene objects(scene, SceneContent::VirtualOnly);
     Camera camera;
