@@ -79,14 +79,6 @@ glm::vec3 interpolatedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, 
     return len > 0.0f ? n / len : fallback;
 }
 
-// The shading normal of a two-sided surface: the interpolated normal turned to the side the ray came from,
-// the side `geometricNormal` (unit) already faces.
-glm::vec3 shadingNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v,
-                        glm::vec3 geometricNormal) {
-    const glm::vec3 n = interpolatedNormal(mesh, tri, u, v, geometricNormal);
-    return glm::dot(n, geometricNormal) < 0.0f ? -n : n;
-}
-
 }  // namespace
 
 RayScene::RayScene(const Scene& scene, SceneContent content, const RayScene* base)
@@ -273,23 +265,25 @@ void RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 
     result.mesh = &mesh;
     result.triangle = primID;
     result.barycentric = {u, v};
-    if (ref.varying && lookUpTextures) {
-        lookUpMaterial(result, 0.0f);
-    } else {
-        result.surface = ref.surface;
-        result.normal = shadingNormal(mesh, tri, u, v, result.geometricNormal);
-    }
+    const glm::vec3 n = interpolatedNormal(mesh, tri, u, v, result.geometricNormal);
+    result.normalFlipped = glm::dot(n, result.geometricNormal) < 0.0f;
+    result.normal = result.normalFlipped ? -n : n;
+    result.surface = ref.surface;
+    result.texturesLookedUp = false;
     result.isVirtual = ref.isVirtual;
     result.varies = ref.varying;
+    if (ref.varying && lookUpTextures) lookUpMaterial(result, 0.0f);
 }
 
 void lookUpMaterial(RayHit& hit, float footprint) {
     const TriangleMesh& mesh = *hit.mesh;
-    const glm::uvec3 tri = mesh.triangles[hit.triangle];
     const float u = hit.barycentric.x, v = hit.barycentric.y;
-    glm::vec3 n = interpolatedNormal(mesh, tri, u, v, hit.geometricNormal);
+    glm::vec3 n = !hit.texturesLookedUp
+                      ? (hit.normalFlipped ? -hit.normal : hit.normal)
+                      : interpolatedNormal(mesh, mesh.triangles[hit.triangle], u, v, hit.geometricNormal);
     hit.surface = surfaceMaterialAt(mesh, hit.triangle, u, v, footprint, &n);
     hit.normal = glm::dot(n, hit.geometricNormal) < 0.0f ? -n : n;
+    hit.texturesLookedUp = true;
 }
 
 bool RayScene::occluded(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {

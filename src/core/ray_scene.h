@@ -34,6 +34,11 @@ struct RayHit {
     glm::vec2 barycentric{0.0f};
     bool isVirtual = false;
     bool varies = false;  // its mesh's material varies over the surface (variesOverSurface)
+    // Whether `normal` is the mesh's interpolated normal turned round to face the ray, and whether the
+    // material's textures were looked up (normal then normal-mapped): lookUpMaterial() starts from the
+    // unmapped normal without interpolating it again.
+    bool normalFlipped = false;
+    bool texturesLookedUp = false;
     bool hit() const { return material != nullptr; }
 };
 
