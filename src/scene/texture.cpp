@@ -514,15 +514,15 @@ struct FloatTexels {
     std::array<const glm::vec4*, 2> level;
     [[gnu::always_inline]] Lanes operator()(int slot, size_t i) const { return Lanes::of(level[slot][i]); }
 };
-// 8-bit sRGB texels: RGB through the sRGB table (decoded before they are blended: sRGB is not linear in its
-// codes), alpha linear.
+// 8-bit sRGB texels: decoded through the sRGB decoder's tables before they are blended (sRGB is not linear
+// in its codes),
 struct SrgbTexels {
     std::array<const uint32_t*, 2> level;
-    const float* srgb;
-    const float* unorm;
+    const TexelDecoder& decoder;
     [[gnu::always_inline]] Lanes operator()(int slot, size_t i) const {
         const uint32_t t = level[slot][i];
-        return Lanes::of(srgb[t & 0xffu], srgb[(t >> 8) & 0xffu], srgb[(t >> 16) & 0xffu], unorm[t >> 24]);
+        return Lanes::of(decoder.rgb[t & 0xffu], decoder.rgb[(t >> 8) & 0xffu],
+                         decoder.rgb[(t >> 16) & 0xffu], decoder.alpha[t >> 24]);
     }
 };
 // or linear 8-bit texels: their codes (0 to 255), blended as they are and divided by 255 after the blend
@@ -612,9 +612,7 @@ glm::vec4 Texture::read(const Lookup& lookup) const {
                                                    second ? second->packed.data() : nullptr};
     if (encoding_ == TextureEncoding::Linear)
         return blendTexels(lookup, CodeTexels{packed}).dividedBy(255.0f).value();
-    static const float* const unorm = unorm8Values().data();
-    static const float* const srgb = srgb8ToLinearValues().data();
-    return blendTexels(lookup, SrgbTexels{packed, srgb, unorm}).value();
+    return blendTexels(lookup, SrgbTexels{packed, decoderFor(TextureEncoding::Srgb)}).value();
 }
 
 glm::vec4 Texture::sample(glm::vec2 uv, float footprint, const TextureSampler& sampler) const {
