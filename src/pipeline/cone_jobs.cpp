@@ -124,7 +124,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                         job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
                         job.filter(o, job.areaLightStride(o, scene.camera)),
                         [&](std::span<const uint32_t> pixels) {
-                            return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels);
+                            return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels,
+                                                         {job.fullLight, job.light});
                         }));
     });
     timer.lap("diffuse");

@@ -210,11 +210,11 @@ glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, con
                     sceneWith.w > 1e-6f ? glm::vec3(sceneWith) / sceneWith.w : glm::vec3(0.0f);
                 const glm::vec3 objectRadiance =
                     objects.w > 1e-6f ? glm::vec3(objects) / objects.w : glm::vec3(0.0f);
-                const glm::vec3 emitted =
-                    settings.objectLightByRays
-                        ? sceneRadiance * opacityB
-                        : sceneRadiance * opacityB + objectRadiance * (opacityA - opacityB);
-                composite(lightA, occlusionA, emitted, opacityA);
+                if (settings.objectLightByRays)  // the rays bring the objects' light and what they hide
+                    composite(lightA, occlusionA, sceneRadiance * opacityB, opacityB);
+                else
+                    composite(lightA, occlusionA,
+                              sceneRadiance * opacityB + objectRadiance * (opacityA - opacityB), opacityA);
             } else if (full.w > 1e-6f) {
                 composite(lightA, occlusionA, glm::vec3(full) / full.w * opacityA, opacityA);
             }

@@ -22,8 +22,9 @@ struct ConeTraceSettings {
     float backfaceWeight = 1.0f;
     float jitter = 1.0f;
     bool paperAccumulation = false;
-    // traceLightChangeCone: the objects' own light is left out (the objects still occlude): it comes from
-    // rays instead (traceObjectBounceRays).
+    // traceLightChangeCone: the objects' own light and their occlusion are left out (the cones carry the
+    // change of the real surfaces' light, through the scene's visibility): rays bring both instead
+    // (traceObjectBounceRays).
     bool objectLightByRays = false;
 };
 ConeTraceSettings coneTraceSettings(const TraceOptions& options);

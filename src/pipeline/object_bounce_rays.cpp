@@ -23,7 +23,8 @@ glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit) {
 
 std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> points,
                                              const MipVolume& objectLight, const ShadowRayScenes& rays,
-                                             const Options& options, std::span<const uint32_t> pixels) {
+                                             const Options& options, std::span<const uint32_t> pixels,
+                                             RealLight realLight) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     if (!rays.scene || !rays.objects || rays.objectBounds.empty()) return out;
     const float offset = shadowRayOffset(*rays.scene);
@@ -68,7 +69,15 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
             const RayHit hit = rays.objects->intersectTopLayer(origin, wi, 0.0f, INFINITY, true);
             if (!hit.hit()) continue;
             if (rays.scene->occluded(origin, wi, 0.0f, hit.t)) continue;
-            sum += volumeRadianceAt(objectLight, hit) * weight;
+            glm::vec3 radiance = volumeRadianceAt(objectLight, hit);
+            if (realLight.full && realLight.delta) {
+                // The real surface the ray met before the objects were there, and its light then.
+                const RayHit hidden = rays.scene->intersect(origin, wi, hit.t, INFINITY, true);
+                if (hidden.hit())
+                    radiance -= volumeRadianceAt(*realLight.full, hidden) -
+                                volumeRadianceAt(*realLight.delta, hidden);
+            }
+            sum += radiance * weight;
         }
         out[i] = sum / static_cast<float>(count);
     });

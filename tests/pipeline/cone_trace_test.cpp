@@ -89,6 +89,41 @@ TEST(ConeTrace, ShadowConeSeparatesSceneAndObjectOcclusion) {
     EXPECT_EQ(traceShadowCone(shortCone, {&empty, &object}, settings(false)).object, 0.0f);
 }
 
+// The relit cone's change (traceLightChangeCone) along a ray from the centre: a lit real wall (radiance L)
+// behind a black object's slab. With the objects in the cones, the slab hides the wall: -L. With the objects
+// left to rays (objectLightByRays, traceObjectBounceRays brings what they hide), the cone sees no change.
+TEST(ConeTrace, TheLightChangeConeLeavesTheObjectsToTheRaysWhenAsked) {
+    const glm::vec3 radiance(0.5f, 0.25f, 0.1f);
+    Grid3 sceneWall(kN), objectSlab(kN), full(kN), delta(kN), objects(kN);
+    for (int z = 0; z < kN; ++z)
+        for (int y = 0; y < kN; ++y) {
+            for (int x = 26; x < 29; ++x) {
+                sceneWall.at(x, y, z) = glm::vec4(1.0f, -1.0f, 0.0f, 0.0f);
+                full.at(x, y, z) = glm::vec4(radiance, 1.0f);
+                delta.at(x, y, z) = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+            }
+            for (int x = 20; x < 23; ++x) {
+                objectSlab.at(x, y, z) = glm::vec4(1.0f, -1.0f, 0.0f, 0.0f);
+                full.at(x, y, z) = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+                delta.at(x, y, z) = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+                objects.at(x, y, z) = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);
+            }
+        }
+    const MipVolume sceneVisibility = buildMipChain(kRegion, std::move(sceneWall));
+    const MipVolume objectVisibility = buildMipChain(kRegion, std::move(objectSlab));
+    const MipVolume fullLight = buildMipChain(kRegion, std::move(full));
+    const MipVolume deltaLight = buildMipChain(kRegion, std::move(delta));
+    const MipVolume objectLight = buildMipChain(kRegion, std::move(objects));
+    const VisibilityVolumes visibility{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Scene};
+    const Cone ray = centreCone({1, 0, 0}, 0.0f);
+    ConeTraceSettings s = settings(false);
+    const glm::vec3 hidden = traceLightChangeCone(ray, fullLight, deltaLight, visibility, s, &objectLight);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(hidden[c], -radiance[c], 0.03f * radiance[c]) << c;
+    s.objectLightByRays = true;
+    const glm::vec3 none = traceLightChangeCone(ray, fullLight, deltaLight, visibility, s, &objectLight);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(none[c], 0.0f, 1e-6f) << c;
+}
+
 // Each volume marched on its own gives traceShadowCone's share of it (as long as neither saturates, which
 // stops the joint march earlier), and the combined occlusion is 1 - (1 - scene)(1 - object).
 TEST(ConeTrace, EachVolumeAloneGivesItsShareOfTheShadowCone) {

@@ -1,6 +1,8 @@
 // The objects' light on real surfaces by rays (traceObjectBounceRays) against the closed form of a
 // uniformly bright sphere: a floor point at distance d under the centre of a sphere of radius r and radiance
-// L receives E = pi L (r / d)^2, so the diffuse cones' quantity E / pi is L (r / d)^2.
+// L receives E = pi L (r / d)^2, so the diffuse cones' quantity E / pi is L (r / d)^2. A sphere in front of
+// a uniformly bright ceiling of radiance L_c hides the same solid angle of it: the change is
+// (L - L_c) (r / d)^2.
 #include "pipeline/object_bounce_rays.h"
 
 #include <gtest/gtest.h>
@@ -54,6 +56,65 @@ TEST(ObjectBounceRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
     SurfacePoint below = test::floorPoint({0.5f, height + 0.4f, 0.5f}, floor);
     const SurfacePoint under[] = {below};
     EXPECT_EQ(traceObjectBounceRays(under, objectLight, rays, options)[0], glm::vec3(0.0f));
+}
+
+TEST(ObjectBounceRays, ASphereTakesAwayTheCeilingLightItHides) {
+    const float radius = 0.15f, height = 0.4f, ceiling = 0.8f, ceilingRadiance = 3.0f;
+    const float sphereRadiance = 1.0f;
+    Scene s;
+    s.real.push_back(
+        test::placed(makeQuad({4.0f, 4.0f}), {0.5f, 0.0f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    s.real.push_back(
+        test::placed(makeQuad({4.0f, 4.0f}), {0.5f, ceiling, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    s.virtuals.push_back(
+        test::placed(makeSphere(radius, 64), {0.5f, height, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    const VolumeRegion region{glm::vec3(0.0f, -0.05f, 0.0f), 1.0f, 64};
+    const VoxelGeometry sphere = voxelize(s.virtuals, region);
+    const VoxelGeometry real = voxelize(s.real, region);
+    // The objects' volume: the sphere's radiance. The full volume: the ceiling's and the sphere's (the floor
+    // is dark); the delta volume (full minus the real scene alone): the sphere's, over the full volume's
+    // occupancy.
+    const int n = region.resolution;
+    Grid3 objects(n), full(n), delta(n);
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const size_t i = full.index(x, y, z);
+                const float o = sphere.visibility[i].x;
+                const float worldY = region.origin.y + (static_cast<float>(y) + 0.5f) * region.voxelSize();
+                const float lit = worldY > 0.5f * ceiling ? real.visibility[i].x : 0.0f;
+                const float w = std::max(o, real.visibility[i].x);
+                objects[i] = glm::vec4(glm::vec3(sphereRadiance * o), o);
+                full[i] = glm::vec4(glm::vec3(sphereRadiance * o + ceilingRadiance * lit), w);
+                delta[i] = glm::vec4(glm::vec3(sphereRadiance * o), w);
+            }
+    const MipVolume objectLight = buildMipChain(region, std::move(objects));
+    const MipVolume fullLight = buildMipChain(region, std::move(full));
+    const MipVolume deltaLight = buildMipChain(region, std::move(delta));
+    const RayScene realOnly(s, SceneContent::RealOnly);
+    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
+    const ShadowRayScenes rays{&realOnly,
+                               &all,
+                               {glm::vec3(0.5f - radius, height - radius, 0.5f - radius),
+                                glm::vec3(0.5f + radius, height + radius, 0.5f + radius)}};
+    Options options;
+    options.diffuse.objectRays = 256;
+    const Material& floor = s.real[0].material;
+    std::vector<SurfacePoint> points;
+    for (const float dx : {0.0f, 0.2f}) points.push_back(test::floorPoint({0.5f + dx, 0.0f, 0.5f}, floor));
+    const std::vector<glm::vec3> got =
+        traceObjectBounceRays(points, objectLight, rays, options, {}, {&fullLight, &deltaLight});
+    const std::vector<glm::vec3> lightOnly = traceObjectBounceRays(points, objectLight, rays, options);
+    for (size_t k = 0; k < points.size(); ++k) {
+        const glm::vec3 toCentre = glm::vec3(0.5f, height, 0.5f) - points[k].position;
+        const float d = glm::length(toCentre);
+        const float solidAngle = (radius / d) * (radius / d) * (toCentre.y / d);
+        EXPECT_NEAR(got[k].x, (sphereRadiance - ceilingRadiance) * solidAngle,
+                    0.08f * ceilingRadiance * solidAngle)
+            << k;
+        // Without the real light the objects' own only.
+        EXPECT_NEAR(lightOnly[k].x, sphereRadiance * solidAngle, 0.08f * sphereRadiance * solidAngle) << k;
+    }
 }
 
 }  // namespace
