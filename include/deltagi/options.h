@@ -178,10 +178,10 @@ struct RenderOptions {
     // radiance there and takes away the real scene's light it met before; the cones carry only the change of
     // the real surfaces' own light, through the scene's visibility. Quality suite, cones -> rays:
     // delta_rel_error 0.154 -> 0.144 (ball and ring), 0.210 -> 0.188 (Buddha), 0.232 -> 0.188 (glossy),
-    // 0.160 -> 0.154 (area light), 0.237 -> 0.187 (textured vase); the field photo, which sets "rays", 0.260.
-    // Not the default for its cost: the benchmark frame's diffuse stage 12 -> about 150 ms (76,800 relit
-    // points, 16 rays each); at a sparser stride or with fewer rays its error per millisecond is no better
-    // than the cones' (README, departures from the paper).
+    // 0.160 -> 0.154 (area light), 0.237 -> 0.188 (textured vase); the field photo, which sets "rays", 0.261.
+    // Not the default for its cost: the benchmark frame's diffuse stage 14 -> 90 ms (76,800 relit points, up
+    // to 16 rays each), and its error per millisecond is no better than the cones' at any stride tried
+    // (README, departures from the paper).
     std::string relightObjectLight = "cones";
     // "layers": also make the compositing layers of RenderOutput (object, shadow, indirect, depth); `deltagi
     // render --layers` sets it. Off by default: four more images a frame.

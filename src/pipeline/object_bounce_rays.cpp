@@ -1,5 +1,6 @@
 #include "pipeline/object_bounce_rays.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -19,6 +20,11 @@ glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit) {
     const glm::vec4 l = light.sample(
         (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) * invVoxel, 0.0f);
     return l.w > 1e-6f ? glm::vec3(l) / l.w : glm::vec3(0.0f);
+}
+
+int objectRaySide(int side, float oneMinusCosMax) {
+    const float share = std::sqrt(std::max(oneMinusCosMax, 0.0f) / kFullRaysOneMinusCos);
+    return std::clamp(static_cast<int>(std::lround(static_cast<float>(side) * share)), 1, side);
 }
 
 std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> points,
@@ -48,9 +54,11 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
             inside ? 0.0f : std::sqrt(std::max(0.0f, 1.0f - (radius * radius) / (distance * distance)));
         const glm::mat3 frame = frameAround(inside ? p.normal : toCentre / distance);
         const float jitterU = hashToUnit(i, kBounceStream), jitterV = hashToUnit(i, kBounceStream + 1);
+        const int pointSide = objectRaySide(side, inside ? 1.0f : 1.0f - cosMax);
+        const int pointCount = pointSide * pointSide;
         glm::vec3 sum(0.0f);
-        for (int k = 0; k < count; ++k) {
-            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
+        for (int k = 0; k < pointCount; ++k) {
+            const auto [u1, u2] = jitteredGridPoint(k, pointSide, jitterU, jitterV);
             glm::vec3 wi;
             float weight;  // cos / (pi pdf)
             if (inside) {
@@ -79,7 +87,7 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
             }
             sum += radiance * weight;
         }
-        out[i] = sum / static_cast<float>(count);
+        out[i] = sum / static_cast<float>(pointCount);
     });
     return out;
 }

@@ -5,6 +5,9 @@
 // (L - L_c) (r / d)^2.
 #include "pipeline/object_bounce_rays.h"
 
+#include <initializer_list>
+#include <span>
+
 #include <gtest/gtest.h>
 
 #include "core/ray_scene.h"
@@ -15,6 +18,52 @@
 
 namespace deltagi {
 namespace {
+
+// Each floor point (x = 0.5 + dx, z = 0.5) kCopies times over: the copies' rays are jittered apart (by the
+// point's index), and a point far off the sphere's side takes fewer rays (objectRaySide), so their mean is
+// what is checked (meanOfCopies: the red channel's).
+constexpr int kCopies = 16;
+std::vector<SurfacePoint> floorPointCopies(std::initializer_list<float> dxs, const Material& floor) {
+    std::vector<SurfacePoint> points;
+    for (const float dx : dxs)
+        for (int c = 0; c < kCopies; ++c) points.push_back(test::floorPoint({0.5f + dx, 0.0f, 0.5f}, floor));
+    return points;
+}
+std::vector<float> meanOfCopies(std::span<const glm::vec3> values) {
+    std::vector<float> means(values.size() / kCopies, 0.0f);
+    for (size_t k = 0; k < values.size(); ++k) means[k / kCopies] += values[k].x / kCopies;
+    return means;
+}
+
+// Options with 256 rays per point (the closed forms are checked to 8 %).
+Options manyRays() {
+    Options options;
+    options.diffuse.objectRays = 256;
+    return options;
+}
+
+// The ray scenes of `s`, whose one object is a sphere of `radius` at `height` over (0.5, 0.5).
+struct SphereRays {
+    SphereRays(const Scene& s, float radius, float height)
+        : realOnly(s, SceneContent::RealOnly),
+          all(s, SceneContent::VirtualOnly, &realOnly),
+          rays{&realOnly,
+               &all,
+               {glm::vec3(0.5f - radius, height - radius, 0.5f - radius),
+                glm::vec3(0.5f + radius, height + radius, 0.5f + radius)}} {}
+    RayScene realOnly;
+    RayScene all;
+    ShadowRayScenes rays;
+};
+
+// The solid angle (times the cosine, over pi: the diffuse cones' measure) of a sphere of `radius` at
+// `height` over (0.5, 0.5) seen from the floor point `p`: (r / D)^2 cos, D the distance to its centre and
+// cos the angle of the centre from the normal.
+float sphereSolidAngle(glm::vec3 p, float radius, float height) {
+    const glm::vec3 toCentre = glm::vec3(0.5f, height, 0.5f) - p;
+    const float d = glm::length(toCentre);
+    return (radius / d) * (radius / d) * (toCentre.y / d);
+}
 
 TEST(ObjectBounceRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
     const float radius = 0.2f, height = 0.5f, radiance = 2.0f;
@@ -31,26 +80,16 @@ TEST(ObjectBounceRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
         light[i] = glm::vec4(glm::vec3(radiance * occupancy), occupancy);
     }
     const MipVolume objectLight = buildMipChain(region, std::move(light));
-    const RayScene realOnly(s, SceneContent::RealOnly);
-    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
-    const ShadowRayScenes rays{&realOnly,
-                               &all,
-                               {glm::vec3(0.5f - radius, height - radius, 0.5f - radius),
-                                glm::vec3(0.5f + radius, height + radius, 0.5f + radius)}};
-    Options options;
-    options.diffuse.objectRays = 256;
+    const SphereRays traced(s, radius, height);
+    const ShadowRayScenes& rays = traced.rays;
+    const Options options = manyRays();
     const Material& floor = s.real[0].material;
-    std::vector<SurfacePoint> points;
-    for (const float dx : {0.0f, 0.3f, 0.45f})
-        points.push_back(test::floorPoint({0.5f + dx, 0.0f, 0.5f}, floor));
-    const std::vector<glm::vec3> got = traceObjectBounceRays(points, objectLight, rays, options);
-    // Under the centre: L (r / d)^2. Off to the side the sphere's disk is tilted: E / pi = L (r / D)^2 cos,
-    // with D the distance to the centre and cos the angle of the centre from the normal.
-    for (size_t k = 0; k < points.size(); ++k) {
-        const glm::vec3 toCentre = glm::vec3(0.5f, height, 0.5f) - points[k].position;
-        const float d = glm::length(toCentre);
-        const float expected = radiance * (radius / d) * (radius / d) * (toCentre.y / d);
-        EXPECT_NEAR(got[k].x, expected, 0.08f * expected) << k;
+    const std::vector<SurfacePoint> points = floorPointCopies({0.0f, 0.3f, 0.45f}, floor);
+    const std::vector<float> got = meanOfCopies(traceObjectBounceRays(points, objectLight, rays, options));
+    // Under the centre: L (r / d)^2. Off to the side the sphere's disk is tilted: E / pi = L (r / D)^2 cos.
+    for (size_t k = 0; k < got.size(); ++k) {
+        const float expected = radiance * sphereSolidAngle(points[k * kCopies].position, radius, height);
+        EXPECT_NEAR(got[k], expected, 0.08f * expected) << k;
     }
     // A floor point with the sphere below its horizon (its back side) gets nothing.
     SurfacePoint below = test::floorPoint({0.5f, height + 0.4f, 0.5f}, floor);
@@ -91,30 +130,33 @@ TEST(ObjectBounceRays, ASphereTakesAwayTheCeilingLightItHides) {
     const MipVolume objectLight = buildMipChain(region, std::move(objects));
     const MipVolume fullLight = buildMipChain(region, std::move(full));
     const MipVolume deltaLight = buildMipChain(region, std::move(delta));
-    const RayScene realOnly(s, SceneContent::RealOnly);
-    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
-    const ShadowRayScenes rays{&realOnly,
-                               &all,
-                               {glm::vec3(0.5f - radius, height - radius, 0.5f - radius),
-                                glm::vec3(0.5f + radius, height + radius, 0.5f + radius)}};
-    Options options;
-    options.diffuse.objectRays = 256;
+    const SphereRays traced(s, radius, height);
+    const ShadowRayScenes& rays = traced.rays;
+    const Options options = manyRays();
     const Material& floor = s.real[0].material;
-    std::vector<SurfacePoint> points;
-    for (const float dx : {0.0f, 0.2f}) points.push_back(test::floorPoint({0.5f + dx, 0.0f, 0.5f}, floor));
-    const std::vector<glm::vec3> got =
-        traceObjectBounceRays(points, objectLight, rays, options, {}, {&fullLight, &deltaLight});
-    const std::vector<glm::vec3> lightOnly = traceObjectBounceRays(points, objectLight, rays, options);
-    for (size_t k = 0; k < points.size(); ++k) {
-        const glm::vec3 toCentre = glm::vec3(0.5f, height, 0.5f) - points[k].position;
-        const float d = glm::length(toCentre);
-        const float solidAngle = (radius / d) * (radius / d) * (toCentre.y / d);
-        EXPECT_NEAR(got[k].x, (sphereRadiance - ceilingRadiance) * solidAngle,
+    const std::vector<SurfacePoint> points = floorPointCopies({0.0f, 0.2f}, floor);
+    const std::vector<float> change = meanOfCopies(
+        traceObjectBounceRays(points, objectLight, rays, options, {}, {&fullLight, &deltaLight}));
+    const std::vector<float> own = meanOfCopies(traceObjectBounceRays(points, objectLight, rays, options));
+    for (size_t k = 0; k < change.size(); ++k) {
+        const float solidAngle = sphereSolidAngle(points[k * kCopies].position, radius, height);
+        EXPECT_NEAR(change[k], (sphereRadiance - ceilingRadiance) * solidAngle,
                     0.08f * ceilingRadiance * solidAngle)
             << k;
         // Without the real light the objects' own only.
-        EXPECT_NEAR(lightOnly[k].x, sphereRadiance * solidAngle, 0.08f * sphereRadiance * solidAngle) << k;
+        EXPECT_NEAR(own[k], sphereRadiance * solidAngle, 0.08f * sphereRadiance * solidAngle) << k;
     }
+}
+
+// A point that sees the objects' bounding sphere small takes fewer rays, in proportion to its solid angle;
+// at least one; all of them from a cone of 90 degrees or wider (and from inside the sphere).
+TEST(ObjectBounceRays, APointTakesRaysInProportionToTheSphereItSees) {
+    EXPECT_EQ(objectRaySide(4, 1.0f), 4);
+    EXPECT_EQ(objectRaySide(4, kFullRaysOneMinusCos), 4);
+    EXPECT_EQ(objectRaySide(4, kFullRaysOneMinusCos / 4.0f), 2);  // a quarter of the solid angle: 4 rays
+    EXPECT_EQ(objectRaySide(16, kFullRaysOneMinusCos / 16.0f), 4);
+    EXPECT_EQ(objectRaySide(4, 1e-6f), 1);
+    EXPECT_EQ(objectRaySide(4, 0.0f), 1);
 }
 
 }  // namespace
