@@ -55,7 +55,8 @@ void addSuiteOptions(CLI::App& eval, SuiteArgs& args) {
         ->excludes("scene")
         ->excludes("--aov")
         ->excludes("--reference")
-        ->excludes("--time-limit");
+        ->excludes("--time-limit")
+        ->excludes("--max-bounces");
     eval.add_option("--markdown", args.markdown,
                     "With --suite: the table as Markdown (default out/quality/quality.md)");
     eval.add_option("--cache", args.cache,

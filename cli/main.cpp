@@ -88,6 +88,7 @@ struct ReferenceArgs {
     int samplesPerPixel = 64;
     double timeLimit = 0.0;
     uint64_t seed = 0;
+    int maxBounces = 0;  // 0: ReferenceOptions' own (unlimited in practice)
     int threads = 0;
     bool quiet = false;
 };
@@ -375,6 +376,7 @@ ReferenceOptions referenceOptions(const ReferenceArgs& args) {
     options.samplesPerPixel = args.samplesPerPixel;
     options.timeLimitSeconds = args.timeLimit;
     options.seed = args.seed;
+    if (args.maxBounces > 0) options.maxBounces = args.maxBounces;
     return options;
 }
 
@@ -627,6 +629,12 @@ int main(int argc, char** argv) {
                          "Stop after the first whole pass past this many seconds (default: none)")
             ->check(finiteNumber(0.0, false, "a number of seconds >= 0"));
         command->add_option("--seed", args->seed, "Random seed (default 0)");
+        command
+            ->add_option(
+                "--max-bounces", args->maxBounces,
+                "Surfaces a path may meet, the camera's first included: 1 is direct light only, 2 adds "
+                "one bounce of indirect light (default: unlimited; Russian roulette ends paths)")
+            ->check(CLI::Range(1, 256));
         command->add_option("--set", args->overrides, "Override a scene key: KEY=VALUE (repeatable)");
         command->add_option("--threads", args->threads, "Worker threads (default: all cores)")
             ->check(CLI::Range(1, kMaxThreads));
@@ -638,7 +646,8 @@ int main(int argc, char** argv) {
                      "`reference` or `eval`) instead of path tracing them")
         ->excludes("--spp")
         ->excludes("--time-limit")
-        ->excludes("--seed");
+        ->excludes("--seed")
+        ->excludes("--max-bounces");
     cli::SuiteArgs suiteArgs;
     cli::addSuiteOptions(*evalCommand, suiteArgs);
 

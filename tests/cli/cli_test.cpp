@@ -265,6 +265,7 @@ TEST_F(CliTest, ReferenceAndEvalBadInput) {
         expectOneErrorLine(run(command + " " + scene + output + " --spp 0"), {"--spp", "0"});
         expectOneErrorLine(run(command + " " + scene + output + " --time-limit nan"),
                            {"--time-limit", "nan"});
+        expectOneErrorLine(run(command + " " + scene + output + " --max-bounces 0"), {"--max-bounces", "0"});
     }
     expectOneErrorLine(run("reference " + scene + out + " --spp -4"), {"--spp", "-4"});
     expectOneErrorLine(run("reference " + scene + out + " --time-limit -1"), {"--time-limit", "-1"});
@@ -275,6 +276,34 @@ TEST_F(CliTest, ReferenceAndEvalBadInput) {
     expectOneErrorLine(run("eval " + scene + " --json " + quote((dir_ / "eval.txt").string())), {"eval.txt"});
     EXPECT_FALSE(fs::exists(dir_ / "ref.exr"));
     EXPECT_FALSE(fs::exists(dir_ / "eval.json"));
+}
+
+// --max-bounces 1 renders the direct light alone: under a white ceiling (the lamp below it), much of the
+// floor's light comes from the ceiling, so the image is clearly darker than with every bounce.
+TEST_F(CliTest, ReferenceMaxBouncesLeavesOutTheIndirectLight) {
+    json doc = tinyScene();
+    json ceiling = doc["scene"][0];
+    ceiling["name"] = "ceiling";
+    ceiling["shape"]["positions"] = {{-2, 1.2, -2}, {2, 1.2, -2}, {2, 1.2, 2}, {-2, 1.2, 2}};
+    ceiling["material"]["albedo"] = {0.9, 0.9, 0.9};
+    doc["scene"].push_back(ceiling);
+    doc["lights"][0]["position"] = {0.5, 1.0, 0.5};
+    const std::string scene = quote(writeScene(doc).string());
+    const fs::path direct = dir_ / "direct.exr", all = dir_ / "all.exr";
+    for (const auto& [file, bounces] : {std::pair{direct, " --max-bounces 1"}, std::pair{all, ""}}) {
+        const CliResult result =
+            run("reference " + scene + " -o " + quote(file.string()) + " --spp 4 --quiet" + bounces);
+        ASSERT_EQ(result.exitCode, 0) << result.err;
+    }
+    const deltagi::Image d = deltagi::readImage(direct), a = deltagi::readImage(all);
+    double directSum = 0.0, allSum = 0.0;
+    for (int y = 0; y < d.height(); ++y)
+        for (int x = 0; x < d.width(); ++x) {
+            directSum += d.at(x, y, 1);
+            allSum += a.at(x, y, 1);
+        }
+    EXPECT_LT(directSum, 0.8 * allSum);
+    EXPECT_GT(directSum, 0.0);
 }
 
 TEST_F(CliTest, CompareBadInput) {
