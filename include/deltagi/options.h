@@ -70,9 +70,10 @@ struct DiffuseConeOptions {
     int relightPixelStride = 0;
     // "object_rays": rays (0 to 256, rounded down to a square) that each coarse voxel of the virtual objects
     // casts to gather the light they reflect once more (options.render.light_bounces >= 2), and that each
-    // relit real point casts towards the objects with options.render.relight_object_light "rays". Cones from
-    // a coarse voxel start half a voxel and more off its surface, below the floor under an object standing on
-    // it, whose underside then gets none of the floor's light (bounce_light.h). 0: cones.
+    // relit real point casts towards the objects with options.render.relight_object_light "rays" (fewer where
+    // the objects look small: object_bounce_rays.h's objectRaySide). Cones from a coarse voxel start half a
+    // voxel and more off its surface, below the floor under an object standing on it, whose underside then
+    // gets none of the floor's light (bounce_light.h). 0: cones.
     int objectRays = 16;
 };
 
