@@ -153,15 +153,27 @@ std::vector<glm::vec4> downsample(std::span<const glm::vec4> src, int width, int
 
 // --- Lookups --------------------------------------------------------------------------------------------
 
+// floor(x) through a truncating conversion, exact for |x| < 2^31 (texel coordinates, levels of detail).
+// Without SSE4.1's rounding instruction the build's std::floor adds a branch on |x| and keeps the sign of
+// zero; a lookup takes up to seven: `BM_MaterialLookups/3` 12.2 -> 11.6 ms with this (the same texels).
+inline float floorOf(float x) {
+    const float t = static_cast<float>(static_cast<int>(x));
+    return t > x ? t - 1.0f : t;
+}
+// floor(x) for any x: floorOf where it is exact.
+inline float floorOfAny(float x) {
+    return std::abs(x) < 2147483648.0f ? floorOf(x) : std::floor(x);
+}
+
 // Brings a coordinate (uv units) into one period of its wrap mode, so that texel indices computed from it
 // fit an int whatever the uv (1e30 included); the indices are wrapped again (wrapIndex), which makes the
 // reduction exact for Repeat and MirroredRepeat and harmless for ClampToEdge.
 float reduceCoordinate(float u, TextureWrap wrap) {
     switch (wrap) {
         case TextureWrap::Repeat:
-            return u - std::floor(u);
+            return u - floorOfAny(u);
         case TextureWrap::MirroredRepeat:
-            return u - 2.0f * std::floor(0.5f * u);
+            return u - 2.0f * floorOfAny(0.5f * u);
         case TextureWrap::ClampToEdge:
             break;
     }
@@ -482,7 +494,7 @@ struct Lanes {
                                                   const TextureSampler& sampler, std::array<size_t, 4>& index,
                                                   float& fx, float& fy) {
     const float s = u * width - 0.5f, t = v * height - 0.5f;
-    const float x0 = std::floor(s), y0 = std::floor(t);
+    const float x0 = floorOf(s), y0 = floorOf(t);
     fx = s - x0, fy = t - y0;
     const int x = static_cast<int>(x0), y = static_cast<int>(y0);
     // Inside the level (nearly every lookup) the neighbours are the next column and row; at its edges each of
@@ -504,8 +516,8 @@ struct Lanes {
 
 // The texel of a level `width` x `height` that (u, v) (reduced) lies in.
 size_t locateNearest(int width, int height, float u, float v, const TextureSampler& sampler) {
-    const int x = wrapIndex(static_cast<int>(std::floor(u * width)), width, sampler.wrapS);
-    const int y = wrapIndex(static_cast<int>(std::floor(v * height)), height, sampler.wrapT);
+    const int x = wrapIndex(static_cast<int>(floorOf(u * width)), width, sampler.wrapS);
+    const int y = wrapIndex(static_cast<int>(floorOf(v * height)), height, sampler.wrapT);
     return static_cast<size_t>(y) * width + x;
 }
 
@@ -589,7 +601,7 @@ Texture::Lookup Texture::locate(glm::vec2 uv, float footprint, const TextureSamp
         return lookup;
     }
     // LINEAR_MIPMAP_LINEAR: bilinear lookups of the two levels around lod, blended (trilinear).
-    const int level = static_cast<int>(std::floor(lod));
+    const int level = static_cast<int>(floorOf(lod));
     const float blend = lod - static_cast<float>(level);
     atLevel(0, level);
     if (level < last && blend > 0.0f) {
