@@ -14,12 +14,29 @@ constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kBounceStream = 7200;
 }  // namespace
 
-glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit) {
-    const VolumeRegion& region = light.region();
+namespace {
+
+// Where volumeRadianceAt reads `region`'s volumes for `hit`: level 0, half a voxel off the surface.
+VolumeLookup lookupOffSurface(const MipVolume& volume, const RayHit& hit) {
+    const VolumeRegion& region = volume.region();
     const float invVoxel = 1.0f / region.voxelSize();
-    const glm::vec4 l = light.sample(
+    return volume.lookup(
         (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) * invVoxel, 0.0f);
+}
+
+glm::vec3 radianceOf(glm::vec4 l) {
     return l.w > 1e-6f ? glm::vec3(l) / l.w : glm::vec3(0.0f);
+}
+
+}  // namespace
+
+glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit) {
+    return radianceOf(light.gather(lookupOffSurface(light, hit)));
+}
+
+glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayHit& hit) {
+    const VolumeLookup where = lookupOffSurface(a, hit);  // b's too: they share their region
+    return radianceOf(a.gather(where)) - radianceOf(b.gather(where));
 }
 
 int objectRaySide(int side, float oneMinusCosMax) {
@@ -82,8 +99,7 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
                 // The real surface the ray met before the objects were there, and its light then.
                 const RayHit hidden = rays.scene->intersect(origin, wi, hit.t, INFINITY, true);
                 if (hidden.hit())
-                    radiance -= volumeRadianceAt(*realLight.full, hidden) -
-                                volumeRadianceAt(*realLight.delta, hidden);
+                    radiance -= volumeRadianceDifferenceAt(*realLight.full, *realLight.delta, hidden);
             }
             sum += radiance * weight;
         }

@@ -148,6 +148,42 @@ TEST(ObjectBounceRays, ASphereTakesAwayTheCeilingLightItHides) {
     }
 }
 
+// The difference of two volumes' radiance where a ray lands, with one lookup for both, is the difference of
+// their own lookups to the bit: inside either's occupied voxels, where only one has any, and far from both.
+TEST(ObjectBounceRays, ARadianceDifferenceIsTheDifferenceOfTheTwoLookups) {
+    const VolumeRegion region{glm::vec3(0.0f), 1.0f, 16};
+    const int n = region.resolution;
+    Grid3 wide(n), narrow(n);
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const float o = static_cast<float>((x * 7 + y * 3 + z * 5) % 4) / 3.0f;
+                wide[wide.index(x, y, z)] = glm::vec4(0.3f * x * o, 0.2f * y * o, 0.1f * z * o, o);
+                if (x > 6 && x < 10 && y > 6 && y < 10 && z > 6 && z < 10)
+                    narrow[narrow.index(x, y, z)] = glm::vec4(0.7f * o, 0.5f * o, 0.9f * o, o);
+            }
+    const MipVolume a = buildMipChain(region, std::move(wide));
+    const MipVolume b = buildMipChain(region, std::move(narrow));
+    int compared = 0, bothNonZero = 0;
+    for (int k = 0; k < 400; ++k) {
+        RayHit hit;
+        hit.position =
+            glm::vec3(static_cast<float>(k % 20) / 19.0f, static_cast<float>((k / 20) % 20) / 19.0f,
+                      0.45f + 0.01f * static_cast<float>(k % 7));
+        hit.geometricNormal = glm::normalize(glm::vec3(k % 3 - 1.0f, 1.0f, (k / 3) % 3 - 1.0f));
+        const glm::vec3 expected = volumeRadianceAt(a, hit) - volumeRadianceAt(b, hit);
+        const glm::vec3 got = volumeRadianceDifferenceAt(a, b, hit);
+        EXPECT_EQ(got.x, expected.x) << k;
+        EXPECT_EQ(got.y, expected.y) << k;
+        EXPECT_EQ(got.z, expected.z) << k;
+        ++compared;
+        if (volumeRadianceAt(b, hit) != glm::vec3(0.0f) && volumeRadianceAt(a, hit) != glm::vec3(0.0f))
+            ++bothNonZero;
+    }
+    EXPECT_EQ(compared, 400);
+    EXPECT_GT(bothNonZero, 10);  // the comparison covers points where both volumes have light
+}
+
 // A point that sees the objects' bounding sphere small takes fewer rays, in proportion to its solid angle;
 // at least one; all of them from a cone of 90 degrees or wider (and from inside the sphere).
 TEST(ObjectBounceRays, APointTakesRaysInProportionToTheSphereItSees) {
