@@ -1,6 +1,7 @@
 #include "pipeline/object_bounce_rays.h"
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <numbers>
 
@@ -12,11 +13,9 @@ namespace deltagi {
 namespace {
 constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kBounceStream = 7200;
-}  // namespace
 
-namespace {
-
-// Where volumeRadianceAt reads `region`'s volumes for `hit`: level 0, half a voxel off the surface.
+// Where volumeRadianceAt reads `volume` (and any volume of its region) for `hit`: level 0, half a voxel off
+// the surface on the ray's side.
 VolumeLookup lookupOffSurface(const MipVolume& volume, const RayHit& hit) {
     const VolumeRegion& region = volume.region();
     const float invVoxel = 1.0f / region.voxelSize();
@@ -35,6 +34,8 @@ glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit) {
 }
 
 glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayHit& hit) {
+    assert(a.region().origin == b.region().origin && a.region().size == b.region().size &&
+           a.region().resolution == b.region().resolution && a.levelCount() == b.levelCount());
     const VolumeLookup where = lookupOffSurface(a, hit);  // b's too: they share their region
     return radianceOf(a.gather(where)) - radianceOf(b.gather(where));
 }
