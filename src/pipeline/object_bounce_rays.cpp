@@ -54,8 +54,9 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
     const float offset = shadowRayOffset(*rays.scene);
     const glm::vec3 centre = rays.objectBounds.center();
     const float radius = rays.boundingRadius();
+    // At least one ray a point, also with object_rays 0: the relit cones leave the objects to these rays.
     const int count = squareSampleCount(options.diffuse.objectRays);
-    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
+    const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<float>(count)))));
     constexpr float kPi = std::numbers::pi_v<float>;
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {

@@ -44,11 +44,11 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
                                              const Options& options, std::span<const uint32_t> pixels = {},
                                              RealLight realLight = {});
 
-// The side of the jittered grid of rays (side x side at most) of a point that sees the objects' bounding
-// sphere within a cone of 1 - cos(half-angle) = `oneMinusCosMax`: the full side from a cone of 90 degrees
-// (kFullRaysOneMinusCos) up, less below, in proportion to the cone's solid angle (the rays' count, the
-// square of the side; at least one ray). The light from a narrower cone is as much smaller, and so is the
-// error of fewer rays over it: on the quality suite, delta_rel_error within 0.001 of all the rays
+// The side of the jittered grid of rays (side x side at most; side >= 1) of a point that sees the objects'
+// bounding sphere within a cone of 1 - cos(half-angle) = `oneMinusCosMax`: the full side from a cone of 90
+// degrees (kFullRaysOneMinusCos) up, less below, in proportion to the cone's solid angle (the rays' count,
+// the square of the side; at least one ray). The light from a narrower cone is as much smaller, and so is
+// the error of fewer rays over it: on the quality suite, delta_rel_error within 0.001 of all the rays
 // everywhere (the field photo 0.2600 -> 0.2611) at 0.44 of the rays (Cornell box + Happy Buddha).
 inline constexpr float kFullRaysOneMinusCos = 0.29289f;  // 1 - cos(45 degrees)
 int objectRaySide(int side, float oneMinusCosMax);
