@@ -86,6 +86,8 @@ class Texture {
         std::array<float, 2> fx{}, fy{};               // per level: the bilinear weights along x and y
     };
     Lookup locate(glm::vec2 uv, float footprint, const TextureSampler& sampler) const;
+    // The same into `out` (every field that read() uses is set): no Lookup made and copied per lookup.
+    void locate(glm::vec2 uv, float footprint, const TextureSampler& sampler, Lookup& out) const;
     glm::vec4 read(const Lookup& lookup) const;
     bool sameSize(const Texture& other) const { return width_ == other.width_ && height_ == other.height_; }
     // The mean of all texels (the 1x1 level).
@@ -106,6 +108,9 @@ class Texture {
     int width_ = 0, height_ = 0;
     bool eightBit_ = false;
     TextureEncoding encoding_ = TextureEncoding::Linear;
+    // eightBit_: the decoding tables of the RGB codes (sRGB or linear) and of alpha, 256 values each.
+    const float* rgbValues_ = nullptr;
+    const float* alphaValues_ = nullptr;
     std::vector<Level> levels_;
     std::string name_;
 };

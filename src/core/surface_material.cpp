@@ -14,6 +14,28 @@ T interpolate(const std::vector<T>& values, glm::uvec3 tri, float u, float v) {
     return (1.0f - u - v) * values[tri.x] + u * values[tri.y] + v * values[tri.z];
 }
 
+// A triangle's corners as a textured lookup reads them, loaded once for the footprint, the texture
+// coordinates and the normal map's frame: positions and texture coordinates of set 0.
+struct Corners {
+    glm::vec3 p0, p1, p2;
+    glm::vec2 t0, t1, t2;
+    Corners(const std::vector<glm::vec3>& positions, const std::vector<glm::vec2>& uvs, glm::uvec3 tri)
+        : p0(positions[tri.x]),
+          p1(positions[tri.y]),
+          p2(positions[tri.z]),
+          t0(uvs[tri.x]),
+          t1(uvs[tri.y]),
+          t2(uvs[tri.z]) {}
+    // uvFootprintOn's factor times `footprint`.
+    float uvFootprint(float footprint) const {
+        const float area = glm::length(glm::cross(p1 - p0, p2 - p0));
+        const glm::vec2 d1 = t1 - t0, d2 = t2 - t0;
+        const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
+        return area > 0.0f ? footprint * std::sqrt(uvArea / area) : 0.0f;
+    }
+    glm::vec2 uvAt(float u, float v) const { return (1.0f - u - v) * t0 + u * t1 + v * t2; }
+};
+
 SurfaceMaterial fromFactors(const Material& m, glm::vec3 base, float metallic, float roughness) {
     SurfaceMaterial s;
     s.model = m.model;
@@ -32,7 +54,7 @@ SurfaceMaterial fromFactors(const Material& m, glm::vec3 base, float metallic, f
 // The tangent-space normal map's normal at a point, in the frame of the shading normal `n`: the mesh's
 // tangents where it has them, else the triangle's texture-coordinate derivative dp/du.
 glm::vec3 mappedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float v, glm::vec3 n,
-                       glm::vec3 texel, float scale) {
+                       glm::vec3 texel, float scale, const Corners& corners) {
     glm::vec3 tangent;
     float handedness = 1.0f;
     float lengthScale = 1.0f;  // the tangent's length is this many times dp/du's
@@ -41,11 +63,10 @@ glm::vec3 mappedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float 
         tangent = glm::vec3(t);
         handedness = t.w < 0.0f ? -1.0f : 1.0f;
     } else {
-        const int set = mesh.material.normalTexture.texCoord == 1 && !mesh.uvs1.empty() ? 1 : 0;
-        const std::vector<glm::vec2>& uvs = set == 1 ? mesh.uvs1 : mesh.uvs;
-        const glm::vec3 e1 = mesh.positions[tri.y] - mesh.positions[tri.x];
-        const glm::vec3 e2 = mesh.positions[tri.z] - mesh.positions[tri.x];
-        const glm::vec2 d1 = uvs[tri.y] - uvs[tri.x], d2 = uvs[tri.z] - uvs[tri.x];
+        const bool set1 = mesh.material.normalTexture.texCoord == 1 && !mesh.uvs1.empty();
+        const glm::vec3 e1 = corners.p1 - corners.p0, e2 = corners.p2 - corners.p0;
+        const glm::vec2 d1 = set1 ? mesh.uvs1[tri.y] - mesh.uvs1[tri.x] : corners.t1 - corners.t0;
+        const glm::vec2 d2 = set1 ? mesh.uvs1[tri.z] - mesh.uvs1[tri.x] : corners.t2 - corners.t0;
         const float det = d1.x * d2.y - d2.x * d1.y;
         if (!(std::abs(det) > 1e-20f)) return n;
         // dp/du and dp/dv up to the positive factor 1 / |det| (only their directions are used).
@@ -99,33 +120,15 @@ glm::vec2 textureCoordinatesAt(const TriangleMesh& mesh, unsigned triangle, floa
     return interpolate(uvs, mesh.triangles[triangle], u, v);
 }
 
-SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v,
-                                  float footprint, glm::vec3* normal) {
-    if (!mesh.material.textured() || mesh.uvs.empty())
-        return surfaceMaterialAtUv(mesh, triangle, u, v, 0.0f, normal);
-    const float uvFootprint =
-        footprint > 0.0f ? uvFootprintOn(mesh.positions, mesh.uvs, mesh.triangles[triangle], footprint)
-                         : 0.0f;
-    return surfaceMaterialAtUv(mesh, triangle, u, v, uvFootprint, normal);
-}
+namespace {
 
-float uvFootprintOn(const std::vector<glm::vec3>& positions, const std::vector<glm::vec2>& uvs,
-                    glm::uvec3 tri, float footprint) {
-    const glm::vec3 a = positions[tri.x];
-    const float area = glm::length(glm::cross(positions[tri.y] - a, positions[tri.z] - a));
-    const glm::vec2 d1 = uvs[tri.y] - uvs[tri.x], d2 = uvs[tri.z] - uvs[tri.x];
-    const float uvArea = std::abs(d1.x * d2.y - d2.x * d1.y);
-    return area > 0.0f ? footprint * std::sqrt(uvArea / area) : 0.0f;
-}
-
-SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle, float u, float v,
-                                    float uvFootprint, glm::vec3* normal) {
+// surfaceMaterialAtUv of a textured mesh with texture coordinates, its triangle's corners loaded.
+SurfaceMaterial texturedMaterialAt(const TriangleMesh& mesh, unsigned triangle, glm::uvec3 tri,
+                                   const Corners& corners, float u, float v, float uvFootprint,
+                                   glm::vec3* normal) {
     const Material& m = mesh.material;
-    if (!variesOverSurface(mesh)) return constantSurfaceMaterial(m);
-    const glm::uvec3 tri = mesh.triangles[triangle];
     glm::vec3 base = m.albedo;
     if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
-    if (!m.textured() || mesh.uvs.empty()) return fromFactors(m, base, m.metallic, m.roughness);
     // Each texture coordinate set interpolated once, when a texture reads it; the texels' places and weights
     // worked out once for the maps of one size, set and sampler (a glTF material's usually are).
     glm::vec2 uvs[2];
@@ -135,12 +138,12 @@ SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle,
     auto lookup = [&](const TextureSlot& slot) {
         const int set = slot.texCoord == 1 ? 1 : 0;
         if (!interpolated[set]) {
-            uvs[set] = textureCoordinatesAt(mesh, triangle, u, v, slot.texCoord);
+            uvs[set] = set == 0 ? corners.uvAt(u, v) : textureCoordinatesAt(mesh, triangle, u, v, 1);
             interpolated[set] = true;
         }
         if (!located || located->texCoord != slot.texCoord || !(located->sampler == slot.sampler) ||
             !located->texture->sameSize(*slot.texture)) {
-            where = slot.texture->locate(uvs[set], uvFootprint, slot.sampler);
+            slot.texture->locate(uvs[set], uvFootprint, slot.sampler, where);
             located = &slot;
         }
         return slot.texture->read(where);
@@ -167,8 +170,40 @@ SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle,
     if (!normal) return s;
     if (m.occlusionTexture) s.occlusion = 1.0f + m.occlusionStrength * (lookup(m.occlusionTexture).x - 1.0f);
     if (m.normalTexture)
-        *normal = mappedNormal(mesh, tri, u, v, *normal, glm::vec3(lookup(m.normalTexture)), m.normalScale);
+        *normal = mappedNormal(mesh, tri, u, v, *normal, glm::vec3(lookup(m.normalTexture)), m.normalScale,
+                               corners);
     return s;
+}
+
+}  // namespace
+
+SurfaceMaterial surfaceMaterialAt(const TriangleMesh& mesh, unsigned triangle, float u, float v,
+                                  float footprint, glm::vec3* normal) {
+    if (!mesh.material.textured() || mesh.uvs.empty())
+        return surfaceMaterialAtUv(mesh, triangle, u, v, 0.0f, normal);
+    const glm::uvec3 tri = mesh.triangles[triangle];
+    const Corners corners(mesh.positions, mesh.uvs, tri);
+    const float uvFootprint = footprint > 0.0f ? corners.uvFootprint(footprint) : 0.0f;
+    return texturedMaterialAt(mesh, triangle, tri, corners, u, v, uvFootprint, normal);
+}
+
+float uvFootprintOn(const std::vector<glm::vec3>& positions, const std::vector<glm::vec2>& uvs,
+                    glm::uvec3 tri, float footprint) {
+    return Corners(positions, uvs, tri).uvFootprint(footprint);
+}
+
+SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle, float u, float v,
+                                    float uvFootprint, glm::vec3* normal) {
+    const Material& m = mesh.material;
+    if (!variesOverSurface(mesh)) return constantSurfaceMaterial(m);
+    const glm::uvec3 tri = mesh.triangles[triangle];
+    if (!m.textured() || mesh.uvs.empty()) {
+        glm::vec3 base = m.albedo;
+        if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
+        return fromFactors(m, base, m.metallic, m.roughness);
+    }
+    return texturedMaterialAt(mesh, triangle, tri, Corners(mesh.positions, mesh.uvs, tri), u, v, uvFootprint,
+                              normal);
 }
 
 glm::vec3 triangleEmission(const TriangleMesh& mesh, unsigned triangle) {

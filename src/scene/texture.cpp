@@ -168,7 +168,7 @@ inline float floorOfAny(float x) {
 // Brings a coordinate (uv units) into one period of its wrap mode, so that texel indices computed from it
 // fit an int whatever the uv (1e30 included); the indices are wrapped again (wrapIndex), which makes the
 // reduction exact for Repeat and MirroredRepeat and harmless for ClampToEdge.
-float reduceCoordinate(float u, TextureWrap wrap) {
+[[gnu::always_inline]] inline float reduceCoordinate(float u, TextureWrap wrap) {
     switch (wrap) {
         case TextureWrap::Repeat:
             return u - floorOfAny(u);
@@ -340,7 +340,13 @@ Texture::Texture(int width, int height, std::vector<glm::vec4> texels, std::stri
 
 Texture::Texture(int width, int height, std::vector<uint8_t> rgba8, TextureEncoding encoding,
                  std::string name)
-    : width_(width), height_(height), eightBit_(true), encoding_(encoding), name_(std::move(name)) {
+    : width_(width),
+      height_(height),
+      eightBit_(true),
+      encoding_(encoding),
+      rgbValues_(decoderFor(encoding).rgb),
+      alphaValues_(decoderFor(encoding).alpha),
+      name_(std::move(name)) {
     if (std::string problem = sizeProblem(width, height); !problem.empty()) throw InputError(name_, problem);
     size_t count = static_cast<size_t>(width) * height;
     if (rgba8.size() != count * 4)
@@ -530,11 +536,11 @@ struct FloatTexels {
 // in its codes),
 struct SrgbTexels {
     std::array<const uint32_t*, 2> level;
-    const TexelDecoder& decoder;
+    const float* rgb;
+    const float* alpha;
     [[gnu::always_inline]] Lanes operator()(int slot, size_t i) const {
         const uint32_t t = level[slot][i];
-        return Lanes::of(decoder.rgb[t & 0xffu], decoder.rgb[(t >> 8) & 0xffu],
-                         decoder.rgb[(t >> 16) & 0xffu], decoder.alpha[t >> 24]);
+        return Lanes::of(rgb[t & 0xffu], rgb[(t >> 8) & 0xffu], rgb[(t >> 16) & 0xffu], alpha[t >> 24]);
     }
 };
 // or linear 8-bit texels: their codes (0 to 255), blended as they are and divided by 255 after the blend
@@ -574,12 +580,21 @@ template <typename Texels>
 
 Texture::Lookup Texture::locate(glm::vec2 uv, float footprint, const TextureSampler& sampler) const {
     Lookup lookup;
+    locate(uv, footprint, sampler, lookup);
+    return lookup;
+}
+
+void Texture::locate(glm::vec2 uv, float footprint, const TextureSampler& sampler, Lookup& lookup) const {
+    lookup.average = false;
+    lookup.bilinear = true;
+    lookup.levels = 1;
+    lookup.levelBlend = 0.0f;
     if (!std::isfinite(uv.x) || !std::isfinite(uv.y)) {
         lookup.average = true;
-        return lookup;
+        return;
     }
     const float u = reduceCoordinate(uv.x, sampler.wrapS), v = reduceCoordinate(uv.y, sampler.wrapT);
-    auto atLevel = [&](int slot, int level) {
+    auto atLevel = [&](int slot, int level) __attribute__((always_inline)) {
         lookup.level[slot] = level;
         locateInLevel(lookup, slot, levels_[level].width, levels_[level].height, u, v, sampler);
     };
@@ -590,7 +605,7 @@ Texture::Lookup Texture::locate(glm::vec2 uv, float footprint, const TextureSamp
     if (!(lod > 0.0f) || !sampler.mipmaps) {  // level 0
         lookup.bilinear = (lod > 0.0f ? sampler.minFilter : sampler.magFilter) == TextureFilter::Linear;
         atLevel(0, 0);
-        return lookup;
+        return;
     }
     const int last = levels() - 1;
     lod = std::min(lod, static_cast<float>(last));
@@ -598,7 +613,7 @@ Texture::Lookup Texture::locate(glm::vec2 uv, float footprint, const TextureSamp
         // NEAREST_MIPMAP_NEAREST: the level nearest lod (OpenGL's ceil(lod + 0.5) - 1, 0.5 rounding down).
         lookup.bilinear = false;
         atLevel(0, std::clamp(static_cast<int>(std::ceil(lod + 0.5f)) - 1, 0, last));
-        return lookup;
+        return;
     }
     // LINEAR_MIPMAP_LINEAR: bilinear lookups of the two levels around lod, blended (trilinear).
     const int level = static_cast<int>(floorOf(lod));
@@ -609,7 +624,6 @@ Texture::Lookup Texture::locate(glm::vec2 uv, float footprint, const TextureSamp
         lookup.levelBlend = blend;
         atLevel(1, level + 1);
     }
-    return lookup;
 }
 
 glm::vec4 Texture::read(const Lookup& lookup) const {
@@ -624,7 +638,7 @@ glm::vec4 Texture::read(const Lookup& lookup) const {
                                                    second ? second->packed.data() : nullptr};
     if (encoding_ == TextureEncoding::Linear)
         return blendTexels(lookup, CodeTexels{packed}).dividedBy(255.0f).value();
-    return blendTexels(lookup, SrgbTexels{packed, decoderFor(TextureEncoding::Srgb)}).value();
+    return blendTexels(lookup, SrgbTexels{packed, rgbValues_, alphaValues_}).value();
 }
 
 glm::vec4 Texture::sample(glm::vec2 uv, float footprint, const TextureSampler& sampler) const {

@@ -594,4 +594,37 @@ TEST(Texture, ALookupOfOneTextureReadsAnotherOfTheSameSize) {
                 }
 }
 
+// locate() into a Lookup that an earlier lookup filled (as a material's lookups reuse one): every lookup
+// reads what a fresh one does, whatever the one before was (trilinear, nearest, one level, a non-finite uv).
+TEST(Texture, ALookupFilledAgainReadsAsAFreshOne) {
+    constexpr int kWidth = 16, kHeight = 8;
+    std::vector<uint8_t> bytes(kWidth * kHeight * 4);
+    for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<uint8_t>((i * 97 + 3) % 256);
+    const Texture texture(kWidth, kHeight, bytes, TextureEncoding::Srgb, "reused");
+    struct Case {
+        glm::vec2 uv;
+        float footprint;
+        TextureFilter filter;
+    };
+    std::vector<Case> cases;
+    for (TextureFilter filter : {TextureFilter::Linear, TextureFilter::Nearest})
+        for (float footprint : {0.0f, 1.5f / kWidth, 3.0f / kWidth, 100.0f})
+            for (glm::vec2 uv : {glm::vec2(0.31f, 0.62f), glm::vec2(NAN, 0.5f), glm::vec2(0.9f, 0.05f)})
+                cases.push_back({uv, footprint, filter});
+    Texture::Lookup reused;
+    int trilinear = 0;
+    for (int pass = 0; pass < 2; ++pass)  // forwards, then backwards: each case after others
+        for (size_t k = 0; k < cases.size(); ++k) {
+            const Case& c = cases[pass == 0 ? k : cases.size() - 1 - k];
+            TextureSampler sampler;
+            sampler.minFilter = sampler.magFilter = c.filter;
+            texture.locate(c.uv, c.footprint, sampler, reused);
+            trilinear += reused.levels == 2 ? 1 : 0;
+            const glm::vec4 read = texture.read(reused), fresh = texture.sample(c.uv, c.footprint, sampler);
+            for (int channel = 0; channel < 4; ++channel)
+                EXPECT_EQ(read[channel], fresh[channel]) << "case " << k << " pass " << pass;
+        }
+    EXPECT_GT(trilinear, 0);  // the cases include two-level lookups, whose fields the others must reset
+}
+
 }  // namespace deltagi
