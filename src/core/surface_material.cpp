@@ -36,6 +36,14 @@ struct Corners {
     glm::vec2 uvAt(float u, float v) const { return (1.0f - u - v) * t0 + u * t1 + v * t2; }
 };
 
+// The material's base colour (Phong: albedo) at a point before its textures: times the vertex colours.
+[[gnu::always_inline]] inline glm::vec3 untexturedBaseAt(const TriangleMesh& mesh, glm::uvec3 tri, float u,
+                                                         float v) {
+    glm::vec3 base = mesh.material.albedo;
+    if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
+    return base;
+}
+
 SurfaceMaterial fromFactors(const Material& m, glm::vec3 base, float metallic, float roughness) {
     SurfaceMaterial s;
     s.model = m.model;
@@ -127,8 +135,7 @@ SurfaceMaterial texturedMaterialAt(const TriangleMesh& mesh, unsigned triangle, 
                                    const Corners& corners, float u, float v, float uvFootprint,
                                    glm::vec3* normal) {
     const Material& m = mesh.material;
-    glm::vec3 base = m.albedo;
-    if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
+    glm::vec3 base = untexturedBaseAt(mesh, tri, u, v);
     // Each texture coordinate set interpolated once, when a texture reads it; the texels' places and weights
     // worked out once for the maps of one size, set and sampler (a glTF material's usually are).
     glm::vec2 uvs[2];
@@ -197,11 +204,8 @@ SurfaceMaterial surfaceMaterialAtUv(const TriangleMesh& mesh, unsigned triangle,
     const Material& m = mesh.material;
     if (!variesOverSurface(mesh)) return constantSurfaceMaterial(m);
     const glm::uvec3 tri = mesh.triangles[triangle];
-    if (!m.textured() || mesh.uvs.empty()) {
-        glm::vec3 base = m.albedo;
-        if (!mesh.colors.empty()) base *= interpolate(mesh.colors, tri, u, v);
-        return fromFactors(m, base, m.metallic, m.roughness);
-    }
+    if (!m.textured() || mesh.uvs.empty())
+        return fromFactors(m, untexturedBaseAt(mesh, tri, u, v), m.metallic, m.roughness);
     return texturedMaterialAt(mesh, triangle, tri, Corners(mesh.positions, mesh.uvs, tri), u, v, uvFootprint,
                               normal);
 }
