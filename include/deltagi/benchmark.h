@@ -47,7 +47,7 @@ struct BenchResult {
     int threads = 0;
     int width = 0, height = 0, volumeResolution = 0;
     size_t realTriangles = 0, virtualTriangles = 0;
-    int worldKeptFrames = 0;  // measured frames that kept the real scene's world-space work
+    int worldKeptFrames = 0;  // measured frames that kept the real scene's world-space work and its light
 
     BenchStatistics row(const BenchRow& row) const;  // over the measured frames
 };

@@ -32,6 +32,8 @@ struct VolumeOptions {
     // every frame (and every chunk of frames) lights the volumes alike and the camera can move without the
     // real scene's volumes being redone.
     std::optional<glm::vec3> viewpoint;
+
+    bool operator==(const VolumeOptions&) const = default;
 };
 
 // options.rsm: reflective shadow maps (Dachsbacher & Stamminger 2005), one per light.
@@ -41,6 +43,8 @@ struct RsmOptions {
     // 128^3 and above, 128 at 32^3), and less for a light that brings less light into the volume than the
     // brightest (rsmResolutions): many lights in a room cost little each.
     int resolution = 0;
+
+    bool operator==(const RsmOptions&) const = default;
 };
 
 // options.diffuse: the diffuse cones of §3.1, covering the hemisphere, cosine weighted.
@@ -75,6 +79,8 @@ struct DiffuseConeOptions {
     // voxel and more off its surface, below the floor under an object standing on it, whose underside then
     // gets none of the floor's light (bounce_light.h). 0: cones.
     int objectRays = 16;
+
+    bool operator==(const DiffuseConeOptions&) const = default;
 };
 
 // options.specular: the one specular cone along the reflected view ray.
@@ -88,6 +94,8 @@ struct SpecularConeOptions {
     // every such row and interpolated like the diffuse cones' ("auto", 0 here, the default:
     // kAutoRelightSpecularStride at 640x480). Rendered surfaces trace every pixel.
     int relightPixelStride = 0;
+
+    bool operator==(const SpecularConeOptions&) const = default;
 };
 
 // options.shadow: how the direct light of each light is shadowed: the shadow cone of §3.5, or shadow rays.
@@ -117,6 +125,8 @@ struct ShadowConeOptions {
     // "relight_pixel_stride": the same for the shadows the objects cast on real surfaces ("auto":
     // kAutoRelightShadowStride, kAutoRelightAreaLightStride at 640x480).
     int relightPixelStride = 0;
+
+    bool operator==(const ShadowConeOptions&) const = default;
 };
 
 // options.trace: the cone marcher shared by all cones.
@@ -142,6 +152,8 @@ struct TraceOptions {
     //   light = light*occ + light_local*occ_local*(1-occ); occ = occ + occ_local*(1-occ),
     // "front_to_back" uses the usual emission-absorption compositing light += light_local*occ_local*(1-occ).
     std::string accumulation = "front_to_back";
+
+    bool operator==(const TraceOptions&) const = default;
 };
 
 // options.render: the camera pass.
@@ -195,6 +207,8 @@ struct RenderOptions {
     // "denoise_radius": pixels of the edge-aware filter over the shadow and diffuse cone results, which
     // averages the noise of the jittered cone starts (0 disables it).
     int denoiseRadius = 2;
+
+    bool operator==(const RenderOptions&) const = default;
 };
 
 // options.environment: how the scene's environment map lights the pipeline (ignored without one).
@@ -212,6 +226,8 @@ struct EnvironmentOptions {
     // "max_light_aperture_deg": an extracted light's shadow cone is as wide as the region of sky it stands
     // for (full apex angle, degrees), at most this.
     float maxLightApertureDeg = 30.0f;
+
+    bool operator==(const EnvironmentOptions&) const = default;
 };
 
 // The "auto" pixel strides: these at a 640x480 image, scaled with its smaller side (so that an image samples
@@ -264,6 +280,8 @@ struct Options {
     TraceOptions trace;
     RenderOptions render;
     EnvironmentOptions environment;
+
+    bool operator==(const Options&) const = default;
 };
 
 }  // namespace deltagi

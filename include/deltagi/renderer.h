@@ -57,13 +57,15 @@ void checkFrame(const Scene& scene);
 RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 
 // Renders a sequence of frames of one scene whose virtual objects and camera change from frame to frame, as
-// in a mixed reality session. What depends only on the real side is kept from the previous frame: its
-// world-space work (the reconstruction's ray-casting BVH, its voxels, its reflective shadow maps and injected
-// and bounced light) while the scene object, its real meshes, lights, options and the volume region are
-// unchanged (compared by identity and content at every call) and the camera stays on the same side of every
-// real surface (the RSMs and the bounces keep a surface's camera side); its camera-space work (the real half
-// of the G-buffer, the rendered background, the real scene's share of the real surfaces' shadow cones, the
-// edge-aware filter's weights over the real surfaces) while the camera is unchanged too. The virtual
+// in a mixed reality session. What depends only on the real side is kept from the previous frame, each part
+// while what it is made from is unchanged (compared by identity and content at every call;
+// src/pipeline/frame_cache.h): the reconstruction's ray-casting BVH while the scene object, its real meshes
+// and the options are; its voxels while the volume region is too; its reflective shadow maps and injected and
+// bounced light while the lights and the environment map are too and the camera stays on the same side of
+// every real surface (the RSMs and the bounces keep a surface's camera side); its camera-space work (the real
+// half of the G-buffer, the edge-aware filter's weights over the real surfaces) while the camera is
+// unchanged, and with it and the lights the rendered background and the real scene's share of the real
+// surfaces' shadow cones. The virtual
 // objects' voxels, the full and delta light volumes and their mipmaps are kept too and redone only where the
 // objects change them (their voxels, and the voxels lit differently because of them); so are the objects'
 // half of the G-buffer (redone where they were and are) and their BVH (refit when only their vertices moved).
@@ -88,10 +90,12 @@ class FrameRenderer {
     // rest: the next frame is render()'s image, with the kept work's speed. For a frame that does not follow
     // the ones before it in time.
     void clearHistory();
-    // What the last frame kept from the frames before: the real scene's world-space work (its voxels, RSMs
-    // and light, with virtual objects in the scene) and its camera-space work.
+    // What the last frame kept from the frames before (with virtual objects in the scene): the real scene's
+    // geometry (its BVH and its voxels over the volume region), its light (its RSMs and injected and bounced
+    // light, which a new light, environment or region redoes, and a camera that crosses a real surface's
+    // plane) and its camera-space work (its G-buffer, the filter's weights).
     struct KeptWork {
-        bool world = false, camera = false;
+        bool world = false, light = false, camera = false;
     };
     KeptWork lastFrameKept() const;
 

@@ -142,7 +142,8 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
         if (options.cold) renderer.clear();
         RenderOutput out = renderer.render(scene);
         if (f < options.warmup) continue;
-        if (renderer.lastFrameKept().world) ++result.worldKeptFrames;
+        const FrameRenderer::KeptWork kept = renderer.lastFrameKept();
+        if (kept.world && kept.light) ++result.worldKeptFrames;
         result.frames.push_back(std::move(out.timings));
         result.totals.push_back(out.totalMs);
         if (onFrame) onFrame(f - options.warmup, out.totalMs);

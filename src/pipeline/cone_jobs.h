@@ -25,17 +25,17 @@ namespace deltagi {
 // One set of surfaces to trace cones from, against a light volume and visibility volumes.
 struct ConeJob {
     std::span<const SurfacePoint> points;
-    const MipVolume* light;
+    const MipVolume* light = nullptr;
     VisibilityVolumes visibility;
-    bool indirect;  // trace diffuse and specular cones too
-    ShadowMode
-        mode;  // how shadows and the sky through the cones count (shaded, relit, or the real scene alone)
+    bool indirect = true;  // trace diffuse and specular cones too
+    // How shadows and the sky through the cones count (shaded, relit, or the real scene alone).
+    ShadowMode mode = ShadowMode::Shaded;
     PixelRect bounds;                             // holds every valid point
     SceneOcclusionCache* sceneShadows = nullptr;  // relit with DeltaShadow: the scene's share, kept
     // Relit real surfaces: the filter's interpolation weights of the shadow, diffuse and specular passes,
     // kept (their surfaces are the real G-buffer's), and the pixels whose points differ from it (covered).
     std::array<InterpolationPlan, 5>* plans = nullptr;  // one per stride (filter())
-    PixelRect changed;
+    PixelRect changed{};
     ShadowRayScenes rays;  // options.shadow.method "rays": what shadow rays are cast against
     // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
     const MipVolume* fullLight = nullptr;

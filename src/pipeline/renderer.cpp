@@ -10,12 +10,12 @@
 #include "core/environment_sampling.h"
 #include "core/parallel.h"
 #include "core/ray_scene.h"
-#include "deltagi/scene_io.h"
 #include "pipeline/area_light_rays.h"
 #include "pipeline/bounce_light.h"
 #include "pipeline/composite.h"
 #include "pipeline/cone_jobs.h"
 #include "pipeline/denoise.h"
+#include "pipeline/frame_cache.h"
 #include "pipeline/gbuffer.h"
 #include "pipeline/inject.h"
 #include "pipeline/mipmap.h"
@@ -28,9 +28,6 @@
 #include "pipeline/stage_timer.h"
 #include "pipeline/temporal_reuse.h"
 #include "pipeline/voxelize.h"
-
-#define XXH_INLINE_ALL
-#include <xxhash.h>
 
 namespace deltagi {
 
@@ -112,158 +109,6 @@ std::vector<Light> rsmLights(const Scene& scene, const RayScene& realOnly) {
     return lights;
 }
 
-// The static half of a frame: what depends only on the real scene, its lights, the camera, the options and
-// the volume region. Built lazily, kept by FrameRenderer while its signature and region are unchanged. Of it,
-// the camera-space work (the G-buffer, the background, the per-pixel caches) is redone when the camera
-// changes; the world-space work (BVHs, voxels, RSMs, injected and bounced light, the objects' volumes) is
-// kept while the camera stays on the same side of every real surface (keepWorldWork).
-struct StaticWork {
-    uint64_t signature = 0;        // of the world: everything but the camera (worldSignature)
-    uint64_t cameraSignature = 0;  // of the camera
-    // The camera is the last frame's: the filter's weights over the real surfaces are worth keeping (a
-    // camera that moves every frame would build them for one use; its passes compute only those they need).
-    bool cameraSteady = false;
-    std::unique_ptr<RayScene> realOnly;
-    std::unique_ptr<RayScene> objects;       // the virtual objects' layer over realOnly, refit as they move
-    std::vector<SurfacePoint> realSurfaces;  // the G-buffer's real half, when realSurfacesMade
-    bool realSurfacesMade = false;
-    std::optional<Image> background;  // the real scene rendered alone (no photo)
-    // Over `region`:
-    std::optional<VolumeRegion> region;
-    std::optional<VoxelGeometry> sceneGeometry;
-    std::optional<MipVolume> sceneVisibility;
-    SceneOcclusionCache relitShadows;             // the scene's share of the real surfaces' shadow cones
-    std::array<InterpolationPlan, 5> relitPlans;  // the relit passes' filter weights over realSurfaces
-    GBuffer gbuffer;                              // the objects' half, redone where they were and are
-    // realSurfaces without the pixels the objects cover (the last frame's `hidden`).
-    std::vector<SurfacePoint> relitSurfaces;
-    std::vector<uint32_t> hidden;
-    std::optional<std::vector<ReflectiveShadowMap>> sceneRsms;  // of the scene alone, one per light
-    std::optional<Grid3> sceneLight;                            // injected from sceneRsms, plus sceneBounce
-    // The further bounces of the scene's light (options.render.light_bounces).
-    std::optional<Grid3> sceneBounce;
-    // The environment map's sampler (its CDFs), when its light is traced by rays.
-    std::unique_ptr<EnvironmentSampler> environmentSampler;
-    // The objects' volumes of the last frame, updated where the objects changed them.
-    std::optional<ObjectVolumes> objectVolumes;
-    // The viewpoint the world-space work holds for, and the sides of the real surfaces it is on there: the
-    // RSMs' (rsmViewSides) and the further bounces' (bounceViewSides).
-    std::optional<glm::vec3> viewpoint;
-    std::vector<int8_t> rsmSides;
-    std::vector<bool> bounceSides;
-};
-
-// The point whose side of the real surfaces the volumes light (options.volume.viewpoint; the camera's).
-glm::vec3 viewpointOf(const Scene& scene) {
-    return scene.options.volume.viewpoint.value_or(scene.camera.position());
-}
-
-// Forgets what depends on the camera: the real G-buffer and what is made over its pixels.
-// The large buffers keep their memory for the next camera's (14 MiB each at 640 x 480: allocated afresh,
-// their pages would be faulted in every frame).
-void forgetCameraWork(StaticWork& kept) {
-    kept.realSurfacesMade = false;
-    kept.background.reset();
-    kept.relitShadows = {};
-    for (InterpolationPlan& plan : kept.relitPlans) {
-        plan.stride = 0;
-        plan.weights.clear();
-    }
-    kept.gbuffer.object.clear();  // renderObjectSurfaces starts afresh
-    kept.gbuffer.coverage.clear();
-    kept.relitSurfaces.clear();
-    kept.hidden.clear();
-}
-
-// Keeps the world-space work for the camera at `viewpoint` where it is the same as made afresh: the RSMs keep
-// a real surface's texels on the camera's side only, and the further bounces gather on the camera's side of
-// each voxel. Where the camera crossed a surface's plane, they are redone (and what is made from them).
-void keepWorldWork(const Scene& scene, glm::vec3 viewpoint, StaticWork& kept) {
-    if (kept.viewpoint == viewpoint) return;
-    kept.viewpoint = viewpoint;
-    if (kept.sceneRsms) {
-        const std::vector<int8_t> sides = rsmViewSides(scene.real, viewpoint);
-        if (sides != kept.rsmSides || std::find(sides.begin(), sides.end(), 0) != sides.end()) {
-            kept.sceneRsms.reset();
-            kept.sceneLight.reset();
-            kept.sceneBounce.reset();
-            kept.objectVolumes.reset();
-            return;
-        }
-    }
-    if (kept.sceneBounce && bounceViewSides(*kept.sceneVisibility, viewpoint) != kept.bounceSides) {
-        kept.sceneLight.reset();
-        kept.sceneBounce.reset();
-        kept.objectVolumes.reset();
-    }
-}
-
-bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
-    return a.origin == b.origin && a.size == b.size && a.resolution == b.resolution;
-}
-
-// XXH3 (xxHash, Debian's libxxhash-dev, inlined) over bytes: the world signature reads every byte of the real
-// meshes each frame, and a byte-wise FNV-1a took about 4 cycles a byte (40 ms a frame for a reconstruction
-// of a million triangles).
-class Hasher {
-  public:
-    Hasher() { XXH3_64bits_reset(&state_); }
-    Hasher(const Hasher&) = delete;
-    Hasher& operator=(const Hasher&) = delete;
-    void bytes(const void* data, size_t size) { XXH3_64bits_update(&state_, data, size); }
-    uint64_t value() const { return XXH3_64bits_digest(&state_); }
-
-  private:
-    XXH3_state_t state_;
-};
-
-uint64_t cameraSignature(const Camera& camera) {
-    Hasher h;
-    h.bytes(&camera, sizeof(camera));
-    return h.value();
-}
-
-// A hash of everything the static half depends on but the camera. The scene's and its real meshes' addresses
-// are part of it: the kept BVH and surfaces point into them.
-uint64_t worldSignature(const Scene& scene) {
-    Hasher h;
-    auto bytes = [&](const void* data, size_t size) { h.bytes(data, size); };
-    auto value = [&](const auto& v) { bytes(&v, sizeof(v)); };
-    value(&scene);
-    value(scene.real.data());
-    value(scene.real.size());
-    for (const TriangleMesh& m : scene.real) {
-        value(m.positions.data());
-        bytes(m.positions.data(), m.positions.size() * sizeof(glm::vec3));
-        bytes(m.normals.data(), m.normals.size() * sizeof(glm::vec3));
-        bytes(m.triangles.data(), m.triangles.size() * sizeof(glm::uvec3));
-        bytes(m.uvs.data(), m.uvs.size() * sizeof(glm::vec2));
-        bytes(m.uvs1.data(), m.uvs1.size() * sizeof(glm::vec2));
-        bytes(m.tangents.data(), m.tangents.size() * sizeof(glm::vec4));
-        bytes(m.colors.data(), m.colors.size() * sizeof(glm::vec3));
-        visitMaterialFields(m.material, value);
-    }
-    for (const Light& l : scene.lights) {  // field by field: Light has padding after its bool
-        value(l.type);
-        value(l.color);
-        value(l.intensity);
-        value(l.position);
-        value(l.direction);
-        value(l.innerAngleDeg);
-        value(l.outerAngleDeg);
-        value(l.radius);
-        value(l.fromEnvironment);
-        value(l.angularRadius);
-    }
-    // The environment lights the background rendered without a photo (its sky term).
-    value(scene.environment ? scene.environment->radiance.data().data() : nullptr);
-    if (scene.environment) value(scene.environment->worldFromEnvironment);
-    value(scene.background.has_value());
-    const std::string options = optionsToJson(scene.options).dump();
-    bytes(options.data(), options.size());
-    return h.value();
-}
-
 // Makes the pixels the objects cover fully invalid in `points`, listing them in `hidden`.
 void hideCovered(const GBuffer& gbuffer, std::vector<SurfacePoint>& points, std::vector<uint32_t>& hidden) {
     const PixelRect& w = gbuffer.written;
@@ -284,7 +129,7 @@ void hideCovered(const GBuffer& gbuffer, std::vector<SurfacePoint>& points, std:
 // The real surfaces that show through (coverage < 1), to be relit: `real` without the pixels the objects
 // cover, kept in `kept` and changed only where the covered pixels were or are.
 const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePoint>& real,
-                                                     const GBuffer& gbuffer, StaticWork& kept) {
+                                                     const GBuffer& gbuffer, ViewWork& kept) {
     std::vector<SurfacePoint>& points = kept.relitSurfaces;
     if (points.size() != real.size()) {  // a new camera: 14 MiB at 640 x 480, copied in parallel
         points.resize(real.size());
@@ -306,7 +151,7 @@ const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePo
 // whole real G-buffer is needed only by a steady camera's kept filter weights, the depth layer and a rendered
 // background; a camera that stays computes it next frame, and the relit surfaces stay valid).
 const std::vector<SurfacePoint>& renderRelitSurfaces(const Camera& camera, const RayScene& realOnly,
-                                                     const GBuffer& gbuffer, StaticWork& kept) {
+                                                     const GBuffer& gbuffer, ViewWork& kept) {
     std::vector<SurfacePoint>& points = kept.relitSurfaces;
     renderRealSurfaces(camera, realOnly, points);
     kept.hidden.clear();
@@ -315,59 +160,61 @@ const std::vector<SurfacePoint>& renderRelitSurfaces(const Camera& camera, const
 }
 
 // Stages 1-4 (§3.2): the two visibility volumes, the full light volume and the delta volume, mip-mapped. The
-// scene's share comes from `kept` when it is there; the objects' volumes are kept there too and updated
+// scene's share comes from `cache` when it is there; the objects' volumes are kept there too and updated
 // where the objects changed them since the last frame (ObjectVolumes).
 struct DgiVolumes {
     const MipVolume *sceneVisibility, *objectVisibility, *fullLight, *deltaLight, *objectLight;
 };
 
 DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const VolumeRegion& region,
-                        const RayScene& realOnly, const RayScene& all, StaticWork& kept, StageTimer& timer) {
+                        const RayScene& realOnly, const RayScene& all, FrameCache& cache, StageTimer& timer) {
+    VoxelWork& real = cache.voxels.work;
+    LightWork& light = cache.light.work;
+    const glm::vec3 viewpoint = viewpointOf(scene);
     // With area lights by rays, emitting surfaces light the volumes through their stand-ins' RSMs instead.
     const bool withEmission = scene.options.shadow.method != "rays";
-    ObjectVolumes& objects = kept.objectVolumes ? *kept.objectVolumes : kept.objectVolumes.emplace();
+    std::optional<ObjectVolumes>& keptObjects = cache.objectVolumes.work.volumes;
+    ObjectVolumes& objects = keptObjects ? *keptObjects : keptObjects.emplace();
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
     const int bounces = scene.options.render.lightBounces - 1;
-    if (!kept.sceneGeometry) kept.sceneGeometry = voxelize(scene.real, region, withEmission, bounces > 0);
+    if (!real.geometry) real.geometry = voxelize(scene.real, region, withEmission, bounces > 0);
     objects.voxelize(scene.virtuals, region, withEmission, bounces > 0);
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
-    if (!kept.sceneRsms) {
-        kept.sceneRsms = renderRsms(realOnly, lights, region, scene.options, viewpointOf(scene));
-        kept.rsmSides = rsmViewSides(scene.real, viewpointOf(scene));
+    if (!light.rsms) {
+        light.rsms = renderRsms(realOnly, lights, region, scene.options, viewpoint);
+        light.rsmSides = rsmViewSides(scene.real, viewpoint);
     }
     std::vector<RsmUpdate> updates;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
     for (size_t l = 0; l < lights.size(); ++l)
-        updates.push_back(
-            traceRsmUpdate((*kept.sceneRsms)[l], all, lights[l], region, objectBounds, viewpointOf(scene)));
+        updates.push_back(traceRsmUpdate((*light.rsms)[l], all, lights[l], region, objectBounds, viewpoint));
     timer.lap("rsm");
+    auto visibility = [&]() -> const MipVolume& {
+        if (!real.visibility) real.visibility = buildMipChain(region, real.geometry->visibility.clone());
+        return *real.visibility;
+    };
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
-    const VoxelGeometry* sceneAlone[] = {&*kept.sceneGeometry};
-    if (!kept.sceneLight) {
-        kept.sceneLight = injectLight(*kept.sceneRsms, region, sceneAlone);
+    const VoxelGeometry* sceneAlone[] = {&*real.geometry};
+    if (!light.injected) {
+        light.injected = injectLight(*light.rsms, region, sceneAlone);
         if (bounces > 0) {
-            if (!kept.sceneVisibility)
-                kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
-            kept.sceneBounce = bounceLight(*kept.sceneLight, *kept.sceneGeometry, *kept.sceneVisibility,
-                                           scene.options, bounces, viewpointOf(scene));
-            kept.bounceSides = bounceViewSides(*kept.sceneVisibility, viewpointOf(scene));
-            for (size_t i = 0; i < kept.sceneLight->size(); ++i)
-                (*kept.sceneLight)[i] += (*kept.sceneBounce)[i];
+            light.bounce =
+                bounceLight(*light.injected, *real.geometry, visibility(), scene.options, bounces, viewpoint);
+            light.bounceSides = bounceViewSides(visibility(), viewpoint);
+            for (size_t i = 0; i < light.injected->size(); ++i) (*light.injected)[i] += (*light.bounce)[i];
         }
     }
-    objects.inject({*kept.sceneGeometry, *kept.sceneRsms, *kept.sceneLight,
-                    kept.sceneBounce ? &*kept.sceneBounce : nullptr},
+    objects.inject({*real.geometry, *light.rsms, *light.injected, light.bounce ? &*light.bounce : nullptr},
                    updates);
     timer.lap("inject");
-    // 4. Mipmaps of all four volumes.
-    if (!kept.sceneVisibility)
-        kept.sceneVisibility = buildMipChain(region, kept.sceneGeometry->visibility.clone());
-    // With further bounces the objects reflect the room's light they receive too.
-    objects.mipmap(bounces > 0 ? &*kept.sceneVisibility : nullptr, &scene.options, &all);
+    // 4. Mipmaps of all four volumes. With further bounces the objects reflect the room's light they receive
+    // too.
+    const MipVolume& sceneVisibility = visibility();
+    objects.mipmap(bounces > 0 ? &sceneVisibility : nullptr, &scene.options, &all);
     timer.lap("mipmap");
-    return {&*kept.sceneVisibility, &objects.objectVisibility(), &objects.fullLight(), &objects.deltaLight(),
+    return {&sceneVisibility, &objects.objectVisibility(), &objects.fullLight(), &objects.deltaLight(),
             &objects.objectLight()};
 }
 
@@ -401,20 +248,15 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
         for (size_t i = 0; i < direct.size(); ++i) direct[i] += bounced[i];
     }
     const MipVolume light = buildMipChain(region, std::move(direct));
-    const ConeJob job{points,
-                      &light,
-                      {&visibility, nullptr, VisibilityVolumes::Self::Scene},
-                      o.render.indirect,
-                      ShadowMode::SceneOnly,
-                      {0, 0, scene.camera.width, scene.camera.height},
-                      nullptr,
-                      nullptr,
-                      {},
-                      {&realOnly, nullptr, {}},
-                      nullptr,
-                      nullptr,
-                      areaRays ? &emitters : nullptr,
-                      environment ? &*environment : nullptr};
+    const ConeJob job{.points = points,
+                      .light = &light,
+                      .visibility = {&visibility, nullptr, VisibilityVolumes::Self::Scene},
+                      .indirect = o.render.indirect,
+                      .mode = ShadowMode::SceneOnly,
+                      .bounds = {0, 0, scene.camera.width, scene.camera.height},
+                      .rays = {&realOnly, nullptr, {}},
+                      .emitters = areaRays ? &emitters : nullptr,
+                      .environment = environment ? &*environment : nullptr};
     std::vector<StageTiming> ignored;
     StageTimer quiet(ignored, {});
     // Rendered once per real scene: 16 times the shadow rays (the penumbrae of 4 were blotchy where the
@@ -433,8 +275,9 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     return toImage(radiance, scene.camera.width, scene.camera.height);
 }
 
-// One frame; `kept` holds the static half from an earlier frame of the same scene, or nothing.
-RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallback& onStage,
+// One frame; `cache` holds the work of earlier frames of the same scene that this frame's inputs keep
+// (FrameCache::update), or nothing.
+RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallback& onStage,
                          TemporalReuse* temporal = nullptr) {
     RenderOutput out;
     const auto start = std::chrono::steady_clock::now();
@@ -442,34 +285,28 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     const Options& o = scene.options;
     const Camera& camera = scene.camera;
     const VolumeRegion region = volumeRegion(scene);
-    if (kept.region && !sameRegion(*kept.region, region)) {
-        kept.sceneGeometry.reset();
-        kept.sceneVisibility.reset();
-        kept.relitShadows = {};
-        kept.sceneRsms.reset();
-        kept.sceneLight.reset();
-        kept.sceneBounce.reset();
-        kept.objectVolumes.reset();
-    }
-    kept.region = region;
+    ViewWork& view = cache.view.work;
 
-    if (!kept.realOnly) kept.realOnly = std::make_unique<RayScene>(scene, SceneContent::RealOnly);
-    const RayScene& realOnly = *kept.realOnly;
+    std::unique_ptr<RayScene>& realRays = cache.world.work.realOnly;
+    if (!realRays) realRays = std::make_unique<RayScene>(scene, SceneContent::RealOnly);
+    const RayScene& realOnly = *realRays;
     // The virtual objects get their own BVH, layered over the reconstruction's; refit when they only moved.
-    if (!scene.virtuals.empty() && !(kept.objects && kept.objects->refit(scene)))
-        kept.objects = std::make_unique<RayScene>(scene, SceneContent::VirtualOnly, &realOnly);
-    const RayScene* all = scene.virtuals.empty() ? nullptr : kept.objects.get();
+    std::unique_ptr<RayScene>& objectRays = cache.objectRays.work.objects;
+    if (!scene.virtuals.empty() && !(objectRays && objectRays->refit(scene)))
+        objectRays = std::make_unique<RayScene>(scene, SceneContent::VirtualOnly, &realOnly);
+    const RayScene* all = scene.virtuals.empty() ? nullptr : objectRays.get();
     timer.lap("bvh");
 
     auto realSurfaces = [&]() -> const std::vector<SurfacePoint>& {
-        if (!kept.realSurfacesMade) renderRealSurfaces(camera, realOnly, kept.realSurfaces);
-        kept.realSurfacesMade = true;
-        return kept.realSurfaces;
+        if (!view.realSurfacesMade) renderRealSurfaces(camera, realOnly, view.realSurfaces);
+        view.realSurfacesMade = true;
+        return view.realSurfaces;
     };
     auto background = [&]() -> const Image& {
         if (scene.background) return *scene.background;
-        if (!kept.background) kept.background = renderRealScene(scene, realOnly, realSurfaces());
-        return *kept.background;
+        std::optional<Image>& rendered = cache.litView.work.background;
+        if (!rendered) rendered = renderRealScene(scene, realOnly, realSurfaces());
+        return *rendered;
     };
 
     if (scene.virtuals.empty()) {
@@ -491,15 +328,15 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     }
 
     const std::vector<Light> lights = rsmLights(scene, realOnly);
-    const DgiVolumes volumes = buildVolumes(scene, lights, region, realOnly, *all, kept, timer);
+    const DgiVolumes volumes = buildVolumes(scene, lights, region, realOnly, *all, cache, timer);
 
     // 5. G-buffer. Real surfaces are relit only where they show through (coverage < 1).
-    GBuffer& gbuffer = kept.gbuffer;
+    GBuffer& gbuffer = view.gbuffer;
     renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer);
-    const bool wholeRealSurfaces = kept.cameraSteady || !scene.background || o.render.layers;
+    const bool wholeRealSurfaces = view.steady || !scene.background || o.render.layers;
     const std::vector<SurfacePoint>& realPoints = wholeRealSurfaces
-                                                      ? hideCoveredSurfaces(realSurfaces(), gbuffer, kept)
-                                                      : renderRelitSurfaces(camera, realOnly, gbuffer, kept);
+                                                      ? hideCoveredSurfaces(realSurfaces(), gbuffer, view)
+                                                      : renderRelitSurfaces(camera, realOnly, gbuffer, view);
     timer.lap("gbuffer");
 
     // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both
@@ -510,49 +347,43 @@ RenderOutput renderFrame(const Scene& scene, StaticWork& kept, const StageCallba
     // The pixels the objects' G-buffer was rendered over hold every virtual point; the real points differ
     // from the kept real surfaces only there, where the objects cover them.
     const PixelRect& objectPixels = gbuffer.written;
-    if (kept.cameraSteady)
-        for (InterpolationPlan& plan : kept.relitPlans) plan.surfaces = realSurfaces();
+    if (view.steady)
+        for (InterpolationPlan& plan : view.relitPlans) plan.surfaces = realSurfaces();
     const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals),
                                      objectSphereRadius(scene.virtuals)};
     // Emitting surfaces light the scene through shadow rays (with options.shadow.method "rays").
     const AreaLights emitters = o.shadow.method == "rays" ? AreaLights(scene, SceneContent::RealAndVirtual)
                                                           : AreaLights(Scene{}, SceneContent::RealOnly);
     // The environment map lights the scene through shadow rays too (with options.shadow.method "rays").
-    if (environmentByRays(scene) && !kept.environmentSampler)
-        kept.environmentSampler = std::make_unique<EnvironmentSampler>(*scene.environment);
-    const EnvironmentSampler* environment =
-        environmentByRays(scene) ? kept.environmentSampler.get() : nullptr;
+    std::unique_ptr<EnvironmentSampler>& sampler = cache.environment.work.sampler;
+    if (environmentByRays(scene) && !sampler) sampler = std::make_unique<EnvironmentSampler>(*scene.environment);
+    const EnvironmentSampler* environment = environmentByRays(scene) ? sampler.get() : nullptr;
     const std::vector<Light> direct = directLights(scene);
     const ConeJob jobs[] = {
-        {gbuffer.object,
-         volumes.fullLight,
-         {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Object},
-         o.render.indirect,
-         ShadowMode::Shaded,
-         objectPixels,
-         nullptr,
-         nullptr,
-         {},
-         shadowRays,
-         nullptr,
-         nullptr,
-         &emitters,
-         environment,
-         &gbuffer.objectSamples},
-        {realPoints,
-         volumes.deltaLight,
-         {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
-         o.render.indirect && o.render.relightIndirect,
-         relightMode,
-         {0, 0, camera.width, camera.height},
-         &kept.relitShadows,
-         kept.cameraSteady ? &kept.relitPlans : nullptr,
-         objectPixels,
-         shadowRays,
-         o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
-         volumes.objectLight,
-         &emitters,
-         environment}};
+        {.points = gbuffer.object,
+         .light = volumes.fullLight,
+         .visibility = {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Object},
+         .indirect = o.render.indirect,
+         .mode = ShadowMode::Shaded,
+         .bounds = objectPixels,
+         .rays = shadowRays,
+         .emitters = &emitters,
+         .environment = environment,
+         .pixelSamples = &gbuffer.objectSamples},
+        {.points = realPoints,
+         .light = volumes.deltaLight,
+         .visibility = {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
+         .indirect = o.render.indirect && o.render.relightIndirect,
+         .mode = relightMode,
+         .bounds = {0, 0, camera.width, camera.height},
+         .sceneShadows = &cache.relitShadows.work.occlusion,
+         .plans = view.steady ? &view.relitPlans : nullptr,
+         .changed = objectPixels,
+         .rays = shadowRays,
+         .fullLight = o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
+         .objectLight = volumes.objectLight,
+         .emitters = &emitters,
+         .environment = environment}};
     std::vector<ConeResults> cones = traceCones(jobs, scene, o, direct, timer);
     ConeResults& object = cones[0];
     ConeResults& real = cones[1];
@@ -648,13 +479,12 @@ std::vector<ImageLayer> compositingLayers(const RenderOutput& output) {
 
 RenderOutput render(const Scene& scene, const StageCallback& onStage) {
     checkFrame(scene);
-    StaticWork fresh;
+    FrameCache fresh;
     return renderFrame(scene, fresh, onStage);
 }
 
 struct FrameRenderer::State {
-    StaticWork kept;
-    KeptWork lastKept;
+    FrameCache cache;
     TemporalReuse temporal;
 };
 
@@ -662,7 +492,7 @@ FrameRenderer::FrameRenderer() : state_(std::make_unique<State>()) {}
 FrameRenderer::~FrameRenderer() = default;
 
 void FrameRenderer::clear() {
-    state_->kept = StaticWork{};
+    state_->cache.clear();
     state_->temporal.clear();
 }
 
@@ -671,28 +501,15 @@ void FrameRenderer::clearHistory() {
 }
 
 FrameRenderer::KeptWork FrameRenderer::lastFrameKept() const {
-    return state_->lastKept;
+    return state_->cache.kept();
 }
 
 RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onStage) {
     checkFrame(scene);
-    StaticWork& kept = state_->kept;
-    const uint64_t world = worldSignature(scene);
-    if (world != kept.signature) {
-        kept = StaticWork{};
-        kept.signature = world;
-        state_->temporal.clear();  // frames of another scene, lights or options
-    }
-    const uint64_t camera = cameraSignature(scene.camera);
-    state_->lastKept.camera = camera == kept.cameraSignature;
-    kept.cameraSteady = state_->lastKept.camera;
-    if (!state_->lastKept.camera) {
-        forgetCameraWork(kept);
-        kept.cameraSignature = camera;
-    }
-    keepWorldWork(scene, viewpointOf(scene), kept);
-    state_->lastKept.world = kept.sceneRsms.has_value();
-    return renderFrame(scene, kept, onStage, &state_->temporal);
+    FrameCache& cache = state_->cache;
+    cache.update(scene);
+    if (cache.newRealScene()) state_->temporal.clear();  // frames of another scene, lights or options
+    return renderFrame(scene, cache, onStage, &state_->temporal);
 }
 
 }  // namespace deltagi

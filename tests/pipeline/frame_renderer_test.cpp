@@ -140,6 +140,7 @@ TEST(FrameRenderer, FramesOfAMovingCameraAreExactlyRendersFromScratchAndKeepTheW
     FrameRenderer frames;
     expectSameImages(frames.render(s), render(s));
     EXPECT_FALSE(frames.lastFrameKept().world);
+    EXPECT_FALSE(frames.lastFrameKept().light);
     for (int f = 1; f <= 3; ++f) {
         SCOPED_TRACE(testing::Message() << "frame " << f);
         const float angle = 0.05f * static_cast<float>(f);  // round the ball, above the floor and the box
@@ -148,6 +149,7 @@ TEST(FrameRenderer, FramesOfAMovingCameraAreExactlyRendersFromScratchAndKeepTheW
         moveVirtuals(s, {0.01f, 0.0f, 0.0f});
         expectSameImages(frames.render(s), render(s));
         EXPECT_TRUE(frames.lastFrameKept().world);
+        EXPECT_TRUE(frames.lastFrameKept().light);
         EXPECT_FALSE(frames.lastFrameKept().camera);
     }
     moveVirtuals(s, {0.01f, 0.0f, 0.0f});  // the camera still
@@ -186,10 +188,48 @@ TEST(FrameRenderer, ACameraThatCrossesARealSurfacesPlaneRedoesTheWorldSpaceWork)
     expectSameImages(frames.render(s), render(s));
     s.camera = test::lookAtCamera({-0.6f, 1.6f, 1.6f}, {0.0f, 0.3f, 0.0f}, 64, 48, 60.0f);
     expectSameImages(frames.render(s), render(s));
-    EXPECT_FALSE(frames.lastFrameKept().world);
+    EXPECT_TRUE(frames.lastFrameKept().world);  // the geometry does not depend on the side
+    EXPECT_FALSE(frames.lastFrameKept().light);
     s.camera = test::lookAtCamera({-0.65f, 1.6f, 1.6f}, {0.0f, 0.3f, 0.0f}, 64, 48, 60.0f);
     expectSameImages(frames.render(s), render(s));
     EXPECT_TRUE(frames.lastFrameKept().world);
+    EXPECT_TRUE(frames.lastFrameKept().light);
+}
+
+// The real light changes every frame, as under a light camera: the geometry and the camera's view are kept,
+// the light's work redone, and every frame is render()'s.
+TEST(FrameRenderer, FramesOfAMovingLightKeepTheGeometryAndTheViewAndAreExactlyRendersFromScratch) {
+    Scene s = ballOverFloor();
+    FrameRenderer frames;
+    expectSameImages(frames.render(s), render(s));
+    for (int f = 1; f <= 3; ++f) {
+        SCOPED_TRACE(testing::Message() << "frame " << f);
+        s.lights[0].position += glm::vec3(0.1f, -0.05f, 0.05f);
+        s.lights[0].intensity *= 1.1f;
+        if (f == 2) moveVirtuals(s, {0.02f, 0.0f, 0.0f});
+        expectSameImages(frames.render(s), render(s));
+        EXPECT_TRUE(frames.lastFrameKept().world);
+        EXPECT_FALSE(frames.lastFrameKept().light);
+        EXPECT_TRUE(frames.lastFrameKept().camera);
+    }
+    moveVirtuals(s, {0.01f, 0.0f, 0.0f});  // the light still: all kept
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_TRUE(frames.lastFrameKept().light);
+    // Light, camera and objects at once, over a photo, as in a live session.
+    s.background = Image(s.camera.width, s.camera.height, 3, 0.3f);
+    expectSameImages(frames.render(s), render(s));
+    for (int f = 1; f <= 2; ++f) {
+        SCOPED_TRACE(testing::Message() << "live frame " << f);
+        s.lights[0].position += glm::vec3(-0.05f, 0.0f, 0.1f);
+        const float angle = 0.04f * static_cast<float>(f);
+        s.camera = test::lookAtCamera({1.6f * std::sin(angle), 1.6f, 1.6f * std::cos(angle)},
+                                      {0.1f, 0.3f, 0.0f}, 64, 48, 60.0f);
+        moveVirtuals(s, {0.0f, 0.0f, 0.02f});
+        expectSameImages(frames.render(s), render(s));
+        EXPECT_TRUE(frames.lastFrameKept().world);
+        EXPECT_FALSE(frames.lastFrameKept().light);
+        EXPECT_FALSE(frames.lastFrameKept().camera);
+    }
 }
 
 TEST(Benchmark, ReportsEveryRowAndPutsTheObjectsBack) {

@@ -1,0 +1,180 @@
+#include "pipeline/frame_cache.h"
+
+#include <algorithm>
+
+#include "pipeline/bounce_light.h"
+
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
+namespace deltagi {
+
+namespace {
+
+// XXH3 (xxHash, Debian's libxxhash-dev, inlined) over bytes: the world's key reads every byte of the real
+// meshes each frame, and a byte-wise FNV-1a took about 4 cycles a byte (40 ms a frame for a reconstruction
+// of a million triangles).
+class Hasher {
+  public:
+    Hasher() { XXH3_64bits_reset(&state_); }
+    Hasher(const Hasher&) = delete;
+    Hasher& operator=(const Hasher&) = delete;
+    void bytes(const void* data, size_t size) { XXH3_64bits_update(&state_, data, size); }
+    // One value's bytes: for types without padding.
+    template <class T>
+    void value(const T& v) {
+        bytes(&v, sizeof(v));
+    }
+    template <class T>
+    void values(const std::vector<T>& v) {
+        bytes(v.data(), v.size() * sizeof(T));
+    }
+    uint64_t digest() const { return XXH3_64bits_digest(&state_); }
+
+  private:
+    XXH3_state_t state_;
+};
+
+template <class... T>
+uint64_t keyOf(const T&... values) {
+    Hasher h;
+    (h.value(values), ...);
+    return h.digest();
+}
+
+// The real scene's geometry and materials. The scene's and its real meshes' addresses are part of it: the
+// kept BVH and surfaces point into them.
+uint64_t realMeshesKey(const Scene& scene) {
+    Hasher h;
+    h.value(&scene);
+    h.value(scene.real.data());
+    h.value(scene.real.size());
+    for (const TriangleMesh& m : scene.real) {
+        h.value(m.positions.data());
+        h.values(m.positions);
+        h.values(m.normals);
+        h.values(m.triangles);
+        h.values(m.uvs);
+        h.values(m.uvs1);
+        h.values(m.tangents);
+        h.values(m.colors);
+        visitMaterialFields(m.material, [&](const auto& v) { h.value(v); });
+    }
+    // Whether there is a photo: without one the background is the real scene rendered alone.
+    h.value(scene.background.has_value());
+    return h.digest();
+}
+
+uint64_t environmentKey(const Scene& scene) {
+    if (!scene.environment) return 0;
+    return keyOf(scene.environment->radiance.data().data(), scene.environment->worldFromEnvironment);
+}
+
+// The real light: the lights and the environment map.
+uint64_t lightsKey(const Scene& scene) {
+    Hasher h;
+    for (const Light& l : scene.lights) {  // field by field: Light has padding after its bools
+        h.value(l.type);
+        h.value(l.color);
+        h.value(l.intensity);
+        h.value(l.position);
+        h.value(l.direction);
+        h.value(l.innerAngleDeg);
+        h.value(l.outerAngleDeg);
+        h.value(l.radius);
+        h.value(l.fromEnvironment);
+        h.value(l.angularRadius);
+        h.value(l.lambertian);
+    }
+    h.value(environmentKey(scene));
+    return h.digest();
+}
+
+uint64_t regionKey(const VolumeRegion& r) {
+    return keyOf(r.origin, r.size, r.resolution);
+}
+
+}  // namespace
+
+void ViewWork::forget() {
+    realSurfacesMade = false;
+    for (InterpolationPlan& plan : relitPlans) {
+        plan.stride = 0;
+        plan.weights.clear();
+    }
+    gbuffer.object.clear();  // renderObjectSurfaces starts afresh
+    gbuffer.coverage.clear();
+    relitSurfaces.clear();
+    hidden.clear();
+}
+
+glm::vec3 viewpointOf(const Scene& scene) {
+    return scene.options.volume.viewpoint.value_or(scene.camera.position());
+}
+
+template <class Work>
+bool FrameCache::renew(CachePart<Work>& part, uint64_t key) {
+    if (part.version != 0 && part.key == key) return true;
+    if constexpr (requires { part.work.forget(); })
+        part.work.forget();
+    else
+        part.work = Work{};
+    part.key = key;
+    part.version = ++nextVersion_;
+    return false;
+}
+
+void FrameCache::emptyLight(bool keepRsms) {
+    LightWork& l = light.work;
+    if (!keepRsms) {
+        l.rsms.reset();
+        l.rsmSides.clear();
+    }
+    l.injected.reset();
+    l.bounce.reset();
+    l.bounceSides.clear();
+    light.version = ++nextVersion_;
+}
+
+void FrameCache::keepLightFor(const Scene& scene, glm::vec3 viewpoint) {
+    if (viewpoint_ == viewpoint) return;
+    viewpoint_ = viewpoint;
+    LightWork& l = light.work;
+    if (l.rsms) {
+        const std::vector<int8_t> sides = rsmViewSides(scene.real, viewpoint);
+        // A surface whose plane holds the viewpoint (side 0) has no side to keep.
+        if (sides != l.rsmSides || std::find(sides.begin(), sides.end(), 0) != sides.end()) {
+            emptyLight(false);
+            return;
+        }
+    }
+    if (l.bounce && bounceViewSides(*voxels.work.visibility, viewpoint) != l.bounceSides) emptyLight(true);
+}
+
+void FrameCache::update(const Scene& scene) {
+    if (!hasOptions_ || !(scene.options == options_)) {
+        options_ = scene.options;
+        hasOptions_ = true;
+        optionsVersion_ = ++nextVersion_;
+    }
+    const uint64_t lights = lightsKey(scene);
+    const uint64_t camera = keyOf(scene.camera);
+    kept_.world = renew(world, keyOf(realMeshesKey(scene), optionsVersion_));
+    const bool regionKept = renew(voxels, keyOf(world.version, regionKey(volumeRegion(scene))));
+    kept_.world = kept_.world && regionKept;
+    if (!renew(light, keyOf(voxels.version, lights))) viewpoint_.reset();
+    keepLightFor(scene, viewpointOf(scene));
+    kept_.light = light.work.rsms.has_value();
+    kept_.camera = renew(view, keyOf(world.version, camera));
+    view.work.steady = kept_.camera;
+    renew(litView, keyOf(world.version, lights, view.version));
+    renew(relitShadows, keyOf(voxels.version, lights, view.version));
+    renew(objectRays, keyOf(world.version));
+    renew(objectVolumes, keyOf(voxels.version, light.version));
+    renew(environment, environmentKey(scene));
+    const uint64_t realScene = keyOf(world.version, lights);
+    newRealScene_ = realScene != realSceneKey_;
+    realSceneKey_ = realScene;
+}
+
+}  // namespace deltagi
