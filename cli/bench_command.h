@@ -7,7 +7,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "deltagi/benchmark.h"
+#include "evaluation/benchmark.h"
 
 namespace deltagi::cli {
 

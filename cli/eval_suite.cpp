@@ -10,7 +10,7 @@
 #include <tbb/global_control.h>
 
 #include "deltagi/error.h"
-#include "deltagi/quality_suite.h"
+#include "evaluation/quality_suite.h"
 
 namespace deltagi::cli {
 

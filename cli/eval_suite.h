@@ -5,7 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "deltagi/quality_suite.h"
+#include "evaluation/quality_suite.h"
 
 namespace deltagi::cli {
 

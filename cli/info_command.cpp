@@ -4,9 +4,9 @@
 #include <nlohmann/json.hpp>
 
 #include "deltagi/renderer.h"
-#include "deltagi/scene_info.h"
 #include "deltagi/scene_io.h"
 #include "messages.h"
+#include "scene/scene_info.h"
 
 namespace deltagi::cli {
 

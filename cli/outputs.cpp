@@ -10,8 +10,9 @@
 
 #include <fmt/format.h>
 
-#include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
+#include "io/atomic_file.h"
+#include "io/image_output.h"
 
 namespace fs = std::filesystem;
 

@@ -11,9 +11,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "deltagi/atomic_file.h"
 #include "deltagi/image.h"
 #include "deltagi/scene.h"
+#include "io/atomic_file.h"
 
 namespace deltagi::cli {
 

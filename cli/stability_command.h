@@ -8,7 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "deltagi/temporal.h"
+#include "evaluation/temporal.h"
 
 namespace deltagi::cli {
 

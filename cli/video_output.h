@@ -8,8 +8,8 @@
 #include <span>
 #include <string>
 
-#include "deltagi/atomic_file.h"
 #include "deltagi/image.h"
+#include "io/atomic_file.h"
 
 namespace deltagi::cli {
 

@@ -22,6 +22,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_files.h"
+#include "test_paths.h"
 #include "test_scene_json.h"
 
 namespace deltagi::test {
@@ -69,7 +70,7 @@ class CliTest : public ::testing::Test {
     // before the command ("NAME=VALUE ").
     CliResult run(const std::string& args, const std::string& environment = "") const {
         const fs::path out = dir_ / "stdout.txt", err = dir_ / "stderr.txt";
-        const std::string command = environment + quote(DELTAGI_CLI) + " " + args + " >" +
+        const std::string command = environment + quote(test::kCli) + " " + args + " >" +
                                     quote(out.string()) + " 2>" + quote(err.string());
         const int status = std::system(command.c_str());
         CliResult result;
@@ -99,7 +100,7 @@ class CliTest : public ::testing::Test {
 
     // `deltagi info` on a shipped example: it loads and covers the box with the region it asks for.
     void expectExampleLoads(const std::string& name) const {
-        const fs::path scene = fs::path(DELTAGI_SOURCE_DIR) / "examples" / (name + ".json");
+        const fs::path scene = fs::path(test::kSourceDir) / "examples" / (name + ".json");
         const CliResult result = run("info --json " + quote(scene.string()));
         ASSERT_EQ(result.exitCode, 0) << name << ": " << result.err;
         const json info = json::parse(result.out);
@@ -129,13 +130,13 @@ inline pid_t startCli(const std::vector<std::string>& args, const fs::path& dir)
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
     posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, (dir / "stderr.txt").c_str(),
                                      O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    std::vector<std::string> all{DELTAGI_CLI};
+    std::vector<std::string> all{test::kCli};
     all.insert(all.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (std::string& arg : all) argv.push_back(arg.data());
     argv.push_back(nullptr);
     pid_t pid = -1;
-    if (posix_spawn(&pid, DELTAGI_CLI, &actions, nullptr, argv.data(), environ) != 0) pid = -1;
+    if (posix_spawn(&pid, test::kCli, &actions, nullptr, argv.data(), environ) != 0) pid = -1;
     posix_spawn_file_actions_destroy(&actions);
     return pid;
 }

@@ -14,6 +14,7 @@
 
 #include "deltagi/image.h"
 #include "test_files.h"
+#include "test_paths.h"
 
 namespace deltagi::test {
 
@@ -75,7 +76,7 @@ class SequenceTest : public ::testing::Test {
     // `deltagi ARGS` (the paths in ARGS as given), its stderr in err.txt; returns the exit status.
     int runCli(const std::string& args, const std::string& environment = "") const {
         const std::string command =
-            environment + " " + std::string(DELTAGI_CLI) + " " + args + " 2>" + (dir_ / "err.txt").string();
+            environment + " " + std::string(test::kCli) + " " + args + " 2>" + (dir_ / "err.txt").string();
         const int status = std::system(command.c_str());
         return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     }

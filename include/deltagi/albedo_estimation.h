@@ -24,8 +24,10 @@
 
 #include <glm/glm.hpp>
 
+#include "deltagi/export.h"
 #include "deltagi/scene.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 enum class AlbedoGranularity {
@@ -91,3 +93,4 @@ AlbedoEstimate estimateAlbedo(const Scene& scene, const AlbedoOptions& options =
 void applyAlbedo(Scene& scene, const AlbedoEstimate& estimate);
 
 }  // namespace deltagi
+DELTAGI_API_END

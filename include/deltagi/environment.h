@@ -16,8 +16,10 @@
 
 #include <glm/glm.hpp>
 
+#include "deltagi/export.h"
 #include "deltagi/image.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 // The environment minus the extracted lights (so that nothing is counted twice), prefiltered for cones of
@@ -46,3 +48,4 @@ struct Scene;
 void setEnvironment(Scene& scene, Environment environment);
 
 }  // namespace deltagi
+DELTAGI_API_END

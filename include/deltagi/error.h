@@ -8,6 +8,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "deltagi/export.h"
+
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 class InputError : public std::runtime_error {
@@ -27,3 +30,4 @@ private:
 };
 
 }  // namespace deltagi
+DELTAGI_API_END

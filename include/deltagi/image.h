@@ -11,6 +11,9 @@
 
 #include <glm/vec3.hpp>
 
+#include "deltagi/export.h"
+
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 class Image {
@@ -75,11 +78,6 @@ void writeImage(const Image& image, const std::filesystem::path& path);
 // encoded with the sRGB transfer function (a 4th channel, alpha, stays linear), rounded.
 std::vector<uint8_t> encodeSrgb8(const Image& image);
 
-// The same into `file`'s temporary, closed but not renamed into place: for callers that commit several
-// outputs together (a failure before then replaces none of them).
-class AtomicFile;
-void writeImage(const Image& image, AtomicFile& file);
-
 // One layer of a multi-layer OpenEXR file: its channels are named `name`.`channel` ("object.A",
 // "depth.Z"), as compositors (Nuke, Blender, Natron) read them; `channels` names the image's channels in
 // order.
@@ -88,10 +86,10 @@ struct ImageLayer {
     const Image* image = nullptr;
     std::vector<std::string> channels;
 };
-// Writes the layers, all of one size, into one 32-bit float EXR (zip compressed) in `file`'s temporary
-// (closed, not renamed: see writeImage). NaN pixels are written as 0; infinities are kept (a depth with no
-// surface). Throws InputError when the file is not .exr, the layers differ in size or the write fails.
-void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file);
+// Writes the layers, all of one size, into one 32-bit float EXR (zip compressed), replaced atomically as by
+// writeImage. NaN pixels are written as 0; infinities are kept (a depth with no surface). Throws InputError
+// when the file is not .exr, the layers differ in size or the write fails.
+void writeLayers(std::span<const ImageLayer> layers, const std::filesystem::path& path);
 // Every layer of an EXR file, in file order: the channels named `layer`.`channel` grouped by `layer` (a
 // channel without a dot makes a layer of its own name), with their channel names. Throws InputError.
 struct NamedImage {
@@ -102,3 +100,4 @@ struct NamedImage {
 std::vector<NamedImage> readLayers(const std::filesystem::path& path);
 
 }  // namespace deltagi
+DELTAGI_API_END

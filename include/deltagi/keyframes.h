@@ -4,8 +4,10 @@
 
 #include <glm/glm.hpp>
 
+#include "deltagi/export.h"
 #include "deltagi/scene.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 // The object's pose at `frame` (a transforms file's frame index; fractions interpolate too):
@@ -25,3 +27,4 @@ void poseObjects(Scene& scene, double frame);
 void fixVolumeRegionOverAnimation(Scene& scene);
 
 }  // namespace deltagi
+DELTAGI_API_END

@@ -6,6 +6,9 @@
 
 #include <glm/glm.hpp>
 
+#include "deltagi/export.h"
+
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 // Axis-aligned bounding box in world space. Empty when min > max.
@@ -34,3 +37,4 @@ struct Bounds3f {
 };
 
 }  // namespace deltagi
+DELTAGI_API_END

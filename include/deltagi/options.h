@@ -8,6 +8,9 @@
 
 #include <glm/vec3.hpp>
 
+#include "deltagi/export.h"
+
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 // options.volume: the region covered by the four volumes (§3.4) and their resolution.
@@ -285,3 +288,4 @@ struct Options {
 };
 
 }  // namespace deltagi
+DELTAGI_API_END

@@ -8,9 +8,11 @@
 #include <functional>
 #include <vector>
 
+#include "deltagi/export.h"
 #include "deltagi/image.h"
 #include "deltagi/scene.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 struct ReferenceOptions {
@@ -82,3 +84,4 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
                                 const ReferenceSums* from = nullptr);
 
 }  // namespace deltagi
+DELTAGI_API_END

@@ -6,10 +6,12 @@
 #include <string>
 #include <vector>
 
+#include "deltagi/export.h"
 #include "deltagi/image.h"
 #include "deltagi/math.h"
 #include "deltagi/scene.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 struct StageTiming {
@@ -117,3 +119,4 @@ struct VolumeRegion {
 VolumeRegion volumeRegion(const Scene& scene);
 
 }  // namespace deltagi
+DELTAGI_API_END

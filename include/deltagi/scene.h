@@ -15,11 +15,13 @@
 #include <glm/vec2.hpp>
 
 #include "deltagi/environment.h"
+#include "deltagi/export.h"
 #include "deltagi/image.h"
 #include "deltagi/math.h"
 #include "deltagi/options.h"
 #include "deltagi/texture.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 // Two reflection models; both are two-sided, and a material may also emit: a diffuse (Lambertian) area light
@@ -236,3 +238,4 @@ struct Scene {
 };
 
 }  // namespace deltagi
+DELTAGI_API_END

@@ -8,8 +8,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "deltagi/export.h"
 #include "deltagi/scene.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 // Applies one "--set KEY=VALUE" override to a parsed scene document. KEY is a dotted path; numeric
@@ -67,3 +69,4 @@ std::optional<double> transformsFrameRate(const std::filesystem::path& file);
 Image readFramePhoto(const SequenceFrame& frame, const std::filesystem::path& transformsFile);
 
 }  // namespace deltagi
+DELTAGI_API_END

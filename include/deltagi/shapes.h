@@ -9,8 +9,10 @@
 
 #include <glm/glm.hpp>
 
+#include "deltagi/export.h"
 #include "deltagi/scene.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 // An axis-aligned box of edge lengths `size`, centred at the origin: 24 vertices (flat face normals), 12
@@ -34,3 +36,4 @@ TriangleMesh makeTriangles(std::span<const glm::vec3> positions, std::span<const
                            bool smooth);
 
 }  // namespace deltagi
+DELTAGI_API_END

@@ -17,6 +17,9 @@
 
 #include <glm/glm.hpp>
 
+#include "deltagi/export.h"
+
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 enum class TextureWrap { Repeat, ClampToEdge, MirroredRepeat };
@@ -126,3 +129,4 @@ struct TextureSlot {
 };
 
 }  // namespace deltagi
+DELTAGI_API_END

@@ -5,8 +5,10 @@
 
 #include <glm/glm.hpp>
 
+#include "deltagi/export.h"
 #include "deltagi/scene.h"
 
+DELTAGI_API_BEGIN
 namespace deltagi {
 
 // Throws InputError("transform", ...) unless `worldFromObject` is finite, affine (last row [0, 0, 0, 1]) and
@@ -38,3 +40,4 @@ void setTransform(TriangleMesh& mesh, const glm::mat4& worldFromObject);
 TriangleMesh placedMesh(const TriangleMesh& mesh, const glm::mat4& worldFromObject);
 
 }  // namespace deltagi
+DELTAGI_API_END

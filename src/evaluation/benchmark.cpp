@@ -1,4 +1,4 @@
-#include "deltagi/benchmark.h"
+#include "evaluation/benchmark.h"
 
 #include <algorithm>
 #include <cmath>

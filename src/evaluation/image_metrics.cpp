@@ -8,7 +8,7 @@
 #include <fmt/core.h>
 
 #include "deltagi/error.h"
-#include "deltagi/evaluation.h"
+#include "evaluation/evaluation.h"
 
 namespace deltagi {
 

@@ -13,8 +13,8 @@
 #include <fmt/format.h>
 
 #include "deltagi/error.h"
-#include "deltagi/quality_suite.h"
 #include "deltagi/scene_io.h"
+#include "evaluation/quality_suite.h"
 
 namespace deltagi {
 

@@ -1,4 +1,4 @@
-#include "deltagi/temporal.h"
+#include "evaluation/temporal.h"
 
 #include <array>
 #include <cmath>

@@ -1,6 +1,6 @@
 // Atomic output files: write a temporary beside the destination, fsync, rename
 // (include/deltagi/atomic_file.h).
-#include "deltagi/atomic_file.h"
+#include "io/atomic_file.h"
 
 #include <fcntl.h>
 #include <signal.h>

@@ -11,10 +11,11 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
-#include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/image.h"
+#include "io/atomic_file.h"
 #include "io/image_encode.h"
+#include "io/image_output.h"
 #include "io/quiet_stderr.h"
 
 namespace deltagi {
@@ -175,14 +176,19 @@ void checkImagePath(const Image& image, const std::filesystem::path& path) {
     if (image.empty()) throw InputError(path.string(), "cannot write image: the image is empty");
 }
 
-}  // namespace
-
-void writeImage(const Image& image, const std::filesystem::path& path) {
-    checkImagePath(image, path);
+// The folder of an output named by its path must exist: its temporary is made there (AtomicFile).
+void checkOutputFolder(const std::filesystem::path& path) {
     std::filesystem::path folder = path.parent_path();
     if (!folder.empty() && !std::filesystem::is_directory(folder))
         throw InputError(path.string(),
                          fmt::format("cannot write image: folder '{}' does not exist", folder.string()));
+}
+
+}  // namespace
+
+void writeImage(const Image& image, const std::filesystem::path& path) {
+    checkImagePath(image, path);
+    checkOutputFolder(path);
     AtomicFile file(path);
     writeImage(image, file);
     file.commit();
@@ -226,6 +232,13 @@ void writeImage(const Image& image, AtomicFile& file) {
     ok = output->close() && ok;
     if (!ok) throw InputError(path.string(), "cannot write image: " + output->geterror());
     file.close();
+}
+
+void writeLayers(std::span<const ImageLayer> layers, const std::filesystem::path& path) {
+    checkOutputFolder(path);
+    AtomicFile file(path);
+    writeLayers(layers, file);
+    file.commit();
 }
 
 void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file) {

@@ -1,6 +1,6 @@
 // What `deltagi info` reports: triangle and light counts, bounds, and the size of the four volumes (§3.2,
 // §3.4).
-#include "deltagi/scene_info.h"
+#include "scene/scene_info.h"
 
 #include <algorithm>
 #include <cmath>

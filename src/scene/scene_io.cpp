@@ -14,13 +14,13 @@
 #include "deltagi/error.h"
 #include "deltagi/keyframes.h"
 #include "deltagi/renderer.h"
-#include "deltagi/scene_info.h"
 #include "deltagi/transforms.h"
 #include "scene/environment_io.h"
 #include "scene/json_reader.h"
 #include "scene/keyframes_io.h"
 #include "scene/material_io.h"
 #include "scene/mesh_io.h"
+#include "scene/scene_info.h"
 #include "scene/shapes.h"
 
 namespace deltagi {

@@ -19,9 +19,10 @@
 #include <nlohmann/json.hpp>
 
 #include "deltagi/image.h"
-#include "deltagi/scene_info.h"
+#include "scene/scene_info.h"
 #include "test_cli.h"
 #include "test_files.h"
+#include "test_paths.h"
 
 namespace fs = std::filesystem;
 using deltagi::test::CliResult;
@@ -200,8 +201,8 @@ TEST_F(CliTest, CornellExamplesLoad) {
 }
 
 TEST_F(CliTest, BuddhaExampleLoads) {
-    if (!fs::exists(fs::path(DELTAGI_SHARED_DATA_DIR) / "meshes" / "happy-buddha.obj"))
-        GTEST_SKIP() << "needs the shared data set (" << DELTAGI_SHARED_DATA_DIR << ")";
+    if (!fs::exists(fs::path(deltagi::test::kSharedDataDir) / "meshes" / "happy-buddha.obj"))
+        GTEST_SKIP() << "needs the shared data set (" << deltagi::test::kSharedDataDir << ")";
     expectExampleLoads("cornell-buddha");
     expectExampleLoads("bench-cornell-buddha");
 }
@@ -391,8 +392,8 @@ TEST_F(CliTest, ReferenceAndEvalWriteTheirOutputs) {
 
 // The field example names the shared file it misses; with the shared data it loads 16 lights from the probe.
 TEST_F(CliTest, FieldBunnyExampleLoadsOrNamesTheMissingSharedFile) {
-    const fs::path scene = fs::path(DELTAGI_SOURCE_DIR) / "examples" / "field-bunny.json";
-    const bool shared = fs::exists(fs::path(DELTAGI_SHARED_DATA_DIR) / "photos" / "spruit-sunrise-field");
+    const fs::path scene = fs::path(deltagi::test::kSourceDir) / "examples" / "field-bunny.json";
+    const bool shared = fs::exists(fs::path(deltagi::test::kSharedDataDir) / "photos" / "spruit-sunrise-field");
     const CliResult missing =
         run("info " + quote(scene.string()) + " --set environment.file=../../shared/data/photos/missing.hdr");
     EXPECT_EQ(missing.exitCode, 1);
@@ -405,7 +406,7 @@ TEST_F(CliTest, FieldBunnyExampleLoadsOrNamesTheMissingSharedFile) {
                                           "shared data"};
     for (const std::string& part : parts)
         EXPECT_NE(missing.err.find(part), std::string::npos) << part << " not in: " << missing.err;
-    if (!shared) GTEST_SKIP() << "needs the shared data set (" << DELTAGI_SHARED_DATA_DIR << ")";
+    if (!shared) GTEST_SKIP() << "needs the shared data set (" << deltagi::test::kSharedDataDir << ")";
     const CliResult result = run("info --json " + quote(scene.string()));
     ASSERT_EQ(result.exitCode, 0) << result.err;
     EXPECT_EQ(json::parse(result.out).at("lights"), 16);
@@ -534,7 +535,7 @@ TEST_F(CliTest, ConcurrentRendersLeaveOneWholeImage) {
     ASSERT_EQ(run("render " + scene + " -q -o " + quote((dir_ / "blue.exr").string())).exitCode, 0);
     ASSERT_EQ(run("render " + scene + red + " -o " + quote((dir_ / "red.exr").string())).exitCode, 0);
     const std::string out = quote((dir_ / "out.exr").string());
-    const std::string cli = quote(DELTAGI_CLI);
+    const std::string cli = quote(deltagi::test::kCli);
     const std::string command = "(" + cli + " render " + scene + " -q -o " + out + "; echo $? >" +
                                 quote((dir_ / "rc1").string()) + ") & (" + cli + " render " + scene + red +
                                 " -o " + out + "; echo $? >" + quote((dir_ / "rc2").string()) + ") & wait";

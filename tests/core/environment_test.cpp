@@ -15,6 +15,7 @@
 #include "deltagi/scene_io.h"
 #include "pipeline/light_extraction.h"
 #include "pipeline/sky_light.h"
+#include "test_paths.h"
 #include "test_scenes.h"
 
 namespace deltagi {
@@ -235,7 +236,7 @@ TEST(LightExtraction, AMirrorBallImagePutsTheSunWhereItIs) {
 // (shared/data/photos/spruit-sunrise-field) light a scene alike: the same total and the same irradiance on
 // planes of every orientation, within the resampling of the two re-projections.
 TEST(LightExtraction, TheSharedProbeAndItsFisheyeGiveTheSameLight) {
-    const fs::path folder = fs::path(DELTAGI_SHARED_DATA_DIR) / "photos" / "spruit-sunrise-field";
+    const fs::path folder = fs::path(test::kSharedDataDir) / "photos" / "spruit-sunrise-field";
     if (!fs::exists(folder / "probe_equirect_1k.hdr") ||
         !fs::exists(folder / "sky_fisheye_equidistant_512.hdr"))
         GTEST_SKIP() << "needs " << folder.string();

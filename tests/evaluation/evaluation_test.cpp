@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "deltagi/scene_io.h"
+#include "test_paths.h"
 
 namespace deltagi {
 namespace {
@@ -56,7 +57,7 @@ TEST(DeltaFigures, KnownImages) {
 // 64^3 volumes, 32 reference samples; each figure is fixed for a given build (both renders are
 // deterministic).
 TEST(Evaluation, CornellBoxRegressionBound) {
-    const Scene scene = loadScene(std::filesystem::path(DELTAGI_SOURCE_DIR) / "examples" / "cornell-box.json",
+    const Scene scene = loadScene(std::filesystem::path(test::kSourceDir) / "examples" / "cornell-box.json",
                                   {"camera.width=96", "camera.height=72", "options.volume.resolution=64",
                                    "options.rsm.resolution=256"});
     ReferenceOptions options;

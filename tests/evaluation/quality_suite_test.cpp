@@ -22,6 +22,7 @@
 #include "deltagi/scene_io.h"
 #include "test_cli.h"
 #include "test_files.h"
+#include "test_paths.h"
 #include "test_scene_json.h"
 
 namespace deltagi {
@@ -465,7 +466,7 @@ class EvalSuiteCliTest : public QualitySuiteTest {
   protected:
     CliResult run(const std::string& args) const {
         const fs::path err = dir_ / "stderr.txt";
-        const std::string command = quote(DELTAGI_CLI) + " " + args + " >" +
+        const std::string command = quote(test::kCli) + " " + args + " >" +
                                     quote((dir_ / "stdout.txt").string()) + " 2>" + quote(err.string());
         const int status = std::system(command.c_str());
         return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, readText(err)};

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "deltagi/error.h"
-#include "deltagi/temporal.h"
+#include "evaluation/temporal.h"
 #include "test_scenes.h"
 
 namespace deltagi {

@@ -16,9 +16,10 @@
 
 #include "test_files.h"
 
-#include "deltagi/atomic_file.h"
 #include "deltagi/error.h"
 #include "deltagi/image.h"
+#include "io/atomic_file.h"
+#include "io/image_output.h"
 
 namespace deltagi {
 namespace {

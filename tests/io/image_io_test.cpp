@@ -12,7 +12,9 @@
 
 #include "deltagi/error.h"
 #include "deltagi/image.h"
+#include "io/image_output.h"
 #include "test_errors.h"
+#include "test_paths.h"
 
 namespace deltagi {
 namespace {
@@ -181,7 +183,7 @@ TEST(ImageTest, RgbOfGreyAndColourImages) {
 }
 
 TEST(ImageIoSharedDataTest, VeniceSunsetHdrMean) {
-    fs::path file = fs::path(DELTAGI_SHARED_DATA_DIR) / "envmaps" / "venice_sunset_1k.hdr";
+    fs::path file = fs::path(test::kSharedDataDir) / "envmaps" / "venice_sunset_1k.hdr";
     if (!fs::exists(file)) GTEST_SKIP() << "shared data set not found: " << file << " (see ../shared/data)";
     Image image = readImage(file);
     ASSERT_EQ(image.width(), 1024);

@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "deltagi/benchmark.h"
 #include "deltagi/renderer.h"
+#include "evaluation/benchmark.h"
 #include "test_scenes.h"
 
 namespace deltagi {

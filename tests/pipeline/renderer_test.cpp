@@ -9,7 +9,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include "deltagi/atomic_file.h"
+#include "io/atomic_file.h"
+#include "io/image_output.h"
 #include "scene/shapes.h"
 #include "test_scenes.h"
 

@@ -8,8 +8,8 @@
 
 #include "core/ray_scene.h"
 #include "deltagi/renderer.h"
-#include "deltagi/temporal.h"
 #include "deltagi/transforms.h"
+#include "evaluation/temporal.h"
 #include "pipeline/gbuffer.h"
 #include "pipeline/temporal_reuse.h"
 #include "test_scenes.h"

@@ -19,6 +19,7 @@
 #include "deltagi/scene_io.h"
 #include "scene/shapes.h"
 #include "test_files.h"
+#include "test_paths.h"
 #include "test_scene_json.h"
 #include "test_scenes.h"
 
@@ -27,7 +28,7 @@ namespace {
 
 // The Cornell box example without its virtual objects, 96 x 72, its path-traced image as the photo.
 Scene cornellBoxWithPhoto(int photoSamples) {
-    Scene scene = loadScene(std::filesystem::path(DELTAGI_SOURCE_DIR) / "examples" / "cornell-box.json",
+    Scene scene = loadScene(std::filesystem::path(test::kSourceDir) / "examples" / "cornell-box.json",
                             {"camera.width=96", "camera.height=72"});
     scene.virtuals.clear();
     scene.virtualEntries.clear();
@@ -243,7 +244,7 @@ TEST_F(AlbedoFiles, CommandWritesTheScene) {
     test::writeText(dir_ / "tiny.json", document_.dump(1));
     const std::filesystem::path out = dir_ / "out" / "estimated.json";
     std::filesystem::create_directories(out.parent_path());
-    const std::string command = std::string(DELTAGI_CLI) + " estimate-albedo " +
+    const std::string command = std::string(test::kCli) + " estimate-albedo " +
                                 (dir_ / "tiny.json").string() + " -o " + out.string() + " --spp 8 >" +
                                 (dir_ / "stdout.txt").string() + " 2>&1";
     ASSERT_EQ(std::system(command.c_str()), 0) << test::readText(dir_ / "stdout.txt");
@@ -252,7 +253,7 @@ TEST_F(AlbedoFiles, CommandWritesTheScene) {
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(perMesh.real[0].material.albedo[c], 0.7f, 0.02f);
 
     const std::string perVertexCommand =
-        std::string(DELTAGI_CLI) + " estimate-albedo " + (dir_ / "tiny.json").string() + " -o " +
+        std::string(test::kCli) + " estimate-albedo " + (dir_ / "tiny.json").string() + " -o " +
         out.string() + " --per vertex --spp 8 -q >" + (dir_ / "stdout.txt").string() + " 2>&1";
     ASSERT_EQ(std::system(perVertexCommand.c_str()), 0) << test::readText(dir_ / "stdout.txt");
     EXPECT_TRUE(std::filesystem::exists(out.parent_path() / "estimated.0-floor.ply"));

@@ -15,6 +15,7 @@
 #include "deltagi/scene_io.h"
 #include "test_errors.h"
 #include "test_files.h"
+#include "test_paths.h"
 #include "test_scene_json.h"
 #include "test_sequence.h"
 
@@ -177,7 +178,7 @@ TEST_F(SequenceTest, RenderingInChunksGivesTheSameFrames) {
     scene["sequence"] = {{"transforms", "transforms.json"}};
     const fs::path sceneFile = write(scene, "scene.json");
     auto run = [&](const std::string& args) {
-        const std::string command = std::string(DELTAGI_CLI) + " render " + sceneFile.string() + " " + args +
+        const std::string command = std::string(test::kCli) + " render " + sceneFile.string() + " " + args +
                                     " -q 2>" + (dir_ / "err.txt").string();
         const int status = std::system(command.c_str());
         return WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -1,0 +1,63 @@
+# Writes OUT, a CTest script with one test per gtest suite of TEST_EXECUTABLE, or per CHUNK tests of a larger
+# suite: `Suite` runs `TEST_EXECUTABLE --gtest_filter=Suite.*`, and `Suite:2` the second CHUNK tests of Suite,
+# in WORKING_DIRECTORY with TIMEOUT seconds. Run after each build of the test binary (tests/CMakeLists.txt).
+execute_process(COMMAND "${TEST_EXECUTABLE}" --gtest_list_tests
+  OUTPUT_VARIABLE listing ERROR_VARIABLE errors RESULT_VARIABLE result TIMEOUT 120)
+if(NOT result EQUAL 0)
+  message(FATAL_ERROR "${TEST_EXECUTABLE} --gtest_list_tests failed (${result}): ${errors}")
+endif()
+
+set(script "")
+function(add_chunk name filter)
+  string(APPEND script
+    "add_test([==[${name}]==] [==[${TEST_EXECUTABLE}]==] [==[--gtest_filter=${filter}]==])\n"
+    "set_tests_properties([==[${name}]==] PROPERTIES TIMEOUT ${TIMEOUT} WORKING_DIRECTORY [==[${WORKING_DIRECTORY}]==])\n")
+  set(script "${script}" PARENT_SCOPE)
+endfunction()
+# Adds the tests of `suite` (its tests in `tests`): the whole suite at once, or in chunks.
+function(add_suite suite tests)
+  list(LENGTH tests count)
+  if(count LESS_EQUAL CHUNK)
+    add_chunk("${suite}" "${suite}.*")
+  else()
+    set(chunk "")
+    set(index 1)
+    foreach(test IN LISTS tests)
+      list(APPEND chunk "${suite}.${test}")
+      list(LENGTH chunk size)
+      if(size EQUAL CHUNK)
+        list(JOIN chunk ":" filter)
+        add_chunk("${suite}:${index}" "${filter}")
+        math(EXPR index "${index} + 1")
+        set(chunk "")
+      endif()
+    endforeach()
+    if(chunk)
+      list(JOIN chunk ":" filter)
+      add_chunk("${suite}:${index}" "${filter}")
+    endif()
+  endif()
+  set(script "${script}" PARENT_SCOPE)
+endfunction()
+
+# Suites are the unindented lines ("Suite.", with "  # TypeParam = ..." after typed ones), their tests the
+# indented lines under them ("  Test", with "  # GetParam() = ..." after parameterized ones).
+string(REPLACE "\n" ";" lines "${listing}")
+set(suite "")
+set(tests "")
+foreach(line IN LISTS lines)
+  if(line MATCHES "^([^ ]+)\\.")
+    if(suite)
+      add_suite("${suite}" "${tests}")
+    endif()
+    set(suite "${CMAKE_MATCH_1}")
+    set(tests "")
+  elseif(line MATCHES "^  ([^ ]+)")
+    list(APPEND tests "${CMAKE_MATCH_1}")
+  endif()
+endforeach()
+if(NOT suite)
+  message(FATAL_ERROR "${TEST_EXECUTABLE} lists no test")
+endif()
+add_suite("${suite}" "${tests}")
+file(WRITE "${OUT}" "${script}")
