@@ -4,11 +4,17 @@
 
 #include <algorithm>
 #include <optional>
-#include <string>
 
 #include <glm/vec3.hpp>
 
 namespace deltagi {
+
+// The options that choose between methods. Their names in the scene file: src/scene/option_table.h.
+enum class ShadowMethod { Rays, Cones };                          // options.shadow.method
+enum class ConeAccumulation { Paper, FrontToBack };               // options.trace.accumulation
+enum class RelightCones { Differential, DeltaVolume };            // options.render.relight_cones
+enum class RelightObjectLight { Cones, Rays };                    // options.render.relight_object_light
+enum class ExtractionMethod { MedianCut, VarianceMinimization };  // options.environment.extraction
 
 // options.volume: the region covered by the four volumes (§3.4) and their resolution.
 struct VolumeOptions {
@@ -106,7 +112,7 @@ struct ShadowConeOptions {
     // the paper's shadow cone through the visibility volumes. Rays give the path tracer's shadows (width,
     // depth, penumbra, the objects' self-shadowing) at any volume size; cones blur every occluder to voxels
     // and are cut off at the volume's faces (docs/ground-truth.md has the figures of both).
-    std::string method = "rays";
+    ShadowMethod method = ShadowMethod::Rays;
     // "ray_samples": shadow rays per point and light with a size (a radius or an angular radius), on a
     // jittered grid (rounded down to a square, 1 to 256). A light without a size takes one ray. The filter
     // averages 5 x 5 traced pixels, so 4 rays already give 100 per filtered pixel.
@@ -151,7 +157,7 @@ struct TraceOptions {
     // "accumulation": "paper" uses the accumulator formulas of §3.1 as printed
     //   light = light*occ + light_local*occ_local*(1-occ); occ = occ + occ_local*(1-occ),
     // "front_to_back" uses the usual emission-absorption compositing light += light_local*occ_local*(1-occ).
-    std::string accumulation = "front_to_back";
+    ConeAccumulation accumulation = ConeAccumulation::FrontToBack;
 
     bool operator==(const TraceOptions&) const = default;
 };
@@ -182,7 +188,7 @@ struct RenderOptions {
     // misses that blocked light. Quality suite (with the objects' own further bounce): delta_rel_error 0.255
     // -> 0.161 (ball and ring), 0.227 -> 0.204 (Buddha), 0.268 -> 0.258 (glossy), 0.297 -> 0.216 (area
     // light), 0.758 -> 0.630 (field photo).
-    std::string relightCones = "differential";
+    RelightCones relightCones = RelightCones::Differential;
     // "relight_object_light": how the objects' own light, and the real light they hide, reach the real
     // surfaces with "differential" relit cones. "cones" (the default): all of it through the cones, where a
     // coarse voxel that holds an object and the floor under it hides the object from afar and spreads it wide
@@ -195,7 +201,7 @@ struct RenderOptions {
     // Not the default for its cost: the benchmark frame's diffuse stage 14 -> 90 ms (76,800 relit points, up
     // to 16 rays each), and its error per millisecond is no better than the cones' at any stride tried
     // (README, departures from the paper).
-    std::string relightObjectLight = "cones";
+    RelightObjectLight relightObjectLight = RelightObjectLight::Cones;
     // "layers": also make the compositing layers of RenderOutput (object, shadow, indirect, depth); `deltagi
     // render --layers` sets it. Off by default: four more images a frame.
     bool layers = false;
@@ -218,7 +224,7 @@ struct EnvironmentOptions {
     int lightCount = 16;
     // "extraction": "median_cut" (Debevec 2005: regions of equal energy) or "variance_minimization"
     // (Viriyothai & Debevec 2009: each split minimizes the regions' energy-weighted angular variance).
-    std::string extraction = "median_cut";
+    ExtractionMethod extraction = ExtractionMethod::MedianCut;
     // "sky": diffuse and specular cones that leave the volumes pick up the map minus the extracted lights,
     // prefiltered to their aperture (sky light, reflections, and the object's ambient occlusion on real
     // surfaces).

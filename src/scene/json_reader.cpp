@@ -13,6 +13,7 @@
 
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
+#include "scene/option_table.h"
 
 namespace deltagi {
 
@@ -292,6 +293,18 @@ bool isPowerOfTwo(int64_t v) {
     return v > 0 && (v & (v - 1)) == 0;
 }
 
+// The value of `table` that `node` names: InputError listing the names otherwise.
+template <typename Enum, size_t N>
+Enum readName(const JsonNode& node, const EnumName<Enum> (&table)[N]) {
+    const std::string name = node.string();
+    std::string expected;
+    for (size_t i = 0; i < N; ++i) {
+        if (table[i].name == name) return table[i].value;
+        expected += fmt::format("{}\"{}\"", i == 0 ? "" : i + 1 == N ? " or " : ", ", table[i].name);
+    }
+    node.fail(fmt::format("expected {}, got \"{}\"", expected, name));
+}
+
 constexpr int kMinVolumeResolution = 4, kMaxVolumeResolution = 1024;
 
 void readVolume(const JsonNode& node, VolumeOptions& volume) {
@@ -325,12 +338,7 @@ void readTrace(const JsonNode& node, TraceOptions& trace) {
     if (auto n = node.find("normal_weight")) trace.normalWeight = n->floatNumber(kUnit);
     if (auto n = node.find("backface_weight")) trace.backfaceWeight = n->floatNumber(kUnit);
     if (auto n = node.find("jitter")) trace.jitter = n->floatNumber(kUnit);
-    if (auto n = node.find("accumulation")) {
-        std::string mode = n->string();
-        if (mode != "paper" && mode != "front_to_back")
-            n->fail("expected \"paper\" or \"front_to_back\", got \"" + mode + "\"");
-        trace.accumulation = mode;
-    }
+    if (auto n = node.find("accumulation")) trace.accumulation = readName(*n, kConeAccumulationNames);
 }
 
 void readRender(const JsonNode& node, RenderOptions& render) {
@@ -349,18 +357,9 @@ void readRender(const JsonNode& node, RenderOptions& render) {
     if (auto n = node.find("denoise_radius")) render.denoiseRadius = n->integer(0, 8);
     if (auto n = node.find("light_bounces")) render.lightBounces = n->integer(1, 8);
     if (auto n = node.find("temporal_frames")) render.temporalFrames = n->integer(1, 8);
-    if (auto n = node.find("relight_cones")) {
-        std::string mode = n->string();
-        if (mode != "differential" && mode != "delta_volume")
-            n->fail("expected \"differential\" or \"delta_volume\", got \"" + mode + "\"");
-        render.relightCones = mode;
-    }
-    if (auto n = node.find("relight_object_light")) {
-        std::string mode = n->string();
-        if (mode != "cones" && mode != "rays")
-            n->fail("expected \"cones\" or \"rays\", got \"" + mode + "\"");
-        render.relightObjectLight = mode;
-    }
+    if (auto n = node.find("relight_cones")) render.relightCones = readName(*n, kRelightConesNames);
+    if (auto n = node.find("relight_object_light"))
+        render.relightObjectLight = readName(*n, kRelightObjectLightNames);
 }
 
 // options.diffuse/shadow.(relight_)pixel_stride: "auto" (0) or a power of two up to 32.
@@ -379,12 +378,7 @@ int readPixelStride(const JsonNode& node) {
 void readEnvironmentOptions(const JsonNode& node, EnvironmentOptions& environment) {
     node.allowKeys({"light_count", "extraction", "sky", "max_light_aperture_deg"});
     if (auto n = node.find("light_count")) environment.lightCount = n->integer(0, 256);
-    if (auto n = node.find("extraction")) {
-        std::string method = n->string();
-        if (method != "median_cut" && method != "variance_minimization")
-            n->fail("expected \"median_cut\" or \"variance_minimization\", got \"" + method + "\"");
-        environment.extraction = method;
-    }
+    if (auto n = node.find("extraction")) environment.extraction = readName(*n, kExtractionMethodNames);
     if (auto n = node.find("sky")) environment.sky = n->boolean();
     if (auto n = node.find("max_light_aperture_deg"))
         environment.maxLightApertureDeg = n->floatNumber({0.0, 180.0, true, true});
@@ -437,12 +431,7 @@ Options readOptions(const JsonNode& node) {
     if (auto n = node.find("shadow")) {
         n->allowKeys({"method", "ray_samples", "area_ray_samples", "aperture_deg", "pixel_stride",
                       "relight_pixel_stride"});
-        if (auto m = n->find("method")) {
-            std::string method = m->string();
-            if (method != "rays" && method != "cones")
-                m->fail("expected \"rays\" or \"cones\", got \"" + method + "\"");
-            options.shadow.method = method;
-        }
+        if (auto m = n->find("method")) options.shadow.method = readName(*m, kShadowMethodNames);
         if (auto r = n->find("ray_samples")) options.shadow.raySamples = r->integer(1, 256);
         if (auto r = n->find("area_ray_samples")) options.shadow.areaRaySamples = r->integer(1, 256);
         if (auto a = n->find("aperture_deg"))
@@ -489,7 +478,7 @@ json optionsToJson(const Options& o) {
           {"max_aperture_deg", o.specular.maxApertureDeg},
           {"relight_pixel_stride", strideJson(o.specular.relightPixelStride)}}},
         {"shadow",
-         {{"method", o.shadow.method},
+         {{"method", nameOf(kShadowMethodNames, o.shadow.method)},
           {"ray_samples", o.shadow.raySamples},
           {"area_ray_samples", o.shadow.areaRaySamples},
           {"aperture_deg", o.shadow.apertureDeg},
@@ -502,21 +491,21 @@ json optionsToJson(const Options& o) {
           {"normal_weight", o.trace.normalWeight},
           {"backface_weight", o.trace.backfaceWeight},
           {"jitter", o.trace.jitter},
-          {"accumulation", o.trace.accumulation}}},
+          {"accumulation", nameOf(kConeAccumulationNames, o.trace.accumulation)}}},
         {"render",
          {{"samples_per_pixel", o.render.samplesPerPixel},
           {"indirect", o.render.indirect},
           {"double_shadow_fix", o.render.doubleShadowFix},
           {"relight_indirect", o.render.relightIndirect},
-          {"relight_cones", o.render.relightCones},
-          {"relight_object_light", o.render.relightObjectLight},
+          {"relight_cones", nameOf(kRelightConesNames, o.render.relightCones)},
+          {"relight_object_light", nameOf(kRelightObjectLightNames, o.render.relightObjectLight)},
           {"light_bounces", o.render.lightBounces},
           {"denoise_radius", o.render.denoiseRadius},
           {"temporal_frames", o.render.temporalFrames},
           {"layers", o.render.layers}}},
         {"environment",
          {{"light_count", o.environment.lightCount},
-          {"extraction", o.environment.extraction},
+          {"extraction", nameOf(kExtractionMethodNames, o.environment.extraction)},
           {"sky", o.environment.sky},
           {"max_light_aperture_deg", o.environment.maxLightApertureDeg}}},
     };
