@@ -14,6 +14,7 @@
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
 #include "scene/json_reader.h"
+#include "scene/option_table.h"
 #include "test_errors.h"
 
 namespace deltagi {
