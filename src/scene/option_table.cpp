@@ -202,8 +202,8 @@ OptionGroup volumeGroup() {
                    "voxels along each axis"),
             option("extent_scale", &V::extentScale, numbers(kPositive), "× box",
                    "without an explicit region, the volumes cover this multiple of the virtual objects' "
-                   "bounding "
-                   "box (the real scene's when there are no virtual objects), made cubic around its centre"),
+                   "bounding box (the real scene's when there are no virtual objects), made cubic around its "
+                   "centre"),
             option(
                 "reach_scale", &V::reachScale, numbers({0.0, 1024.0}), "× box",
                 "without an explicit region, the cube grows from `extent_scale` up to this multiple of the "
@@ -238,17 +238,13 @@ OptionGroup volumeGroup() {
 OptionGroup rsmGroup() {
     const std::string doc = fmt::format(
         "texels along each side of one shadow-map face (up to 6 faces, 48 bytes per texel, two maps per "
-        "light: "
-        "the scene's and its update with the objects). `\"auto\"`: a point or spot light's maps have {} "
-        "texels "
-        "per voxel along the volume's side, a power of two in [{}, {}] ({} at 128³ and above, {} at 64³, {} "
-        "at "
-        "32³), a directional light's {} (its orthographic map spreads over the whole region); with several "
-        "lights, each takes the square root of its share of the brightest light's irradiance in the volume "
-        "(its "
-        "largest over the region's centre and corners) times that, to the nearest power of two, at least "
-        "1/{} of "
-        "it. Figures: [design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays), "
+        "light: the scene's and its update with the objects). `\"auto\"`: a point or spot light's maps have "
+        "{} texels per voxel along the volume's side, a power of two in [{}, {}] ({} at 128³ and above, {} "
+        "at 64³, {} at 32³), a directional light's {} (its orthographic map spreads over the whole region); "
+        "with several lights, each takes the square root of its share of the brightest light's irradiance in "
+        "the volume (its largest over the region's centre and corners) times that, to the nearest power of "
+        "two, at least 1/{} of it. Figures: "
+        "[design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays), "
         "[performance.md](performance.md#many-lights)",
         kAutoRsmTexelsPerVoxel, kAutoRsmMinResolution, kAutoRsmMaxResolution,
         rsmResolutionCeiling(0, 128, false), rsmResolutionCeiling(0, 64, false),
@@ -278,16 +274,16 @@ OptionGroup diffuseGroup() {
                 "([design.md](design.md#departures-from-the-paper))"),
             option(
                 "pixel_stride", &D::pixelStride, integers(kStrides), "pixels",
-                "trace the diffuse cones of rendered surfaces (the virtual objects; the real scene when "
-                "there "
-                "is no photo) at every `pixel_stride`-th pixel of every `pixel_stride`-th row; the "
-                "edge-aware "
-                "filter (`options.render.denoise_radius` samples around each pixel, spaced `pixel_stride` "
-                "apart) fills the others from traced samples on the same surface, and pixels with none (thin "
-                "parts, silhouettes) are traced as well. `\"auto\"` scales the 640x480 stride with the "
-                "image's "
-                "smaller side (÷ 480) and rounds it down to a power of two, at least 1: a 64x48 image traces "
-                "every pixel, 1280x960 every 16th")
+                fmt::format(
+                    "trace the diffuse cones of rendered surfaces (the virtual objects; the real scene when "
+                    "there is no photo) at every `pixel_stride`-th pixel of every `pixel_stride`-th row; the "
+                    "edge-aware filter (`options.render.denoise_radius` samples around each pixel, spaced "
+                    "`pixel_stride` apart) fills the others from traced samples on the same surface, and "
+                    "pixels with none (thin parts, silhouettes) are traced as well. `\"auto\"` scales the "
+                    "640x480 stride with the image's smaller side (÷ 480) and rounds it down to a power of "
+                    "two, at least 1: a 64x48 image takes a stride of {}, 1280x960 one of {}",
+                    pixelStrideFor(0, kAutoDiffuseStride, 64, 48),
+                    pixelStrideFor(0, kAutoDiffuseStride, 1280, 960)))
                 .withDefaultNote(autoStrideNote(kAutoDiffuseStride)),
             option(
                 "relight_pixel_stride", &D::relightPixelStride, integers(kStrides), "pixels",
@@ -297,16 +293,13 @@ OptionGroup diffuseGroup() {
             option(
                 "object_rays", &D::objectRays, integers(0, 256), "rays",
                 "rays (rounded down to a square number) that each coarse voxel of the virtual objects casts "
-                "to "
-                "gather the light they reflect once more (`options.render.light_bounces` ≥ 2), and that each "
-                "relit real point casts towards the objects with `options.render.relight_object_light` "
+                "to gather the light they reflect once more (`options.render.light_bounces` ≥ 2), and that "
+                "each relit real point casts towards the objects with `options.render.relight_object_light` "
                 "`\"rays\"`. A ray takes the light volume's radiance at the level-0 voxels where it ends. "
-                "The "
-                "cones of a coarse voxel start half a voxel and more off its surface: under an object "
-                "standing "
-                "on the floor they start below the floor, and the object's underside got none of the floor's "
-                "light (tested: a box on a lit floor gets albedo × the floor's radiance underneath by rays, "
-                "under half of it by cones). 0: cones"),
+                "The cones of a coarse voxel start half a voxel and more off its surface: under an object "
+                "standing on the floor they start below the floor, and the object's underside got none of "
+                "the floor's light (tested: a box on a lit floor gets albedo × the floor's radiance "
+                "underneath by rays, under half of it by cones). 0: cones"),
         });
 }
 
@@ -317,8 +310,7 @@ OptionGroup specularGroup() {
         {
             option("min_aperture_deg", &S::minApertureDeg, numbers(kOpenAperture), "degrees",
                    "the aperture derived from a material's roughness is clamped to [min, max] (full apex "
-                   "angle); "
-                   "at most `max_aperture_deg`. Narrow cones take many small steps"),
+                   "angle); at most `max_aperture_deg`. Narrow cones take many small steps"),
             option("max_aperture_deg", &S::maxApertureDeg, numbers(kOpenAperture), "degrees",
                    "the upper end of that range"),
             option("relight_pixel_stride", &S::relightPixelStride, integers(kStrides), "pixels",
@@ -346,21 +338,17 @@ OptionGroup shadowGroup() {
             option(
                 "method", &S::method, names(kShadowMethodNames), "",
                 "`\"rays\"`: shadow rays from each point towards `ray_samples` points spread over the light "
-                "(a "
-                "sphere light's disk facing the point, the cone of directions of an environment map's "
-                "light), "
-                "against the real scene's and the objects' triangles, filtered like the cones. `\"cones\"`: "
-                "the paper's shadow cone through the visibility volumes (an occluder smaller than a coarse "
-                "voxel fills it: shadows come out too wide and too dark, and they end at the volumes' "
-                "faces). "
-                "Figures of both: [design.md](design.md#departures-from-the-paper)"),
+                "(a sphere light's disk facing the point, the cone of directions of an environment map's "
+                "light), against the real scene's and the objects' triangles, filtered like the cones. "
+                "`\"cones\"`: the paper's shadow cone through the visibility volumes (an occluder smaller "
+                "than a coarse voxel fills it: shadows come out too wide and too dark, and they end at the "
+                "volumes' faces). Figures of both: [design.md](design.md#departures-from-the-paper)"),
             option("ray_samples", &S::raySamples, integers(1, 256), "rays",
                    fmt::format(
-                       "shadow rays per point and light with a size, on a jittered square grid (rounded "
-                       "down to a square number); a light without a size takes one ray (a hard shadow, "
-                       "as in the path tracer). The filter averages {0}×{0} traced pixels, so {1} give {2} "
-                       "rays per pixel ([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-"
-                       "rays))",
+                       "shadow rays per point and light with a size, on a jittered square grid (rounded down "
+                       "to a square number); a light without a size takes one ray (a hard shadow, as in the "
+                       "path tracer). The filter averages {0}×{0} traced pixels, so {1} give {2} rays per "
+                       "pixel ([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))",
                        filterSide, defaults.shadow.raySamples,
                        filterSide * filterSide * defaults.shadow.raySamples)),
             option(
@@ -383,8 +371,8 @@ OptionGroup shadowGroup() {
             option("relight_pixel_stride", &S::relightPixelStride, integers(kStrides), "pixels",
                    fmt::format(
                        "the same for the shadows the objects cast on real surfaces: the filter spreads "
-                       "{0}×{0} samples `relight_pixel_stride` apart, and a contact shadow is sharper "
-                       "than that ([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))",
+                       "{0}×{0} samples `relight_pixel_stride` apart, and a contact shadow is sharper than "
+                       "that ([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))",
                        filterSide))
                 .withDefaultNote(autoStrideNote(kAutoRelightShadowStride, kAutoRelightAreaLightStride)),
         });
@@ -409,12 +397,10 @@ OptionGroup traceGroup() {
             option("backface_weight", &T::backfaceWeight, numbers(kUnit), "",
                    "how much less a voxel occludes a cone that leaves it through the back of its surface: 0 "
                    "two-sided, 1 a coherent back face does not occlude (prevents the shadow terminator on "
-                   "convex "
-                   "surfaces)"),
+                   "convex surfaces)"),
             option("jitter", &T::jitter, numbers(kUnit), "× step",
                    "each cone's first step is offset by this fraction of a step, random per pixel (seeded by "
-                   "the "
-                   "pixel index): turns banding into fine noise. 0 disables it"),
+                   "the pixel index): turns banding into fine noise. 0 disables it"),
             option("accumulation", &T::accumulation, names(kConeAccumulationNames), "",
                    "`\"paper\"`: the accumulator formulas of §3.1 as printed (light = light·occ + "
                    "light_local·occ_local·(1 − occ)); `\"front_to_back\"`: usual emission-absorption "
@@ -436,13 +422,10 @@ OptionGroup renderGroup() {
                 "samples_per_pixel", &R::samplesPerPixel, integers({1, 16, Integers::Only::Squares}),
                 "samples",
                 "sub-pixel samples of the G-buffer; the object mask is their coverage, and the objects' "
-                "direct "
-                "light is the mean over them: each pixel of an object keeps the surfaces of its sub-samples, "
-                "its shadow rays start from them in turn (at least one each, counted by their cosine), and "
-                "its "
-                "unshadowed light is their mean. A fold or a shadow edge inside a pixel then shows as the "
-                "path "
-                "tracer shows it, not as the light at the pixel's centre "
+                "direct light is the mean over them: each pixel of an object keeps the surfaces of its "
+                "sub-samples, its shadow rays start from them in turn (at least one each, counted by their "
+                "cosine), and its unshadowed light is their mean. A fold or a shadow edge inside a pixel "
+                "then shows as the path tracer shows it, not as the light at the pixel's centre "
                 "([design.md](design.md#departures-from-the-paper)). 1: one point per pixel (and no "
                 "anti-aliased silhouette); 4 costs 4 camera rays per object pixel"),
             option("indirect", &R::indirect, boolean(), "",
@@ -458,36 +441,29 @@ OptionGroup renderGroup() {
             option(
                 "temporal_frames", &R::temporalFrames, integers(1, 8), "frames",
                 "frames of a sequence (`deltagi render` over a `\"sequence\"`, `stability`, `bench`, "
-                "`serve`, "
-                "Python's `FrameRenderer`) that each pixel's objects' radiance and real surfaces' change of "
-                "direct light (the shadows) are averaged over: its own and those of the frames before it, "
-                "found again by reprojection (a real point where it was, an object's point on its triangle) "
-                "and clamped to the range of the frame's own 3×3 neighbourhood, so a moving shadow does not "
-                "leave a trail (`src/pipeline/temporal_reuse.*`). A window, not a running average: once the "
-                "objects and the camera stop, the `temporal_frames`-th frame is the still render; a range of "
-                "frames (`--frames A:B`) renders the `temporal_frames − 1` frames before A first, unwritten. "
-                "1 "
-                "turns it off. A single `render` has no frames before it "
+                "`serve`, Python's `FrameRenderer`) that each pixel's objects' radiance and real surfaces' "
+                "change of direct light (the shadows) are averaged over: its own and those of the frames "
+                "before it, found again by reprojection (a real point where it was, an object's point on its "
+                "triangle) and clamped to the range of the frame's own 3×3 neighbourhood, so a moving shadow "
+                "does not leave a trail (`src/pipeline/temporal_reuse.*`). A window, not a running average: "
+                "once the objects and the camera stop, the `temporal_frames`-th frame is the still render; a "
+                "range of frames (`--frames A:B`) renders the `temporal_frames − 1` frames before A first, "
+                "unwritten. 1 turns it off. A single `render` has no frames before it "
                 "([design.md](design.md#temporal-reuse); what it buys: "
                 "[quality-notes.md](quality-notes.md#stable-frames))"),
             option("relight_indirect", &R::relightIndirect, boolean(), "",
                    "add the indirect change (cones in the delta volume) to real surfaces; `false` keeps only "
-                   "the "
-                   "object's shadow there (the object itself is still shaded in full)"),
+                   "the object's shadow there (the object itself is still shaded in full)"),
             option(
                 "light_bounces", &R::lightBounces, integers(1, 8), "bounces",
                 "bounces of indirect light the light volumes carry. 1 is the paper: the reflective shadow "
-                "maps "
-                "inject the directly lit surfaces and the cones gather one bounce. Each more gathers the "
-                "volume "
-                "at every surface voxel of the real scene (at half the volume's resolution, with the diffuse "
-                "cones, on the side facing the camera) and adds what it reflects, once while the real side "
-                "stays the same (`src/pipeline/bounce_light.*`); the objects get the room's bounced light, "
-                "and "
-                "their own voxels gather the full volume every frame (at a quarter of the volume's "
-                "resolution) "
-                "and add what they reflect ([design.md](design.md#departures-from-the-paper), with its "
-                "cost)"),
+                "maps inject the directly lit surfaces and the cones gather one bounce. Each more gathers "
+                "the volume at every surface voxel of the real scene (at half the volume's resolution, with "
+                "the diffuse cones, on the side facing the camera) and adds what it reflects, once while the "
+                "real side stays the same (`src/pipeline/bounce_light.*`); the objects get the room's "
+                "bounced light, and their own voxels gather the full volume every frame (at a quarter of the "
+                "volume's resolution) and add what they reflect "
+                "([design.md](design.md#departures-from-the-paper), with its cost)"),
             option(
                 "relight_cones", &R::relightCones, names(kRelightConesNames), "",
                 "how the real surfaces' indirect change is traced. `\"differential\"`: the full light volume "
@@ -499,26 +475,19 @@ OptionGroup renderGroup() {
             option(
                 "relight_object_light", &R::relightObjectLight, names(kRelightObjectLightNames), "",
                 "with `\"differential\"` relit cones, how the objects' own light, and the real light they "
-                "hide, "
-                "reach the real surfaces. `\"cones\"`: all of it through the cones, where a coarse voxel "
-                "that "
-                "holds an object and the floor under it hides the object from afar and spreads it wide "
-                "nearby. "
-                "`\"rays\"`: `options.diffuse.object_rays` rays per relit point (at the area lights' relit "
-                "stride; fewer where the objects look small, in proportion to their bounding sphere's solid "
-                "angle below a cone of 90°) towards the objects' bounding sphere; where one meets an object "
-                "it "
-                "brings the objects' voxel radiance there and takes away the real scene's light it met "
-                "before "
-                "(the full minus the delta volume where the ray, continued through the objects, meets a real "
-                "surface; `src/pipeline/object_bounce_rays.*`, tested against a bright sphere's solid angle "
-                "and "
-                "a sphere hiding a bright ceiling); the cones then carry only the change of the real "
-                "surfaces' "
-                "own light (the objects' shadows on them) through the real scene's visibility. Closer to the "
-                "path tracer on every scene of the suite, but it about doubles the benchmark frame "
-                "([design.md](design.md#departures-from-the-paper)). The field example sets `\"rays\"`: the "
-                "cones spread the bunny's light far over the open ground"),
+                "hide, reach the real surfaces. `\"cones\"`: all of it through the cones, where a coarse "
+                "voxel that holds an object and the floor under it hides the object from afar and spreads it "
+                "wide nearby. `\"rays\"`: `options.diffuse.object_rays` rays per relit point (at the area "
+                "lights' relit stride; fewer where the objects look small, in proportion to their bounding "
+                "sphere's solid angle below a cone of 90°) towards the objects' bounding sphere; where one "
+                "meets an object it brings the objects' voxel radiance there and takes away the real scene's "
+                "light it met before (the full minus the delta volume where the ray, continued through the "
+                "objects, meets a real surface; `src/pipeline/object_bounce_rays.*`, tested against a bright "
+                "sphere's solid angle and a sphere hiding a bright ceiling); the cones then carry only the "
+                "change of the real surfaces' own light (the objects' shadows on them) through the real "
+                "scene's visibility. Closer to the path tracer on every scene of the suite, but it about "
+                "doubles the benchmark frame ([design.md](design.md#departures-from-the-paper)). The field "
+                "example sets `\"rays\"`: the cones spread the bunny's light far over the open ground"),
         });
 }
 
@@ -530,8 +499,7 @@ OptionGroup environmentGroup() {
             option("light_count", &E::lightCount, integers(0, 256), "lights",
                    "directional lights extracted from the map; together they carry exactly the map's light "
                    "(solid-angle weighted). They drive the reflective shadow maps (and the shadow cones). 0 "
-                   "leaves "
-                   "all of it to the sky term"),
+                   "leaves all of it to the sky term"),
             option("extraction", &E::extraction, names(kExtractionMethodNames), "",
                    "Debevec 2005: each region is split across its longest side (measured on the sphere) into "
                    "halves of equal energy; Viriyothai & Debevec 2009: at the cut that minimizes the "
@@ -539,8 +507,8 @@ OptionGroup environmentGroup() {
                    "`light_count` is not a power of two the last round splits the most energetic ones"),
             option("sky", &E::sky, boolean(), "",
                    "the sky term through the diffuse and specular cones that leave the volumes (the map "
-                   "minus the "
-                   "extracted lights, prefiltered to their aperture). `false`: the extracted lights only"),
+                   "minus the extracted lights, prefiltered to their aperture). `false`: the extracted "
+                   "lights only"),
             option(
                 "max_light_aperture_deg", &E::maxLightApertureDeg, numbers(kOpenAperture), "degrees",
                 "an extracted light's shadow cone is as wide as its region of the map (full apex angle), at "

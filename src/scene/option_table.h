@@ -1,6 +1,7 @@
 // The scene file's "options", one description per option (option_table.cpp): its key, the member of Options
 // it sets, the values it takes, its unit and its doc. Its default is that of a default-constructed Options.
-// readOptions and optionsToJson read and write the options through it.
+// readOptions and optionsToJson read and write the options through it, and the options tables of
+// docs/scene-format.md are made from it (option_docs.cpp; tests/scene/option_table_test.cpp checks them).
 #pragma once
 
 #include <functional>
