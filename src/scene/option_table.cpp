@@ -45,9 +45,16 @@ struct Integers {
     bool allows(int64_t v) const {
         if (v < lo || v > hi) return false;
         int64_t root = 0;
-        while (root * root < v) ++root;
-        return only == Only::All || (only == Only::PowersOfTwo && v > 0 && (v & (v - 1)) == 0) ||
-               (only == Only::Squares && root * root == v);
+        switch (only) {
+            case Only::All:
+                return true;
+            case Only::PowersOfTwo:
+                return v > 0 && (v & (v - 1)) == 0;
+            case Only::Squares:
+                while (root * root < v) ++root;  // v <= hi: a few steps
+                return root * root == v;
+        }
+        return false;
     }
     // "an integer in [1, 8]", "1, 4, 9 or 16 (a square grid)", "a power of two in [4, 1024]", with "auto" or
     // before it where that is allowed; for the docs without the article and with `"auto"` as code.
@@ -59,7 +66,8 @@ struct Integers {
         if (only == Only::All)
             values = fmt::format("{}integer in [{}, {}]", docs ? "" : "an ", lo, hi);
         else if (listed.size() > kMaxListed)
-            values = fmt::format("{}a power of two in [{}, {}]", docs ? "integer, " : "", lo, hi);
+            values = fmt::format("{}a {} in [{}, {}]", docs ? "integer, " : "",
+                                 only == Only::PowersOfTwo ? "power of two" : "square", lo, hi);
         else
             values = joinWithOr(listed) + (only == Only::Squares ? " (a square grid)" : "");
         return orAuto ? (docs ? "`\"auto\"` or " : "\"auto\" or ") + values : values;
