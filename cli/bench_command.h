@@ -1,4 +1,4 @@
-// `deltagi bench`: per-stage timings over moving-object frames (include/deltagi/benchmark.h).
+// `deltagi bench`: per-stage timings over moving-object frames (src/evaluation/benchmark.h).
 #pragma once
 
 #include <filesystem>

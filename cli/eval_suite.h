@@ -1,4 +1,4 @@
-// `deltagi eval --suite FILE_OR_FOLDER`: the quality suite (include/deltagi/quality_suite.h).
+// `deltagi eval --suite FILE_OR_FOLDER`: the quality suite (src/evaluation/quality_suite.h).
 #pragma once
 
 #include <filesystem>

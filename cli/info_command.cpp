@@ -1,8 +1,12 @@
 #include "info_command.h"
 
+#include <fstream>
+#include <iterator>
+
 #include <fmt/core.h>
 #include <nlohmann/json.hpp>
 
+#include "deltagi/error.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
 #include "messages.h"
@@ -73,13 +77,35 @@ void printInfoTable(const Scene& scene, const SceneInfo& info) {
 CLI::App* addInfoCommand(CLI::App& app, InfoArgs& args) {
     CLI::App* command =
         app.add_subcommand("info", "Print a scene's size, volume region and effective options");
-    command->add_option("scene", args.scene, "Scene file (JSON)")->required();
-    command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
-    command->add_flag("--json", args.json, "Print JSON on stdout instead of a table");
+    CLI::Option* scene = command->add_option("scene", args.scene, "Scene file (JSON)");
+    CLI::Option* set =
+        command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
+    CLI::Option* json = command->add_flag("--json", args.json, "Print JSON on stdout instead of a table");
+    command
+        ->add_option(
+            "--options-markdown", args.optionsMarkdown,
+            "Print the options tables of docs/scene-format.md, made from src/scene/option_table.cpp; "
+            "given a markdown file, print it with its tables made anew (scripts/update-options-doc.sh)")
+        ->expected(0, 1)
+        ->excludes(scene)
+        ->excludes(set)
+        ->excludes(json);
     return command;
 }
 
 int runInfo(const InfoArgs& args) {
+    if (args.optionsMarkdown) {
+        const std::string& file = *args.optionsMarkdown;
+        if (file.empty()) {
+            fmt::print("{}", optionTablesMarkdown());
+            return 0;
+        }
+        std::ifstream in(file, std::ios::binary);
+        if (!in) throw InputError(file, "cannot open the markdown file");
+        const std::string markdown{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        fmt::print("{}", withOptionTables(markdown, file));
+        return 0;
+    }
     const Scene scene = loadAndWarn(args.scene, args.overrides);
     const SceneInfo info = sceneInfo(scene);
     if (args.json) {

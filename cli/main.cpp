@@ -600,7 +600,7 @@ int main(int argc, char** argv) {
     renderCommand->add_flag("-q,--quiet", renderArgs.quiet, "Print nothing but errors");
 
     cli::InfoArgs infoArgs;
-    cli::addInfoCommand(app, infoArgs);
+    CLI::App* infoCommand = cli::addInfoCommand(app, infoArgs);
 
     ReferenceArgs referenceArgs;
     CLI::App* referenceCommand = app.add_subcommand(
@@ -709,6 +709,9 @@ int main(int argc, char** argv) {
         if (*albedoCommand) return cli::runAlbedo(albedoArgs);
         if (*encodeCommand) return cli::runEncode(encodeArgs);
         if (*serveCommand) return cli::runServe(serveArgs);
+        if (*infoCommand && infoArgs.scene.empty() && !infoArgs.optionsMarkdown)
+            return reportError("info: expected SCENE.json, or --options-markdown (see deltagi --help)",
+                               kExitUsageError);
         return cli::runInfo(infoArgs);
     } catch (const std::exception& error) {  // InputError and everything else: one line
         removeTemporaryOutputs();            // output folders made for nothing

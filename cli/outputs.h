@@ -1,5 +1,5 @@
 // The CLI's outputs: checked before any work (not one of the run's inputs, a folder that takes files),
-// written atomically (deltagi/atomic_file.h), and cleaned up when SIGINT or SIGTERM stops the run.
+// written atomically (io/atomic_file.h), and cleaned up when SIGINT or SIGTERM stops the run.
 #pragma once
 
 #include <filesystem>

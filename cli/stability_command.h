@@ -1,5 +1,5 @@
 // `deltagi stability`: flicker without a reference, over frames in which the objects and the camera move
-// (include/deltagi/temporal.h).
+// (src/evaluation/temporal.h).
 #pragma once
 
 #include <filesystem>

@@ -1,5 +1,5 @@
 // H.264 MP4 output through the FFmpeg libraries (libavcodec with libx264, libavformat, libswscale): the
-// frames of a sequence as a video, written atomically as every output is (deltagi/atomic_file.h).
+// frames of a sequence as a video, written atomically as every output is (io/atomic_file.h).
 #pragma once
 
 #include <cstdint>

@@ -32,6 +32,15 @@ Scene loadScene(const nlohmann::json& document, const std::filesystem::path& fil
 // The options as JSON, every key with its value (the defaults where the scene did not set one).
 nlohmann::json optionsToJson(const Options& options);
 
+// The options tables of docs/scene-format.md, made from the one description of each option
+// (src/scene/option_table.cpp): one table per group, each between "<!-- options table: GROUP -->" and
+// "<!-- end of options table -->".
+std::string optionTablesMarkdown();
+// `markdown` (the text of `file`) with the table between each pair of those markers made anew. Throws
+// InputError naming the file and line for a group that does not exist, a table without its end marker, and
+// a group without its table or with two.
+std::string withOptionTables(const std::string& markdown, const std::string& file);
+
 // ---- tracked camera sequences (src/scene/sequence_io.cpp)
 // ------------------------------------------------------- As capture tools write them: the nerfstudio /
 // instant-ngp `transforms.json` that COLMAP, Polycam, Record3D, Metashape and others are converted into.

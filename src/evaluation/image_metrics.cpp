@@ -1,5 +1,5 @@
 // Image metrics and the false-colour difference image of `deltagi compare` (declared in
-// deltagi/evaluation.h).
+// evaluation/evaluation.h).
 #include <algorithm>
 #include <array>
 #include <cmath>

@@ -1,4 +1,4 @@
-// The quality suite (include/deltagi/quality_suite.h): the suite file, one scene's figures against its
+// The quality suite (src/evaluation/quality_suite.h): the suite file, one scene's figures against its
 // cached references, and the table (JSON and Markdown). Definitions: docs/ground-truth.md#the-quality-suite.
 #include "evaluation/quality_suite.h"
 

@@ -1,4 +1,4 @@
-// The quality suite's cache of path-traced references (include/deltagi/quality_suite.h): a folder per
+// The quality suite's cache of path-traced references (src/evaluation/quality_suite.h): a folder per
 // reference, keyed by what the path tracer reads, so that a suite re-renders only what changed.
 #include <algorithm>
 #include <cctype>

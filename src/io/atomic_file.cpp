@@ -1,5 +1,5 @@
 // Atomic output files: write a temporary beside the destination, fsync, rename
-// (include/deltagi/atomic_file.h).
+// (src/io/atomic_file.h).
 #include "io/atomic_file.h"
 
 #include <fcntl.h>

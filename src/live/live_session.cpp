@@ -19,6 +19,7 @@
 #include "deltagi/transforms.h"
 #include "io/image_encode.h"
 #include "scene/json_reader.h"
+#include "scene/option_table.h"
 
 namespace deltagi::live {
 

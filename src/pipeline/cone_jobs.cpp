@@ -81,7 +81,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         results[j].shadows = traceSparse<ShadowOcclusion>(
             job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
             job.filter(o, job.shadowStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
-                if (o.shadow.method == "rays")
+                if (o.shadow.method == ShadowMethod::Rays)
                     return traceShadowRays(job.points, directLights, job.rays, o, job.mode, pixels,
                                            job.pixelSamples, scene.camera.width);
                 return traceShadowCones(job.points, directLights, job.visibility, o,
@@ -147,7 +147,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     // Sky light through the cones, added to their indirect light; its diffuse part traced sparsely and
     // filtered like the diffuse cones (it has the same jitter noise).
     // (With the environment's light by rays, its direct light, sky included, is already in `areaLight`.)
-    if (scene.environment && !scene.environment->sky.empty() && o.shadow.method != "rays") {
+    if (scene.environment && !scene.environment->sky.empty() && o.shadow.method != ShadowMethod::Rays) {
         const Environment& environment = *scene.environment;
         forEachJob(jobs.size(), [&](size_t j) {
             const ConeJob& job = jobs[j];

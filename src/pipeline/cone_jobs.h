@@ -84,7 +84,7 @@ struct ConeJob {
     // relit cones can leave it out.
     bool objectBounceByRays(const Options& o) const {
         return relit() && indirect && fullLight && objectLight && rays.scene && rays.objects &&
-               o.render.relightObjectLight == "rays";
+               o.render.relightObjectLight == RelightObjectLight::Rays;
     }
     // The virtual objects' diffuse cones have their own aperture; the others options.diffuse.aperture_deg.
     std::optional<float> diffuseAperture(const Options& o) const {

@@ -8,8 +8,8 @@
 namespace deltagi {
 
 ConeTraceSettings coneTraceSettings(const TraceOptions& o) {
-    return {o.stepScale,      o.startOffset, o.maxOcclusion,           o.normalWeight,
-            o.backfaceWeight, o.jitter,      o.accumulation == "paper"};
+    const bool paper = o.accumulation == ConeAccumulation::Paper;
+    return {o.stepScale, o.startOffset, o.maxOcclusion, o.normalWeight, o.backfaceWeight, o.jitter, paper};
 }
 
 float hashToUnit(uint64_t index, uint32_t stream) {

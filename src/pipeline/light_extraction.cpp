@@ -13,11 +13,6 @@
 
 namespace deltagi {
 
-ExtractionMethod extractionMethod(const std::string& name) {
-    return name == "variance_minimization" ? ExtractionMethod::VarianceMinimization
-                                           : ExtractionMethod::MedianCut;
-}
-
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -235,7 +230,7 @@ std::vector<ExtractedLight> extractLights(const Image& equirect, int count, Extr
 void setEnvironment(Scene& scene, Environment environment) {
     const EnvironmentOptions& o = scene.options.environment;
     const std::vector<ExtractedLight> extracted =
-        extractLights(environment.radiance, o.lightCount, extractionMethod(o.extraction));
+        extractLights(environment.radiance, o.lightCount, o.extraction);
     environment.sky = o.sky ? prefilterSky(environment.radiance, extracted) : SkyPyramid{};
     std::erase_if(scene.lights, [](const Light& l) { return l.fromEnvironment; });
     // A light's shadow cone is as wide as its region of sky, but never narrower than other lights' cones.

@@ -13,18 +13,14 @@
 // the last round splits the regions with the most energy first.
 #pragma once
 
-#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "deltagi/image.h"
+#include "deltagi/options.h"
 
 namespace deltagi {
-
-enum class ExtractionMethod { MedianCut, VarianceMinimization };
-// "median_cut" or "variance_minimization"; anything else is MedianCut (the options reader checks the name).
-ExtractionMethod extractionMethod(const std::string& name);
 
 struct ExtractedLight {
     glm::vec3 direction{0, 1, 0};  // unit, environment frame, from the scene towards the light

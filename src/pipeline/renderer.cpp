@@ -87,7 +87,7 @@ Image depthImage(const Camera& camera, const GBuffer& gbuffer, std::span<const S
 // Whether the environment map lights the scene through shadow rays (then its extracted lights only drive the
 // reflective shadow maps, and its sky is not gathered through the cones).
 bool environmentByRays(const Scene& scene) {
-    return scene.environment && scene.options.shadow.method == "rays";
+    return scene.environment && scene.options.shadow.method == ShadowMethod::Rays;
 }
 
 // The lights whose direct light is shaded with their shadows: the scene's, without the environment's lights
@@ -102,7 +102,7 @@ std::vector<Light> directLights(const Scene& scene) {
 // stand-ins of its emitting surfaces (their direct light comes from traceAreaLightRays, not the volumes).
 std::vector<Light> rsmLights(const Scene& scene, const RayScene& realOnly) {
     std::vector<Light> lights = scene.lights;
-    if (scene.options.shadow.method == "rays") {
+    if (scene.options.shadow.method == ShadowMethod::Rays) {
         const std::vector<Light> standIns = emitterStandInLights(scene, realOnly);
         lights.insert(lights.end(), standIns.begin(), standIns.end());
     }
@@ -172,7 +172,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     LightWork& light = cache.light.work;
     const glm::vec3 viewpoint = viewpointOf(scene);
     // With area lights by rays, emitting surfaces light the volumes through their stand-ins' RSMs instead.
-    const bool withEmission = scene.options.shadow.method != "rays";
+    const bool withEmission = scene.options.shadow.method != ShadowMethod::Rays;
     std::optional<ObjectVolumes>& keptObjects = cache.objectVolumes.work.volumes;
     ObjectVolumes& objects = keptObjects ? *keptObjects : keptObjects.emplace();
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
@@ -231,7 +231,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     // One voxel of margin on each side so that surfaces on the bounds are inside.
     const float margin = 1.0f + 2.0f / static_cast<float>(o.volume.resolution);
     const VolumeRegion region = cubeAround(boundsOf(scene.real), margin, o.volume.resolution);
-    const bool areaRays = o.shadow.method == "rays";
+    const bool areaRays = o.shadow.method == ShadowMethod::Rays;
     const int bounces = o.render.lightBounces - 1;
     VoxelGeometry geometry = voxelize(scene.real, region, !areaRays, bounces > 0);
     const std::vector<ReflectiveShadowMap> rsms =
@@ -352,8 +352,9 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
     const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals),
                                      objectSphereRadius(scene.virtuals)};
     // Emitting surfaces light the scene through shadow rays (with options.shadow.method "rays").
-    const AreaLights emitters = o.shadow.method == "rays" ? AreaLights(scene, SceneContent::RealAndVirtual)
-                                                          : AreaLights(Scene{}, SceneContent::RealOnly);
+    const AreaLights emitters = o.shadow.method == ShadowMethod::Rays
+                                    ? AreaLights(scene, SceneContent::RealAndVirtual)
+                                    : AreaLights(Scene{}, SceneContent::RealOnly);
     // The environment map lights the scene through shadow rays too (with options.shadow.method "rays").
     std::unique_ptr<EnvironmentSampler>& sampler = cache.environment.work.sampler;
     if (environmentByRays(scene) && !sampler) sampler = std::make_unique<EnvironmentSampler>(*scene.environment);
@@ -380,7 +381,7 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
          .plans = view.steady ? &view.relitPlans : nullptr,
          .changed = objectPixels,
          .rays = shadowRays,
-         .fullLight = o.render.relightCones == "differential" ? volumes.fullLight : nullptr,
+         .fullLight = o.render.relightCones == RelightCones::Differential ? volumes.fullLight : nullptr,
          .objectLight = volumes.objectLight,
          .emitters = &emitters,
          .environment = environment}};

@@ -1,6 +1,6 @@
 // Reading JSON values with their path, so that every error names the file and the key:
 //   scene.json: options.volume.resolution: expected a power of two in [4, 1024], got 100
-// Also the readers of the scene file's "options" section, which only need JSON (scene_io.cpp does the rest).
+// The scene file's "options" are read through them by option_table.h.
 #pragma once
 
 #include <cstdint>
@@ -8,6 +8,7 @@
 #include <initializer_list>
 #include <limits>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -57,7 +58,10 @@ class JsonNode {
     JsonNode child(std::string_view key) const;
     std::optional<JsonNode> find(std::string_view key) const;
     // Fails, naming the key's path, at the first key not in `allowed`.
-    void allowKeys(std::initializer_list<std::string_view> allowed) const;
+    void allowKeys(std::span<const std::string_view> allowed) const;
+    void allowKeys(std::initializer_list<std::string_view> allowed) const {
+        allowKeys(std::span(allowed.begin(), allowed.size()));
+    }
     // A path below this node that need not exist, for messages: "camera" -> "camera.fx".
     std::string childWhere(std::string_view key) const;
 
@@ -100,9 +104,6 @@ std::string describeValue(const nlohmann::json& value);
 // A file named by `node` (a string), relative to the scene file's folder; it must exist (the message points
 // at the project's shared data set when the path runs through a "shared" folder).
 std::filesystem::path inputFile(const JsonNode& node, const std::filesystem::path& sceneFolder);
-
-// Reads the "options" object into Options, checking every range; unknown keys are errors.
-Options readOptions(const JsonNode& node);
 
 // Estimated memory of a render: the four volumes with their mip chains, two cube RSMs per light (the scene's
 // and the update with the objects) at the largest resolution options.rsm.resolution gives it

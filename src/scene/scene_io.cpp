@@ -20,6 +20,7 @@
 #include "scene/keyframes_io.h"
 #include "scene/material_io.h"
 #include "scene/mesh_io.h"
+#include "scene/option_table.h"
 #include "scene/scene_info.h"
 #include "scene/shapes.h"
 

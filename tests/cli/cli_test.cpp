@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 
 #include "deltagi/image.h"
+#include "deltagi/scene_io.h"
 #include "scene/scene_info.h"
 #include "test_cli.h"
 #include "test_files.h"
@@ -193,6 +194,29 @@ TEST_F(CliTest, InfoJson) {
     const CliResult table = run("info " + quote(scene.string()));
     ASSERT_EQ(table.exitCode, 0) << table.err;
     EXPECT_NE(table.out.find("triangles"), std::string::npos) << table.out;
+}
+
+// `info --options-markdown` prints the options tables, or a markdown file with its tables made anew (what
+// scripts/update-options-doc.sh writes over docs/scene-format.md); `info` needs one or a scene.
+TEST_F(CliTest, InfoPrintsTheOptionsMarkdown) {
+    const CliResult tables = run("info --options-markdown");
+    ASSERT_EQ(tables.exitCode, 0) << tables.err;
+    EXPECT_EQ(tables.out, deltagi::optionTablesMarkdown());
+
+    // A document whose rsm table is out of date comes back with the tables of the code.
+    std::string stale = tables.out;
+    const size_t begin = stale.find('\n', stale.find("<!-- options table: rsm -->")) + 1;
+    stale.replace(begin, stale.find("<!-- end of options table -->", begin) - begin, "| old |\n");
+    writeText(dir_ / "doc.md", "# Options\n\n" + stale);
+    const CliResult doc = run("info --options-markdown " + quote((dir_ / "doc.md").string()));
+    ASSERT_EQ(doc.exitCode, 0) << doc.err;
+    EXPECT_EQ(doc.out, "# Options\n\n" + tables.out);
+    expectOneErrorLine(run("info --options-markdown " + quote((dir_ / "missing.md").string())),
+                       {"missing.md"});
+
+    const CliResult usage = run("info");
+    EXPECT_EQ(usage.exitCode, 2);
+    EXPECT_NE(usage.err.find("expected SCENE.json, or --options-markdown"), std::string::npos) << usage.err;
 }
 
 TEST_F(CliTest, CornellExamplesLoad) {

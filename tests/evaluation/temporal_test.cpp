@@ -1,4 +1,4 @@
-// Temporal stability (include/deltagi/temporal.h): the instability measure on frames made by hand, and on
+// Temporal stability (src/evaluation/temporal.h): the instability measure on frames made by hand, and on
 // rendered frames of a moving object.
 #include <gtest/gtest.h>
 

@@ -98,7 +98,7 @@ TEST(AreaLightRays, AnObjectCastsAShadowFromAnEmittingPanelEndToEnd) {
     const glm::ivec2 under = test::project(scene.camera, {0.0f, 0.0f, 0.12f});
     ASSERT_EQ(out.objectMask.at(under.x, under.y, 0), 0.0f);
     EXPECT_LT(out.delta.at(under.x, under.y, 0), -0.02f);
-    scene.options.shadow.method = "cones";
+    scene.options.shadow.method = ShadowMethod::Cones;
     const RenderOutput cones = render(scene);
     EXPECT_GT(cones.delta.at(under.x, under.y, 0), out.delta.at(under.x, under.y, 0));
 }

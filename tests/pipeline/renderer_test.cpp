@@ -328,9 +328,9 @@ TEST(Render, AnObjectBlocksTheLightBouncingBetweenTwoRealSurfaces) {
     s.options.rsm.resolution = 128;
     s.background = Image(64, 48, 3, 0.3f);
     const glm::ivec2 p = test::project(s.camera, {0.15f, 0.0f, 0.0f});
-    s.options.render.relightCones = "differential";
+    s.options.render.relightCones = RelightCones::Differential;
     const RenderOutput differential = render(s);
-    s.options.render.relightCones = "delta_volume";
+    s.options.render.relightCones = RelightCones::DeltaVolume;
     const RenderOutput deltaVolume = render(s);
     ASSERT_EQ(differential.objectMask.at(p.x, p.y, 0), 0.0f);
     const glm::vec3 a = differential.delta.rgb(p.x, p.y), b = deltaVolume.delta.rgb(p.x, p.y);

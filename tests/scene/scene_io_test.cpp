@@ -14,6 +14,7 @@
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
 #include "scene/json_reader.h"
+#include "scene/option_table.h"
 #include "test_errors.h"
 
 namespace deltagi {
@@ -351,7 +352,7 @@ TEST_F(SceneIoTest, OptionsReadAndWriteBack) {
     EXPECT_EQ(options.volume.resolution, 64);
     ASSERT_TRUE(options.volume.center && options.volume.size);
     EXPECT_FLOAT_EQ(*options.volume.size, 4.0f);
-    EXPECT_EQ(options.trace.accumulation, "paper");
+    EXPECT_EQ(options.trace.accumulation, ConeAccumulation::Paper);
     EXPECT_EQ(options.trace.jitter, 0.0f);
     EXPECT_EQ(options.render.samplesPerPixel, 9);
     EXPECT_FALSE(options.render.indirect);
@@ -480,13 +481,13 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
         "render": {"light_bounces": 3, "relight_cones": "differential", "relight_object_light": "rays"},
         "diffuse": {"object_rays": 4}, "volume": {"reach_scale": 0}})");
     const Options options = load(doc).options;
-    EXPECT_EQ(options.render.relightObjectLight, "rays");
+    EXPECT_EQ(options.render.relightObjectLight, RelightObjectLight::Rays);
     EXPECT_EQ(options.diffuse.objectRays, 4);
-    EXPECT_EQ(options.shadow.method, "cones");
+    EXPECT_EQ(options.shadow.method, ShadowMethod::Cones);
     EXPECT_EQ(options.shadow.raySamples, 9);
     EXPECT_EQ(options.shadow.areaRaySamples, 25);
     EXPECT_EQ(options.render.lightBounces, 3);
-    EXPECT_EQ(options.render.relightCones, "differential");
+    EXPECT_EQ(options.render.relightCones, RelightCones::Differential);
     EXPECT_EQ(options.volume.reachScale, 0.0f);
     const json written = optionsToJson(options);
     EXPECT_EQ(written["shadow"]["method"], "cones");
@@ -495,10 +496,10 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
     EXPECT_EQ(written["render"]["relight_object_light"], "rays");
     EXPECT_EQ(written["diffuse"]["object_rays"], 4);
     const Options defaults;
-    EXPECT_EQ(defaults.render.relightObjectLight, "cones");
+    EXPECT_EQ(defaults.render.relightObjectLight, RelightObjectLight::Cones);
     EXPECT_EQ(defaults.diffuse.objectRays, 16);
-    EXPECT_EQ(defaults.shadow.method, "rays");
-    EXPECT_EQ(defaults.render.relightCones, "differential");
+    EXPECT_EQ(defaults.shadow.method, ShadowMethod::Rays);
+    EXPECT_EQ(defaults.render.relightCones, RelightCones::Differential);
     struct Bad {
         const char* options;
         const char* key;
