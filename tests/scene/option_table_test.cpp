@@ -15,6 +15,7 @@
 #include "deltagi/scene_io.h"
 #include "test_errors.h"
 #include "test_files.h"
+#include "test_paths.h"
 
 namespace deltagi {
 namespace {
@@ -151,7 +152,7 @@ std::string firstDifference(const std::string& a, const std::string& b) {
 }
 
 TEST(OptionTable, DocsTablesAreTheCodesTables) {
-    const std::filesystem::path file = std::filesystem::path(DELTAGI_SOURCE_DIR) / "docs" / "scene-format.md";
+    const std::filesystem::path file = std::filesystem::path(test::kSourceDir) / "docs" / "scene-format.md";
     const std::string docs = test::readText(file);
     ASSERT_FALSE(docs.empty()) << file;
     EXPECT_EQ(firstDifference(docs, withOptionTables(docs, file.string())), "")
