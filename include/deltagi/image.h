@@ -69,7 +69,7 @@ struct ImageFile {
 ImageFile readImageFile(const std::filesystem::path& path);
 
 // Writes by extension: .png (8-bit sRGB, clamped to [0,1]), .exr (32-bit float, linear), .hdr (linear).
-// NaN/Inf pixels are written as 0. The file is replaced atomically (deltagi/atomic_file.h): a reader, a kill
+// NaN/Inf pixels are written as 0. The file is replaced atomically (src/io/atomic_file.h): a reader, a kill
 // or a failure never sees it half written. Throws InputError when the file cannot be written (its folder
 // must exist).
 void writeImage(const Image& image, const std::filesystem::path& path);
