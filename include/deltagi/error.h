@@ -14,7 +14,7 @@ DELTAGI_API_BEGIN
 namespace deltagi {
 
 class InputError : public std::runtime_error {
-public:
+  public:
     // `where` names the file and/or key, e.g. "scenes/box.json: options.volume.resolution".
     InputError(std::string where, const std::string& what)
         : std::runtime_error(where.empty() ? what : where + ": " + what),
@@ -24,7 +24,7 @@ public:
     // What was expected, without `where` (for callers that name the place again, further out).
     const std::string& message() const { return message_; }
 
-private:
+  private:
     std::string where_;
     std::string message_;
 };

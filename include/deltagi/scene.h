@@ -229,8 +229,8 @@ struct Scene {
     // For each of `virtuals`, its entry in the scene file's "virtual" list (a file entry may hold several
     // meshes, which share its "transform"); filled by loadScene, may be empty for scenes built in code.
     std::vector<int> virtualEntries;
-    std::vector<int> realEntries;        // the same for `real` and the scene file's "scene" list
-    std::vector<Light> lights;           // the scene file's lights, then those extracted from the environment
+    std::vector<int> realEntries;  // the same for `real` and the scene file's "scene" list
+    std::vector<Light> lights;     // the scene file's lights, then those extracted from the environment
     std::optional<Environment> environment;  // "environment": the light probe
     Options options;
     // What the loader accepted but the user should know (an LDR environment map, repaired pixels).

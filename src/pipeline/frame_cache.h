@@ -14,9 +14,10 @@
 //   └─ object BVH                                             the objects' layer over realOnly
 //   environment: the environment map                          its sampler
 //
-// The objects' parts (their BVH and volumes, and the objects' half of the G-buffer in `view`) are also brought
-// up to date by their own code where the objects move (RayScene::refit, ObjectVolumes, renderObjectSurfaces).
-// Everything is made lazily by the frame that needs it (renderer.cpp); update() only forgets.
+// The objects' parts (their BVH and volumes, and the objects' half of the G-buffer in `view`) are also
+// brought up to date by their own code where the objects move (RayScene::refit, ObjectVolumes,
+// renderObjectSurfaces). Everything is made lazily by the frame that needs it (renderer.cpp); update() only
+// forgets.
 #pragma once
 
 #include <array>

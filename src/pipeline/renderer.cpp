@@ -357,7 +357,8 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
                                     : AreaLights(Scene{}, SceneContent::RealOnly);
     // The environment map lights the scene through shadow rays too (with options.shadow.method "rays").
     std::unique_ptr<EnvironmentSampler>& sampler = cache.environment.work.sampler;
-    if (environmentByRays(scene) && !sampler) sampler = std::make_unique<EnvironmentSampler>(*scene.environment);
+    if (environmentByRays(scene) && !sampler)
+        sampler = std::make_unique<EnvironmentSampler>(*scene.environment);
     const EnvironmentSampler* environment = environmentByRays(scene) ? sampler.get() : nullptr;
     const std::vector<Light> direct = directLights(scene);
     const ConeJob jobs[] = {

@@ -417,7 +417,8 @@ TEST_F(CliTest, ReferenceAndEvalWriteTheirOutputs) {
 // The field example names the shared file it misses; with the shared data it loads 16 lights from the probe.
 TEST_F(CliTest, FieldBunnyExampleLoadsOrNamesTheMissingSharedFile) {
     const fs::path scene = fs::path(deltagi::test::kSourceDir) / "examples" / "field-bunny.json";
-    const bool shared = fs::exists(fs::path(deltagi::test::kSharedDataDir) / "photos" / "spruit-sunrise-field");
+    const bool shared =
+        fs::exists(fs::path(deltagi::test::kSharedDataDir) / "photos" / "spruit-sunrise-field");
     const CliResult missing =
         run("info " + quote(scene.string()) + " --set environment.file=../../shared/data/photos/missing.hdr");
     EXPECT_EQ(missing.exitCode, 1);

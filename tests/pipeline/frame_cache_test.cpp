@@ -106,7 +106,8 @@ TEST_F(FrameCacheTest, ARegionThatFollowsTheObjectsEmptiesTheVoxelsAndWhatIsMade
 }
 
 TEST_F(FrameCacheTest, TheRealScenesGeometryMaterialsOrOptionsEmptyAllButTheEnvironment) {
-    const Parts all{"world", "voxels", "light", "view", "litView", "relitShadows", "objectRays", "objectVolumes"};
+    const Parts all{"world",   "voxels",       "light",      "view",
+                    "litView", "relitShadows", "objectRays", "objectVolumes"};
     scene_.real[0].material.albedo = glm::vec3(0.2f);
     EXPECT_EQ(emptied(), all);
     EXPECT_TRUE(cache_.newRealScene());

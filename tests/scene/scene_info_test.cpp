@@ -68,8 +68,7 @@ TEST(LightPlacementTest, DirectionalLightsAreNotChecked) {
 
 // The loader adds the warnings to the scene's, which `render` and `info` print.
 TEST(LightPlacementTest, TheCornellExampleLoadsWithoutWarningAndWarnsWithTheOldLamp) {
-    const std::filesystem::path file =
-        std::filesystem::path(test::kSourceDir) / "examples/cornell-box.json";
+    const std::filesystem::path file = std::filesystem::path(test::kSourceDir) / "examples/cornell-box.json";
     EXPECT_TRUE(loadScene(file).warnings.empty());
     const Scene old = loadScene(file, {"lights.0.position=[0.278, 0.5478, 0.2795]"});
     ASSERT_EQ(old.warnings.size(), 1u);
