@@ -30,8 +30,8 @@ struct MaterialOverrides {
     std::string emissionWhere;  // the "emission_scale" key, for an overflowing product
 };
 
-// Whether an "albedo" value is "estimate": the real mesh's albedo comes from the photo (scene_io.cpp's
-// estimateRequestedAlbedo), starting from grey.
+// Whether an "albedo" value is "estimate": the real mesh's albedo comes from the photo (loadScene() in
+// src/loading/load_scene.cpp), starting from grey.
 bool asksForEstimate(const nlohmann::json& albedo);
 
 // Reads a texture key's file (relative to the scene file, each read once) with the given encoding.

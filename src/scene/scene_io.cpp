@@ -10,7 +10,6 @@
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "deltagi/albedo_estimation.h"
 #include "deltagi/error.h"
 #include "deltagi/keyframes.h"
 #include "deltagi/renderer.h"
@@ -22,6 +21,7 @@
 #include "scene/mesh_io.h"
 #include "scene/option_table.h"
 #include "scene/scene_info.h"
+#include "scene/scene_reader.h"
 #include "scene/shapes.h"
 
 namespace deltagi {
@@ -435,20 +435,12 @@ std::vector<bool> albedoRequests(const JsonNode& root, const Scene& scene) {
     return requests;
 }
 
-// The albedo of the real meshes whose entries asked for it, from the photo (deltagi/albedo_estimation.h),
-// with the estimator's defaults but fewer samples, as it runs at every load.
-constexpr int kLoadEstimateSamples = 16;
-void estimateRequestedAlbedo(const std::vector<bool>& requests, Scene& scene) {
-    AlbedoOptions options;
-    options.samplesPerPixel = kLoadEstimateSamples;
-    options.meshes.assign(scene.real.size(), false);
-    bool any = false;
+// Per real mesh, whether its entry asked for an estimate (`requests`: per entry of "scene").
+std::vector<bool> realMeshRequests(const std::vector<bool>& requests, const Scene& scene) {
+    std::vector<bool> meshes(scene.real.size(), false);
     for (size_t m = 0; m < scene.real.size(); ++m)
-        any |= options.meshes[m] = requests.at(static_cast<size_t>(scene.realEntries.at(m)));
-    if (!any) return;
-    const AlbedoEstimate estimate = estimateAlbedo(scene, options);
-    applyAlbedo(scene, estimate);
-    for (const std::string& warning : estimate.warnings) scene.warnings.push_back(warning);
+        meshes[m] = requests.at(static_cast<size_t>(scene.realEntries.at(m)));
+    return meshes;
 }
 
 // ---- the document -----------------------------------------------------------------------------------------
@@ -566,7 +558,7 @@ std::vector<std::string> sceneWarnings(const Scene& scene) {
 
 }  // namespace
 
-Scene loadScene(const json& document, const fs::path& file) {
+SceneRead readScene(const json& document, const fs::path& file) {
     JsonNode root(document, file.string());
     if (!document.is_object())
         root.fail("expected a JSON object {...} at the top level, got " + describeValue(document));
@@ -612,7 +604,6 @@ Scene loadScene(const json& document, const fs::path& file) {
         const KeyframeReader keyframes{scene, scene.animations};
         scene.virtuals = readMeshList(*n, meshInputs, true, &keyframes, &scene.virtualEntries);
     }
-    estimateRequestedAlbedo(albedoEstimates, scene);
     // Moving objects: placed for the first frame, in a volume region that holds them in every frame.
     if (!scene.animations.empty()) {
         poseObjects(scene, scene.sequence.front().index);
@@ -622,16 +613,17 @@ Scene loadScene(const json& document, const fs::path& file) {
         scene.warnings.push_back(file.string() + ": " + warning);
     for (const std::string& warning : sceneWarnings(scene))
         scene.warnings.push_back(file.string() + ": " + warning);
-    return scene;
+    std::vector<bool> estimate = realMeshRequests(albedoEstimates, scene);
+    return SceneRead{std::move(scene), std::move(estimate)};
 }
 
-Scene loadScene(const fs::path& file, const std::vector<std::string>& overrides) {
+SceneRead readScene(const fs::path& file, const std::vector<std::string>& overrides) {
     std::ifstream in(file, std::ios::binary);
     if (!fs::is_regular_file(file) || !in) throw InputError(file.string(), "cannot open scene file");
     std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
     json document = parseJson(text, file.string());
     for (const std::string& override : overrides) applyOverride(document, override);
-    return loadScene(document, file);
+    return readScene(document, file);
 }
 
 void applyOverride(json& document, const std::string& keyEqualsValue) {
