@@ -34,6 +34,11 @@ CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
                      "Move the camera too: swing it up to DEG degrees either way about the objects' centre "
                      "(default 0: still); each pose's photo is rendered first, untimed")
         ->check(CLI::Range(0.0f, 90.0f));
+    command->add_flag(
+        "--live", args.options.live,
+        "The live frame: the real light changes every frame too (point and spot lights move, "
+        "directional ones swing, an environment map turns), and the camera swings (--camera-motion, "
+        "default 5 then); each frame over its photo");
     command->add_option("--json", args.json, "Also write the figures as JSON here");
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     command->add_option("--threads", args.threads, "Worker threads (default: all cores)")

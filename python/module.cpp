@@ -69,8 +69,11 @@ py::dict outputToPython(RenderOutput&& out) {
     result["background"] = toArray(std::move(out.background));
     result["delta"] = toArray(std::move(out.delta));
     result["object_mask"] = toArray(std::move(out.objectMask));
-    py::dict timings;  // in pipeline order (dicts keep insertion order)
-    for (const StageTiming& t : out.timings) timings[py::str(t.name)] = t.ms;
+    py::dict timings;  // in pipeline order (dicts keep insertion order); a stage run twice is summed
+    for (const StageTiming& t : out.timings) {
+        const py::str name(t.name);
+        timings[name] = (timings.contains(name) ? timings[name].cast<double>() : 0.0) + t.ms;
+    }
     result["timings_ms"] = timings;
     result["total_ms"] = out.totalMs;
     return result;

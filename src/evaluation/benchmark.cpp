@@ -1,13 +1,16 @@
 #include "evaluation/benchmark.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <optional>
 
 #include <fmt/core.h>
 #include <tbb/global_control.h>
+#include <glm/gtc/matrix_transform.hpp>
 
+#include "deltagi/environment.h"
 #include "deltagi/transforms.h"
 
 namespace deltagi {
@@ -22,6 +25,8 @@ const std::vector<BenchRow>& benchRows() {
         {"specular_ms", {"specular"}, 64.0},
         {"shadow_ms", {"shadow"}, 4.0},
         {"sky_ms", {"sky"}, -1.0},
+        {"environment_ms", {"environment"}, -1.0},
+        {"bounce_ms", {"bounce"}, -1.0},
         {"bvh_ms", {"bvh"}, -1.0},
         {"gbuffer_ms", {"gbuffer"}, -1.0},
         {"shading_ms", {"shading"}, -1.0},
@@ -45,14 +50,55 @@ BenchStatistics statistics(std::vector<double> values) {
     return s;
 }
 
+// The frames repeat after this many: the objects' circle, the camera's swing and the live light's motion.
+constexpr int kPeriod = 16;
+
+float turnOf(int frame) {
+    return 2.0f * std::numbers::pi_v<float> * static_cast<float>(frame % kPeriod) /
+           static_cast<float>(kPeriod);
+}
+
+glm::mat3 aboutVertical(float radians) {
+    return glm::mat3(glm::rotate(glm::mat4(1.0f), radians, glm::vec3(0.0f, 1.0f, 0.0f)));
+}
+
+// The real light as loaded, which a live benchmark (BenchOptions::live) changes frame by frame.
+struct RealLight {
+    std::vector<Light> lights;  // the environment's extracted lights included
+    std::optional<Environment> environment;
+    float radius = 0.0f;  // of the point and spot lights' circle (world units)
+};
+
+// Frame `frame`'s real light on `scene` (BenchOptions::live); returns the milliseconds setEnvironment took,
+// 0 without an environment map.
+double setLiveLight(Scene& scene, const RealLight& original, int frame) {
+    const float turn = turnOf(frame);
+    scene.lights.clear();
+    for (Light light : original.lights) {
+        if (light.fromEnvironment) continue;
+        if (light.type == Light::Type::Directional)
+            light.direction =
+                aboutVertical(glm::radians(kLiveLightDegrees) * std::sin(turn)) * light.direction;
+        else
+            light.position += original.radius * glm::vec3(std::cos(turn) - 1.0f, 0.0f, std::sin(turn));
+        scene.lights.push_back(light);
+    }
+    if (!original.environment) return 0.0;
+    Environment environment = *original.environment;
+    environment.worldFromEnvironment = aboutVertical(turn) * environment.worldFromEnvironment;
+    const auto start = std::chrono::steady_clock::now();
+    setEnvironment(scene, std::move(environment));
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
 struct CameraPose {
     Camera camera;
     Image photo;
 };
 
-// The camera's poses for BenchOptions::cameraDegrees (at most a period of 16, and `frames`), each with the
-// real scene rendered alone from there as its photo.
-std::vector<CameraPose> cameraPoses(const Scene& scene, float degrees, int frames) {
+// The camera's poses for BenchOptions::cameraDegrees (at most a period, and `frames`), each with the real
+// scene rendered alone from there as its photo, lit as frame k is (`live`: the live light of frame k).
+std::vector<CameraPose> cameraPoses(const Scene& scene, float degrees, int frames, const RealLight* live) {
     Bounds3f objects;
     for (const TriangleMesh& m : scene.virtuals) objects.extend(m.bounds());
     const glm::vec3 centre = objects.center();
@@ -64,10 +110,10 @@ std::vector<CameraPose> cameraPoses(const Scene& scene, float degrees, int frame
     real.environment = scene.environment;
     real.options = scene.options;
     std::vector<CameraPose> poses;
-    for (int k = 0; k < std::min(frames, 16); ++k) {
-        const float angle =
-            degrees * std::sin(2.0f * std::numbers::pi_v<float> * static_cast<float>(k) / 16.0f);
+    for (int k = 0; k < std::min(frames, kPeriod); ++k) {
+        const float angle = degrees * std::sin(turnOf(k));
         real.camera = turnedCamera(scene.camera, centre, angle);
+        if (live) setLiveLight(real, *live, k);
         poses.push_back({real.camera, render(real).background});
     }
     return poses;
@@ -112,7 +158,7 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
     for (const TriangleMesh& m : scene.virtuals) original.push_back(m.positions);
     const float radius = options.motionVoxels * region.voxelSize();
     auto placeObjects = [&](int frame) {
-        const float angle = 2.0f * std::numbers::pi_v<float> * static_cast<float>(frame) / 16.0f;
+        const float angle = turnOf(frame);
         const glm::vec3 offset = radius * glm::vec3(std::cos(angle) - 1.0f, 0.0f, std::sin(angle));
         for (size_t m = 0; m < scene.virtuals.size(); ++m) {
             std::vector<glm::vec3>& p = scene.virtuals[m].positions;
@@ -124,16 +170,21 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
     const Camera camera = scene.camera;
     const std::optional<Image> background = scene.background;
     const std::optional<glm::vec3> viewpoint = scene.options.volume.viewpoint;
+    const RealLight light{scene.lights, scene.environment, kLiveLightVoxels * region.voxelSize()};
+    const float cameraDegrees =
+        options.live && options.cameraDegrees == 0.0f ? kLiveCameraDegrees : options.cameraDegrees;
     std::vector<CameraPose> poses;
-    if (options.cameraDegrees > 0.0f) {
+    result.cameraDegrees = cameraDegrees;
+    if (cameraDegrees > 0.0f) {
         // As a sequence does: the volumes light the real surfaces' side that the first camera sees.
         if (!viewpoint) scene.options.volume.viewpoint = camera.position();
-        poses = cameraPoses(scene, options.cameraDegrees, total);
+        poses = cameraPoses(scene, cameraDegrees, total, options.live ? &light : nullptr);
     }
 
     FrameRenderer renderer;
     for (int f = 0; f < total; ++f) {
         placeObjects(f);
+        const double environmentMs = options.live ? setLiveLight(scene, light, f) : 0.0;
         if (!poses.empty()) {
             const CameraPose& pose = poses[static_cast<size_t>(f) % poses.size()];
             scene.camera = pose.camera;
@@ -141,14 +192,21 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
         }
         if (options.cold) renderer.clear();
         RenderOutput out = renderer.render(scene);
+        if (light.environment && options.live) {
+            out.timings.insert(out.timings.begin(), {"environment", environmentMs});
+            out.totalMs += environmentMs;
+        }
         if (f < options.warmup) continue;
         const FrameRenderer::KeptWork kept = renderer.lastFrameKept();
-        if (kept.world && kept.light) ++result.worldKeptFrames;
+        if (kept.world) ++result.worldKeptFrames;
+        if (kept.light) ++result.lightKeptFrames;
         result.frames.push_back(std::move(out.timings));
         result.totals.push_back(out.totalMs);
         if (onFrame) onFrame(f - options.warmup, out.totalMs);
     }
     placeObjects(0);
+    scene.lights = light.lights;
+    scene.environment = light.environment;
     scene.camera = camera;
     scene.background = background;
     scene.options.volume.viewpoint = viewpoint;
@@ -160,8 +218,10 @@ nlohmann::ordered_json benchToJson(const BenchResult& r) {
     json["frames"] = r.options.frames;
     json["warmup"] = r.options.warmup;
     json["cold"] = r.options.cold;
-    json["camera_motion_deg"] = r.options.cameraDegrees;
+    json["live"] = r.options.live;
+    json["camera_motion_deg"] = r.cameraDegrees;
     json["world_kept_frames"] = r.worldKeptFrames;
+    json["light_kept_frames"] = r.lightKeptFrames;
     json["threads"] = r.threads;
     json["width"] = r.width;
     json["height"] = r.height;
@@ -178,12 +238,16 @@ nlohmann::ordered_json benchToJson(const BenchResult& r) {
 
 std::string benchTable(const BenchResult& r) {
     std::string out = fmt::format(
-        "{}x{}, volumes {}^3, {} real + {} virtual triangles, {} threads, {} frames ({}{} warm-up)\n",
+        "{}x{}, volumes {}^3, {} real + {} virtual triangles, {} threads, {} frames ({}{}{} warm-up)\n",
         r.width, r.height, r.volumeResolution, r.realTriangles, r.virtualTriangles, r.threads,
-        r.options.frames, r.options.cold ? "cold, " : "", r.options.warmup);
-    if (r.options.cameraDegrees > 0.0f)
-        out += fmt::format("camera swinging +-{} deg; the world-space work kept in {} of {} frames\n",
-                           r.options.cameraDegrees, r.worldKeptFrames, r.options.frames);
+        r.options.frames, r.options.cold ? "cold, " : "", r.options.live ? "live, " : "", r.options.warmup);
+    if (r.options.live)
+        out += fmt::format(
+            "the real light changing every frame; its shadow maps and injection kept in {} of {} frames\n",
+            r.lightKeptFrames, r.options.frames);
+    if (r.cameraDegrees > 0.0f)
+        out += fmt::format("camera swinging +-{} deg; the BVH and voxels kept in {} of {} frames\n",
+                           r.cameraDegrees, r.worldKeptFrames, r.options.frames);
     out += fmt::format("{:<15} {:>10} {:>10} {:>12}\n", "stage", "median ms", "max ms", "paper ms");
     for (const BenchRow& row : benchRows()) {
         const BenchStatistics s = r.row(row);

@@ -1,6 +1,8 @@
 // `deltagi bench`: the per-stage timings of the paper's Table 1, measured over a sequence of frames in which
 // the virtual objects move a little every frame (as in a mixed reality session), so that their voxels, the
-// RSMs with them, the light and delta volumes and all cones are redone each frame.
+// RSMs with them, the light and delta volumes and all cones are redone each frame. The live frame
+// (BenchOptions::live) changes the real light and the camera every frame too, as the paper's light camera and
+// tracked scene camera do.
 #pragma once
 
 #include <functional>
@@ -26,7 +28,17 @@ struct BenchOptions {
     // its photo (the real scene rendered alone from there, before the measured frames), so the frames do not
     // render the background; they redo the camera-space work and keep the world-space work.
     float cameraDegrees = 0.0f;
+    // The live frame: every frame the real light changes as well, over a photo. Point and spot lights move on
+    // a horizontal circle of kLiveLightVoxels level-0 voxels; the scene file's directional lights swing
+    // +-kLiveLightDegrees about the vertical; an environment map turns 1/16 of a turn per frame about the
+    // vertical, its lights extracted again each frame (setEnvironment, timed as "environment"). The camera
+    // swings as cameraDegrees says, kLiveCameraDegrees when that is 0. Each frame's photo is the real scene
+    // rendered alone with that frame's light and camera (before the measured frames).
+    bool live = false;
 };
+inline constexpr float kLiveLightVoxels = 8.0f;
+inline constexpr float kLiveLightDegrees = 10.0f;
+inline constexpr float kLiveCameraDegrees = 5.0f;
 
 // The rows of the report, in order: Table 1's stages first, then the others, then the total.
 struct BenchRow {
@@ -42,23 +54,27 @@ struct BenchStatistics {
 
 struct BenchResult {
     BenchOptions options;
+    float cameraDegrees = 0.0f;  // the camera's swing as run (options.cameraDegrees, or the live default)
     std::vector<std::vector<StageTiming>> frames;  // the measured frames' stage timings
     std::vector<double> totals;                    // their total_ms
     int threads = 0;
     int width = 0, height = 0, volumeResolution = 0;
     size_t realTriangles = 0, virtualTriangles = 0;
-    int worldKeptFrames = 0;  // measured frames that kept the real scene's world-space work and its light
+    int worldKeptFrames = 0;  // measured frames that kept the real scene's BVH and voxels
+    int lightKeptFrames = 0;  // measured frames that kept the real scene's light (its RSMs and injection)
 
     BenchStatistics row(const BenchRow& row) const;  // over the measured frames
 };
 
 // Renders options.warmup + options.frames frames of `scene`, moving its virtual objects (their vertices are
-// changed in place and put back at the end) and with options.cameraDegrees its camera (put back too).
+// changed in place and put back at the end), with options.cameraDegrees its camera and with options.live its
+// lights or environment (all put back too).
 // `onFrame(index, total_ms)` is called after each measured frame.
 BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
                          const std::function<void(int, double)>& onFrame = {});
 
-// {"frames", "warmup", "cold", "camera_motion_deg", "world_kept_frames", "threads", "width", "height",
+// {"frames", "warmup", "cold", "live", "camera_motion_deg", "world_kept_frames", "light_kept_frames",
+// "threads", "width", "height",
 // "volume_resolution", "triangles": {"real", "virtual"}, then one object {"median", "max", "paper"} per row
 // key ("voxelize_ms" ... "total_ms")}.
 nlohmann::ordered_json benchToJson(const BenchResult& result);

@@ -200,10 +200,12 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     if (!light.injected) {
         light.injected = injectLight(*light.rsms, region, sceneAlone);
         if (bounces > 0) {
+            timer.lap("inject");
             light.bounce =
                 bounceLight(*light.injected, *real.geometry, visibility(), scene.options, bounces, viewpoint);
             light.bounceSides = bounceViewSides(visibility(), viewpoint);
             for (size_t i = 0; i < light.injected->size(); ++i) (*light.injected)[i] += (*light.bounce)[i];
+            timer.lap("bounce");
         }
     }
     objects.inject({*real.geometry, *light.rsms, *light.injected, light.bounce ? &*light.bounce : nullptr},

@@ -242,6 +242,16 @@ TEST_F(CliTest, BenchWritesTheTableAndJson) {
     EXPECT_EQ(figures.at("width"), 64);
     EXPECT_GE(figures.at("total_ms").at("median").get<double>(), 0.0);
     EXPECT_EQ(figures.at("specular_ms").at("paper"), 64.0);
+    EXPECT_FALSE(figures.at("live").get<bool>());
+
+    const CliResult live = run("bench " + quote(writeScene(tinyScene()).string()) +
+                               " --frames 2 --warmup 1 --live --json " + quote(jsonPath.string()));
+    ASSERT_EQ(live.exitCode, 0) << live.err;
+    EXPECT_NE(live.out.find("the real light changing every frame"), std::string::npos) << live.out;
+    const json liveFigures = json::parse(readText(jsonPath));
+    EXPECT_TRUE(liveFigures.at("live").get<bool>());
+    EXPECT_EQ(liveFigures.at("light_kept_frames"), 0);
+    EXPECT_EQ(liveFigures.at("camera_motion_deg"), 5.0);
 }
 
 TEST_F(CliTest, BenchBadInput) {

@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "deltagi/environment.h"
 #include "deltagi/renderer.h"
 #include "evaluation/benchmark.h"
 #include "test_scenes.h"
@@ -272,6 +273,44 @@ TEST(Benchmark, AMovingCameraKeepsTheWorldSpaceWorkAndPutsTheCameraBack) {
     EXPECT_EQ(json["world_kept_frames"].get<int>(), 3);
     // The frames used their photos: nothing was rendered for the background.
     EXPECT_LT(json["background_ms"]["max"].get<double>(), json["total_ms"]["median"].get<double>());
+}
+
+// The live frame changes the real light every frame (a point light moves, an environment map turns and its
+// lights are extracted again) and swings the camera; the scene's lights and environment are put back.
+TEST(Benchmark, TheLiveFrameChangesTheRealLightAndPutsItBack) {
+    Scene s = ballOverFloor();
+    Environment environment;
+    environment.radiance = Image(32, 16, 3, 0.2f);
+    environment.radiance.setRgb(5, 3, glm::vec3(400.0f));  // a sun
+    s.options.environment.lightCount = 2;
+    setEnvironment(s, environment);
+    const std::vector<Light> lights = s.lights;
+    ASSERT_GE(lights.size(), 2u);
+    BenchOptions o;
+    o.frames = 3;
+    o.warmup = 1;
+    o.live = true;
+    const BenchResult r = runBenchmark(s, o);
+    EXPECT_EQ(r.lightKeptFrames, 0);
+    EXPECT_EQ(r.worldKeptFrames, 3);
+    EXPECT_EQ(r.cameraDegrees, kLiveCameraDegrees);
+    ASSERT_EQ(s.lights.size(), lights.size());
+    for (size_t l = 0; l < lights.size(); ++l) {
+        EXPECT_EQ(s.lights[l].position, lights[l].position);
+        EXPECT_EQ(s.lights[l].direction, lights[l].direction);
+    }
+    ASSERT_TRUE(s.environment.has_value());
+    EXPECT_EQ(s.environment->worldFromEnvironment, glm::mat3(1.0f));
+    EXPECT_FALSE(s.background.has_value());
+    const nlohmann::ordered_json json = benchToJson(r);
+    EXPECT_TRUE(json["live"].get<bool>());
+    EXPECT_EQ(json["light_kept_frames"].get<int>(), 0);
+    EXPECT_GT(json["environment_ms"]["max"].get<double>(), 0.0);
+    EXPECT_LT(json["background_ms"]["max"].get<double>(), json["total_ms"]["median"].get<double>());
+    // Without it, the same frames keep the light.
+    o.live = false;
+    o.cameraDegrees = kLiveCameraDegrees;
+    EXPECT_EQ(runBenchmark(s, o).lightKeptFrames, 3);
 }
 
 }  // namespace
