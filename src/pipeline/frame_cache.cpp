@@ -170,7 +170,7 @@ void FrameCache::update(const Scene& scene) {
     renew(litView, keyOf(world.version, lights, view.version));
     renew(relitShadows, keyOf(voxels.version, lights, view.version));
     renew(objectRays, keyOf(world.version));
-    renew(objectVolumes, keyOf(voxels.version, light.version));
+    renew(objectVolumes, keyOf(voxels.version));  // a new light: ObjectVolumes starts from it (lightVersion)
     renew(environment, environmentKey(scene));
     const uint64_t realScene = keyOf(world.version, lights);
     newRealScene_ = realScene != realSceneKey_;

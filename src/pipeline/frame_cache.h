@@ -100,7 +100,8 @@ struct ObjectRayWork {
     std::unique_ptr<RayScene> objects;
 };
 
-// The objects' volumes, updated where the objects changed them since the last frame.
+// The objects' volumes, updated where the objects changed them since the last frame (and from the new light
+// when the light changed: ObjectVolumes follows the light part's version itself).
 struct ObjectVolumeWork {
     std::optional<ObjectVolumes> volumes;
 };

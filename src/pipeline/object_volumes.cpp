@@ -32,15 +32,21 @@ void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const Volume
 }
 
 void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates) {
+    const bool newLight = fullLight_.empty() || real.lightVersion != sceneLightVersion_;
+    if (newLight) {
+        sceneLightVersion_ = real.lightVersion;
+        sceneTexels_.reset();
+        sceneLightBounds_.reset();
+    }
     const RsmChanges changes = compareRsms(real.rsms, updates, region_);
     const VoxelGeometry* both[] = {&real.geometry, &objects_};
     VoxelBox differs = objects_.bounds;
     differs.extend(changes.bounds);
     VoxelBox changed = differs;
-    changed.extend(lightDiffers_);
+    if (!newLight) changed.extend(lightDiffers_);
     lightDiffers_ = differs;
-    const size_t voxels = VoxelBox::all(region_.resolution).count();
-    if (fullLight_.empty() || changed.count() > voxels / kFreshInjectionFraction) {
+    const VoxelBox all = VoxelBox::all(region_.resolution);
+    if (changed.count() > all.count() / kFreshInjectionFraction) {
         std::vector<ReflectiveShadowMap> withObjects;
         for (size_t l = 0; l < updates.size(); ++l)
             withObjects.push_back(applyRsmUpdate(real.rsms[l], updates[l]));
@@ -48,11 +54,20 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
         if (real.bounce)
             for (size_t i = 0; i < freshFull_->size(); ++i) (*freshFull_)[i] += (*real.bounce)[i];
         freshDelta_ = deltaVolume(*freshFull_, real.light);
-        lightChanged_ = VoxelBox::all(region_.resolution);
+        lightChanged_ = all;
         return;
     }
     if (!sceneTexels_) sceneTexels_ = binTexels(real.rsms, region_);
-    if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, VoxelBox::all(region_.resolution));
+    if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, all);
+    if (newLight) {
+        // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).
+        freshFull_ = real.light.clone();
+        freshDelta_ = deltaVolume(real.light, real.light);
+        reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, *freshFull_, *freshDelta_,
+                      real.bounce);
+        lightChanged_ = all;
+        return;
+    }
     reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, fullLight_.levelForUpdate(0),
                   deltaLight_.levelForUpdate(0), real.bounce);
     lightChanged_ = changed;

@@ -8,7 +8,10 @@
 //      (reinjectLight), together with last frame's box, which puts the scene's light back where the objects
 //      have left;
 //   4. mipmap: every level is recomputed above the changed boxes only (updateMipChain).
-// The first frame, and one in which the changes cover a large part of the volume, computes them as render()
+// When the real light changes (a new RealSceneVolumes::lightVersion, and the first frame), the light volumes
+// start from the scene's own light: the full volume is the scene's and the delta volume (0, 0, 0, occupancy)
+// outside the box of the objects and the texels they change, which is injected as above; their mip chains
+// are made anew. A frame in which that box covers a large part of the volume injects everything as render()
 // does.
 #pragma once
 
@@ -23,8 +26,8 @@
 
 namespace deltagi {
 
-// The real scene's share of the volumes (kept by the renderer). The same from frame to frame: a changed real
-// scene, light or region needs a new ObjectVolumes (the renderer keeps both in one place and drops both).
+// The real scene's share of the volumes (kept by the renderer). A changed real scene or region needs a new
+// ObjectVolumes (the renderer keeps both in one place and drops both); a changed light, a new `lightVersion`.
 struct RealSceneVolumes {
     const VoxelGeometry& geometry;
     std::span<const ReflectiveShadowMap> rsms;  // of the real scene alone, one per light
@@ -32,6 +35,9 @@ struct RealSceneVolumes {
     // The real scene's further bounces of light (bounceLight), added to the full light volume as well; null:
     // none.
     const Grid3* bounce = nullptr;
+    // Another value whenever `rsms`, `light` or `bounce` differ from the last frame's (the real light
+    // changed).
+    uint64_t lightVersion = 0;
 };
 
 class ObjectVolumes {
@@ -73,9 +79,10 @@ class ObjectVolumes {
     VoxelBox lightDiffers_;    // outside it the full light volume is the scene's (the last injection)
     VoxelBox lightChanged_;    // level-0 voxels that this frame's injection rewrote
     std::optional<Grid3> freshFull_, freshDelta_;  // injected from scratch this frame, for mipmap()
-    // Built on the first frame that needs them:
+    // Of the real light of version sceneLightVersion_, built on the first frame that needs them:
     std::optional<TexelBins> sceneTexels_;      // the real scene's RSM texels by voxel row
     std::optional<VoxelBox> sceneLightBounds_;  // the real scene's non-zero light voxels
+    uint64_t sceneLightVersion_ = 0;
 };
 
 }  // namespace deltagi

@@ -208,7 +208,8 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
             timer.lap("bounce");
         }
     }
-    objects.inject({*real.geometry, *light.rsms, *light.injected, light.bounce ? &*light.bounce : nullptr},
+    objects.inject({*real.geometry, *light.rsms, *light.injected, light.bounce ? &*light.bounce : nullptr,
+                    cache.light.version},
                    updates);
     timer.lap("inject");
     // 4. Mipmaps of all four volumes. With further bounces the objects reflect the room's light they receive

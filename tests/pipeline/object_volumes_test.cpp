@@ -62,8 +62,9 @@ struct RealScene {
     VoxelGeometry geometry;
     std::vector<ReflectiveShadowMap> rsms;
     Grid3 light;
-    explicit RealScene(const Scene& s)
-        : rays(s, SceneContent::RealOnly), geometry(voxelize(s.real, kRegion)) {
+    uint64_t lightVersion = 0;
+    explicit RealScene(const Scene& s, uint64_t version = 0)
+        : rays(s, SceneContent::RealOnly), geometry(voxelize(s.real, kRegion)), lightVersion(version) {
         for (const Light& l : s.lights)
             rsms.push_back(renderReflectiveShadowMap(rays, l, kRegion, s.options.rsm.resolution));
         const VoxelGeometry* alone[] = {&geometry};
@@ -84,7 +85,7 @@ size_t frameEqualsScratch(ObjectVolumes& kept, const RealScene& real, const Scen
         updates.push_back(traceRsmUpdate(real.rsms[l], all, s.lights[l], kRegion, objectBounds));
         withObjects.push_back(applyRsmUpdate(real.rsms[l], updates.back()));
     }
-    kept.inject({real.geometry, real.rsms, real.light}, updates);
+    kept.inject({real.geometry, real.rsms, real.light, nullptr, real.lightVersion}, updates);
     kept.mipmap();
 
     // From scratch, as render() does (the updated maps are the maps rendered with the objects, texel for
@@ -146,6 +147,27 @@ TEST(ObjectVolumes, ChangesOfTheObjectsMaterialAndNumberEqualVolumesFromScratch)
     s.virtuals.erase(s.virtuals.begin());  // one object fewer
     const size_t injected = next();
     EXPECT_LT(injected, VoxelBox::all(kRegion.resolution).count() / 4);
+}
+
+// A live session's real light changes every frame (a light camera): the kept volumes start from each new
+// light, and are still the volumes from scratch, while the objects move too and after a large jump.
+TEST(ObjectVolumes, FramesOfAChangingLightEqualVolumesFromScratch) {
+    Scene s = floorWithBall();
+    ObjectVolumes kept;
+    for (uint64_t version = 1; version <= 5; ++version) {
+        SCOPED_TRACE(testing::Message() << "light " << version);
+        s.lights[0].position += glm::vec3(0.04f, -0.02f, 0.03f);
+        s.lights[1].intensity *= 1.1f;
+        moveMesh(s.virtuals[0], {0.03f, 0.0f, -0.02f});
+        const RealScene real(s, version);
+        frameEqualsScratch(kept, real, s);
+        if (HasFatalFailure()) return;
+        moveMesh(s.virtuals[0], {0.02f, 0.0f, 0.02f});  // and a frame of the same light
+        EXPECT_LT(frameEqualsScratch(kept, real, s), VoxelBox::all(kRegion.resolution).count() / 4);
+        if (HasFatalFailure()) return;
+    }
+    s.virtuals[0] = placed(makeSphere(0.7f, 24), {0.0f, 0.4f, 0.0f}, diffuse(glm::vec3(0.5f)), "big");
+    frameEqualsScratch(kept, RealScene(s, 6), s);
 }
 
 // A directional light's map is traced again whole when the objects reach beyond the real scene (its rays
