@@ -200,7 +200,9 @@ void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> di
                                  std::span<RayHit> hits, bool topLayerOnly, bool texturesLater) const {
     if (meshes_.empty() || (base_ && !topLayerOnly)) {  // layers: one ray at a time
         for (size_t i = 0; i < directions.size(); ++i)
-            hits[i] = topLayerOnly ? RayHit{} : intersect(origin, directions[i]);
+            hits[i] = topLayerOnly ? RayHit{}
+                                   : intersect(origin, directions[i], 0.0f,
+                                               std::numeric_limits<float>::infinity(), texturesLater);
         return;
     }
     RTCIntersectContext context;
