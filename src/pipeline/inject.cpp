@@ -134,24 +134,29 @@ TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegio
     bins.resolution = n;
     // A counting sort by row, which keeps injectLight's order inside each row, then each row by x.
     const TexelVoxels texelVoxel(region);
-    std::vector<uint32_t> rowOf;
+    size_t texels = 0;
+    for (const ReflectiveShadowMap& rsm : rsms) texels += rsm.texels.size();
+    // Each texel's voxel, found in parallel: the row (z * n + y) and x.
+    std::vector<uint32_t> rowOf(texels);
+    std::vector<uint16_t> xOf(texels);
+    size_t first = 0;
+    for (const ReflectiveShadowMap& rsm : rsms) {
+        parallelFor(0, static_cast<int64_t>(rsm.texels.size()), 1 << 14, [&](int64_t t) {
+            const glm::ivec3 v = texelVoxel(rsm.texels[t].position);
+            rowOf[first + t] = static_cast<uint32_t>(v.z * n + v.y);
+            xOf[first + t] = static_cast<uint16_t>(v.x);
+        });
+        first += rsm.texels.size();
+    }
     bins.rowStart.assign(static_cast<size_t>(n) * n + 1, 0);
-    for (const ReflectiveShadowMap& rsm : rsms)
-        for (const RsmTexel& t : rsm.texels) {
-            const glm::ivec3 v = texelVoxel(t.position);
-            rowOf.push_back(static_cast<uint32_t>(v.z * n + v.y));
-            ++bins.rowStart[rowOf.back() + 1];
-        }
+    for (uint32_t row : rowOf) ++bins.rowStart[row + 1];
     for (size_t r = 0; r + 1 < bins.rowStart.size(); ++r) bins.rowStart[r + 1] += bins.rowStart[r];
-    bins.entries.resize(rowOf.size());
+    bins.entries.resize(texels);
     std::vector<uint32_t> cursor(bins.rowStart.begin(), bins.rowStart.end() - 1);
     size_t k = 0;
     for (size_t l = 0; l < rsms.size(); ++l)
-        for (size_t t = 0; t < rsms[l].texels.size(); ++t, ++k) {
-            const int x = texelVoxel(rsms[l].texels[t].position).x;
-            bins.entries[cursor[rowOf[k]]++] = {static_cast<uint16_t>(x), static_cast<uint16_t>(l),
-                                                static_cast<uint32_t>(t)};
-        }
+        for (size_t t = 0; t < rsms[l].texels.size(); ++t, ++k)
+            bins.entries[cursor[rowOf[k]]++] = {xOf[k], static_cast<uint16_t>(l), static_cast<uint32_t>(t)};
     parallelFor(0, static_cast<int64_t>(n) * n, 64, [&](int64_t r) {
         std::stable_sort(bins.entries.begin() + bins.rowStart[r], bins.entries.begin() + bins.rowStart[r + 1],
                          [](const TexelBins::Entry& a, const TexelBins::Entry& b) { return a.x < b.x; });

@@ -62,7 +62,7 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     if (newLight) {
         // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).
         freshFull_ = real.light.clone();
-        freshDelta_ = deltaVolume(real.light, real.light);
+        freshDelta_ = deltaVolume(*freshFull_, real.light);
         reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, *freshFull_, *freshDelta_,
                       real.bounce);
         lightChanged_ = all;
