@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The performance figures of the README ("Performance"): the benchmark scene's stage timings next to the
-# paper's Table 1 (warm frames, where only the virtual object moves, and cold frames), and the scaling with
-# volume resolution and image size. Writes docs/benchmark/*.json and prints the tables as Markdown.
+# The performance figures of docs/performance.md: the benchmark scene's stage timings next to the paper's
+# Table 1 (warm frames, where only the virtual object moves; live frames, where the real light, the camera
+# and the object change every frame; cold frames), and the scaling with volume resolution and image size. Writes docs/benchmark/*.json and prints the tables as Markdown.
 # Needs ../shared/data/meshes/happy-buddha.obj and a Release build (scripts/test.sh or scripts/render-example.sh).
 #   scripts/bench.sh [FRAMES]     (default 10 measured frames per figure)
 set -euo pipefail
@@ -16,6 +16,7 @@ run() {  # name, extra args...
   build/deltagi bench "$scene" --frames "$frames" --quiet --json "$out/$name.json" "$@" >/dev/null
 }
 run warm
+run live --live
 run cold --cold
 for r in 64 256; do run "volume-$r" --set options.volume.resolution=$r; done
 run image-320x240 --set camera.width=320 --set camera.height=240
@@ -24,16 +25,16 @@ python3 - "$out" <<'PY'
 import json, sys, os
 out = sys.argv[1]
 load = lambda n: json.load(open(os.path.join(out, n + ".json")))
-warm, cold = load("warm"), load("cold")
+warm, live, cold = load("warm"), load("live"), load("cold")
 rows = [k for k in warm if k.endswith("_ms")]
 print(f"{warm['width']}x{warm['height']}, {warm['volume_resolution']}^3, {warm['triangles']['virtual']} virtual "
       f"triangles, {warm['threads']} threads, {warm['frames']} frames\n")
-print("| stage | warm median ms | warm max ms | cold median ms | paper (GTX 660) ms |")
-print("|---|---:|---:|---:|---:|")
+print("| stage | warm median ms | warm max ms | live median ms | live max ms | cold median ms | paper (GTX 660) ms |")
+print("|---|---:|---:|---:|---:|---:|---:|")
 for k in rows:
     p = warm[k]["paper"]
-    print(f"| {k} | {warm[k]['median']:.1f} | {warm[k]['max']:.1f} | {cold[k]['median']:.1f} | "
-          f"{'' if p is None else p} |")
+    print(f"| {k} | {warm[k]['median']:.1f} | {warm[k]['max']:.1f} | {live[k]['median']:.1f} | "
+          f"{live[k]['max']:.1f} | {cold[k]['median']:.1f} | {'' if p is None else p} |")
 print("\n| volume resolution | total ms (median) | diffuse | shadow | voxelize | inject | mipmap |")
 print("|---:|---:|---:|---:|---:|---:|---:|")
 for r, name in ((64, "volume-64"), (128, "warm"), (256, "volume-256")):

@@ -198,10 +198,17 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
 
 void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
                                  std::span<RayHit> hits, bool topLayerOnly, bool texturesLater) const {
+    intersectCoherent(std::span(&origin, 1), directions, hits, topLayerOnly, texturesLater);
+}
+
+void RayScene::intersectCoherent(std::span<const glm::vec3> origins, std::span<const glm::vec3> directions,
+                                 std::span<RayHit> hits, bool topLayerOnly, bool texturesLater) const {
+    // One origin for all, or one per ray.
+    auto originOf = [&](size_t i) { return origins.size() == 1 ? origins[0] : origins[i]; };
     if (meshes_.empty() || (base_ && !topLayerOnly)) {  // layers: one ray at a time
         for (size_t i = 0; i < directions.size(); ++i)
             hits[i] = topLayerOnly ? RayHit{}
-                                   : intersect(origin, directions[i], 0.0f,
+                                   : intersect(originOf(i), directions[i], 0.0f,
                                                std::numeric_limits<float>::infinity(), texturesLater);
         return;
     }
@@ -214,11 +221,12 @@ void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> di
         alignas(32) int valid[kPacket];
         const size_t n = std::min(kPacket, directions.size() - first);
         for (size_t k = 0; k < kPacket; ++k) {
-            const glm::vec3 d = directions[first + std::min(k, n - 1)];
+            const size_t i = first + std::min(k, n - 1);
+            const glm::vec3 o = originOf(i), d = directions[i];
             valid[k] = k < n ? -1 : 0;
-            rh.ray.org_x[k] = origin.x;
-            rh.ray.org_y[k] = origin.y;
-            rh.ray.org_z[k] = origin.z;
+            rh.ray.org_x[k] = o.x;
+            rh.ray.org_y[k] = o.y;
+            rh.ray.org_z[k] = o.z;
             rh.ray.dir_x[k] = d.x;
             rh.ray.dir_y[k] = d.y;
             rh.ray.dir_z[k] = d.z;
@@ -238,8 +246,8 @@ void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> di
                 continue;
             }
             hitOn(rh.hit.geomID[k], rh.hit.primID[k], {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
-                  {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, origin, directions[first + k],
-                  !texturesLater, hits[first + k]);
+                  {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, originOf(first + k),
+                  directions[first + k], !texturesLater, hits[first + k]);
         }
     }
 }

@@ -88,6 +88,10 @@ class RayScene {
     // unmapped normal instead of a lookup at the finest texels.
     void intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions, std::span<RayHit> hits,
                            bool topLayerOnly = false, bool texturesLater = false) const;
+    // The same for rays of their own origins (origins[i], e.g. a directional light's parallel rays).
+    void intersectCoherent(std::span<const glm::vec3> origins, std::span<const glm::vec3> directions,
+                           std::span<RayHit> hits, bool topLayerOnly = false,
+                           bool texturesLater = false) const;
     // Whether anything lies along origin + t * direction, t in (tMin, tMax): shadow rays (any hit, cheaper
     // than the closest). Of this layer and its base, or of this layer alone.
     bool occluded(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,

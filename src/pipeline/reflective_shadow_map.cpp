@@ -241,26 +241,23 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
                                               std::optional<glm::vec3> viewpoint) {
     const MapLayout layout(scene, light, region, resolution);
     const Bounds3f regionBounds = region.bounds();
-    if (light.type == Light::Type::Directional)
-        return renderRows(layout, resolution, [&](int face, int j, std::vector<RsmTexel>& row) {
-            for (int i = 0; i < resolution; ++i)
-                if (auto t = traceTexel(scene, layout, regionBounds, resolution, face, i, j, viewpoint))
-                    row.push_back(*t);
-        });
-    // A point or spot light's rays all leave its position: a row's are traced in packets.
+    // A row's rays are traced in packets: a point or spot light's all leave its position, a directional
+    // light's are parallel.
+    const bool directional = light.type == Light::Type::Directional;
     return renderRows(layout, resolution, [&](int face, int j, std::vector<RsmTexel>& row) {
         std::vector<TexelRay> rays;
         std::vector<int> columns;
-        std::vector<glm::vec3> directions;
+        std::vector<glm::vec3> origins, directions;
         for (int i = 0; i < resolution; ++i) {
             const TexelRay ray = layout.ray(face, i, j);
             if (!carriesLight(ray)) continue;
             rays.push_back(ray);
             columns.push_back(i);
+            if (directional || origins.empty()) origins.push_back(ray.origin);
             directions.push_back(ray.dir);
         }
         std::vector<RayHit> hits(rays.size());
-        scene.intersectCoherent(light.position, directions, hits, false, true);
+        scene.intersectCoherent(origins, directions, hits, false, true);
         for (size_t k = 0; k < rays.size(); ++k)
             if (auto t = texelFromHit(hits[k], rays[k], regionBounds,
                                       texelIndex(resolution, face, columns[k], j), viewpoint))
