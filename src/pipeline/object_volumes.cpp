@@ -42,8 +42,11 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     const VoxelGeometry* both[] = {&real.geometry, &objects_};
     VoxelBox differs = objects_.bounds;
     differs.extend(changes.bounds);
+    // A new light rewrites the whole full volume, but the delta volume only where the objects change the
+    // light now or did last frame: elsewhere it is (0, 0, 0, occupancy) whatever the light.
+    const bool wholeDelta = deltaLight_.empty();
     VoxelBox changed = differs;
-    if (!newLight) changed.extend(lightDiffers_);
+    if (!wholeDelta) changed.extend(lightDiffers_);
     lightDiffers_ = differs;
     const VoxelBox all = VoxelBox::all(region_.resolution);
     if (changed.count() > all.count() / kFreshInjectionFraction) {
@@ -62,10 +65,10 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     if (newLight) {
         // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).
         freshFull_ = real.light.clone();
-        freshDelta_ = deltaVolume(*freshFull_, real.light);
-        reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, *freshFull_, *freshDelta_,
-                      real.bounce);
-        lightChanged_ = all;
+        if (wholeDelta) freshDelta_ = deltaVolume(*freshFull_, real.light);
+        reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, *freshFull_,
+                      wholeDelta ? *freshDelta_ : deltaLight_.levelForUpdate(0), real.bounce);
+        lightChanged_ = wholeDelta ? all : changed;
         return;
     }
     reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, fullLight_.levelForUpdate(0),
@@ -146,19 +149,24 @@ void ObjectVolumes::buildLightMips() {
         });
         updateMipChain(objectVisibility_, box, nonZeroBounds(level0, objects_.bounds));
     }
+    // Outside lightDiffers_ both are non-zero only where the scene's light is.
+    auto update = [&](MipVolume& volume) {
+        VoxelBox occupied = *sceneLightBounds_;
+        occupied.extend(nonZeroBounds(volume.level(0), lightDiffers_));
+        updateMipChain(volume, lightChanged_, occupied);
+    };
     if (freshFull_) {
         fullLight_ = buildMipChain(region_, std::move(*freshFull_));
-        deltaLight_ = buildMipChain(region_, std::move(*freshDelta_));
         freshFull_.reset();
+        if (freshDelta_)
+            deltaLight_ = buildMipChain(region_, std::move(*freshDelta_));
+        else
+            update(deltaLight_);  // a new light: the delta volume was rewritten in lightChanged_ only
         freshDelta_.reset();
         return;
     }
-    // Outside lightDiffers_ both are non-zero only where the scene's light is.
-    for (MipVolume* volume : {&fullLight_, &deltaLight_}) {
-        VoxelBox occupied = *sceneLightBounds_;
-        occupied.extend(nonZeroBounds(volume->level(0), lightDiffers_));
-        updateMipChain(*volume, lightChanged_, occupied);
-    }
+    update(fullLight_);
+    update(deltaLight_);
 }
 
 }  // namespace deltagi

@@ -8,11 +8,11 @@
 //      (reinjectLight), together with last frame's box, which puts the scene's light back where the objects
 //      have left;
 //   4. mipmap: every level is recomputed above the changed boxes only (updateMipChain).
-// When the real light changes (a new RealSceneVolumes::lightVersion, and the first frame), the light volumes
-// start from the scene's own light: the full volume is the scene's and the delta volume (0, 0, 0, occupancy)
-// outside the box of the objects and the texels they change, which is injected as above; their mip chains
-// are made anew. A frame in which that box covers a large part of the volume injects everything as render()
-// does.
+// When the real light changes (a new RealSceneVolumes::lightVersion, and the first frame), the full light
+// volume starts from the scene's own light, the box of the objects and the texels they change injected as
+// above, and its mip chain is made anew; the delta volume, (0, 0, 0, occupancy) outside that box and last
+// frame's whatever the light, is injected and mip-mapped there only. A frame in which that box covers a large
+// part of the volume injects everything as render() does.
 #pragma once
 
 #include <optional>
@@ -77,8 +77,9 @@ class ObjectVolumes {
     MipVolume objectVisibility_, fullLight_, deltaLight_, objectLight_;
     VoxelBox objectsChanged_;  // level-0 voxels that this frame's voxelization changed
     VoxelBox lightDiffers_;    // outside it the full light volume is the scene's (the last injection)
-    VoxelBox lightChanged_;    // level-0 voxels that this frame's injection rewrote
-    std::optional<Grid3> freshFull_, freshDelta_;  // injected from scratch this frame, for mipmap()
+    VoxelBox lightChanged_;  // level-0 voxels that this frame's injection rewrote (a new light: of the delta
+                             // volume)
+    std::optional<Grid3> freshFull_, freshDelta_;  // made whole this frame, for mipmap()
     // Of the real light of version sceneLightVersion_, built on the first frame that needs them:
     std::optional<TexelBins> sceneTexels_;      // the real scene's RSM texels by voxel row
     std::optional<VoxelBox> sceneLightBounds_;  // the real scene's non-zero light voxels
