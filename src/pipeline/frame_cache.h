@@ -5,9 +5,10 @@
 //
 //   world: the real meshes, their materials, the options      realOnly BVH
 //   ├─ voxels: + the volume region                            the real scene's voxels and visibility mipmaps
-//   │  └─ light: + the lights, the environment map, the       its RSMs, injected and bounced light
-//   │     │       viewpoint's side of each real surface
-//   │     └─ object volumes                                   the objects' voxels and the four light volumes
+//   │  ├─ light: + the lights, the environment map, the       its RSMs, injected and bounced light
+//   │  │         viewpoint's side of each real surface
+//   │  └─ object volumes                                      the objects' voxels and the four light volumes,
+//   │                                                          which start from each new light themselves
 //   ├─ view: + the camera                                     the real G-buffer, the filter's weights
 //   │  ├─ lit view: + the lights                              the background rendered without a photo
 //   │  └─ relit shadows: + the region, the lights             the scene's share of the relit shadow cones
