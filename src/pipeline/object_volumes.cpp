@@ -66,14 +66,11 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
         // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).
         freshFull_ = real.light.clone();
         if (wholeDelta) freshDelta_ = deltaVolume(*freshFull_, real.light);
-        reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, *freshFull_,
-                      wholeDelta ? *freshDelta_ : deltaLight_.levelForUpdate(0), real.bounce);
-        lightChanged_ = wholeDelta ? all : changed;
-        return;
     }
-    reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light, fullLight_.levelForUpdate(0),
-                  deltaLight_.levelForUpdate(0), real.bounce);
-    lightChanged_ = changed;
+    reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light,
+                  newLight ? *freshFull_ : fullLight_.levelForUpdate(0),
+                  wholeDelta ? *freshDelta_ : deltaLight_.levelForUpdate(0), real.bounce);
+    lightChanged_ = wholeDelta ? all : changed;
 }
 
 namespace {
