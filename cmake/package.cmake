@@ -1,12 +1,12 @@
 # The installed package (issue 14): `cmake --install build [--prefix P]` puts in place
-#   P/lib/libdeltagi.so.0.1          the library (the pipeline, with Embree, TBB, Assimp, OpenImageIO and fmt
+#   P/lib/libdeltagi.so.0.1          the library (the pipeline, with Embree, TBB, Assimp, OpenImageIO, fmt, FFmpeg and AprilTag
 #                                    as its own private dependencies: a consumer does not find or link them)
 #   P/include/deltagi/*.h            the public API, which includes only the C++ library, GLM and nlohmann-json
 #   P/lib/cmake/deltagi/             deltagiConfig.cmake: find_package(deltagi CONFIG) -> deltagi::deltagi
 #   P/bin/deltagi                    the command line
 #   P/lib/python3.X/dist-packages/   the Python module (python/CMakeLists.txt)
 # A shared library, so that a consumer needs only GLM and nlohmann-json (the public headers use them) and not
-# the five packages the pipeline links; the command line and the tests link the same objects statically
+# the packages the pipeline links; the command line and the tests link the same objects statically
 # (deltagi_core), whose position-independent code costs nothing measurable on x86-64.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)

@@ -17,7 +17,7 @@ packages=(
   cmake ninja-build g++ pkg-config ccache
   libembree-dev libtbb-dev libassimp-dev libopenimageio-dev
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev libxxhash-dev
-  libavcodec-dev libavformat-dev libavutil-dev libswscale-dev
+  libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libavdevice-dev libapriltag-dev
   libcivetweb-dev
 )
 if [ "$render_only" = 0 ]; then

@@ -209,6 +209,17 @@ struct ObjectAnimation {
     std::string where;  // "scene.json: virtual[1].keyframes", for messages
 };
 
+// A fiducial marker printed and laid on the real scene (the scene file's "markers"): it registers a camera
+// that sees it (`deltagi track`, src/live/marker_registration.h). AprilTag family tag36h11.
+struct Marker {
+    int id = 0;        // "id": the tag's number in its family (0-586)
+    float size = 0.0f;  // "size": side of the printed black square, in world units
+    // "world_from_marker" (4 rows) or "transform" as for meshes: the marker's frame, whose origin is the
+    // black square's centre, x to the right and y up as the tag is printed, z out of its printed face.
+    glm::mat4 worldFromMarker{1.0f};
+    bool operator==(const Marker&) const = default;
+};
+
 struct Scene {
     std::filesystem::path file;  // the scene file, for messages; relative paths were resolved against it
     Camera camera;               // with a sequence: its first frame's
@@ -232,6 +243,7 @@ struct Scene {
     std::vector<int> realEntries;  // the same for `real` and the scene file's "scene" list
     std::vector<Light> lights;     // the scene file's lights, then those extracted from the environment
     std::optional<Environment> environment;  // "environment": the light probe
+    std::vector<Marker> markers;             // "markers": what registers a camera by its image
     Options options;
     // What the loader accepted but the user should know (an LDR environment map, repaired pixels).
     std::vector<std::string> warnings;

@@ -235,6 +235,29 @@ glm::mat4 readTransform(const JsonNode& node) {
     return glm::scale(m, scale);
 }
 
+// "markers": [{"id": 0, "size": 0.12, "transform": ...}]: AprilTag tag36h11 markers lying on the real scene.
+// The transform must be rigid (a printed square keeps its size): its rotation orthonormal to 1e-3.
+constexpr int kTag36h11Codes = 587;
+Marker readMarker(const JsonNode& node) {
+    node.requireObject();
+    node.allowKeys({"id", "size", "transform", "family"});
+    if (auto family = node.find("family"); family && family->string() != "tag36h11")
+        family->fail("expected \"tag36h11\" (AprilTag), got \"" + family->string() + "\"");
+    Marker marker;
+    marker.id = node.child("id").integer(0, kTag36h11Codes - 1);
+    marker.size = node.child("size").floatNumber({0.0, 1e6, true, false});
+    const JsonNode transform = node.child("transform");
+    marker.worldFromMarker = readTransform(transform);
+    const glm::mat3 r(marker.worldFromMarker);
+    const glm::mat3 gram = glm::transpose(r) * r;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (std::abs(gram[i][j] - (i == j ? 1.0f : 0.0f)) > 1e-3f || !std::isfinite(gram[i][j]))
+                transform.fail("expected a rotation and a translation only (a marker keeps its printed size)");
+    if (glm::determinant(r) < 0.0f) transform.fail("expected a rotation, got a mirroring");
+    return marker;
+}
+
 // "indices": [[i, j, k], ...] or a flat list of ints, each in [0, vertexCount).
 std::vector<glm::uvec3> readIndices(const JsonNode& node, size_t vertexCount) {
     node.requireArray();
@@ -563,7 +586,7 @@ SceneRead readScene(const json& document, const fs::path& file) {
     if (!document.is_object())
         root.fail("expected a JSON object {...} at the top level, got " + describeValue(document));
     root.allowKeys({"description", "camera", "sequence", "background", "environment", "scene", "virtual",
-                    "lights", "options"});
+                    "lights", "markers", "options"});
     if (auto n = root.find("description")) n->string();
     fs::path sceneFolder = file.parent_path();
 
@@ -584,6 +607,16 @@ SceneRead readScene(const json& document, const fs::path& file) {
     if (auto n = root.find("lights")) {
         n->requireArray();
         for (size_t i = 0; i < n->size(); ++i) scene.lights.push_back(readLight(n->element(i)));
+    }
+    if (auto n = root.find("markers")) {
+        n->requireArray();
+        for (size_t i = 0; i < n->size(); ++i) {
+            const Marker marker = readMarker(n->element(i));
+            for (const Marker& other : scene.markers)
+                if (other.id == marker.id)
+                    n->element(i).child("id").fail(fmt::format("marker {} is listed twice", marker.id));
+            scene.markers.push_back(marker);
+        }
     }
     const size_t environmentLights = root.has("environment") ? scene.options.environment.lightCount : 0;
     const size_t directional =

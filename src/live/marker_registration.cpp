@@ -1,0 +1,403 @@
+#include "live/marker_registration.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include <apriltag/apriltag.h>
+#include <apriltag/tag36h11.h>
+#include <glm/gtc/quaternion.hpp>
+
+#include "core/environment.h"
+
+namespace deltagi {
+
+std::array<glm::vec3, 4> markerCorners(const Marker& marker) {
+    const float h = 0.5f * marker.size;
+    return {glm::vec3(-h, -h, 0.0f), glm::vec3(h, -h, 0.0f), glm::vec3(h, h, 0.0f), glm::vec3(-h, h, 0.0f)};
+}
+
+std::vector<bool> markerCells(int id) {
+    apriltag_family_t* family = tag36h11_create();
+    std::vector<bool> cells;
+    if (id >= 0 && static_cast<uint32_t>(id) < family->ncodes) {
+        image_u8_t* image = apriltag_to_image(family, id);
+        if (image && image->width == kMarkerCells && image->height == kMarkerCells)
+            for (int y = 0; y < kMarkerCells; ++y)
+                for (int x = 0; x < kMarkerCells; ++x)
+                    cells.push_back(image->buf[static_cast<size_t>(y) * image->stride + x] < 128);
+        image_u8_destroy(image);
+    }
+    tag36h11_destroy(family);
+    return cells;
+}
+
+// ---- detection ------------------------------------------------------------------------------------------
+
+struct MarkerDetector::Impl {
+    apriltag_family_t* family = nullptr;
+    apriltag_detector_t* detector = nullptr;
+    std::vector<int> markerOfId;  // tag id -> index into the markers, -1 where none
+};
+
+MarkerDetector::MarkerDetector(std::span<const Marker> markers) : impl_(std::make_unique<Impl>()) {
+    impl_->family = tag36h11_create();
+    impl_->detector = apriltag_detector_create();
+    apriltag_detector_add_family(impl_->detector, impl_->family);
+    // Full resolution and edge refinement: the corners are where lines fitted to the square's edges meet,
+    // which a marker only 40 pixels wide needs. One thread: the same corners on any machine.
+    impl_->detector->quad_decimate = 1.0f;
+    impl_->detector->quad_sigma = 0.0f;
+    impl_->detector->refine_edges = true;
+    impl_->detector->nthreads = 1;
+    impl_->markerOfId.assign(impl_->family->ncodes, -1);
+    for (size_t i = 0; i < markers.size(); ++i)
+        if (markers[i].id >= 0 && static_cast<uint32_t>(markers[i].id) < impl_->family->ncodes)
+            impl_->markerOfId[markers[i].id] = static_cast<int>(i);
+}
+
+MarkerDetector::~MarkerDetector() {
+    apriltag_detector_destroy(impl_->detector);
+    tag36h11_destroy(impl_->family);
+}
+
+MarkerDetector::Result MarkerDetector::detect(const Image& frame) const {
+    Result result;
+    if (frame.empty()) return result;
+    // Grey levels in linear light: an edge blurred by the lens and the pixels' area is crossed half-way
+    // between black and white where the edge is.
+    image_u8_t* grey = image_u8_create(static_cast<unsigned>(frame.width()), static_cast<unsigned>(frame.height()));
+    for (int y = 0; y < frame.height(); ++y)
+        for (int x = 0; x < frame.width(); ++x) {
+            const float l = luminance(frame.rgb(x, y));
+            grey->buf[static_cast<size_t>(y) * grey->stride + x] =
+                static_cast<uint8_t>(std::lround(255.0f * std::clamp(std::isfinite(l) ? l : 0.0f, 0.0f, 1.0f)));
+        }
+    zarray_t* detections = apriltag_detector_detect(impl_->detector, grey);
+    for (int i = 0; i < zarray_size(detections); ++i) {
+        apriltag_detection_t* d = nullptr;
+        zarray_get(detections, i, &d);
+        const int marker = d->id >= 0 && static_cast<size_t>(d->id) < impl_->markerOfId.size()
+                               ? impl_->markerOfId[d->id]
+                               : -1;
+        if (marker < 0) {
+            ++result.unknown;
+            continue;
+        }
+        MarkerSighting s;
+        s.marker = marker;
+        s.decisionMargin = d->decision_margin;
+        double shortest = INFINITY;
+        for (int k = 0; k < 4; ++k) {
+            // libapriltag's pixel centres are at + 0.5, as ours (its decimation's corner mapping says so).
+            s.corners[k] = glm::dvec2(d->p[k][0], d->p[k][1]);
+        }
+        for (int k = 0; k < 4; ++k) shortest = std::min(shortest, glm::length(s.corners[k] - s.corners[(k + 1) % 4]));
+        if (!(shortest >= kMinMarkerSidePx)) {
+            ++result.tooSmall;
+            continue;
+        }
+        result.sightings.push_back(s);
+    }
+    apriltag_detections_destroy(detections);
+    image_u8_destroy(grey);
+    // In the scene's order, so that the pose does not depend on the detector's.
+    std::sort(result.sightings.begin(), result.sightings.end(),
+              [](const MarkerSighting& a, const MarkerSighting& b) { return a.marker < b.marker; });
+    return result;
+}
+
+// ---- pose -----------------------------------------------------------------------------------------------
+
+namespace {
+
+// Solves A x = b (n x n, row-major) by Gaussian elimination with partial pivoting; false when singular.
+template <int N>
+bool solveLinear(std::array<double, N * N> a, std::array<double, N> b, std::array<double, N>& x) {
+    for (int c = 0; c < N; ++c) {
+        int pivot = c;
+        for (int r = c + 1; r < N; ++r)
+            if (std::abs(a[r * N + c]) > std::abs(a[pivot * N + c])) pivot = r;
+        if (!(std::abs(a[pivot * N + c]) > 1e-300)) return false;
+        if (pivot != c) {
+            for (int k = 0; k < N; ++k) std::swap(a[c * N + k], a[pivot * N + k]);
+            std::swap(b[c], b[pivot]);
+        }
+        for (int r = c + 1; r < N; ++r) {
+            const double f = a[r * N + c] / a[c * N + c];
+            for (int k = c; k < N; ++k) a[r * N + k] -= f * a[c * N + k];
+            b[r] -= f * b[c];
+        }
+    }
+    for (int r = N - 1; r >= 0; --r) {
+        double s = b[r];
+        for (int k = r + 1; k < N; ++k) s -= a[r * N + k] * x[k];
+        x[r] = s / a[r * N + r];
+    }
+    return true;
+}
+
+// A rigid transform in the computer-vision camera frame (x right, y down, z forward): q = R p + t.
+struct RigidPose {
+    glm::dmat3 r{1.0};
+    glm::dvec3 t{0.0};
+};
+
+// The rotation nearest to m (polar decomposition by Newton's iteration).
+glm::dmat3 nearestRotation(glm::dmat3 m) {
+    for (int i = 0; i < 20; ++i) m = 0.5 * (m + glm::transpose(glm::inverse(m)));
+    return m;
+}
+
+glm::dmat3 rotationFromVector(glm::dvec3 w) {
+    const double angle = glm::length(w);
+    if (angle < 1e-12) return glm::dmat3(1.0) + glm::dmat3(0, w.z, -w.y, -w.z, 0, w.x, w.y, -w.x, 0);
+    const glm::dvec3 k = w / angle;
+    const glm::dmat3 kx(0, k.z, -k.y, -k.z, 0, k.x, k.y, -k.x, 0);  // columns: cross(k, .)
+    return glm::dmat3(1.0) + std::sin(angle) * kx + (1.0 - std::cos(angle)) * kx * kx;
+}
+
+// The pose of a plane (its points (x, y, 0)) from four or more points and their undistorted normalized image
+// coordinates: a homography, split into rotation and translation (Zhang 2000).
+std::optional<RigidPose> planePose(std::span<const glm::dvec2> plane, std::span<const glm::dvec2> image) {
+    // h33 = 1: 8 unknowns, least squares over the points.
+    std::array<double, 64> ata{};
+    std::array<double, 8> atb{};
+    for (size_t i = 0; i < plane.size(); ++i) {
+        const double x = plane[i].x, y = plane[i].y, u = image[i].x, v = image[i].y;
+        const double rows[2][9] = {{x, y, 1, 0, 0, 0, -u * x, -u * y, u}, {0, 0, 0, x, y, 1, -v * x, -v * y, v}};
+        for (const auto& row : rows)
+            for (int a = 0; a < 8; ++a) {
+                for (int b = 0; b < 8; ++b) ata[a * 8 + b] += row[a] * row[b];
+                atb[a] += row[a] * row[8];
+            }
+    }
+    std::array<double, 8> h{};
+    if (!solveLinear<8>(ata, atb, h)) return std::nullopt;
+    const glm::dvec3 h1(h[0], h[3], h[6]), h2(h[1], h[4], h[7]), h3(h[2], h[5], 1.0);
+    double scale = 2.0 / (glm::length(h1) + glm::length(h2));
+    if (h3.z * scale < 0.0) scale = -scale;  // in front of the camera
+    const glm::dvec3 r1 = h1 * scale, r2 = h2 * scale;
+    RigidPose pose;
+    pose.r = nearestRotation(glm::dmat3(r1, r2, glm::cross(r1, r2)));
+    pose.t = h3 * scale;
+    if (!std::isfinite(pose.t.x + pose.t.y + pose.t.z)) return std::nullopt;
+    return pose;
+}
+
+// Gauss-Newton (with a little damping) on the normalized reprojection error of points p (world) seen at n.
+void refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span<const glm::dvec2> observed) {
+    double lambda = 1e-6;
+    auto cost = [&](const RigidPose& p) {
+        double c = 0.0;
+        for (size_t i = 0; i < points.size(); ++i) {
+            const glm::dvec3 q = p.r * points[i] + p.t;
+            if (!(q.z > 0.0)) return static_cast<double>(INFINITY);
+            const glm::dvec2 e = glm::dvec2(q.x, q.y) / q.z - observed[i];
+            c += glm::dot(e, e);
+        }
+        return c;
+    };
+    double current = cost(pose);
+    for (int iteration = 0; iteration < 30 && std::isfinite(current); ++iteration) {
+        std::array<double, 36> jtj{};
+        std::array<double, 6> jte{};
+        for (size_t i = 0; i < points.size(); ++i) {
+            const glm::dvec3 rp = pose.r * points[i];
+            const glm::dvec3 q = rp + pose.t;
+            const double iz = 1.0 / q.z;
+            const glm::dvec2 e = glm::dvec2(q.x, q.y) * iz - observed[i];
+            // d(projection)/dq, and dq/d(rotation w, translation): q' = exp(w) R p + t + dt.
+            const glm::dvec3 du(iz, 0.0, -q.x * iz * iz), dv(0.0, iz, -q.y * iz * iz);
+            auto rowFor = [&](glm::dvec3 d) {
+                // d/dw of exp(w) rp = w x rp: -rp x, i.e. column k is e_k x rp.
+                const glm::dvec3 dw = glm::cross(rp, d);  // d . (e_k x rp) = e_k . (rp x d)
+                return std::array<double, 6>{dw.x, dw.y, dw.z, d.x, d.y, d.z};
+            };
+            const std::array<double, 6> ju = rowFor(du), jv = rowFor(dv);
+            for (int a = 0; a < 6; ++a) {
+                for (int b = 0; b < 6; ++b) jtj[a * 6 + b] += ju[a] * ju[b] + jv[a] * jv[b];
+                jte[a] += ju[a] * e.x + jv[a] * e.y;
+            }
+        }
+        bool improved = false;
+        for (int attempt = 0; attempt < 10 && !improved; ++attempt) {
+            std::array<double, 36> damped = jtj;
+            for (int a = 0; a < 6; ++a) damped[a * 7] *= 1.0 + lambda;
+            std::array<double, 6> neg{}, step{};
+            for (int a = 0; a < 6; ++a) neg[a] = -jte[a];
+            if (!solveLinear<6>(damped, neg, step)) return;
+            RigidPose next;
+            next.r = rotationFromVector({step[0], step[1], step[2]}) * pose.r;
+            next.t = pose.t + glm::dvec3(step[3], step[4], step[5]);
+            const double c = cost(next);
+            if (c < current) {
+                pose = next;
+                const bool converged = current - c < 1e-14 * (1.0 + current);
+                current = c;
+                lambda = std::max(lambda * 0.1, 1e-9);
+                improved = true;
+                if (converged) return;
+            } else {
+                lambda *= 10.0;
+            }
+        }
+        if (!improved) return;
+    }
+}
+
+}  // namespace
+
+std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sightings,
+                                          std::span<const Marker> markers, const Camera& camera) {
+    if (sightings.empty() || !(camera.fx > 0.0f) || !(camera.fy > 0.0f)) return std::nullopt;
+    // Every corner: its world point and its undistorted normalized image point.
+    std::vector<glm::dvec3> world;
+    std::vector<glm::dvec2> normalized;
+    auto normalize = [&](glm::dvec2 pixel) {
+        glm::vec2 n(static_cast<float>((pixel.x - camera.cx) / camera.fx),
+                    static_cast<float>((pixel.y - camera.cy) / camera.fy));
+        if (!camera.distortion.none()) n = camera.distortion.undistort(n);
+        return glm::dvec2(n);
+    };
+    size_t largest = 0;
+    double largestArea = -1.0;
+    for (size_t s = 0; s < sightings.size(); ++s) {
+        const Marker& marker = markers[sightings[s].marker];
+        const std::array<glm::vec3, 4> corners = markerCorners(marker);
+        for (int k = 0; k < 4; ++k) {
+            world.emplace_back(glm::dvec3(marker.worldFromMarker * glm::vec4(corners[k], 1.0f)));
+            normalized.push_back(normalize(sightings[s].corners[k]));
+        }
+        const auto& c = sightings[s].corners;
+        const glm::dvec2 d1 = c[2] - c[0], d2 = c[3] - c[1];
+        const double area = 0.5 * std::abs(d1.x * d2.y - d1.y * d2.x);
+        if (area > largestArea) largestArea = area, largest = s;
+    }
+    // A first pose from the largest marker's homography, in its own frame, then taken to the world's.
+    const Marker& first = markers[sightings[largest].marker];
+    const std::array<glm::vec3, 4> corners = markerCorners(first);
+    std::array<glm::dvec2, 4> plane, image;
+    for (int k = 0; k < 4; ++k) {
+        plane[k] = glm::dvec2(corners[k]);
+        image[k] = normalized[largest * 4 + k];
+    }
+    std::optional<RigidPose> fromMarker = planePose(plane, image);
+    if (!fromMarker) return std::nullopt;
+    const glm::dmat4 markerFromWorld = glm::inverse(glm::dmat4(first.worldFromMarker));
+    RigidPose pose;
+    pose.r = fromMarker->r * glm::dmat3(markerFromWorld);
+    pose.t = fromMarker->r * glm::dvec3(markerFromWorld[3]) + fromMarker->t;
+    refinePose(pose, world, normalized);
+    // The OpenGL camera frame (x right, y up, z backwards) from the computer-vision one.
+    const glm::dmat3 flip(1, 0, 0, 0, -1, 0, 0, 0, -1);
+    glm::dmat4 cameraFromWorld(flip * pose.r);
+    cameraFromWorld[3] = glm::dvec4(flip * pose.t, 1.0);
+    MarkerPose result;
+    result.worldFromCamera = glm::mat4(glm::inverse(cameraFromWorld));
+    result.markersSeen = static_cast<int>(sightings.size());
+    // The RMS pixel error through the lens model.
+    double squared = 0.0;
+    for (size_t i = 0; i < world.size(); ++i) {
+        const glm::dvec3 q = pose.r * world[i] + pose.t;
+        if (!(q.z > 0.0)) return std::nullopt;
+        const glm::vec3 qGl(static_cast<float>(q.x), static_cast<float>(-q.y), static_cast<float>(-q.z));
+        const glm::dvec2 projected(camera.imagePoint(qGl));
+        const size_t s = i / 4, k = i % 4;
+        const glm::dvec2 e = projected - sightings[s].corners[k];
+        squared += glm::dot(e, e);
+    }
+    result.reprojectionErrorPx = std::sqrt(squared / static_cast<double>(world.size()));
+    const glm::mat4& m = result.worldFromCamera;
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r)
+            if (!std::isfinite(m[c][r])) return std::nullopt;
+    if (!std::isfinite(result.reprojectionErrorPx)) return std::nullopt;
+    return result;
+}
+
+// ---- smoothing ------------------------------------------------------------------------------------------
+
+namespace {
+
+// The exponential smoothing factor of a low-pass filter with cut-off `hz` over a step of `dt` seconds.
+double smoothingFactor(double dt, double hz) {
+    const double tau = 1.0 / (2.0 * std::numbers::pi * hz);
+    return 1.0 / (1.0 + tau / dt);
+}
+
+// One One-Euro step of a vector value: the speed low-passed at the derivative cut-off, the value at a cut-off
+// that rises with the speed's magnitude.
+template <typename V>
+void oneEuroStep(V& value, V& speed, const V& sample, double dt, double minCutoff, double beta,
+                 double derivativeCutoff) {
+    const V rawSpeed = (sample - value) / dt;
+    speed += (rawSpeed - speed) * smoothingFactor(dt, derivativeCutoff);
+    const double cutoff = minCutoff + beta * glm::length(speed);
+    value += (sample - value) * smoothingFactor(dt, cutoff);
+}
+
+}  // namespace
+
+glm::mat4 PoseFilter::filter(const glm::mat4& worldFromCamera, double timeSeconds) {
+    const glm::dvec3 position(worldFromCamera[3]);
+    glm::dquat q = glm::quat_cast(glm::dmat3(glm::mat3(worldFromCamera)));
+    glm::dvec4 rotation(q.x, q.y, q.z, q.w);
+    const double dt = timeSeconds - lastTime_;
+    if (!smoothing_.enabled || !started_ || !(dt > 0.0)) {
+        started_ = true;
+        lastTime_ = timeSeconds;
+        position_ = position;
+        rotation_ = rotation;
+        positionSpeed_ = glm::dvec3(0.0);
+        rotationSpeed_ = glm::dvec4(0.0);
+        return worldFromCamera;
+    }
+    lastTime_ = timeSeconds;
+    if (glm::dot(rotation, rotation_) < 0.0) rotation = -rotation;  // the same rotation, nearer
+    oneEuroStep(position_, positionSpeed_, position, dt, smoothing_.minCutoffHz, smoothing_.positionBeta,
+                smoothing_.derivativeCutoffHz);
+    // A quaternion's components change at half the angular speed (radians per second).
+    oneEuroStep(rotation_, rotationSpeed_, rotation, dt, smoothing_.minCutoffHz, 2.0 * smoothing_.rotationBeta,
+                smoothing_.derivativeCutoffHz);
+    rotation_ = glm::normalize(rotation_);
+    const glm::dquat smoothed(rotation_.w, rotation_.x, rotation_.y, rotation_.z);
+    glm::dmat4 out(glm::mat3_cast(smoothed));
+    out[3] = glm::dvec4(position_, 1.0);
+    return glm::mat4(out);
+}
+
+// ---- tracking -------------------------------------------------------------------------------------------
+
+MarkerTracker::MarkerTracker(std::span<const Marker> markers, const Camera& camera, TrackingOptions options)
+    : markers_(markers.begin(), markers.end()),
+      camera_(camera),
+      options_(options),
+      detector_(markers),
+      filter_(options.smoothing) {}
+
+TrackedFrame MarkerTracker::track(const Image& frame, double timeSeconds) {
+    TrackedFrame out;
+    const MarkerDetector::Result found = detector_.detect(frame);
+    out.unknownTags = found.unknown;
+    out.tooSmall = found.tooSmall;
+    if (std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers_, camera_)) {
+        out.state = TrackedFrame::State::Registered;
+        out.worldFromCamera = filter_.filter(pose->worldFromCamera, timeSeconds);
+        out.reprojectionErrorPx = pose->reprojectionErrorPx;
+        out.markersSeen = pose->markersSeen;
+        lastSeen_ = timeSeconds;
+        lastPose_ = out.worldFromCamera;
+        return out;
+    }
+    if (lastSeen_ && timeSeconds - *lastSeen_ <= options_.holdSeconds) {
+        out.state = TrackedFrame::State::Held;
+        out.worldFromCamera = lastPose_;
+        return out;
+    }
+    // Lost: the next sighting starts the filter afresh rather than gliding from an old pose.
+    filter_.reset();
+    return out;
+}
+
+}  // namespace deltagi

@@ -1,0 +1,211 @@
+#include "live/marker_registration.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <numbers>
+
+#include "test_marker_capture.h"
+
+namespace deltagi {
+namespace {
+
+using test::floorMarker;
+using test::markerCamera;
+using test::poseError;
+using test::renderMarkerFrame;
+
+float median(std::vector<float> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+}
+
+// Camera positions around a marker at the origin: `count` of them at 0.7-1.1 units, 35-75 degrees above the
+// floor, all around, each looking at a point near the marker (so that it is not always in the middle).
+std::vector<std::pair<glm::vec3, glm::vec3>> viewsAround(int count) {
+    std::vector<std::pair<glm::vec3, glm::vec3>> views;
+    for (int i = 0; i < count; ++i) {
+        const float t = (static_cast<float>(i) + 0.5f) / static_cast<float>(count);
+        const float azimuth = 2.0f * std::numbers::pi_v<float> * t * 3.0f;
+        const float elevation = glm::radians(35.0f + 40.0f * std::fmod(t * 7.0f, 1.0f));
+        const float distance = 0.7f + 0.4f * std::fmod(t * 5.0f, 1.0f);
+        const glm::vec3 position = distance * glm::vec3(std::cos(elevation) * std::cos(azimuth),
+                                                        std::sin(elevation),
+                                                        std::cos(elevation) * std::sin(azimuth));
+        const glm::vec3 target(0.05f * std::cos(5.0f * azimuth), 0.0f, 0.05f * std::sin(3.0f * azimuth));
+        views.emplace_back(position, target);
+    }
+    return views;
+}
+
+TEST(MarkerCells, AreTheTag36h11PatternWithItsBlackBorderAndWhiteRing) {
+    const std::vector<bool> cells = markerCells(0);
+    ASSERT_EQ(cells.size(), static_cast<size_t>(kMarkerCells * kMarkerCells));
+    for (int i = 0; i < kMarkerCells; ++i) {
+        EXPECT_FALSE(cells[i]) << "top white ring";
+        EXPECT_FALSE(cells[static_cast<size_t>(i) * kMarkerCells]) << "left white ring";
+        if (i >= 1 && i <= 8) {
+            EXPECT_TRUE(cells[kMarkerCells + i]) << "top black border";
+            EXPECT_TRUE(cells[static_cast<size_t>(i) * kMarkerCells + 1]) << "left black border";
+        }
+    }
+    EXPECT_NE(markerCells(0), markerCells(1));
+    EXPECT_TRUE(markerCells(587).empty());
+    EXPECT_TRUE(markerCells(-1).empty());
+}
+
+// The case: a 12 cm marker about 1 m away covers about 40 pixels of a 320 x 240 image.
+void expectRegistration(int width, int height, int views, float maxPositionMedian, float maxRotationMedian) {
+    const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f))};
+    std::vector<float> positionErrors, rotationErrors;
+    MarkerDetector detector(markers);
+    int seed = 0;
+    for (const auto& [position, target] : viewsAround(views)) {
+        const Camera camera = markerCamera(width, height, 40.0f, position, target);
+        const Image frame = renderMarkerFrame(camera, markers, 1.5f, static_cast<uint64_t>(seed++));
+        const MarkerDetector::Result found = detector.detect(frame);
+        ASSERT_EQ(found.sightings.size(), 1u) << "camera at " << position.x << " " << position.y << " " << position.z;
+        const std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers, camera);
+        ASSERT_TRUE(pose);
+        const test::PoseError e = poseError(pose->worldFromCamera, camera.worldFromCamera);
+        positionErrors.push_back(e.position);
+        rotationErrors.push_back(e.rotationDeg);
+        EXPECT_LT(pose->reprojectionErrorPx, 0.5);
+    }
+    const float p = median(positionErrors), r = median(rotationErrors);
+    testing::Test::RecordProperty("position_error_median_cm", std::to_string(100.0f * p));
+    testing::Test::RecordProperty("rotation_error_median_deg", std::to_string(r));
+    std::printf("%dx%d: position error median %.3f cm (max %.3f), rotation %.3f deg (max %.3f)\n", width, height,
+                100.0f * p, 100.0f * *std::max_element(positionErrors.begin(), positionErrors.end()), r,
+                *std::max_element(rotationErrors.begin(), rotationErrors.end()));
+    EXPECT_LE(p, maxPositionMedian);
+    EXPECT_LE(r, maxRotationMedian);
+}
+
+TEST(MarkerRegistration, FindsTheCameraTo5MillimetresAndHalfADegreeAt320x240) {
+    expectRegistration(320, 240, 24, 0.005f, 0.5f);
+}
+
+TEST(MarkerRegistration, FindsTheCameraTo5MillimetresAndHalfADegreeAt640x480) {
+    expectRegistration(640, 480, 12, 0.005f, 0.5f);
+}
+
+TEST(MarkerRegistration, UsesEveryMarkerSeenThroughTheLensDistortion) {
+    // Two markers, a lens with barrel distortion: the corners are undistorted before the pose is solved.
+    const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f)),
+                                         floorMarker(8, 0.1f, glm::vec3(-0.2f, 0.0f, 0.1f), 45.0f)};
+    Camera camera = markerCamera(320, 240, 50.0f, {0.3f, 0.6f, 0.6f}, {-0.05f, 0.0f, 0.0f});
+    camera.distortion.model = LensDistortion::Model::OpenCV;
+    camera.distortion.k1 = -0.2f;
+    camera.distortion.k2 = 0.05f;
+    const Image frame = renderMarkerFrame(camera, markers, 1.5f, 1);
+    MarkerDetector detector(markers);
+    const MarkerDetector::Result found = detector.detect(frame);
+    ASSERT_EQ(found.sightings.size(), 2u);
+    EXPECT_EQ(found.sightings[0].marker, 0);
+    EXPECT_EQ(found.sightings[1].marker, 1);
+    const std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers, camera);
+    ASSERT_TRUE(pose);
+    EXPECT_EQ(pose->markersSeen, 2);
+    EXPECT_LT(pose->reprojectionErrorPx, 0.5);
+    const test::PoseError e = poseError(pose->worldFromCamera, camera.worldFromCamera);
+    EXPECT_LT(e.position, 0.005f);
+    EXPECT_LT(e.rotationDeg, 0.5f);
+}
+
+// The pixel where a point 5 cm above the marker (an object standing on it) appears.
+glm::vec2 objectPixel(const Camera& intrinsics, const glm::mat4& worldFromCamera) {
+    const glm::vec3 q(glm::inverse(worldFromCamera) * glm::vec4(0.0f, 0.05f, 0.0f, 1.0f));
+    return intrinsics.imagePoint(q);
+}
+
+TEST(MarkerTracker, HoldsAStillCameraStillAndFollowsAMovingOne) {
+    const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f))};
+    // A still camera, 30 frames at 30 per second with a webcam's noise (4 levels): the object stays within 0.1 px RMS
+    // of where it is on average (the jitter a viewer sees; the pose's constant error is another matter).
+    {
+        const Camera camera = markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0.0f, 0.0f, 0.0f});
+        MarkerTracker tracker(markers, camera);
+        MarkerDetector detector(markers);
+        std::vector<glm::vec2> smoothed, raw;
+        for (int i = 0; i < 30; ++i) {
+            const Image frame = renderMarkerFrame(camera, markers, 4.0f, static_cast<uint64_t>(100 + i));
+            const TrackedFrame t = tracker.track(frame, i / 30.0);
+            ASSERT_EQ(t.state, TrackedFrame::State::Registered);
+            if (i < 10) continue;  // once the filter has settled
+            smoothed.push_back(objectPixel(camera, t.worldFromCamera));
+            const std::optional<MarkerPose> pose = solveCameraPose(detector.detect(frame).sightings, markers, camera);
+            raw.push_back(objectPixel(camera, pose->worldFromCamera));
+        }
+        auto jitter = [](const std::vector<glm::vec2>& p) {
+            glm::vec2 mean(0.0f);
+            for (glm::vec2 v : p) mean += v / static_cast<float>(p.size());
+            float squared = 0.0f;
+            for (glm::vec2 v : p) squared += glm::dot(v - mean, v - mean) / static_cast<float>(p.size());
+            return std::sqrt(squared);
+        };
+        std::printf("still camera: the object jitters %.3f px RMS smoothed, %.3f px unsmoothed\n", jitter(smoothed),
+                    jitter(raw));
+        EXPECT_LT(jitter(smoothed), 0.1f);
+        EXPECT_LT(jitter(smoothed), jitter(raw));
+    }
+    // A camera walking round the marker (about 40 degrees a second): the smoothed object lags under 1.5 px.
+    {
+        MarkerTracker tracker(markers, markerCamera(320, 240, 40.0f, {1, 1, 1}, {0, 0, 0}));
+        std::vector<float> offsets;
+        for (int i = 0; i < 30; ++i) {
+            const float azimuth = glm::radians(20.0f + 1.3f * static_cast<float>(i));
+            const Camera camera = markerCamera(320, 240, 40.0f,
+                                               0.9f * glm::vec3(0.6f * std::cos(azimuth), 0.8f, 0.6f * std::sin(azimuth)),
+                                               {0.0f, 0.0f, 0.0f});
+            const TrackedFrame t = tracker.track(renderMarkerFrame(camera, markers, 1.5f, static_cast<uint64_t>(i)), i / 30.0);
+            ASSERT_EQ(t.state, TrackedFrame::State::Registered);
+            if (i >= 10) offsets.push_back(glm::length(objectPixel(camera, t.worldFromCamera) - objectPixel(camera, camera.worldFromCamera)));
+        }
+        std::printf("moving camera: object %.3f px from the truth (median), %.3f px (max)\n", median(offsets),
+                    *std::max_element(offsets.begin(), offsets.end()));
+        EXPECT_LT(median(offsets), 1.5f);
+    }
+}
+
+TEST(MarkerTracker, HoldsTheLastPoseForAWhileThenSaysItIsLost) {
+    const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f))};
+    const Camera camera = markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0.0f, 0.0f, 0.0f});
+    TrackingOptions options;
+    options.holdSeconds = 0.1;
+    MarkerTracker tracker(markers, camera, options);
+    const TrackedFrame seen = tracker.track(renderMarkerFrame(camera, markers), 0.0);
+    ASSERT_EQ(seen.state, TrackedFrame::State::Registered);
+    const Image empty = renderMarkerFrame(camera, {});
+    const TrackedFrame held = tracker.track(empty, 0.05);
+    EXPECT_EQ(held.state, TrackedFrame::State::Held);
+    EXPECT_EQ(held.worldFromCamera, seen.worldFromCamera);
+    EXPECT_EQ(tracker.track(empty, 0.2).state, TrackedFrame::State::Lost);
+    // Other tags and tags too small to trust are counted, not used.
+    std::vector<Marker> other = markers;
+    other[0].id = 4;
+    const TrackedFrame wrong = tracker.track(renderMarkerFrame(camera, other), 0.3);
+    EXPECT_EQ(wrong.state, TrackedFrame::State::Lost);
+    EXPECT_EQ(wrong.unknownTags, 1);
+    const Camera far = markerCamera(320, 240, 40.0f, {0.6f, 2.3f, 1.0f}, {0.0f, 0.0f, 0.0f});  // 13-15 px
+    const TrackedFrame tiny = tracker.track(renderMarkerFrame(far, markers), 0.4);
+    EXPECT_EQ(tiny.state, TrackedFrame::State::Lost);
+    EXPECT_EQ(tiny.tooSmall, 1);
+}
+
+TEST(MarkerRegistration, RefusesNothingToSolveFrom) {
+    const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f))};
+    Camera camera = markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0.0f, 0.0f, 0.0f});
+    EXPECT_FALSE(solveCameraPose({}, markers, camera));
+    MarkerDetector detector(markers);
+    EXPECT_TRUE(detector.detect(Image()).sightings.empty());
+    Image nan(320, 240, 3, std::numeric_limits<float>::quiet_NaN());
+    EXPECT_TRUE(detector.detect(nan).sightings.empty());
+    camera.fx = 0.0f;
+    const MarkerDetector::Result found = detector.detect(renderMarkerFrame(markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0, 0, 0}), markers));
+    ASSERT_EQ(found.sightings.size(), 1u);
+    EXPECT_FALSE(solveCameraPose(found.sightings, markers, camera));
+}
+
+}  // namespace
+}  // namespace deltagi
