@@ -1,7 +1,8 @@
 // The `deltagi` command: `render` a scene file to an image (and its AOVs), print `info` about a scene, render
 // the path-traced `reference`, `compare` two images, `eval` DGI against the reference, `bench` the pipeline,
 // measure its `stability`, `estimate-albedo` of the real scene from its photo, `encode` frames into an H.264
-// MP4, or `track` a video by the scene's markers into a sequence.
+// MP4, print a `marker`, `track` a video by the scene's markers into a sequence, or augment a camera's frames
+// `live`.
 //
 // Errors: bad input (InputError) and any other exception become one line `deltagi: error: <message>` on
 // stderr and exit code 1; command-line usage errors exit with code 2; SIGINT and SIGTERM exit with 130 and
@@ -36,6 +37,8 @@
 #include "deltagi/scene_io.h"
 #include "deltagi_version.h"
 #include "encode_command.h"
+#include "live_command.h"
+#include "marker_command.h"
 #include "track_command.h"
 #include "eval_suite.h"
 #include "evaluation/evaluation.h"
@@ -679,6 +682,12 @@ int main(int argc, char** argv) {
     cli::TrackArgs trackArgs;
     CLI::App* trackCommand = cli::addTrackCommand(app, trackArgs);
 
+    cli::MarkerArgs markerArgs;
+    CLI::App* markerCommand = cli::addMarkerCommand(app, markerArgs);
+
+    cli::LiveArgs liveArgs;
+    CLI::App* liveCommand = cli::addLiveCommand(app, liveArgs);
+
     cli::ServeArgs serveArgs;
     CLI::App* serveCommand = cli::addServeCommand(app, serveArgs, kMaxThreads);
 
@@ -692,7 +701,7 @@ int main(int argc, char** argv) {
             return reportError(
                 fmt::format(
                     "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
-                    "'bench', 'stability', 'estimate-albedo', 'encode', 'track' or 'serve' (see deltagi --help)",
+                    "'bench', 'stability', 'estimate-albedo', 'encode', 'marker', 'track', 'live' or 'serve' (see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);
@@ -713,6 +722,8 @@ int main(int argc, char** argv) {
         if (*albedoCommand) return cli::runAlbedo(albedoArgs);
         if (*encodeCommand) return cli::runEncode(encodeArgs);
         if (*trackCommand) return cli::runTrack(trackArgs);
+        if (*liveCommand) return cli::runLive(liveArgs);
+        if (*markerCommand) return cli::runMarker(markerArgs);
         if (*serveCommand) return cli::runServe(serveArgs);
         if (*infoCommand && infoArgs.scene.empty() && !infoArgs.optionsMarkdown)
             return reportError("info: expected SCENE.json, or --options-markdown (see deltagi --help)",

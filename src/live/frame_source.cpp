@@ -206,6 +206,87 @@ class VideoSource final : public FrameSource {
 
 }  // namespace
 
+FrameFeed::FrameFeed(std::unique_ptr<FrameSource> source, bool realtime)
+    : source_(std::move(source)), realtime_(realtime || source_->name().starts_with("/dev/")) {
+    reader_ = std::thread([this] { read(); });
+}
+
+FrameFeed::~FrameFeed() {
+    {
+        std::lock_guard lock(mutex_);
+        stopping_ = true;
+    }
+    changed_.notify_all();
+    reader_.join();
+}
+
+void FrameFeed::read() {
+    const Clock::time_point start = Clock::now();
+    std::optional<double> firstTime;
+    while (true) {
+        std::optional<CameraFrame> frame;
+        try {
+            frame = source_->next();
+        } catch (...) {
+            std::lock_guard lock(mutex_);
+            error_ = std::current_exception();
+            ended_ = true;
+            changed_.notify_all();
+            return;
+        }
+        std::unique_lock lock(mutex_);
+        if (!frame || stopping_) {
+            ended_ = true;
+            changed_.notify_all();
+            return;
+        }
+        const bool device = source_->name().starts_with("/dev/");
+        if (realtime_ && !device) {
+            // A recorded camera replayed live: the frame arrives when its timestamp says.
+            if (!firstTime) firstTime = frame->timeSeconds;
+            const auto due = start + std::chrono::duration_cast<Clock::duration>(
+                                         std::chrono::duration<double>(frame->timeSeconds - *firstTime));
+            if (changed_.wait_until(lock, due, [&] { return stopping_; })) return;
+        } else if (!realtime_) {
+            // Every frame is used: wait until the one before is taken.
+            changed_.wait(lock, [&] { return !newest_ || stopping_; });
+            if (stopping_) return;
+        }
+        if (newest_) ++droppedSinceTake_, ++droppedTotal_;
+        newest_ = Arrival{std::move(*frame), Clock::now(), 0};
+        changed_.notify_all();
+    }
+}
+
+std::optional<FrameFeed::Arrival> FrameFeed::takeLocked(std::unique_lock<std::mutex>& lock) {
+    std::optional<Arrival> out = std::move(newest_);
+    newest_.reset();
+    out->dropped = droppedSinceTake_;
+    droppedSinceTake_ = 0;
+    changed_.notify_all();
+    return out;
+}
+
+std::optional<FrameFeed::Arrival> FrameFeed::take() {
+    std::unique_lock lock(mutex_);
+    changed_.wait(lock, [&] { return newest_.has_value() || ended_; });
+    if (newest_) return takeLocked(lock);
+    if (error_) std::rethrow_exception(error_);
+    return std::nullopt;
+}
+
+std::optional<FrameFeed::Arrival> FrameFeed::poll() {
+    std::unique_lock lock(mutex_);
+    if (newest_) return takeLocked(lock);
+    if (ended_ && error_) std::rethrow_exception(error_);
+    return std::nullopt;
+}
+
+int FrameFeed::droppedTotal() const {
+    std::lock_guard lock(mutex_);
+    return droppedTotal_;
+}
+
 std::unique_ptr<FrameSource> openFrameSource(const std::string& source, double patternFps) {
     if (source.empty()) throw InputError("", "expected a camera source (a video file, /dev/videoN or frame_####.png)");
     if (source.find('#') != std::string::npos) return std::make_unique<PatternSource>(source, patternFps);

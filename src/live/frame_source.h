@@ -4,10 +4,15 @@
 // readImage().
 #pragma once
 
+#include <chrono>
 #include <cstdint>
+#include <exception>
 #include <memory>
+#include <condition_variable>
+#include <mutex>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include "deltagi/image.h"
 
@@ -39,5 +44,45 @@ class FrameSource {
 // file FFmpeg reads. `patternFps` times a pattern's frames. Throws InputError naming the source when it
 // cannot be opened or holds no video.
 std::unique_ptr<FrameSource> openFrameSource(const std::string& source, double patternFps = 30.0);
+
+// Frames as a live system receives them, read on a thread of their own. A device gives frames at its own pace;
+// with `realtime`, a file's or pattern's frames come at the pace of their timestamps as well (a recorded
+// camera replayed live), otherwise each waits until it is taken (every frame is used, none dropped). take()
+// gives the newest frame that arrived; the frames that arrived and were never taken are counted as dropped.
+class FrameFeed {
+  public:
+    using Clock = std::chrono::steady_clock;
+    FrameFeed(std::unique_ptr<FrameSource> source, bool realtime);
+    ~FrameFeed();  // stops the reading thread
+    FrameFeed(const FrameFeed&) = delete;
+    FrameFeed& operator=(const FrameFeed&) = delete;
+
+    struct Arrival {
+        CameraFrame frame;
+        Clock::time_point arrived;  // when it was read from the source
+        int dropped = 0;            // frames that arrived since the last take() and were not taken
+    };
+    // Waits for a frame; nothing once the source has ended and every frame is taken. Rethrows the source's
+    // error (InputError naming it) once its frames before the error are taken.
+    std::optional<Arrival> take();
+    // The newest frame if one arrived since the last take(), without waiting; nothing otherwise.
+    std::optional<Arrival> poll();
+    const FrameSource& source() const { return *source_; }
+    int droppedTotal() const;
+
+  private:
+    void read();
+    std::optional<Arrival> takeLocked(std::unique_lock<std::mutex>& lock);
+
+    std::unique_ptr<FrameSource> source_;
+    bool realtime_;
+    mutable std::mutex mutex_;
+    std::condition_variable changed_;
+    std::optional<Arrival> newest_;
+    int droppedSinceTake_ = 0, droppedTotal_ = 0;
+    bool ended_ = false, stopping_ = false;
+    std::exception_ptr error_;
+    std::thread reader_;
+};
 
 }  // namespace deltagi

@@ -67,14 +67,19 @@ glm::mat3 readRotation(const JsonNode& node) {
 
 }  // namespace
 
-void readEnvironment(const JsonNode& node, const fs::path& sceneFolder, Scene& scene) {
+namespace {
+
+// The rotation and the keys allowed, shared by the file and the light camera.
+void checkEnvironmentKeys(const JsonNode& node) {
     node.requireObject();
     node.allowKeys({"file", "projection", "fisheye", "mirror_ball", "rotate_deg", "intensity"});
-    const JsonNode fileNode = node.child("file");
-    Environment environment;
-    environment.file = inputFile(fileNode, sceneFolder);
-    const std::string fileName = environment.file.string();
+}
 
+}  // namespace
+
+Environment environmentFromImage(const JsonNode& node, Image image, const std::string& imageName) {
+    checkEnvironmentKeys(node);
+    Environment environment;
     std::string projection = "equirectangular";
     if (auto n = node.find("projection")) {
         projection = n->string();
@@ -89,30 +94,11 @@ void readEnvironment(const JsonNode& node, const fs::path& sceneFolder, Scene& s
     float intensity = 1.0f;
     if (auto n = node.find("intensity")) intensity = n->floatNumber(kNonNegative);
     if (auto n = node.find("rotate_deg")) environment.worldFromEnvironment = readRotation(*n);
-
-    ImageFile file;
-    try {
-        file = readImageFile(environment.file);
-    } catch (const InputError& e) {
-        fileNode.fail(e.what());
-    }
-    Image& image = file.image;
-    if (!file.floatPixels)
-        scene.warnings.push_back(
-            fmt::format("{}: '{}' is a low-dynamic-range image: decoded from sRGB, but its brightest parts "
-                        "(the sun, lamps) "
-                        "are clipped, so it lights the scene too weakly; use an .hdr or .exr light probe",
-                        fileNode.where(), fileName));
-    if (const size_t bad = sanitizeRadiance(image); bad > 0)
-        scene.warnings.push_back(
-            fmt::format("{}: {} of {} pixels of '{}' are NaN, infinite or negative: set to 0",
-                        fileNode.where(), bad, image.pixelCount(), fileName));
-
     if (projection == "equirectangular") {
         if (image.width() != 2 * image.height())
-            fileNode.fail(
-                fmt::format("expected an equirectangular image twice as wide as high, got {}x{} ('{}')",
-                            image.width(), image.height(), fileName));
+            throw InputError(imageName, fmt::format("expected an equirectangular image twice as wide as high, "
+                                                    "got {}x{}",
+                                                    image.width(), image.height()));
         environment.radiance = std::move(image);
     } else if (projection == "fisheye") {
         environment.radiance = equirectFromFisheye(image, readFisheye(node.find("fisheye"), image));
@@ -126,7 +112,40 @@ void readEnvironment(const JsonNode& node, const fs::path& sceneFolder, Scene& s
             node.childWhere("intensity"),
             fmt::format("the brightest pixel of '{}' times intensity is {:.3g}, more than {:.0e}, "
                         "beyond which the render's 32-bit floats overflow",
-                        fileName, brightest, kMaxRadiance));
+                        imageName, brightest, kMaxRadiance));
+    return environment;
+}
+
+void readEnvironment(const JsonNode& node, const fs::path& sceneFolder, Scene& scene) {
+    checkEnvironmentKeys(node);
+    const JsonNode fileNode = node.child("file");
+    const fs::path file = inputFile(fileNode, sceneFolder);
+    const std::string fileName = file.string();
+    ImageFile read;
+    try {
+        read = readImageFile(file);
+    } catch (const InputError& e) {
+        fileNode.fail(e.what());
+    }
+    Image& image = read.image;
+    if (!read.floatPixels)
+        scene.warnings.push_back(
+            fmt::format("{}: '{}' is a low-dynamic-range image: decoded from sRGB, but its brightest parts "
+                        "(the sun, lamps) "
+                        "are clipped, so it lights the scene too weakly; use an .hdr or .exr light probe",
+                        fileNode.where(), fileName));
+    if (const size_t bad = sanitizeRadiance(image); bad > 0)
+        scene.warnings.push_back(
+            fmt::format("{}: {} of {} pixels of '{}' are NaN, infinite or negative: set to 0",
+                        fileNode.where(), bad, image.pixelCount(), fileName));
+    Environment environment;
+    try {
+        environment = environmentFromImage(node, std::move(image), fileName);
+    } catch (const InputError& e) {
+        if (e.where() == fileName) fileNode.fail(e.message() + fmt::format(" ('{}')", fileName));
+        throw;
+    }
+    environment.file = file;
     setEnvironment(scene, std::move(environment));
 }
 

@@ -9,6 +9,12 @@
 
 namespace deltagi {
 
+// The environment an image of the light gives through the scene file's "environment" `node` (its
+// projection and that projection's parameters for the image's size, rotation and intensity): what
+// readEnvironment() does with the file's image, and `deltagi live` with each light-camera frame. The image
+// must be finite and >= 0. Throws InputError naming the key, or `imageName` for an image of the wrong shape.
+Environment environmentFromImage(const JsonNode& node, Image image, const std::string& imageName);
+
 // Reads the map (converted to equirectangular, bad pixels repaired, times the intensity) and calls
 // setEnvironment(). Warnings (an LDR image, repaired pixels) are added to scene.warnings; errors name the
 // file and the key. scene.options must already be read.
