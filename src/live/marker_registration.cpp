@@ -9,6 +9,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "core/environment.h"
+#include "io/image_encode.h"
 
 namespace deltagi {
 
@@ -44,10 +45,10 @@ MarkerDetector::MarkerDetector(std::span<const Marker> markers) : impl_(std::mak
     impl_->family = tag36h11_create();
     impl_->detector = apriltag_detector_create();
     apriltag_detector_add_family(impl_->detector, impl_->family);
-    // Full resolution and edge refinement: the corners are where lines fitted to the square's edges meet,
-    // which a marker only 40 pixels wide needs. One thread: the same corners on any machine.
+    // Full resolution, the squares found in a slightly blurred copy (a noisy frame's segments hold together),
+    // their edges refined on the frame itself. One thread: the same corners on any machine.
     impl_->detector->quad_decimate = 1.0f;
-    impl_->detector->quad_sigma = 0.0f;
+    impl_->detector->quad_sigma = 0.8f;
     impl_->detector->refine_edges = true;
     impl_->detector->nthreads = 1;
     impl_->markerOfId.assign(impl_->family->ncodes, -1);
@@ -61,17 +62,120 @@ MarkerDetector::~MarkerDetector() {
     tag36h11_destroy(impl_->family);
 }
 
+namespace {
+
+// A frame's grey levels in linear light, for the corners' refinement.
+struct GreyImage {
+    int width = 0, height = 0;
+    std::vector<float> values;
+    float at(int x, int y) const {
+        x = std::clamp(x, 0, width - 1), y = std::clamp(y, 0, height - 1);
+        return values[static_cast<size_t>(y) * width + x];
+    }
+    // Bilinear, at a point in our pixel coordinates (pixel centres at + 0.5).
+    float sample(glm::dvec2 p) const {
+        const double x = p.x - 0.5, y = p.y - 0.5;
+        const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+        const float fx = static_cast<float>(x - x0), fy = static_cast<float>(y - y0);
+        return (1 - fy) * ((1 - fx) * at(x0, y0) + fx * at(x0 + 1, y0)) +
+               fy * ((1 - fx) * at(x0, y0 + 1) + fx * at(x0 + 1, y0 + 1));
+    }
+};
+
+// Where the black square's edge from corner a to corner b lies: at points along it, the place across it where
+// the grey level is half-way between the black inside and the white outside (in linear light, where an edge
+// blurred by the lens and the pixels' area is crossed half-way at the edge itself), and the line through
+// them. Nothing when too few points are found. `outward`: the normal pointing out of the square.
+struct EdgeLine {
+    glm::dvec2 point, direction;
+};
+std::optional<EdgeLine> fitEdge(const GreyImage& grey, glm::dvec2 a, glm::dvec2 b, glm::dvec2 outward,
+                                double cellPx) {
+    const double length = glm::length(b - a);
+    const glm::dvec2 along = (b - a) / length;
+    // Across the edge: within the black border inside and the white ring outside (each a cell wide).
+    const double reach = std::clamp(0.7 * cellPx, 1.0, 3.0);
+    const int samples = std::max(6, static_cast<int>(length / 1.5));
+    std::vector<glm::dvec2> points;
+    for (int i = 0; i < samples; ++i) {
+        // Away from the corners, where the neighbouring edges blur in.
+        const double t = 0.15 + 0.7 * (i + 0.5) / samples;
+        const glm::dvec2 p = a + t * length * along;
+        constexpr int kSteps = 24;
+        float profile[kSteps + 1];
+        for (int k = 0; k <= kSteps; ++k)
+            profile[k] = grey.sample(p + outward * (-reach + 2.0 * reach * k / kSteps));
+        const float black = std::min({profile[0], profile[1], profile[2]});
+        const float white = std::max({profile[kSteps], profile[kSteps - 1], profile[kSteps - 2]});
+        if (!(white - black > 0.02f)) continue;
+        const float half = 0.5f * (black + white);
+        for (int k = 0; k < kSteps; ++k)
+            if (profile[k] < half && profile[k + 1] >= half) {
+                const double f = (half - profile[k]) / (profile[k + 1] - profile[k]);
+                const double across = -reach + 2.0 * reach * (k + f) / kSteps;
+                points.push_back(p + outward * across);
+                break;
+            }
+    }
+    if (points.size() < 4) return std::nullopt;
+    // The line through them (their mean and principal direction).
+    glm::dvec2 mean(0.0);
+    for (glm::dvec2 q : points) mean += q / static_cast<double>(points.size());
+    double sxx = 0, sxy = 0, syy = 0;
+    for (glm::dvec2 q : points) {
+        const glm::dvec2 d = q - mean;
+        sxx += d.x * d.x, sxy += d.x * d.y, syy += d.y * d.y;
+    }
+    const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+    return EdgeLine{mean, glm::dvec2(std::cos(angle), std::sin(angle))};
+}
+
+// The corners where the fitted edges meet; the detector's where an edge cannot be fitted or the lines meet
+// far from them.
+void refineCorners(const GreyImage& grey, std::array<glm::dvec2, 4>& corners) {
+    glm::dvec2 centre(0.0);
+    for (glm::dvec2 c : corners) centre += 0.25 * c;
+    double side = 0.0;
+    for (int k = 0; k < 4; ++k) side += 0.25 * glm::length(corners[(k + 1) % 4] - corners[k]);
+    const double cellPx = side / 8.0;
+    std::array<std::optional<EdgeLine>, 4> edges;
+    for (int k = 0; k < 4; ++k) {
+        const glm::dvec2 a = corners[k], b = corners[(k + 1) % 4];
+        glm::dvec2 normal = glm::normalize(glm::dvec2(b.y - a.y, a.x - b.x));
+        if (glm::dot(normal, 0.5 * (a + b) - centre) < 0.0) normal = -normal;
+        edges[k] = fitEdge(grey, a, b, normal, cellPx);
+    }
+    const std::array<glm::dvec2, 4> detected = corners;
+    for (int k = 0; k < 4; ++k) {
+        // Corner k is where edge k - 1 (from corner k - 1) meets edge k.
+        const auto& e0 = edges[(k + 3) % 4];
+        const auto& e1 = edges[k];
+        if (!e0 || !e1) continue;
+        const double cross = e0->direction.x * e1->direction.y - e0->direction.y * e1->direction.x;
+        if (std::abs(cross) < 0.1) continue;
+        const glm::dvec2 d = e1->point - e0->point;
+        const double t = (d.x * e1->direction.y - d.y * e1->direction.x) / cross;
+        const glm::dvec2 corner = e0->point + t * e0->direction;
+        if (glm::length(corner - detected[k]) < 0.5 * cellPx) corners[k] = corner;
+    }
+}
+
+}  // namespace
+
 MarkerDetector::Result MarkerDetector::detect(const Image& frame) const {
     Result result;
     if (frame.empty()) return result;
-    // Grey levels in linear light: an edge blurred by the lens and the pixels' area is crossed half-way
-    // between black and white where the edge is.
+    // The detector finds and decodes the squares in sRGB-encoded grey levels (what cameras give and it is
+    // tuned for); their corners are then refined in linear light (refineCorners).
+    GreyImage linear{frame.width(), frame.height(), std::vector<float>(frame.pixelCount())};
     image_u8_t* grey = image_u8_create(static_cast<unsigned>(frame.width()), static_cast<unsigned>(frame.height()));
     for (int y = 0; y < frame.height(); ++y)
         for (int x = 0; x < frame.width(); ++x) {
             const float l = luminance(frame.rgb(x, y));
+            const float v = std::clamp(std::isfinite(l) ? l : 0.0f, 0.0f, 1.0f);
+            linear.values[static_cast<size_t>(y) * frame.width() + x] = v;
             grey->buf[static_cast<size_t>(y) * grey->stride + x] =
-                static_cast<uint8_t>(std::lround(255.0f * std::clamp(std::isfinite(l) ? l : 0.0f, 0.0f, 1.0f)));
+                static_cast<uint8_t>(std::lround(255.0f * linearToSrgbValue(v)));
         }
     zarray_t* detections = apriltag_detector_detect(impl_->detector, grey);
     for (int i = 0; i < zarray_size(detections); ++i) {
@@ -97,6 +201,7 @@ MarkerDetector::Result MarkerDetector::detect(const Image& frame) const {
             ++result.tooSmall;
             continue;
         }
+        refineCorners(linear, s.corners);
         result.sightings.push_back(s);
     }
     apriltag_detections_destroy(detections);
@@ -185,8 +290,9 @@ std::optional<RigidPose> planePose(std::span<const glm::dvec2> plane, std::span<
     return pose;
 }
 
-// Gauss-Newton (with a little damping) on the normalized reprojection error of points p (world) seen at n.
-void refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span<const glm::dvec2> observed) {
+// Gauss-Newton (with a little damping) on the normalized reprojection error of points p (world) seen at n;
+// returns the sum of squared errors it ends with.
+double refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span<const glm::dvec2> observed) {
     double lambda = 1e-6;
     auto cost = [&](const RigidPose& p) {
         double c = 0.0;
@@ -226,7 +332,7 @@ void refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span<c
             for (int a = 0; a < 6; ++a) damped[a * 7] *= 1.0 + lambda;
             std::array<double, 6> neg{}, step{};
             for (int a = 0; a < 6; ++a) neg[a] = -jte[a];
-            if (!solveLinear<6>(damped, neg, step)) return;
+            if (!solveLinear<6>(damped, neg, step)) return current;
             RigidPose next;
             next.r = rotationFromVector({step[0], step[1], step[2]}) * pose.r;
             next.t = pose.t + glm::dvec3(step[3], step[4], step[5]);
@@ -237,19 +343,21 @@ void refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span<c
                 current = c;
                 lambda = std::max(lambda * 0.1, 1e-9);
                 improved = true;
-                if (converged) return;
+                if (converged) return current;
             } else {
                 lambda *= 10.0;
             }
         }
-        if (!improved) return;
+        if (!improved) return current;
     }
+    return current;
 }
 
 }  // namespace
 
 std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sightings,
-                                          std::span<const Marker> markers, const Camera& camera) {
+                                          std::span<const Marker> markers, const Camera& camera,
+                                          const std::optional<glm::mat4>& previous) {
     if (sightings.empty() || !(camera.fx > 0.0f) || !(camera.fy > 0.0f)) return std::nullopt;
     // Every corner: its world point and its undistorted normalized image point.
     std::vector<glm::dvec3> world;
@@ -284,13 +392,42 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
     }
     std::optional<RigidPose> fromMarker = planePose(plane, image);
     if (!fromMarker) return std::nullopt;
+    // A small square seen nearly head-on looks almost the same tilted either way about the line of sight (the
+    // planar pose ambiguity: two minima of the reprojection error, the camera some 2 x tilt x distance apart).
+    // Both are refined, from the homography's pose and from it with the marker's normal reflected about the
+    // line of sight; the lower error wins, or where the two are close, the one nearer `previous`.
+    std::vector<RigidPose> starts = {*fromMarker};
+    const glm::dvec3 n = fromMarker->r[2], v = glm::normalize(fromMarker->t);
+    const glm::dvec3 reflected = 2.0 * glm::dot(v, n) * v - n;
+    const glm::dvec3 axis = glm::cross(n, reflected);
+    if (glm::length(axis) > 1e-9) {
+        const double angle = std::atan2(glm::length(axis), glm::dot(n, reflected));
+        RigidPose other = *fromMarker;
+        other.r = rotationFromVector(glm::normalize(axis) * angle) * fromMarker->r;
+        starts.push_back(other);
+    }
     const glm::dmat4 markerFromWorld = glm::inverse(glm::dmat4(first.worldFromMarker));
-    RigidPose pose;
-    pose.r = fromMarker->r * glm::dmat3(markerFromWorld);
-    pose.t = fromMarker->r * glm::dvec3(markerFromWorld[3]) + fromMarker->t;
-    refinePose(pose, world, normalized);
     // The OpenGL camera frame (x right, y up, z backwards) from the computer-vision one.
     const glm::dmat3 flip(1, 0, 0, 0, -1, 0, 0, 0, -1);
+    auto cameraPosition = [&](const RigidPose& p) { return -glm::transpose(p.r) * p.t; };
+    std::vector<std::pair<RigidPose, double>> solutions;
+    for (const RigidPose& start : starts) {
+        RigidPose p;
+        p.r = start.r * glm::dmat3(markerFromWorld);
+        p.t = start.r * glm::dvec3(markerFromWorld[3]) + start.t;
+        const double cost = refinePose(p, world, normalized);
+        if (std::isfinite(cost)) solutions.emplace_back(p, cost);
+    }
+    if (solutions.empty()) return std::nullopt;
+    std::sort(solutions.begin(), solutions.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+    RigidPose pose = solutions.front().first;
+    const double pixel = 1.0 / std::max<double>(camera.fy, 1.0);  // a pixel in normalized units
+    const double noise = static_cast<double>(world.size()) * (0.25 * pixel) * (0.25 * pixel);
+    if (previous && solutions.size() == 2 && solutions[1].second <= 4.0 * solutions[0].second + noise) {
+        const glm::dvec3 last = glm::dvec3((*previous)[3]);
+        if (glm::length(cameraPosition(solutions[1].first) - last) < glm::length(cameraPosition(pose) - last))
+            pose = solutions[1].first;
+    }
     glm::dmat4 cameraFromWorld(flip * pose.r);
     cameraFromWorld[3] = glm::dvec4(flip * pose.t, 1.0);
     MarkerPose result;
@@ -381,7 +518,10 @@ TrackedFrame MarkerTracker::track(const Image& frame, double timeSeconds) {
     const MarkerDetector::Result found = detector_.detect(frame);
     out.unknownTags = found.unknown;
     out.tooSmall = found.tooSmall;
-    if (std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers_, camera_)) {
+    const std::optional<glm::mat4> previous =
+        lastSeen_ ? std::optional<glm::mat4>(lastRaw_) : std::nullopt;
+    if (std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers_, camera_, previous)) {
+        lastRaw_ = pose->worldFromCamera;
         out.state = TrackedFrame::State::Registered;
         out.worldFromCamera = filter_.filter(pose->worldFromCamera, timeSeconds);
         out.reprojectionErrorPx = pose->reprojectionErrorPx;

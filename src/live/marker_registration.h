@@ -4,9 +4,12 @@
 // its intrinsics and lens distortion, and smoothed over time with a One-Euro filter (Casiez et al. 2012), so
 // that a still camera gives a still object and a moving one follows without visible lag.
 //
-// Corners: the detector fits a line to each edge of the black square (libapriltag's refine_edges, on the full
-// image) and intersects them, to a small fraction of a pixel; the pose minimises the reprojection error of
-// every corner (Gauss-Newton from a homography of the largest marker).
+// Corners: libapriltag finds and decodes the squares in the sRGB-encoded grey image; each edge of a black
+// square is then fitted with a line through the points where the grey level, in linear light, is half-way
+// between the black border and the white ring across it, and the corners are where those lines meet (a
+// tenth of a pixel; the detector's own corners, refined in sRGB values, put a 320x240 camera 5 times further
+// off, tests/live/marker_registration_test.cpp). The pose minimises the reprojection error of every corner
+// (Gauss-Newton from a homography of the largest marker, and from its mirror tilt: see solveCameraPose).
 #pragma once
 
 #include <array>
@@ -71,9 +74,13 @@ struct MarkerPose {
 };
 
 // The pose of `camera` (its intrinsics and distortion; its pose is ignored) that best explains the
-// sightings; nothing when there is none or the solution is behind the camera or not finite.
+// sightings; nothing when there is none or the solution is behind the camera or not finite. A marker seen
+// nearly head-on has two poses that explain its corners almost equally well (tilted either way about the
+// line of sight): where their errors are close, the one whose camera is nearer `previous` (the last frame's
+// world-from-camera) is taken.
 std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sightings,
-                                          std::span<const Marker> markers, const Camera& camera);
+                                          std::span<const Marker> markers, const Camera& camera,
+                                          const std::optional<glm::mat4>& previous = std::nullopt);
 
 // One-Euro filtering of a camera pose: position and orientation (a quaternion kept in one hemisphere) each
 // low-passed with a cut-off that rises with their speed.
@@ -133,7 +140,8 @@ class MarkerTracker {
     MarkerDetector detector_;
     PoseFilter filter_;
     std::optional<double> lastSeen_;
-    glm::mat4 lastPose_{1.0f};
+    glm::mat4 lastPose_{1.0f};  // smoothed
+    glm::mat4 lastRaw_{1.0f};   // as solved
 };
 
 }  // namespace deltagi

@@ -94,7 +94,7 @@ TEST(MarkerRegistration, UsesEveryMarkerSeenThroughTheLensDistortion) {
     // Two markers, a lens with barrel distortion: the corners are undistorted before the pose is solved.
     const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f)),
                                          floorMarker(8, 0.1f, glm::vec3(-0.2f, 0.0f, 0.1f), 45.0f)};
-    Camera camera = markerCamera(320, 240, 50.0f, {0.3f, 0.6f, 0.6f}, {-0.05f, 0.0f, 0.0f});
+    Camera camera = markerCamera(320, 240, 50.0f, {0.3f, 0.6f, 0.6f}, {0.15f, 0.0f, -0.1f});  // markers off-centre
     camera.distortion.model = LensDistortion::Model::OpenCV;
     camera.distortion.k1 = -0.2f;
     camera.distortion.k2 = 0.05f;
@@ -109,8 +109,17 @@ TEST(MarkerRegistration, UsesEveryMarkerSeenThroughTheLensDistortion) {
     EXPECT_EQ(pose->markersSeen, 2);
     EXPECT_LT(pose->reprojectionErrorPx, 0.5);
     const test::PoseError e = poseError(pose->worldFromCamera, camera.worldFromCamera);
-    EXPECT_LT(e.position, 0.005f);
+    EXPECT_LT(e.position, 0.01f);
     EXPECT_LT(e.rotationDeg, 0.5f);
+    // The same corners taken as a pinhole camera's put it further off.
+    Camera pinhole = camera;
+    pinhole.distortion = {};
+    const std::optional<MarkerPose> wrong = solveCameraPose(found.sightings, markers, pinhole);
+    ASSERT_TRUE(wrong);
+    const test::PoseError w = poseError(wrong->worldFromCamera, camera.worldFromCamera);
+    std::printf("with the lens model %.2f cm, %.2f deg; without %.2f cm, %.2f deg\n", 100 * e.position, e.rotationDeg,
+                100 * w.position, w.rotationDeg);
+    EXPECT_GT(w.position, 2.0f * e.position);
 }
 
 // The pixel where a point 5 cm above the marker (an object standing on it) appears.
