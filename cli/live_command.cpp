@@ -136,17 +136,31 @@ int runLive(const LiveArgs& args) {
     ordered_json frames = ordered_json::array();
     std::vector<double> latencies, renders, errors;
     int count = 0, registered = 0, held = 0, lost = 0, lightFrames = 0;
-    bool wasLost = false;
+    bool wasLost = false, warnedClipped = false;
     while (args.maxFrames == 0 || count < args.maxFrames) {
         std::optional<FrameFeed::Arrival> arrival = camera.take();
         if (!arrival) break;
         ++count;
         const CameraFrame& frame = arrival->frame;
+        const double waited = std::chrono::duration<double, std::milli>(Clock::now() - arrival->arrived).count();
         // The light: the newest light-camera frame (replayed files: one per scene-camera frame).
         double environmentMs = 0.0;
         if (lightFeed) {
             std::optional<FrameFeed::Arrival> lit = args.realtime ? lightFeed->poll() : lightFeed->take();
             if (lit) {
+                // An 8-bit light camera records what is brighter than its white as white: say so once.
+                const Image& raw = lit->frame.image;
+                size_t clipped = 0;
+                for (size_t p = 0; p < raw.pixelCount(); ++p)
+                    clipped += raw.data()[3 * p] >= 1.0f || raw.data()[3 * p + 1] >= 1.0f || raw.data()[3 * p + 2] >= 1.0f;
+                if (!warnedClipped && clipped * 1000 > raw.pixelCount()) {
+                    warnedClipped = true;
+                    note("deltagi: warning: {}: frame {}: {:.1f} % of the light camera's pixels are at its white: "
+                         "a light brighter than that (the sun, a bare lamp) is recorded too dim and lights the scene "
+                         "too weakly; lower the camera's exposure and raise the environment's intensity to match\n",
+                         lightFeed->source().name(), lit->frame.index,
+                         100.0 * static_cast<double>(clipped) / static_cast<double>(raw.pixelCount()));
+                }
                 const Clock::time_point start = Clock::now();
                 setEnvironment(scene, light->environment(std::move(lit->frame.image), lit->frame.timeSeconds,
                                                          lightFeed->source().name()));
@@ -171,6 +185,10 @@ int runLive(const LiveArgs& args) {
             wasLost = false;
             tracked.state == TrackedFrame::State::Registered ? ++registered : ++held;
             scene.camera.worldFromCamera = tracked.worldFromCamera;
+            // The side of each real surface the light is kept on is the one the first registered camera sees
+            // (as a sequence's first camera): a hand-held camera would otherwise cross the planes of some
+            // surfaces back and forth and have the real scene's light made again in every other frame.
+            if (!scene.options.volume.viewpoint) scene.options.volume.viewpoint = scene.camera.position();
             scene.background = frame.image;
             rendered = renderer.render(scene);
             composite = rendered->composite;
@@ -189,6 +207,7 @@ int runLive(const LiveArgs& args) {
         row["index"] = frame.index;
         row["time"] = std::round(frame.timeSeconds * 1e6) / 1e6;
         row["latency_ms"] = std::round(latency * 1000.0) / 1000.0;
+        row["waited_ms"] = std::round(waited * 1000.0) / 1000.0;  // for the frame before to be done
         row["dropped"] = arrival->dropped;
         row["registration"] = stateName(tracked.state);
         row["markers_seen"] = tracked.markersSeen;
@@ -201,8 +220,9 @@ int runLive(const LiveArgs& args) {
             row["stages_ms"] = timingsJson(*rendered);
         }
         if (!args.quiet)
-            note("frame {}: {:.0f} ms from arrival to composite ({}{:.0f} ms tracking{}), {} dropped, {}{}\n",
-                 frame.index, latency, rendered ? fmt::format("{:.0f} ms rendering, ", rendered->totalMs) : "",
+            note("frame {}: {:.0f} ms from arrival to composite ({}{}{:.0f} ms tracking{}), {} dropped, {}{}\n",
+                 frame.index, latency, waited >= 0.5 ? fmt::format("{:.0f} ms waiting, ", waited) : "",
+                 rendered ? fmt::format("{:.0f} ms rendering, ", rendered->totalMs) : "",
                  trackMs, environmentMs > 0.0 ? fmt::format(", {:.0f} ms new light", environmentMs) : "",
                  arrival->dropped, stateName(tracked.state),
                  tracked.state == TrackedFrame::State::Registered

@@ -1,19 +1,21 @@
 #!/usr/bin/env bash
 # A camera capture to try `deltagi live` and `deltagi track` on, made by the project itself: the Cornell box
-# example's real part with two printed AprilTags (tag36h11), one pinned to the back wall and one on the floor,
+# example's real part with two printed AprilTags (tag36h11), one on the back wall and one on the tall block,
 # path-traced by `deltagi reference` from a hand-held camera that sways and turns a little, frame after
 # frame; and a scene file that places the markers and puts the example's ball and ring into the room for
 # `live` to augment.
 #
 #   scripts/make-live-capture.sh [FRAMES] [SPP]     # default 24 frames, 64 samples per pixel, 320x240
-#   WIDTH=640 HEIGHT=480 scripts/make-live-capture.sh
+#   OUT=out/bench-capture WIDTH=640 HEIGHT=480 EXAMPLE=examples/bench-cornell-buddha.json \
+#       scripts/make-live-capture.sh 60 64   # the benchmark scene at its size
+#   (any scene of the same Cornell box: its objects, lights and options)
 #   build/deltagi live out/live-capture/scene.json --camera 'out/live-capture/camera/frame_####.png' \
 #       -o 'out/live-capture/live/frame_####.png' --json out/live-capture/live.json
 #   build/deltagi track 'out/live-capture/camera/frame_####.png' --scene out/live-capture/scene.json \
 #       -o out/live-capture/tracked/transforms.json
 #
-# Writes out/live-capture/{scene.json,marker3.png,marker4.png,truth.json,camera/frame_NNNN.png}: truth.json holds the
-# camera's true poses (a nerfstudio transforms file) to compare `track`'s with. Needs build/deltagi and jq
+# Writes out/live-capture/{scene.json,marker3.png,marker4.png,truth.json,camera/frame_NNNN.png}: truth.json
+# holds the camera's true poses (a nerfstudio transforms file) to compare `track`'s with. Needs build/deltagi and jq
 # (scripts/install-deps.sh). About 1 s per frame at the defaults on 2 cores.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -22,8 +24,8 @@ spp=${2:-64}
 width=${WIDTH:-320}
 height=${HEIGHT:-240}
 deltagi=${DELTAGI:-build/deltagi}
-out=out/live-capture
-example=examples/cornell-box.json
+out=${OUT:-out/live-capture}
+example=${EXAMPLE:-examples/cornell-box.json}
 [ -x "$deltagi" ] || { echo "make-live-capture.sh: $deltagi not found: build it first (scripts/test.sh)" >&2; exit 1; }
 command -v jq >/dev/null || { echo "make-live-capture.sh: jq not found (scripts/install-deps.sh installs it)" >&2; exit 1; }
 rm -rf "$out/camera"
@@ -82,9 +84,11 @@ jq -n --argjson w "$width" --argjson h "$height" --argjson fov "$fov" --argjson 
   | {"camera_model": "PINHOLE", "w": $w, "h": $h, "fl_x": $f, "fl_y": $f, "cx": ($w / 2), "cy": ($h / 2),
      "fps": 30, "frames": $frames}' > "$out/truth.json"
 # The live scene: the example with the paper in the real scene, the marker, and the camera's intrinsics (its
-# pose is the markers' to find).
+# pose is the markers' to find); the example's mesh files by their absolute paths.
 jq --argjson w "$width" --argjson h "$height" --argjson fov "$fov" --argjson papers "$papers" \
-  --argjson markers "$markers" '
+  --argjson markers "$markers" --arg dir "$(cd "$(dirname "$example")" && pwd)" '
+  def rebase: if has("file") and (.file | startswith("/") | not) then .file = ($dir + "/" + .file) else . end;
   .camera = (.camera + {"width": $w, "height": $h, "fov_y_deg": $fov}) | del(.background)
-  | .scene += $papers | .markers = $markers' "$example" > "$out/scene.json"
+  | .scene += $papers | .markers = $markers | .virtual |= map(rebase) | .scene |= map(rebase)' \
+  "$example" > "$out/scene.json"
 echo "make-live-capture.sh: wrote $out/scene.json, $out/truth.json and $frames frames in $out/camera"

@@ -261,6 +261,8 @@ void FrameFeed::read() {
 std::optional<FrameFeed::Arrival> FrameFeed::takeLocked(std::unique_lock<std::mutex>& lock) {
     std::optional<Arrival> out = std::move(newest_);
     newest_.reset();
+    // Every frame is used: it arrives when it is wanted (the one read ahead waited for the one before).
+    if (!realtime_) out->arrived = Clock::now();
     out->dropped = droppedSinceTake_;
     droppedSinceTake_ = 0;
     changed_.notify_all();

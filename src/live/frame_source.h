@@ -59,7 +59,7 @@ class FrameFeed {
 
     struct Arrival {
         CameraFrame frame;
-        Clock::time_point arrived;  // when it was read from the source
+        Clock::time_point arrived;  // when it was read from the source (not in real time: when taken)
         int dropped = 0;            // frames that arrived since the last take() and were not taken
     };
     // Waits for a frame; nothing once the source has ended and every frame is taken. Rethrows the source's

@@ -418,15 +418,32 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
         const double cost = refinePose(p, world, normalized);
         if (std::isfinite(cost)) solutions.emplace_back(p, cost);
     }
+    // And from the last frame's pose, which finds the minimum near it when the other start does not.
+    if (previous) {
+        const glm::dmat4 cameraFromWorld = glm::inverse(glm::dmat4(*previous));
+        RigidPose p;
+        p.r = flip * glm::dmat3(cameraFromWorld);
+        p.t = flip * glm::dvec3(cameraFromWorld[3]);
+        const double cost = refinePose(p, world, normalized);
+        if (std::isfinite(cost)) solutions.emplace_back(p, cost);
+    }
     if (solutions.empty()) return std::nullopt;
     std::sort(solutions.begin(), solutions.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
     RigidPose pose = solutions.front().first;
-    const double pixel = 1.0 / std::max<double>(camera.fy, 1.0);  // a pixel in normalized units
-    const double noise = static_cast<double>(world.size()) * (0.25 * pixel) * (0.25 * pixel);
-    if (previous && solutions.size() == 2 && solutions[1].second <= 4.0 * solutions[0].second + noise) {
+    if (previous) {
+        // Of the solutions that explain the corners about as well as the best (within 4 times its squared
+        // error plus what corners 0.3 pixels off in x and y add: one marker's 4 corners fit a wrong tilt
+        // better than the true one by that much), the one nearest the last frame's camera.
+        const double pixel = 1.0 / std::max<double>(camera.fy, 1.0);  // a pixel in normalized units
+        const double noise = 2.0 * static_cast<double>(world.size()) * (0.3 * pixel) * (0.3 * pixel);
         const glm::dvec3 last = glm::dvec3((*previous)[3]);
-        if (glm::length(cameraPosition(solutions[1].first) - last) < glm::length(cameraPosition(pose) - last))
-            pose = solutions[1].first;
+        double nearest = glm::length(cameraPosition(pose) - last);
+        for (const auto& [candidate, cost] : solutions)
+            if (cost <= 4.0 * solutions.front().second + noise &&
+                glm::length(cameraPosition(candidate) - last) < nearest) {
+                pose = candidate;
+                nearest = glm::length(cameraPosition(candidate) - last);
+            }
     }
     glm::dmat4 cameraFromWorld(flip * pose.r);
     cameraFromWorld[3] = glm::dvec4(flip * pose.t, 1.0);

@@ -81,14 +81,14 @@ TEST_F(LiveTest, AugmentsEachFrameOverItselfAndReportsIt) {
 
 TEST_F(LiveTest, LightsTheSceneWithTheLightCamerasFrames) {
     const std::string camera = writeCapture();
-    // A fish-eye light camera looking up at a sky that brightens from frame 3 on.
+    // A fish-eye light camera looking up at a sky that brightens from frame 3 on, to the camera's white.
     fs::create_directories(dir_ / "light");
     for (int i = 0; i < kFrames; ++i) {
         Image sky(64, 64, 3, 0.0f);
         for (int y = 0; y < 64; ++y)
             for (int x = 0; x < 64; ++x)
                 if (glm::length(glm::vec2(x - 31.5f, y - 31.5f)) < 32.0f)
-                    sky.setRgb(x, y, glm::vec3(i < 3 ? 0.2f : 0.8f));
+                    sky.setRgb(x, y, glm::vec3(i < 3 ? 0.2f : 1.0f));
         writeImage(sky, dir_ / "light" / fmt::format("frame_{:04d}.png", i));
     }
     const fs::path stats = dir_ / "stats.json";
@@ -97,6 +97,8 @@ TEST_F(LiveTest, LightsTheSceneWithTheLightCamerasFrames) {
                             quote((dir_ / "out" / "frame_####.png").string()) + " --json " +
                             quote(stats.string()) + " -q");
     ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.err.find("frame 3: 78.8 % of the light camera's pixels are at its white"), std::string::npos) << r.err;
+    EXPECT_EQ(lineCount(r.err), 2u) << r.err;  // and the loader's about the scene's own 8-bit probe
     const json s = json::parse(readText(stats));
     EXPECT_EQ(s["summary"]["light_frames"], kFrames);
     EXPECT_GT(s["frames"][0]["environment_ms"].get<double>(), 0.0);
