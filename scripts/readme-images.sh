@@ -22,4 +22,10 @@ render cornell-box-glossy none
 render cornell-buddha none
 render cornell-textured none
 render field-bunny delta
-echo "readme-images.sh: wrote docs/images/{cornell-box,cornell-box-background,cornell-box-delta,cornell-box-glossy,cornell-buddha,cornell-textured,field-bunny,field-bunny-delta}.png"
+# `deltagi live` on the project's own capture: a camera frame and the same frame augmented.
+scripts/make-live-capture.sh 24 256 >/dev/null
+"$deltagi" live out/live-capture/scene.json --camera 'out/live-capture/camera/frame_####.png' \
+  -o 'out/live-capture/live/frame_####.png' --quiet
+cp out/live-capture/camera/frame_0012.png docs/images/live-camera.png
+cp out/live-capture/live/frame_0012.png docs/images/live-augmented.png
+echo "readme-images.sh: wrote docs/images/{cornell-box,cornell-box-background,cornell-box-delta,cornell-box-glossy,cornell-buddha,cornell-textured,field-bunny,field-bunny-delta,live-camera,live-augmented}.png"
