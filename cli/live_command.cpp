@@ -19,6 +19,7 @@
 #include "live/light_camera.h"
 #include "messages.h"
 #include "outputs.h"
+#include "track_command.h"
 
 namespace fs = std::filesystem;
 using nlohmann::ordered_json;
@@ -111,12 +112,7 @@ int runLive(const LiveArgs& args) {
 
     FrameFeed camera(openFrameSource(args.camera, args.patternFps), args.realtime);
     const Camera intrinsics = scene.camera;
-    if (camera.source().width() != intrinsics.width || camera.source().height() != intrinsics.height)
-        throw InputError(camera.source().name(),
-                         fmt::format("frames of {}x{}, the scene's camera ({}) is {}x{}: its intrinsics must be "
-                                     "those of these frames",
-                                     camera.source().width(), camera.source().height(), args.scene.string(),
-                                     intrinsics.width, intrinsics.height));
+    checkFrameSize(camera.source(), intrinsics, args.scene);
     std::optional<LightCamera> light;
     std::optional<FrameFeed> lightFeed;
     if (!args.lightCamera.empty()) {

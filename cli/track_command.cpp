@@ -57,6 +57,14 @@ std::string markerIds(const Scene& scene) {
 
 }  // namespace
 
+void checkFrameSize(const FrameSource& source, const Camera& camera, const fs::path& sceneFile) {
+    if (source.width() != camera.width || source.height() != camera.height)
+        throw InputError(source.name(), fmt::format("frames of {}x{}, the scene's camera ({}) is {}x{}: its "
+                                                    "intrinsics must be those of these frames",
+                                                    source.width(), source.height(), sceneFile.string(),
+                                                    camera.width, camera.height));
+}
+
 CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args) {
     CLI::App* command = app.add_subcommand(
         "track", "Register a video by the scene's markers into a transforms file for `render` (a sequence)");
@@ -107,11 +115,7 @@ int runTrack(const TrackArgs& args) {
 
     std::unique_ptr<FrameSource> source = openFrameSource(args.source, args.patternFps);
     const Camera& camera = scene.camera;
-    if (source->width() != camera.width || source->height() != camera.height)
-        throw InputError(source->name(), fmt::format("frames of {}x{}, the scene's camera ({}) is {}x{}: its "
-                                                     "intrinsics must be those of these frames",
-                                                     source->width(), source->height(), args.scene.string(),
-                                                     camera.width, camera.height));
+    checkFrameSize(*source, camera, args.scene);
     TrackingOptions tracking = args.tracking;
     tracking.smoothing.enabled = !args.noSmoothing;
     MarkerTracker tracker(scene.markers, camera, tracking);

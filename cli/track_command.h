@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "live/frame_source.h"
 #include "live/marker_registration.h"
 
 namespace deltagi::cli {
@@ -25,6 +26,10 @@ struct TrackArgs {
 };
 
 CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args);
+
+// Throws InputError naming the source when its frames are not of `camera`'s size (the scene camera's
+// intrinsics, from `sceneFile`, must be those of the frames); `live` checks its camera so too.
+void checkFrameSize(const FrameSource& source, const Camera& camera, const std::filesystem::path& sceneFile);
 
 // Throws InputError on bad input: a source that cannot be read or changes size, frames not of the scene
 // camera's size, a scene without markers, no frame registered.

@@ -1,0 +1,64 @@
+#!/usr/bin/env python3
+"""How much `deltagi track`'s poses change the augmented frames: each frame of a capture rendered over its photo
+from the pose `track` found and from the true pose (scripts/make-live-capture.sh writes truth.json), and the
+change to the photo (delta) of the first compared with the second's, as `deltagi eval` compares DGI with the
+path tracer: delta_rel_error = |delta_tracked - delta_true| / |delta_true| over the pixels that show the real
+scene in both. Also the camera position error. Needs the Python module (build/python, or installed).
+
+    PYTHONPATH=build/python scripts/track-vs-truth.py out/live-capture/scene.json \\
+        out/live-capture/tracked/transforms.json out/live-capture/truth.json
+"""
+import json
+import os
+import sys
+
+import numpy as np
+
+import deltagi
+
+
+def frames(path):
+    with open(path) as f:
+        document = json.load(f)
+    folder = os.path.dirname(os.path.abspath(path))
+    return [(os.path.join(folder, frame["file_path"]), np.array(frame["transform_matrix"], dtype=np.float32))
+            for frame in document["frames"]]
+
+
+def main():
+    if len(sys.argv) != 4:
+        sys.exit(__doc__)
+    scene_file, tracked_file, truth_file = sys.argv[1:]
+    tracked = {os.path.basename(photo): pose for photo, pose in frames(tracked_file)}
+    truth = frames(truth_file)
+    # The light kept on the side the first true camera sees, as `deltagi live` keeps it.
+    first = truth[0][1][:3, 3]
+    viewpoint = f"options.volume.viewpoint=[{first[0]}, {first[1]}, {first[2]}]"
+    scenes = {kind: deltagi.Scene.load(scene_file, [viewpoint]) for kind in ("tracked", "true")}
+    renderers = {kind: deltagi.FrameRenderer() for kind in scenes}
+    errors, positions = [], []
+    for photo_path, true_pose in truth:
+        name = os.path.basename(photo_path)
+        if name not in tracked:
+            continue
+        photo = deltagi.read_image(photo_path)
+        results = {}
+        for kind, pose in (("tracked", tracked[name]), ("true", true_pose)):
+            scenes[kind].camera_pose = pose
+            scenes[kind].background = photo
+            results[kind] = renderers[kind].render(scenes[kind])
+        real = (results["tracked"]["object_mask"] <= 0.0) & (results["true"]["object_mask"] <= 0.0)
+        difference = (results["tracked"]["delta"] - results["true"]["delta"])[real]
+        reference = results["true"]["delta"][real]
+        errors.append(float(np.sqrt((difference ** 2).sum()) / max(np.sqrt((reference ** 2).sum()), 1e-30)))
+        positions.append(float(np.linalg.norm(tracked[name][:3, 3] - true_pose[:3, 3])))
+        print(f"{name}: delta_rel_error {errors[-1]:.4f}, camera {100 * positions[-1]:.2f} cm off", flush=True)
+    if not errors:
+        sys.exit("track-vs-truth.py: no frame of the truth is in the tracked transforms")
+    errors_sorted = sorted(errors)
+    print(f"{len(errors)} frames: delta_rel_error median {errors_sorted[len(errors) // 2]:.4f}, "
+          f"worst {errors_sorted[-1]:.4f}; camera median {100 * sorted(positions)[len(positions) // 2]:.2f} cm")
+
+
+if __name__ == "__main__":
+    main()
