@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
-# Fuzzes the scene reader, mesh loading and the live session's message handler with libFuzzer (clang 16 from
-# Debian 12): builds build-fuzz/ with -DDELTAGI_FUZZ=ON, seeds each target, runs each for a fixed budget and
-# prints executions and findings.
+# Fuzzes the scene reader, mesh loading, the live session's message handler and camera frames (video decoding
+# and the marker detector) with libFuzzer (clang 16 from Debian 12): builds build-fuzz/ with -DDELTAGI_FUZZ=ON,
+# seeds each target, runs each for a fixed budget and prints executions and findings.
 #   scripts/fuzz.sh [SECONDS_PER_TARGET]      (default 300)
 # Seeds: the scenes of examples/ and tests/bad-inputs/ (and ../shared/data/scenes when present) for the scene
 # reader; Debian's assimp-testmodels (OBJ, PLY, OFF, glTF 2, STL) and the meshes of tests/bad-inputs/ for
 # mesh loading. The corpus grows in build-fuzz/corpus-*/ from run to run; crashes, timeouts and running out of
 # memory (4 GB) are written to build-fuzz/findings/. The live session's handler (`deltagi serve`) is seeded with
-# one message of each type. Every crash found becomes a case of tests/bad-inputs/.
+# one message of each type, camera frames with a short MP4 of a marker. Every crash found becomes a case of
+# tests/bad-inputs/.
 # Exit status 1 when a target found something. Installs clang 16, libFuzzer and assimp-testmodels when missing
 # (as root). Clang 16, not Debian's default 14: the renderer captures structured bindings in lambdas (C++20),
 # which clang supports from version 16.
@@ -20,13 +21,13 @@ scripts/install-deps.sh clang-16 libclang-rt-16-dev assimp-testmodels
 build=build-fuzz
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-16 \
   -DDELTAGI_FUZZ=ON -DDELTAGI_BUILD_TESTS=OFF -DDELTAGI_BUILD_BENCHMARKS=OFF
-cmake --build "$build" -j2 --target fuzz_scene_reader fuzz_mesh_loader fuzz_live_session
+cmake --build "$build" -j2 --target fuzz_scene_reader fuzz_mesh_loader fuzz_live_session fuzz_camera_frames
 
 # Seeds, rebuilt each run (the corpus folders keep what the fuzzer found).
 seeds="$build/seeds"
 rm -rf "$seeds"
-mkdir -p "$seeds/scene" "$seeds/mesh" "$seeds/live" "$build/corpus-scene" "$build/corpus-mesh" \
-  "$build/corpus-live" "$build/findings"
+mkdir -p "$seeds/scene" "$seeds/mesh" "$seeds/live" "$seeds/frames" "$build/corpus-scene" "$build/corpus-mesh" \
+  "$build/corpus-live" "$build/corpus-frames" "$build/findings"
 for f in examples/*.json tests/bad-inputs/*.json ../shared/data/scenes/*.json; do
   [ -f "$f" ] && [ "$(stat -c %s "$f")" -le 65536 ] && cp "$f" "$seeds/scene/$(echo "$f" | tr / _)"
 done
@@ -62,12 +63,24 @@ done <<'MESSAGES'
 {"type": "ping"}
 MESSAGES
 
+# Camera frames: a 3-frame MP4 of a marker (first byte 0: .mp4), written by the Release build's `deltagi`
+# when there is one (scripts/test.sh builds it).
+if [ -x build/deltagi ]; then
+  frames="$build/seed-frames"
+  rm -rf "$frames" && mkdir -p "$frames"
+  build/deltagi marker 3 -o "$frames/frame_0000.png" --pixels-per-cell 4 --quiet
+  cp "$frames/frame_0000.png" "$frames/frame_0001.png" && cp "$frames/frame_0000.png" "$frames/frame_0002.png"
+  build/deltagi encode "$frames/frame_####.png" -o "$frames/marker.mp4" --quiet
+  { printf '\x00'; cat "$frames/marker.mp4"; } > "$seeds/frames/marker-mp4"
+fi
+
 status=0
-for target in scene mesh live; do
+for target in scene mesh live frames; do
   case $target in
     scene) binary="$build/fuzz/fuzz_scene_reader" ;;
     mesh) binary="$build/fuzz/fuzz_mesh_loader" ;;
     live) binary="$build/fuzz/fuzz_live_session" ;;
+    frames) binary="$build/fuzz/fuzz_camera_frames" ;;
   esac
   log="$build/fuzz-$target.log"
   echo "== fuzz_$target: $budget s, $(ls "$seeds/$target" | wc -l) seeds"

@@ -23,7 +23,10 @@ namespace deltagi {
 
 namespace {
 
-constexpr int kMaxFrameSide = 16384;
+// Frames up to 8K (7680 x 4320) and a little more; larger ones are refused before a pixel is decoded (each
+// frame is held as linear floats: 12 bytes a pixel).
+constexpr int kMaxFrameSide = 8192;
+constexpr int64_t kMaxFramePixels = 8192LL * 4608;
 
 std::string avError(int error) {
     char text[AV_ERROR_MAX_STRING_SIZE] = {};
@@ -50,9 +53,17 @@ class PatternSource final : public FrameSource {
             throw InputError(pattern_, fmt::format("no frame: neither '{}' nor '{}' exists", path(0).string(),
                                                    path(1).string()));
         const std::optional<std::pair<int, int>> size = imageFileSize(path(next_));
-        if (!size) (void)readImage(path(next_));  // says why
+        if (!size) {
+            (void)readImage(path(next_));  // says why
+            throw InputError(path(next_).string(), "cannot read the image's size");
+        }
         width_ = size->first;
         height_ = size->second;
+        if (width_ > kMaxFrameSide || height_ > kMaxFrameSide ||
+            static_cast<int64_t>(width_) * height_ > kMaxFramePixels)
+            throw InputError(path(next_).string(),
+                             fmt::format("a frame of {}x{}: expected at most {} pixels a side and {} in all",
+                                         width_, height_, kMaxFrameSide, kMaxFramePixels));
     }
 
     std::optional<CameraFrame> next() override {
@@ -117,8 +128,10 @@ class VideoSource final : public FrameSource {
         if (int e = avcodec_open2(decoder_, codec, nullptr); e < 0) fail("cannot decode: " + avError(e));
         width_ = decoder_->width;
         height_ = decoder_->height;
-        if (width_ < 1 || height_ < 1 || width_ > kMaxFrameSide || height_ > kMaxFrameSide)
-            fail(fmt::format("frames of {}x{}: expected 1 to {} pixels a side", width_, height_, kMaxFrameSide));
+        if (width_ < 1 || height_ < 1 || width_ > kMaxFrameSide || height_ > kMaxFrameSide ||
+            static_cast<int64_t>(width_) * height_ > kMaxFramePixels)
+            fail(fmt::format("frames of {}x{}: expected 1 to {} pixels a side and at most {} in all", width_,
+                             height_, kMaxFrameSide, kMaxFramePixels));
         timeBase_ = av_q2d(stream->time_base);
         const AVRational rate = stream->avg_frame_rate.num > 0 ? stream->avg_frame_rate : stream->r_frame_rate;
         fps_ = rate.num > 0 && rate.den > 0 ? av_q2d(rate) : 0.0;
