@@ -7,6 +7,13 @@ scene in both. Also the camera position error. Needs the Python module (build/py
 
     PYTHONPATH=build/python scripts/track-vs-truth.py out/live-capture/scene.json \\
         out/live-capture/tracked/transforms.json out/live-capture/truth.json
+
+With --still instead of the truth file: each frame at the tracked pose rendered as `deltagi live` renders it
+(one renderer over the frames, keeping what they share and averaging frames over time) against a still render
+of the same frame and pose (a renderer of its own), and the objects compared too (object_rel_rmse).
+
+    PYTHONPATH=build/python scripts/track-vs-truth.py out/live-capture/scene.json \\
+        out/live-capture/tracked/transforms.json --still
 """
 import json
 import os
@@ -25,7 +32,38 @@ def frames(path):
             for frame in document["frames"]]
 
 
+def live_against_still(scene_file, tracked_file):
+    tracked = frames(tracked_file)
+    first = tracked[0][1][:3, 3]
+    viewpoint = f"options.volume.viewpoint=[{first[0]}, {first[1]}, {first[2]}]"
+    live_scene = deltagi.Scene.load(scene_file, [viewpoint])
+    live = deltagi.FrameRenderer()
+    deltas, objects = [], []
+    for photo_path, pose in tracked:
+        photo = deltagi.read_image(photo_path)
+        live_scene.camera_pose = pose
+        live_scene.background = photo
+        a = live.render(live_scene)
+        still_scene = deltagi.Scene.load(scene_file, [viewpoint])
+        still_scene.camera_pose = pose
+        still_scene.background = photo
+        b = deltagi.FrameRenderer().render(still_scene)
+        real = (a["object_mask"] <= 0.0) & (b["object_mask"] <= 0.0)
+        d = (a["delta"] - b["delta"])[real]
+        deltas.append(float(np.sqrt((d ** 2).sum()) / max(np.sqrt((b["delta"][real] ** 2).sum()), 1e-30)))
+        covered = (b["object_mask"] >= 1.0) & (a["object_mask"] >= 1.0)
+        o = (a["composite"] - b["composite"])[covered]
+        objects.append(float(np.sqrt((o ** 2).mean()) / max(np.sqrt((b["composite"][covered] ** 2).mean()), 1e-30)))
+        print(f"{os.path.basename(photo_path)}: delta_rel_error {deltas[-1]:.4f}, object_rel_rmse {objects[-1]:.4f}",
+              flush=True)
+    print(f"{len(deltas)} frames, live against still: delta_rel_error median {sorted(deltas)[len(deltas) // 2]:.4f}, "
+          f"worst {max(deltas):.4f}; object_rel_rmse median {sorted(objects)[len(objects) // 2]:.4f}, "
+          f"worst {max(objects):.4f}")
+
+
 def main():
+    if len(sys.argv) == 4 and sys.argv[3] == "--still":
+        return live_against_still(sys.argv[1], sys.argv[2])
     if len(sys.argv) != 4:
         sys.exit(__doc__)
     scene_file, tracked_file, truth_file = sys.argv[1:]
