@@ -140,6 +140,31 @@ TEST_F(LiveTest, RefusesWhatItCannotRun) {
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.err.find("no frame: neither"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir_ / "s.json"));
+    // Light-camera frames that the scene's projection cannot take: an equirectangular map must be 2:1.
+    fs::create_directories(dir_ / "light");
+    writeImage(Image(32, 16, 3, 0.5f), dir_ / "light" / "frame_0000.png");
+    for (int i = 0; i < 2; ++i) writeImage(Image(24, 24, 3, 0.5f), dir_ / "light" / fmt::format("frame_{:04d}.png", i));
+    writeImage(Image(32, 16, 3, 0.5f), dir_ / "sky.png");
+    json withSky = json::parse(readText(liveScene()));
+    withSky["environment"] = {{"file", (dir_ / "sky.png").string()}};
+    r = run("live " + quote(writeScene(withSky, "sky.json").string()) + " --camera " + quote(camera) +
+            " --light-camera " + quote((dir_ / "light" / "frame_####.png").string()) + " --json " +
+            quote((dir_ / "s.json").string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("light/frame_####.png: expected an equirectangular image twice as wide as high, got 24x24"),
+              std::string::npos)
+        << r.err;
+    // A frame of another size in the middle: the frames before it are written whole, then one line.
+    writeImage(Image(80, 60, 3, 0.5f), dir_ / "in" / "frame_0003.png");
+    r = run("live " + quote(liveScene().string()) + " --camera " + quote(camera) + " -o " +
+            quote((dir_ / "out" / "frame_####.png").string()) + " -q");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("frame_0003.png: the frames changed size: 80x60, the first was 160x120"), std::string::npos)
+        << r.err;
+    EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+    EXPECT_EQ(readImage(dir_ / "out" / "frame_0002.png").width(), kWidth);
+    EXPECT_FALSE(fs::exists(dir_ / "out" / "frame_0003.png"));
+    EXPECT_TRUE(temporaries().empty());
 }
 
 }  // namespace
