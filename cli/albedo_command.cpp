@@ -26,11 +26,8 @@ namespace deltagi::cli {
 namespace {
 
 // Figures in the written scene file: 4 decimals, more than an 8-bit photo holds.
-double rounded(float value) {
-    return std::round(static_cast<double>(value) * 1e4) / 1e4;
-}
 ordered_json rgb(glm::vec3 v) {
-    return ordered_json::array({rounded(v.x), rounded(v.y), rounded(v.z)});
+    return ordered_json::array({rounded(v.x, 1e4), rounded(v.y, 1e4), rounded(v.z, 1e4)});
 }
 
 // The largest diffuse albedo a material allows (albedo + specular <= 1, which the scene reader checks).

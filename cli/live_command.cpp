@@ -30,6 +30,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The share of a light-camera frame's pixels at its white above which `live` warns (once) of a clipped light.
+constexpr double kClippedShareWarning = 0.001;
+
 double millisecondsSince(Clock::time_point start) {
     return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
@@ -38,15 +41,6 @@ double median(std::vector<double> v) {
     if (v.empty()) return 0.0;
     std::sort(v.begin(), v.end());
     return v[v.size() / 2];
-}
-
-ordered_json timingsJson(const RenderOutput& output) {
-    ordered_json out = ordered_json::object();
-    for (const StageTiming& t : output.timings) {
-        const double ms = (out.contains(t.name) ? out[t.name].get<double>() : 0.0) + t.ms;
-        out[t.name] = std::round(ms * 1000.0) / 1000.0;
-    }
-    return out;
 }
 
 const char* stateName(TrackedFrame::State s) {
@@ -144,24 +138,18 @@ int runLive(const LiveArgs& args) {
         if (lightFeed) {
             std::optional<FrameFeed::Arrival> lit = args.realtime ? lightFeed->poll() : lightFeed->take();
             if (lit) {
-                // An 8-bit light camera records what is brighter than its white as white: say so once.
-                const Image& raw = lit->frame.image;
-                size_t clipped = 0;
-                for (size_t p = 0; p < raw.pixelCount(); ++p)
-                    clipped += raw.data()[3 * p] >= 1.0f || raw.data()[3 * p + 1] >= 1.0f || raw.data()[3 * p + 2] >= 1.0f;
-                if (!warnedClipped && clipped * 1000 > raw.pixelCount()) {
-                    warnedClipped = true;
-                    note("deltagi: warning: {}: frame {}: {:.1f} % of the light camera's pixels are at its white: "
-                         "a light brighter than that (the sun, a bare lamp) is recorded too dim and lights the scene "
-                         "too weakly; lower the camera's exposure and raise the environment's intensity to match\n",
-                         lightFeed->source().name(), lit->frame.index,
-                         100.0 * static_cast<double>(clipped) / static_cast<double>(raw.pixelCount()));
-                }
                 const Clock::time_point start = Clock::now();
                 setEnvironment(scene, light->environment(std::move(lit->frame.image), lit->frame.timeSeconds,
                                                          lightFeed->source().name()));
                 environmentMs = millisecondsSince(start);
                 ++lightFrames;
+                if (!warnedClipped && light->clippedShare() > kClippedShareWarning) {
+                    warnedClipped = true;
+                    note("deltagi: warning: {}: frame {}: {:.1f} % of the light camera's pixels are at its white: "
+                         "a light brighter than that (the sun, a bare lamp) is recorded too dim and lights the scene "
+                         "too weakly; lower the camera's exposure and raise the environment's intensity to match\n",
+                         lightFeed->source().name(), lit->frame.index, 100.0 * light->clippedShare());
+                }
             }
         }
         const Clock::time_point trackStart = Clock::now();
@@ -201,19 +189,19 @@ int runLive(const LiveArgs& args) {
         if (video) video->add(composite);
         ordered_json row;
         row["index"] = frame.index;
-        row["time"] = std::round(frame.timeSeconds * 1e6) / 1e6;
-        row["latency_ms"] = std::round(latency * 1000.0) / 1000.0;
-        row["waited_ms"] = std::round(waited * 1000.0) / 1000.0;  // for the frame before to be done
+        row["time"] = rounded(frame.timeSeconds, 1e6);
+        row["latency_ms"] = rounded(latency, 1e3);
+        row["waited_ms"] = rounded(waited, 1e3);  // for the frame before to be done
         row["dropped"] = arrival->dropped;
         row["registration"] = stateName(tracked.state);
         row["markers_seen"] = tracked.markersSeen;
         if (tracked.state == TrackedFrame::State::Registered)
-            row["reprojection_error_px"] = std::round(tracked.reprojectionErrorPx * 1e4) / 1e4;
-        row["track_ms"] = std::round(trackMs * 1000.0) / 1000.0;
-        row["environment_ms"] = std::round(environmentMs * 1000.0) / 1000.0;
+            row["reprojection_error_px"] = rounded(tracked.reprojectionErrorPx, 1e4);
+        row["track_ms"] = rounded(trackMs, 1e3);
+        row["environment_ms"] = rounded(environmentMs, 1e3);
         if (rendered) {
-            row["render_ms"] = std::round(rendered->totalMs * 1000.0) / 1000.0;
-            row["stages_ms"] = timingsJson(*rendered);
+            row["render_ms"] = rounded(rendered->totalMs, 1e3);
+            row["stages_ms"] = stageTimesJson(*rendered, 1e3);
         }
         if (!args.quiet)
             note("frame {}: {:.0f} ms from arrival to composite ({}{}{:.0f} ms tracking{}), {} dropped, {}{}\n",
@@ -237,9 +225,9 @@ int runLive(const LiveArgs& args) {
     summary["held"] = held;
     summary["lost"] = lost;
     summary["light_frames"] = lightFrames;
-    summary["latency_ms_median"] = std::round(median(latencies) * 1000.0) / 1000.0;
-    summary["render_ms_median"] = std::round(median(renders) * 1000.0) / 1000.0;
-    summary["reprojection_error_px_median"] = std::round(median(errors) * 1e4) / 1e4;
+    summary["latency_ms_median"] = rounded(median(latencies), 1e3);
+    summary["render_ms_median"] = rounded(median(renders), 1e3);
+    summary["reprojection_error_px_median"] = rounded(median(errors), 1e4);
     if (!args.json.empty()) {
         ordered_json document;
         document["summary"] = summary;

@@ -159,11 +159,8 @@ std::vector<fs::path> outputFiles(const fs::path& output, const fs::path& aovDir
 // scene loading is not a pipeline stage and is reported beside them.
 nlohmann::ordered_json timingsJson(const RenderOutput& output, const Scene& scene, int threads,
                                    double loadMs) {
-    nlohmann::ordered_json stages = nlohmann::ordered_json::object();
-    for (const StageTiming& stage : output.timings)
-        stages[stage.name] = stages.value(stage.name, 0.0) + stage.ms;
     nlohmann::ordered_json json;
-    json["stages"] = std::move(stages);
+    json["stages"] = cli::stageTimesJson(output);
     json["total_ms"] = output.totalMs;
     json["load_ms"] = loadMs;
     json["threads"] = threads;

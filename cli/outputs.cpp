@@ -140,4 +140,13 @@ void OutputFiles::commit() {
     files_.clear();
 }
 
+nlohmann::ordered_json stageTimesJson(const RenderOutput& output, double scale) {
+    nlohmann::ordered_json stages = nlohmann::ordered_json::object();
+    for (const StageTiming& stage : output.timings)
+        stages[stage.name] = stages.value(stage.name, 0.0) + stage.ms;
+    if (scale > 0.0)
+        for (auto& ms : stages) ms = rounded(ms.get<double>(), scale);
+    return stages;
+}
+
 }  // namespace deltagi::cli

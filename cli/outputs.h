@@ -2,6 +2,7 @@
 // written atomically (io/atomic_file.h), and cleaned up when SIGINT or SIGTERM stops the run.
 #pragma once
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <span>
@@ -12,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "deltagi/image.h"
+#include "deltagi/renderer.h"
 #include "deltagi/scene.h"
 #include "io/atomic_file.h"
 
@@ -48,6 +50,13 @@ void checkOutputs(const std::vector<std::filesystem::path>& outputs, const std::
 
 // Writes JSON (2-space indent) atomically; the folder must exist.
 void writeJson(const nlohmann::ordered_json& json, const std::filesystem::path& path);
+
+// Each stage's milliseconds in pipeline order, a stage run more than once (per light, say) summed; with a
+// `scale`, rounded to 1 / scale.
+nlohmann::ordered_json stageTimesJson(const RenderOutput& output, double scale = 0.0);
+
+// A figure for a JSON output, rounded to 1 / scale (1e3: timings in ms to the microsecond).
+inline double rounded(double value, double scale) { return std::round(value * scale) / scale; }
 
 // A file name with the place of a frame's number: a run of '#' (frame_####.png) or a printf-style %d / %0Nd
 // (frame_%04d.png), replaced by the number, padded to its width (with zeros, or spaces for %Nd). Throws

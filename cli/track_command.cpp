@@ -21,8 +21,6 @@ namespace deltagi::cli {
 
 namespace {
 
-double rounded(double v, double scale = 1e6) { return std::round(v * scale) / scale; }
-
 // nerfstudio's intrinsics (the keys readTransforms reads).
 void writeIntrinsics(const Camera& camera, ordered_json& out) {
     const LensDistortion& d = camera.distortion;
@@ -45,7 +43,7 @@ void writeIntrinsics(const Camera& camera, ordered_json& out) {
 ordered_json rows(const glm::mat4& m) {
     ordered_json out = ordered_json::array();
     for (int r = 0; r < 4; ++r)
-        out.push_back({rounded(m[0][r]), rounded(m[1][r]), rounded(m[2][r]), rounded(m[3][r])});
+        out.push_back({rounded(m[0][r], 1e6), rounded(m[1][r], 1e6), rounded(m[2][r], 1e6), rounded(m[3][r], 1e6)});
     return out;
 }
 
@@ -146,7 +144,7 @@ int runTrack(const TrackArgs& args) {
         ordered_json entry;
         entry["file_path"] = photo.generic_string();
         entry["transform_matrix"] = rows(tracked.worldFromCamera);
-        entry["time"] = rounded(frame->timeSeconds);
+        entry["time"] = rounded(frame->timeSeconds, 1e6);
         if (tracked.state == TrackedFrame::State::Registered) {
             ++registered;
             errors.push_back(tracked.reprojectionErrorPx);

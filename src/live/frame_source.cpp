@@ -28,6 +28,9 @@ namespace {
 constexpr int kMaxFrameSide = 8192;
 constexpr int64_t kMaxFramePixels = 8192LL * 4608;
 
+// A capture device (V4L2): it gives frames at its own pace.
+bool isDevice(const std::string& source) { return source.starts_with("/dev/"); }
+
 std::string avError(int error) {
     char text[AV_ERROR_MAX_STRING_SIZE] = {};
     av_strerror(error, text, sizeof text);
@@ -106,7 +109,7 @@ class VideoSource final : public FrameSource {
             av_log_set_level(AV_LOG_QUIET);  // its errors come back as codes, which the messages name
             avdevice_register_all();
         });
-        const bool device = name_.starts_with("/dev/");
+        const bool device = isDevice(name_);
         const AVInputFormat* format = device ? av_find_input_format("video4linux2") : nullptr;
         if (device && !format) fail("this FFmpeg has no V4L2 input (libavdevice)");
         if (!device) {
@@ -220,7 +223,9 @@ class VideoSource final : public FrameSource {
 }  // namespace
 
 FrameFeed::FrameFeed(std::unique_ptr<FrameSource> source, bool realtime)
-    : source_(std::move(source)), realtime_(realtime || source_->name().starts_with("/dev/")) {
+    : source_(std::move(source)),
+      realtime_(realtime || isDevice(source_->name())),
+      paced_(realtime && !isDevice(source_->name())) {
     reader_ = std::thread([this] { read(); });
 }
 
@@ -253,8 +258,7 @@ void FrameFeed::read() {
             changed_.notify_all();
             return;
         }
-        const bool device = source_->name().starts_with("/dev/");
-        if (realtime_ && !device) {
+        if (paced_) {
             // A recorded camera replayed live: the frame arrives when its timestamp says.
             if (!firstTime) firstTime = frame->timeSeconds;
             const auto due = start + std::chrono::duration_cast<Clock::duration>(

@@ -75,7 +75,8 @@ class FrameFeed {
     std::optional<Arrival> takeLocked(std::unique_lock<std::mutex>& lock);
 
     std::unique_ptr<FrameSource> source_;
-    bool realtime_;
+    bool realtime_;  // frames come at their own pace, the newest wins (else each waits to be taken)
+    bool paced_;     // ... at their timestamps' pace, read from a file (a device paces itself)
     mutable std::mutex mutex_;
     std::condition_variable changed_;
     std::optional<Arrival> newest_;

@@ -28,8 +28,17 @@ LightCamera::LightCamera(const std::filesystem::path& sceneFile, const std::vect
 
 Environment LightCamera::environment(Image frame, double timeSeconds, const std::string& frameName) {
     const JsonNode node(document_["environment"], file_, "environment");
-    for (float& v : frame.data())
-        if (!(v >= 0.0f) || !std::isfinite(v)) v = 0.0f;
+    size_t clipped = 0;
+    for (size_t p = 0; p < frame.pixelCount(); ++p) {
+        float* rgb = &frame.data()[p * frame.channels()];
+        bool white = false;
+        for (int c = 0; c < frame.channels(); ++c) {
+            if (!(rgb[c] >= 0.0f) || !std::isfinite(rgb[c])) rgb[c] = 0.0f;
+            white = white || rgb[c] >= 1.0f;
+        }
+        clipped += white;
+    }
+    clippedShare_ = frame.pixelCount() ? static_cast<double>(clipped) / static_cast<double>(frame.pixelCount()) : 0.0;
     Environment e = environmentFromImage(node, std::move(frame), frameName);
     const Image& map = e.radiance;
     if (smoothed_.empty() || smoothed_.width() != map.width() || smoothed_.height() != map.height() ||

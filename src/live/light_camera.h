@@ -30,6 +30,8 @@ class LightCamera {
     // average afresh). Pixels that are not finite and >= 0 count as 0. InputError naming `frameName` for a
     // frame the projection cannot take.
     Environment environment(Image frame, double timeSeconds, const std::string& frameName);
+    // The share of the last frame's pixels with a channel at 1 or more: at an 8-bit camera's white, clipped.
+    double clippedShare() const { return clippedShare_; }
 
   private:
     std::string file_;
@@ -37,6 +39,7 @@ class LightCamera {
     double timeConstant_;
     Image smoothed_;
     double lastTime_ = 0.0;
+    double clippedShare_ = 0.0;
 };
 
 }  // namespace deltagi

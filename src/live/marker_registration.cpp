@@ -248,6 +248,20 @@ struct RigidPose {
     glm::dvec3 t{0.0};
 };
 
+// The OpenGL camera frame (x right, y up, z backwards) from the computer-vision one, and back.
+const glm::dmat3 kFlipYZ(1, 0, 0, 0, -1, 0, 0, 0, -1);
+
+RigidPose poseOf(const glm::mat4& worldFromCamera) {
+    const glm::dmat4 cameraFromWorld = glm::inverse(glm::dmat4(worldFromCamera));
+    return {kFlipYZ * glm::dmat3(cameraFromWorld), kFlipYZ * glm::dvec3(cameraFromWorld[3])};
+}
+
+glm::mat4 worldFromCameraOf(const RigidPose& pose) {
+    glm::dmat4 cameraFromWorld(kFlipYZ * pose.r);
+    cameraFromWorld[3] = glm::dvec4(kFlipYZ * pose.t, 1.0);
+    return glm::mat4(glm::inverse(cameraFromWorld));
+}
+
 // The rotation nearest to m (polar decomposition by Newton's iteration).
 glm::dmat3 nearestRotation(glm::dmat3 m) {
     for (int i = 0; i < 20; ++i) m = 0.5 * (m + glm::transpose(glm::inverse(m)));
@@ -394,8 +408,9 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
     if (!fromMarker) return std::nullopt;
     // A small square seen nearly head-on looks almost the same tilted either way about the line of sight (the
     // planar pose ambiguity: two minima of the reprojection error, the camera some 2 x tilt x distance apart).
-    // Both are refined, from the homography's pose and from it with the marker's normal reflected about the
-    // line of sight; the lower error wins, or where the two are close, the one nearer `previous`.
+    // The pose is refined from the homography's, from it with the marker's normal reflected about the line of
+    // sight, and from `previous`; the lowest error wins, or among those close to it, the one nearest
+    // `previous`.
     std::vector<RigidPose> starts = {*fromMarker};
     const glm::dvec3 n = fromMarker->r[2], v = glm::normalize(fromMarker->t);
     const glm::dvec3 reflected = 2.0 * glm::dot(v, n) * v - n;
@@ -407,8 +422,6 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
         starts.push_back(other);
     }
     const glm::dmat4 markerFromWorld = glm::inverse(glm::dmat4(first.worldFromMarker));
-    // The OpenGL camera frame (x right, y up, z backwards) from the computer-vision one.
-    const glm::dmat3 flip(1, 0, 0, 0, -1, 0, 0, 0, -1);
     auto cameraPosition = [&](const RigidPose& p) { return -glm::transpose(p.r) * p.t; };
     std::vector<std::pair<RigidPose, double>> solutions;
     for (const RigidPose& start : starts) {
@@ -418,12 +431,9 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
         const double cost = refinePose(p, world, normalized);
         if (std::isfinite(cost)) solutions.emplace_back(p, cost);
     }
-    // And from the last frame's pose, which finds the minimum near it when the other start does not.
+    // And from the last frame's pose, which finds the minimum near it when the other starts do not.
     if (previous) {
-        const glm::dmat4 cameraFromWorld = glm::inverse(glm::dmat4(*previous));
-        RigidPose p;
-        p.r = flip * glm::dmat3(cameraFromWorld);
-        p.t = flip * glm::dvec3(cameraFromWorld[3]);
+        RigidPose p = poseOf(*previous);
         const double cost = refinePose(p, world, normalized);
         if (std::isfinite(cost)) solutions.emplace_back(p, cost);
     }
@@ -445,10 +455,8 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
                 nearest = glm::length(cameraPosition(candidate) - last);
             }
     }
-    glm::dmat4 cameraFromWorld(flip * pose.r);
-    cameraFromWorld[3] = glm::dvec4(flip * pose.t, 1.0);
     MarkerPose result;
-    result.worldFromCamera = glm::mat4(glm::inverse(cameraFromWorld));
+    result.worldFromCamera = worldFromCameraOf(pose);
     result.markersSeen = static_cast<int>(sightings.size());
     // The RMS pixel error through the lens model.
     double squared = 0.0;
