@@ -44,14 +44,17 @@ double median(std::vector<double> v) {
 }
 
 const char* stateName(TrackedFrame::State s) {
-    return s == TrackedFrame::State::Registered ? "markers" : s == TrackedFrame::State::Held ? "held" : "lost";
+    return s == TrackedFrame::State::Registered ? "markers"
+           : s == TrackedFrame::State::Held     ? "held"
+                                                : "lost";
 }
 
 }  // namespace
 
 CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
     CLI::App* command = app.add_subcommand(
-        "live", "Augment a camera's frames as they come, registered by the scene's markers, lit by a light camera");
+        "live",
+        "Augment a camera's frames as they come, registered by the scene's markers, lit by a light camera");
     command->add_option("scene", args.scene, "The scene file: the reconstruction, the objects, the markers")
         ->required();
     command
@@ -65,17 +68,19 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
     command->add_option("-o,--output", args.output, "The augmented frames (out/frame_####.png)");
     command->add_option("--video", args.video, "The augmented frames as an H.264 MP4");
     command->add_option("--json", args.json, "Each frame's latency, drops, pose and stage times (JSON)");
-    command->add_flag("--realtime", args.realtime,
-                      "Replay files at their frames' pace, as a camera would give them: frames that arrive while "
-                      "one renders are dropped, the newest wins (a device always is)");
+    command->add_flag(
+        "--realtime", args.realtime,
+        "Replay files at their frames' pace, as a camera would give them: frames that arrive while "
+        "one renders are dropped, the newest wins (a device always is)");
     command->add_option("--fps", args.patternFps, "The frame rate of numbered images (default 30)")
         ->check(CLI::Range(1e-3, 1000.0));
     command->add_option("--max-frames", args.maxFrames, "Stop after this many frames (default: all)")
         ->check(CLI::Range(1, 100000000));
     command
-        ->add_option("--hold", args.tracking.holdSeconds,
-                     "Seconds a frame without markers keeps the last pose (default 0.5); then the camera image "
-                     "is shown as it is")
+        ->add_option(
+            "--hold", args.tracking.holdSeconds,
+            "Seconds a frame without markers keeps the last pose (default 0.5); then the camera image "
+            "is shown as it is")
         ->check(CLI::Range(0.0, 60.0));
     command
         ->add_option("--light-smoothing", args.lightSmoothingSeconds,
@@ -88,16 +93,19 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
 
 int runLive(const LiveArgs& args) {
     if (args.output.empty() && args.video.empty() && args.json.empty())
-        throw InputError("live", "nothing to write: give -o FRAME_####.png, --video OUT.mp4 and/or --json OUT.json");
+        throw InputError("live",
+                         "nothing to write: give -o FRAME_####.png, --video OUT.mp4 and/or --json OUT.json");
     if (!args.video.empty()) {
         checkVideoPath(args.video, "--video");
         checkVideoEncoder("--video");
     }
     Scene scene = loadAndWarn(args.scene, args.overrides);
     if (scene.markers.empty())
-        throw InputError(args.scene.string(), "markers: the scene places no marker to register the camera by");
+        throw InputError(args.scene.string(),
+                         "markers: the scene places no marker to register the camera by");
     if (!scene.sequence.empty())
-        throw InputError(args.scene.string(), "sequence: a live scene's frames come from --camera, not a sequence");
+        throw InputError(args.scene.string(),
+                         "sequence: a live scene's frames come from --camera, not a sequence");
     std::vector<fs::path> outputs;
     if (!args.output.empty()) outputs.push_back(framePath(args.output, 0));
     for (const fs::path* p : {&args.video, &args.json})
@@ -132,7 +140,8 @@ int runLive(const LiveArgs& args) {
         if (!arrival) break;
         ++count;
         const CameraFrame& frame = arrival->frame;
-        const double waited = std::chrono::duration<double, std::milli>(Clock::now() - arrival->arrived).count();
+        const double waited =
+            std::chrono::duration<double, std::milli>(Clock::now() - arrival->arrived).count();
         // The light: the newest light-camera frame (replayed files: one per scene-camera frame).
         double environmentMs = 0.0;
         if (lightFeed) {
@@ -145,10 +154,14 @@ int runLive(const LiveArgs& args) {
                 ++lightFrames;
                 if (!warnedClipped && light->clippedShare() > kClippedShareWarning) {
                     warnedClipped = true;
-                    note("deltagi: warning: {}: frame {}: {:.1f} % of the light camera's pixels are at its white: "
-                         "a light brighter than that (the sun, a bare lamp) is recorded too dim and lights the scene "
-                         "too weakly; lower the camera's exposure and raise the environment's intensity to match\n",
-                         lightFeed->source().name(), lit->frame.index, 100.0 * light->clippedShare());
+                    note(
+                        "deltagi: warning: {}: frame {}: {:.1f} % of the light camera's pixels are at its "
+                        "white: "
+                        "a light brighter than that (the sun, a bare lamp) is recorded too dim and lights "
+                        "the scene "
+                        "too weakly; lower the camera's exposure and raise the environment's intensity to "
+                        "match\n",
+                        lightFeed->source().name(), lit->frame.index, 100.0 * light->clippedShare());
                 }
             }
         }
@@ -160,8 +173,9 @@ int runLive(const LiveArgs& args) {
         if (tracked.state == TrackedFrame::State::Lost) {
             ++lost;
             if (!wasLost && !args.quiet)
-                note("deltagi: frame {} ({:.2f} s): no marker for {:g} s: showing the camera image as it is\n",
-                     frame.index, frame.timeSeconds, args.tracking.holdSeconds);
+                note(
+                    "deltagi: frame {} ({:.2f} s): no marker for {:g} s: showing the camera image as it is\n",
+                    frame.index, frame.timeSeconds, args.tracking.holdSeconds);
             wasLost = true;
             composite = frame.image;
         } else {
@@ -177,7 +191,8 @@ int runLive(const LiveArgs& args) {
             rendered = renderer.render(scene);
             composite = rendered->composite;
         }
-        const double latency = std::chrono::duration<double, std::milli>(Clock::now() - arrival->arrived).count();
+        const double latency =
+            std::chrono::duration<double, std::milli>(Clock::now() - arrival->arrived).count();
         latencies.push_back(latency);
         if (rendered) renders.push_back(rendered->totalMs);
         if (tracked.state == TrackedFrame::State::Registered) errors.push_back(tracked.reprojectionErrorPx);
@@ -204,15 +219,17 @@ int runLive(const LiveArgs& args) {
             row["stages_ms"] = stageTimesJson(*rendered, 1e3);
         }
         if (!args.quiet)
-            note("frame {}: {:.0f} ms from arrival to composite ({}{}{:.0f} ms tracking{}), {} dropped, {}{}\n",
-                 frame.index, latency, waited >= 0.5 ? fmt::format("{:.0f} ms waiting, ", waited) : "",
-                 rendered ? fmt::format("{:.0f} ms rendering, ", rendered->totalMs) : "",
-                 trackMs, environmentMs > 0.0 ? fmt::format(", {:.0f} ms new light", environmentMs) : "",
-                 arrival->dropped, stateName(tracked.state),
-                 tracked.state == TrackedFrame::State::Registered
-                     ? fmt::format(" ({} marker{}, {:.2f} px)", tracked.markersSeen, tracked.markersSeen == 1 ? "" : "s",
-                                   tracked.reprojectionErrorPx)
-                     : "");
+            note(
+                "frame {}: {:.0f} ms from arrival to composite ({}{}{:.0f} ms tracking{}), {} dropped, "
+                "{}{}\n",
+                frame.index, latency, waited >= 0.5 ? fmt::format("{:.0f} ms waiting, ", waited) : "",
+                rendered ? fmt::format("{:.0f} ms rendering, ", rendered->totalMs) : "", trackMs,
+                environmentMs > 0.0 ? fmt::format(", {:.0f} ms new light", environmentMs) : "",
+                arrival->dropped, stateName(tracked.state),
+                tracked.state == TrackedFrame::State::Registered
+                    ? fmt::format(" ({} marker{}, {:.2f} px)", tracked.markersSeen,
+                                  tracked.markersSeen == 1 ? "" : "s", tracked.reprojectionErrorPx)
+                    : "");
         frames.push_back(std::move(row));
     }
     if (count == 0) throw InputError(camera.source().name(), "holds no frame");
@@ -235,9 +252,11 @@ int runLive(const LiveArgs& args) {
         writeJson(document, args.json);
     }
     if (!args.quiet)
-        note("deltagi: {} frames ({} dropped): {} registered by markers, {} holding the last pose, {} without; "
-             "latency median {:.0f} ms, rendering {:.0f} ms, reprojection error {:.2f} px\n",
-             count, dropped, registered, held, lost, median(latencies), median(renders), median(errors));
+        note(
+            "deltagi: {} frames ({} dropped): {} registered by markers, {} holding the last pose, {} "
+            "without; "
+            "latency median {:.0f} ms, rendering {:.0f} ms, reprojection error {:.2f} px\n",
+            count, dropped, registered, held, lost, median(latencies), median(renders), median(errors));
     return 0;
 }
 

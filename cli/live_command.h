@@ -23,7 +23,7 @@ struct LiveArgs {
     std::filesystem::path output;  // frame_####.png (optional)
     std::filesystem::path video;   // .mp4 (optional)
     std::filesystem::path json;    // per-frame statistics (optional)
-    bool realtime = false;         // replay files at their frames' pace, dropping what rendering cannot keep up with
+    bool realtime = false;  // replay files at their frames' pace, dropping what rendering cannot keep up with
     double patternFps = 30.0;
     int maxFrames = 0;
     double lightSmoothingSeconds = 0.15;

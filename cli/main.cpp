@@ -37,17 +37,17 @@
 #include "deltagi/scene_io.h"
 #include "deltagi_version.h"
 #include "encode_command.h"
-#include "live_command.h"
-#include "marker_command.h"
-#include "track_command.h"
 #include "eval_suite.h"
 #include "evaluation/evaluation.h"
 #include "info_command.h"
 #include "io/atomic_file.h"
+#include "live_command.h"
+#include "marker_command.h"
 #include "messages.h"
 #include "outputs.h"
 #include "serve_command.h"
 #include "stability_command.h"
+#include "track_command.h"
 #include "video_output.h"
 
 namespace fs = std::filesystem;
@@ -698,7 +698,8 @@ int main(int argc, char** argv) {
             return reportError(
                 fmt::format(
                     "unknown command '{}': expected 'render', 'info', 'reference', 'compare', 'eval', "
-                    "'bench', 'stability', 'estimate-albedo', 'encode', 'marker', 'track', 'live' or 'serve' (see deltagi --help)",
+                    "'bench', 'stability', 'estimate-albedo', 'encode', 'marker', 'track', 'live' or 'serve' "
+                    "(see deltagi --help)",
                     argv[1]),
                 kExitUsageError);
         return reportError(fmt::format("{} (see deltagi --help)", error.what()), kExitUsageError);

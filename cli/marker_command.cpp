@@ -34,7 +34,8 @@ std::string markerPdf(const std::vector<bool>& cells, double cell, int margin) {
     const std::vector<std::string> objects = {
         "<< /Type /Catalog /Pages 2 0 R >>",
         "<< /Type /Pages /Kids [3 0 R] /Count 1 >>",
-        fmt::format("<< /Type /Page /Parent 2 0 R /MediaBox [0 0 {:.4f} {:.4f}] /Contents 4 0 R >>", page, page),
+        fmt::format("<< /Type /Page /Parent 2 0 R /MediaBox [0 0 {:.4f} {:.4f}] /Contents 4 0 R >>", page,
+                    page),
         fmt::format("<< /Length {} >>\nstream\n{}endstream", content.size(), content),
     };
     std::string pdf = "%PDF-1.4\n";
@@ -46,7 +47,8 @@ std::string markerPdf(const std::vector<bool>& cells, double cell, int margin) {
     const size_t xref = pdf.size();
     pdf += fmt::format("xref\n0 {}\n0000000000 65535 f \n", objects.size() + 1);
     for (size_t offset : offsets) pdf += fmt::format("{:010d} 00000 n \n", offset);
-    pdf += fmt::format("trailer\n<< /Size {} /Root 1 0 R >>\nstartxref\n{}\n%%EOF\n", objects.size() + 1, xref);
+    pdf +=
+        fmt::format("trailer\n<< /Size {} /Root 1 0 R >>\nstartxref\n{}\n%%EOF\n", objects.size() + 1, xref);
     return pdf;
 }
 
@@ -54,7 +56,8 @@ std::string markerPdf(const std::vector<bool>& cells, double cell, int margin) {
 
 CLI::App* addMarkerCommand(CLI::App& app, MarkerArgs& args) {
     CLI::App* command = app.add_subcommand(
-        "marker", "Write a printable AprilTag tag36h11 marker (PDF at its true size, or PNG) for \"markers\"");
+        "marker",
+        "Write a printable AprilTag tag36h11 marker (PDF at its true size, or PNG) for \"markers\"");
     command->add_option("id", args.id, "The tag's id, 0-586")->required()->check(CLI::Range(0, 586));
     command->add_option("-o,--output", args.output, "marker.pdf (true size) or marker.png")->required();
     command->add_option("--size", args.size, "The black square's side in metres (default 0.12)")
@@ -91,8 +94,10 @@ int runMarker(const MarkerArgs& args) {
     }
     out.commit();
     if (!args.quiet)
-        note("deltagi: wrote {}: tag36h11 id {}, its black square {:g} m wide ({:g} m with the paper's white)\n",
-             args.output.string(), args.id, args.size, args.size / 8.0 * side);
+        note(
+            "deltagi: wrote {}: tag36h11 id {}, its black square {:g} m wide ({:g} m with the paper's "
+            "white)\n",
+            args.output.string(), args.id, args.size, args.size / 8.0 * side);
     return 0;
 }
 

@@ -56,7 +56,9 @@ void writeJson(const nlohmann::ordered_json& json, const std::filesystem::path& 
 nlohmann::ordered_json stageTimesJson(const RenderOutput& output, double scale = 0.0);
 
 // A figure for a JSON output, rounded to 1 / scale (1e3: timings in ms to the microsecond).
-inline double rounded(double value, double scale) { return std::round(value * scale) / scale; }
+inline double rounded(double value, double scale) {
+    return std::round(value * scale) / scale;
+}
 
 // A file name with the place of a frame's number: a run of '#' (frame_####.png) or a printf-style %d / %0Nd
 // (frame_%04d.png), replaced by the number, padded to its width (with zeros, or spaces for %Nd). Throws

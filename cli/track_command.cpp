@@ -43,7 +43,8 @@ void writeIntrinsics(const Camera& camera, ordered_json& out) {
 ordered_json rows(const glm::mat4& m) {
     ordered_json out = ordered_json::array();
     for (int r = 0; r < 4; ++r)
-        out.push_back({rounded(m[0][r], 1e6), rounded(m[1][r], 1e6), rounded(m[2][r], 1e6), rounded(m[3][r], 1e6)});
+        out.push_back(
+            {rounded(m[0][r], 1e6), rounded(m[1][r], 1e6), rounded(m[2][r], 1e6), rounded(m[3][r], 1e6)});
     return out;
 }
 
@@ -73,16 +74,19 @@ CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args) {
         ->required();
     command->add_option("--scene", args.scene, "The scene file: its \"markers\" and its camera's intrinsics")
         ->required();
-    command->add_option("-o,--output", args.output, "The transforms file to write (transforms.json)")->required();
-    command->add_option("--frames-folder", args.framesFolder,
-                        "Where the frames go as PNG photos, relative to the output's folder (default frames)");
+    command->add_option("-o,--output", args.output, "The transforms file to write (transforms.json)")
+        ->required();
+    command->add_option(
+        "--frames-folder", args.framesFolder,
+        "Where the frames go as PNG photos, relative to the output's folder (default frames)");
     command->add_option("--fps", args.patternFps, "The frame rate of numbered images (default 30)")
         ->check(CLI::Range(1e-3, 1000.0));
     command->add_option("--max-frames", args.maxFrames, "Stop after this many frames (default: all)")
         ->check(CLI::Range(1, 1000000));
     command
-        ->add_option("--hold", args.tracking.holdSeconds,
-                     "Seconds a frame without markers keeps the last pose (default 0.5); later ones are left out")
+        ->add_option(
+            "--hold", args.tracking.holdSeconds,
+            "Seconds a frame without markers keeps the last pose (default 0.5); later ones are left out")
         ->check(CLI::Range(0.0, 60.0));
     command
         ->add_option("--min-cutoff", args.tracking.smoothing.minCutoffHz,
@@ -101,14 +105,15 @@ CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args) {
 int runTrack(const TrackArgs& args) {
     const Scene scene = loadScene(args.scene);
     if (scene.markers.empty())
-        throw InputError(args.scene.string(), "markers: the scene places no marker to register the camera by");
+        throw InputError(args.scene.string(),
+                         "markers: the scene places no marker to register the camera by");
     if (args.output.extension() != ".json")
         throw InputError(args.output.string(), "expected a .json file name for the transforms");
     const fs::path folder = args.output.parent_path();
     const fs::path framesFolder(args.framesFolder);
     if (framesFolder.is_absolute() || framesFolder.empty())
-        throw InputError("--frames-folder", "expected a folder relative to the output's, got '" +
-                                                args.framesFolder + "'");
+        throw InputError("--frames-folder",
+                         "expected a folder relative to the output's, got '" + args.framesFolder + "'");
     checkOutputs({args.output}, sceneInputs(scene));
 
     std::unique_ptr<FrameSource> source = openFrameSource(args.source, args.patternFps);
@@ -160,23 +165,24 @@ int runTrack(const TrackArgs& args) {
     if (progress) fmt::print(stderr, "\n");
     if (count == 0) throw InputError(source->name(), "holds no frame");
     if (registered == 0)
-        throw InputError(source->name(),
-                         fmt::format("no frame registered: none of the scene's markers (tag36h11, ids {}) was seen "
-                                     "in {} frames{}{}",
-                                     markerIds(scene), count,
-                                     unknownTags ? fmt::format("; tags of other ids were") : "",
-                                     tooSmall ? fmt::format("; the markers were too small (under {:g} pixels)",
-                                                            kMinMarkerSidePx)
-                                              : ""));
+        throw InputError(
+            source->name(),
+            fmt::format(
+                "no frame registered: none of the scene's markers (tag36h11, ids {}) was seen "
+                "in {} frames{}{}",
+                markerIds(scene), count, unknownTags ? fmt::format("; tags of other ids were") : "",
+                tooSmall ? fmt::format("; the markers were too small (under {:g} pixels)", kMinMarkerSidePx)
+                         : ""));
     outputs.json(transforms, args.output);
     outputs.commit();
     if (!args.quiet) {
         std::sort(errors.begin(), errors.end());
-        fmt::print(stderr,
-                   "deltagi: wrote {} ({} of {} frames: {} registered by markers, {} holding the last pose; {} "
-                   "without markers left out); reprojection error median {:.3f} px, max {:.3f} px\n",
-                   args.output.string(), registered + held, count, registered, held, lost,
-                   errors[errors.size() / 2], errors.back());
+        fmt::print(
+            stderr,
+            "deltagi: wrote {} ({} of {} frames: {} registered by markers, {} holding the last pose; {} "
+            "without markers left out); reprojection error median {:.3f} px, max {:.3f} px\n",
+            args.output.string(), registered + held, count, registered, held, lost, errors[errors.size() / 2],
+            errors.back());
     }
     return 0;
 }

@@ -14,12 +14,12 @@
 namespace deltagi::cli {
 
 struct TrackArgs {
-    std::string source;             // a video file, /dev/videoN or frame_####.png
-    std::filesystem::path scene;    // the scene file: its markers and its camera's intrinsics
-    std::filesystem::path output;   // transforms.json
+    std::string source;                   // a video file, /dev/videoN or frame_####.png
+    std::filesystem::path scene;          // the scene file: its markers and its camera's intrinsics
+    std::filesystem::path output;         // transforms.json
     std::string framesFolder = "frames";  // the photos, relative to the output's folder
-    double patternFps = 30.0;       // the frame rate of a numbered-image source
-    int maxFrames = 0;              // 0: until the source ends
+    double patternFps = 30.0;             // the frame rate of a numbered-image source
+    int maxFrames = 0;                    // 0: until the source ends
     TrackingOptions tracking;
     bool noSmoothing = false;
     bool quiet = false;

@@ -1,8 +1,8 @@
-// libFuzzer target: camera frames (`deltagi live`, `deltagi track`): the input is a file that the frame source
-// opens as a video (libavformat picks the demuxer from its bytes; the first byte picks the extension, which
-// FFmpeg takes as a hint), whose first frames are decoded and searched for markers. Bad input must end in
-// InputError or no frame; anything else (a crash, a sanitizer finding, another exception, a hang) is a finding.
-// scripts/fuzz.sh seeds it with short videos that the project writes itself (`deltagi encode`).
+// libFuzzer target: camera frames (`deltagi live`, `deltagi track`): the input is a file that the frame
+// source opens as a video (libavformat picks the demuxer from its bytes; the first byte picks the extension,
+// which FFmpeg takes as a hint), whose first frames are decoded and searched for markers. Bad input must end
+// in InputError or no frame; anything else (a crash, a sanitizer finding, another exception, a hang) is a
+// finding. scripts/fuzz.sh seeds it with short videos that the project writes itself (`deltagi encode`).
 #include <unistd.h>
 
 #include <array>
@@ -36,7 +36,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         return std::vector<deltagi::Marker>{m};
     }();
     static const deltagi::MarkerDetector detector(markers);
-    const std::filesystem::path file = kFolder / (std::string("frames") + kExtensions[data[0] % kExtensions.size()]);
+    const std::filesystem::path file =
+        kFolder / (std::string("frames") + kExtensions[data[0] % kExtensions.size()]);
     {
         std::ofstream out(file, std::ios::binary | std::ios::trunc);
         out.write(reinterpret_cast<const char*>(data + 1), static_cast<std::streamsize>(size - 1));

@@ -70,7 +70,8 @@ inline Image renderMarkerFrame(const Camera& camera, std::span<const Marker> mar
             for (int s = 0; s < 16; ++s) {
                 const float px = static_cast<float>(x) + (static_cast<float>(s % 4) + 0.5f) / 4.0f;
                 const float py = static_cast<float>(y) + (static_cast<float>(s / 4) + 0.5f) / 4.0f;
-                sum += markerSceneRadiance(markers, cells, origin, glm::normalize(camera.rayDirection(px, py)));
+                sum +=
+                    markerSceneRadiance(markers, cells, origin, glm::normalize(camera.rayDirection(px, py)));
             }
             Rng rng(static_cast<uint64_t>(y) * camera.width + x, seed, 77);
             // Box-Muller from two uniforms.
@@ -83,7 +84,8 @@ inline Image renderMarkerFrame(const Camera& camera, std::span<const Marker> mar
     return image;
 }
 
-// A camera of `width` x `height` with a vertical field of view of `fovDeg`, at `position` looking at `target`.
+// A camera of `width` x `height` with a vertical field of view of `fovDeg`, at `position` looking at
+// `target`.
 inline Camera markerCamera(int width, int height, float fovDeg, glm::vec3 position, glm::vec3 target) {
     Camera camera;
     camera.width = width;

@@ -212,9 +212,9 @@ struct ObjectAnimation {
 // A fiducial marker printed and laid on the real scene (the scene file's "markers"): it registers a camera
 // that sees it (`deltagi track`, src/live/marker_registration.h). AprilTag family tag36h11.
 struct Marker {
-    int id = 0;        // "id": the tag's number in its family (0-586)
+    int id = 0;         // "id": the tag's number in its family (0-586)
     float size = 0.0f;  // "size": side of the printed black square, in world units
-    // "world_from_marker" (4 rows) or "transform" as for meshes: the marker's frame, whose origin is the
+    // "transform" (an object or 4 rows, as for meshes, but rigid): the marker's frame, whose origin is the
     // black square's centre, x to the right and y up as the tag is printed, z out of its printed face.
     glm::mat4 worldFromMarker{1.0f};
     bool operator==(const Marker&) const = default;

@@ -29,7 +29,9 @@ constexpr int kMaxFrameSide = 8192;
 constexpr int64_t kMaxFramePixels = 8192LL * 4608;
 
 // A capture device (V4L2): it gives frames at its own pace.
-bool isDevice(const std::string& source) { return source.starts_with("/dev/"); }
+bool isDevice(const std::string& source) {
+    return source.starts_with("/dev/");
+}
 
 std::string avError(int error) {
     char text[AV_ERROR_MAX_STRING_SIZE] = {};
@@ -75,9 +77,9 @@ class PatternSource final : public FrameSource {
         CameraFrame frame;
         frame.image = readImage(file);
         if (frame.image.width() != width_ || frame.image.height() != height_)
-            throw InputError(file.string(), fmt::format("the frames changed size: {}x{}, the first was {}x{}",
-                                                        frame.image.width(), frame.image.height(), width_,
-                                                        height_));
+            throw InputError(file.string(),
+                             fmt::format("the frames changed size: {}x{}, the first was {}x{}",
+                                         frame.image.width(), frame.image.height(), width_, height_));
         frame.index = read_++;
         frame.timeSeconds = static_cast<double>(frame.index) / fps_;
         ++next_;
@@ -89,9 +91,7 @@ class PatternSource final : public FrameSource {
     double frameRate() const override { return fps_; }
 
   private:
-    fs::path path(int64_t index) const {
-        return prefix_ + fmt::format("{:0{}d}", index, digits_) + suffix_;
-    }
+    fs::path path(int64_t index) const { return prefix_ + fmt::format("{:0{}d}", index, digits_) + suffix_; }
     std::string pattern_, prefix_, suffix_;
     int digits_ = 0;
     double fps_;
@@ -126,7 +126,8 @@ class VideoSource final : public FrameSource {
         const AVStream* stream = input_->streams[stream_];
         decoder_ = avcodec_alloc_context3(codec);
         if (!decoder_) fail("out of memory");
-        if (avcodec_parameters_to_context(decoder_, stream->codecpar) < 0) fail("cannot read its video stream");
+        if (avcodec_parameters_to_context(decoder_, stream->codecpar) < 0)
+            fail("cannot read its video stream");
         decoder_->thread_count = 1;
         if (int e = avcodec_open2(decoder_, codec, nullptr); e < 0) fail("cannot decode: " + avError(e));
         width_ = decoder_->width;
@@ -136,7 +137,8 @@ class VideoSource final : public FrameSource {
             fail(fmt::format("frames of {}x{}: expected 1 to {} pixels a side and at most {} in all", width_,
                              height_, kMaxFrameSide, kMaxFramePixels));
         timeBase_ = av_q2d(stream->time_base);
-        const AVRational rate = stream->avg_frame_rate.num > 0 ? stream->avg_frame_rate : stream->r_frame_rate;
+        const AVRational rate =
+            stream->avg_frame_rate.num > 0 ? stream->avg_frame_rate : stream->r_frame_rate;
         fps_ = rate.num > 0 && rate.den > 0 ? av_q2d(rate) : 0.0;
         packet_ = av_packet_alloc();
         frame_ = av_frame_alloc();
@@ -184,9 +186,9 @@ class VideoSource final : public FrameSource {
         if (frame_->width != width_ || frame_->height != height_)
             fail(fmt::format("the frames changed size at frame {}: {}x{}, the first were {}x{}", read_,
                              frame_->width, frame_->height, width_, height_));
-        scaler_ = sws_getCachedContext(scaler_, width_, height_, static_cast<AVPixelFormat>(frame_->format), width_,
-                                       height_, AV_PIX_FMT_RGB24, SWS_BICUBIC | SWS_ACCURATE_RND, nullptr, nullptr,
-                                       nullptr);
+        scaler_ = sws_getCachedContext(scaler_, width_, height_, static_cast<AVPixelFormat>(frame_->format),
+                                       width_, height_, AV_PIX_FMT_RGB24, SWS_BICUBIC | SWS_ACCURATE_RND,
+                                       nullptr, nullptr, nullptr);
         if (!scaler_) fail(fmt::format("frame {}: cannot convert its pixel format to RGB", read_));
         std::vector<uint8_t> rgb(static_cast<size_t>(width_) * height_ * 3);
         uint8_t* planes[4] = {rgb.data(), nullptr, nullptr, nullptr};
@@ -307,7 +309,8 @@ int FrameFeed::droppedTotal() const {
 }
 
 std::unique_ptr<FrameSource> openFrameSource(const std::string& source, double patternFps) {
-    if (source.empty()) throw InputError("", "expected a camera source (a video file, /dev/videoN or frame_####.png)");
+    if (source.empty())
+        throw InputError("", "expected a camera source (a video file, /dev/videoN or frame_####.png)");
     if (source.find('#') != std::string::npos) return std::make_unique<PatternSource>(source, patternFps);
     return std::make_unique<VideoSource>(source);
 }

@@ -1,14 +1,14 @@
 // Camera frames from a video file, a capture device or numbered images: the scene camera and the light
-// camera of a live or recorded session (the paper's Fig. 2 inputs). Video files and V4L2 devices (/dev/video0)
-// are read through FFmpeg's libavformat and libavdevice, with one code path; numbered images through
-// readImage().
+// camera of a live or recorded session (the paper's Fig. 2 inputs). Video files and V4L2 devices
+// (/dev/video0) are read through FFmpeg's libavformat and libavdevice, with one code path; numbered images
+// through readImage().
 #pragma once
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
 #include <exception>
 #include <memory>
-#include <condition_variable>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -45,10 +45,11 @@ class FrameSource {
 // cannot be opened or holds no video.
 std::unique_ptr<FrameSource> openFrameSource(const std::string& source, double patternFps = 30.0);
 
-// Frames as a live system receives them, read on a thread of their own. A device gives frames at its own pace;
-// with `realtime`, a file's or pattern's frames come at the pace of their timestamps as well (a recorded
-// camera replayed live), otherwise each waits until it is taken (every frame is used, none dropped). take()
-// gives the newest frame that arrived; the frames that arrived and were never taken are counted as dropped.
+// Frames as a live system receives them, read on a thread of their own. A device gives frames at its own
+// pace; with `realtime`, a file's or pattern's frames come at the pace of their timestamps as well (a
+// recorded camera replayed live), otherwise each waits until it is taken (every frame is used, none dropped).
+// take() gives the newest frame that arrived; the frames that arrived and were never taken are counted as
+// dropped.
 class FrameFeed {
   public:
     using Clock = std::chrono::steady_clock;

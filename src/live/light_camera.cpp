@@ -38,7 +38,8 @@ Environment LightCamera::environment(Image frame, double timeSeconds, const std:
         }
         clipped += white;
     }
-    clippedShare_ = frame.pixelCount() ? static_cast<double>(clipped) / static_cast<double>(frame.pixelCount()) : 0.0;
+    clippedShare_ =
+        frame.pixelCount() ? static_cast<double>(clipped) / static_cast<double>(frame.pixelCount()) : 0.0;
     Environment e = environmentFromImage(node, std::move(frame), frameName);
     const Image& map = e.radiance;
     if (smoothed_.empty() || smoothed_.width() != map.width() || smoothed_.height() != map.height() ||

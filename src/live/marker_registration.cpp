@@ -168,7 +168,8 @@ MarkerDetector::Result MarkerDetector::detect(const Image& frame) const {
     // The detector finds and decodes the squares in sRGB-encoded grey levels (what cameras give and it is
     // tuned for); their corners are then refined in linear light (refineCorners).
     GreyImage linear{frame.width(), frame.height(), std::vector<float>(frame.pixelCount())};
-    image_u8_t* grey = image_u8_create(static_cast<unsigned>(frame.width()), static_cast<unsigned>(frame.height()));
+    image_u8_t* grey =
+        image_u8_create(static_cast<unsigned>(frame.width()), static_cast<unsigned>(frame.height()));
     for (int y = 0; y < frame.height(); ++y)
         for (int x = 0; x < frame.width(); ++x) {
             const float l = luminance(frame.rgb(x, y));
@@ -196,7 +197,8 @@ MarkerDetector::Result MarkerDetector::detect(const Image& frame) const {
             // libapriltag's pixel centres are at + 0.5, as ours (its decimation's corner mapping says so).
             s.corners[k] = glm::dvec2(d->p[k][0], d->p[k][1]);
         }
-        for (int k = 0; k < 4; ++k) shortest = std::min(shortest, glm::length(s.corners[k] - s.corners[(k + 1) % 4]));
+        for (int k = 0; k < 4; ++k)
+            shortest = std::min(shortest, glm::length(s.corners[k] - s.corners[(k + 1) % 4]));
         if (!(shortest >= kMinMarkerSidePx)) {
             ++result.tooSmall;
             continue;
@@ -284,7 +286,8 @@ std::optional<RigidPose> planePose(std::span<const glm::dvec2> plane, std::span<
     std::array<double, 8> atb{};
     for (size_t i = 0; i < plane.size(); ++i) {
         const double x = plane[i].x, y = plane[i].y, u = image[i].x, v = image[i].y;
-        const double rows[2][9] = {{x, y, 1, 0, 0, 0, -u * x, -u * y, u}, {0, 0, 0, x, y, 1, -v * x, -v * y, v}};
+        const double rows[2][9] = {{x, y, 1, 0, 0, 0, -u * x, -u * y, u},
+                                   {0, 0, 0, x, y, 1, -v * x, -v * y, v}};
         for (const auto& row : rows)
             for (int a = 0; a < 8; ++a) {
                 for (int b = 0; b < 8; ++b) ata[a * 8 + b] += row[a] * row[b];
@@ -407,9 +410,9 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
     std::optional<RigidPose> fromMarker = planePose(plane, image);
     if (!fromMarker) return std::nullopt;
     // A small square seen nearly head-on looks almost the same tilted either way about the line of sight (the
-    // planar pose ambiguity: two minima of the reprojection error, the camera some 2 x tilt x distance apart).
-    // The pose is refined from the homography's, from it with the marker's normal reflected about the line of
-    // sight, and from `previous`; the lowest error wins, or among those close to it, the one nearest
+    // planar pose ambiguity: two minima of the reprojection error, the camera some 2 x tilt x distance
+    // apart). The pose is refined from the homography's, from it with the marker's normal reflected about the
+    // line of sight, and from `previous`; the lowest error wins, or among those close to it, the one nearest
     // `previous`.
     std::vector<RigidPose> starts = {*fromMarker};
     const glm::dvec3 n = fromMarker->r[2], v = glm::normalize(fromMarker->t);
@@ -438,7 +441,8 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
         if (std::isfinite(cost)) solutions.emplace_back(p, cost);
     }
     if (solutions.empty()) return std::nullopt;
-    std::sort(solutions.begin(), solutions.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+    std::sort(solutions.begin(), solutions.end(),
+              [](const auto& a, const auto& b) { return a.second < b.second; });
     RigidPose pose = solutions.front().first;
     if (previous) {
         // Of the solutions that explain the corners about as well as the best (within 4 times its squared
@@ -520,8 +524,8 @@ glm::mat4 PoseFilter::filter(const glm::mat4& worldFromCamera, double timeSecond
     oneEuroStep(position_, positionSpeed_, position, dt, smoothing_.minCutoffHz, smoothing_.positionBeta,
                 smoothing_.derivativeCutoffHz);
     // A quaternion's components change at half the angular speed (radians per second).
-    oneEuroStep(rotation_, rotationSpeed_, rotation, dt, smoothing_.minCutoffHz, 2.0 * smoothing_.rotationBeta,
-                smoothing_.derivativeCutoffHz);
+    oneEuroStep(rotation_, rotationSpeed_, rotation, dt, smoothing_.minCutoffHz,
+                2.0 * smoothing_.rotationBeta, smoothing_.derivativeCutoffHz);
     rotation_ = glm::normalize(rotation_);
     const glm::dquat smoothed(rotation_.w, rotation_.x, rotation_.y, rotation_.z);
     glm::dmat4 out(glm::mat3_cast(smoothed));
@@ -543,8 +547,7 @@ TrackedFrame MarkerTracker::track(const Image& frame, double timeSeconds) {
     const MarkerDetector::Result found = detector_.detect(frame);
     out.unknownTags = found.unknown;
     out.tooSmall = found.tooSmall;
-    const std::optional<glm::mat4> previous =
-        lastSeen_ ? std::optional<glm::mat4>(lastRaw_) : std::nullopt;
+    const std::optional<glm::mat4> previous = lastSeen_ ? std::optional<glm::mat4>(lastRaw_) : std::nullopt;
     if (std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers_, camera_, previous)) {
         lastRaw_ = pose->worldFromCamera;
         out.state = TrackedFrame::State::Registered;

@@ -37,7 +37,7 @@ std::vector<bool> markerCells(int id);
 
 // One of the scene's markers found in a frame.
 struct MarkerSighting {
-    int marker = 0;                      // index into the scene's markers
+    int marker = 0;                     // index into the scene's markers
     std::array<glm::dvec2, 4> corners;  // pixels (x right, y down, 0 at the top-left pixel's corner)
     float decisionMargin = 0.0f;        // the detector's confidence in the decoded bits
 };
@@ -85,9 +85,9 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
 // One-Euro filtering of a camera pose: position and orientation (a quaternion kept in one hemisphere) each
 // low-passed with a cut-off that rises with their speed.
 struct PoseSmoothing {
-    double minCutoffHz = 1.0;     // the cut-off of a still camera: lower is steadier
-    double positionBeta = 40.0;   // cut-off increase per world unit per second of camera speed
-    double rotationBeta = 60.0;   // per radian per second
+    double minCutoffHz = 1.0;    // the cut-off of a still camera: lower is steadier
+    double positionBeta = 40.0;  // cut-off increase per world unit per second of camera speed
+    double rotationBeta = 60.0;  // per radian per second
     double derivativeCutoffHz = 2.0;
     bool enabled = true;
 };

@@ -96,9 +96,10 @@ Environment environmentFromImage(const JsonNode& node, Image image, const std::s
     if (auto n = node.find("rotate_deg")) environment.worldFromEnvironment = readRotation(*n);
     if (projection == "equirectangular") {
         if (image.width() != 2 * image.height())
-            throw InputError(imageName, fmt::format("expected an equirectangular image twice as wide as high, "
-                                                    "got {}x{}",
-                                                    image.width(), image.height()));
+            throw InputError(imageName,
+                             fmt::format("expected an equirectangular image twice as wide as high, "
+                                         "got {}x{}",
+                                         image.width(), image.height()));
         environment.radiance = std::move(image);
     } else if (projection == "fisheye") {
         environment.radiance = equirectFromFisheye(image, readFisheye(node.find("fisheye"), image));

@@ -253,7 +253,8 @@ Marker readMarker(const JsonNode& node) {
     for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j)
             if (std::abs(gram[i][j] - (i == j ? 1.0f : 0.0f)) > 1e-3f || !std::isfinite(gram[i][j]))
-                transform.fail("expected a rotation and a translation only (a marker keeps its printed size)");
+                transform.fail(
+                    "expected a rotation and a translation only (a marker keeps its printed size)");
     if (glm::determinant(r) < 0.0f) transform.fail("expected a rotation, got a mirroring");
     return marker;
 }

@@ -13,7 +13,9 @@ namespace {
 
 constexpr int kWidth = 160, kHeight = 120, kFrames = 6;
 
-Marker liveMarker() { return floorMarker(5, 0.3f, glm::vec3(0.0f, 0.0f, 0.45f)); }
+Marker liveMarker() {
+    return floorMarker(5, 0.3f, glm::vec3(0.0f, 0.0f, 0.45f));
+}
 
 Camera liveCamera(int i) {
     return markerCamera(kWidth, kHeight, 45.0f, glm::vec3(0.05f * static_cast<float>(i), 0.8f, 1.5f),
@@ -45,9 +47,10 @@ class LiveTest : public CliTest {
         fs::create_directories(dir_ / "in");
         const std::vector<Marker> markers = {liveMarker()};
         for (int i = 0; i < kFrames; ++i)
-            writeImage(renderMarkerFrame(liveCamera(i), i < markersUntil ? std::span(markers) : std::span<Marker>(),
-                                         1.5f, static_cast<uint64_t>(i)),
-                       dir_ / "in" / fmt::format("frame_{:04d}.png", i));
+            writeImage(
+                renderMarkerFrame(liveCamera(i), i < markersUntil ? std::span(markers) : std::span<Marker>(),
+                                  1.5f, static_cast<uint64_t>(i)),
+                dir_ / "in" / fmt::format("frame_{:04d}.png", i));
         return (dir_ / "in" / "frame_####.png").string();
     }
 };
@@ -56,11 +59,12 @@ TEST_F(LiveTest, AugmentsEachFrameOverItselfAndReportsIt) {
     const std::string camera = writeCapture(4);
     const fs::path stats = dir_ / "stats.json";
     const CliResult r = run("live " + quote(liveScene().string()) + " --camera " + quote(camera) + " -o " +
-                            quote((dir_ / "out" / "frame_####.png").string()) + " --json " + quote(stats.string()) +
-                            " --hold 0.04");
+                            quote((dir_ / "out" / "frame_####.png").string()) + " --json " +
+                            quote(stats.string()) + " --hold 0.04");
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_NE(r.err.find("frame 0: "), std::string::npos) << r.err;
-    EXPECT_NE(r.err.find("no marker for 0.04 s: showing the camera image as it is"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("no marker for 0.04 s: showing the camera image as it is"), std::string::npos)
+        << r.err;
     const json s = json::parse(readText(stats));
     EXPECT_EQ(s["summary"]["frames"], kFrames);
     EXPECT_EQ(s["summary"]["dropped"], 0);
@@ -72,10 +76,13 @@ TEST_F(LiveTest, AugmentsEachFrameOverItselfAndReportsIt) {
     EXPECT_TRUE(s["frames"][0]["stages_ms"].contains("diffuse"));
     EXPECT_LT(s["frames"][0]["reprojection_error_px"].get<double>(), 0.5);
     // A registered frame has the box over the camera image; a lost one is the camera image as it is.
-    const Image input0 = readImage(dir_ / "in" / "frame_0000.png"), output0 = readImage(dir_ / "out" / "frame_0000.png");
-    const glm::vec3 centre = input0.rgb(kWidth / 2, kHeight / 2 + 10), augmented = output0.rgb(kWidth / 2, kHeight / 2 + 10);
+    const Image input0 = readImage(dir_ / "in" / "frame_0000.png"),
+                output0 = readImage(dir_ / "out" / "frame_0000.png");
+    const glm::vec3 centre = input0.rgb(kWidth / 2, kHeight / 2 + 10),
+                    augmented = output0.rgb(kWidth / 2, kHeight / 2 + 10);
     EXPECT_GT(glm::length(augmented - centre), 0.05f) << "the box is not drawn over the frame";
-    const Image input5 = readImage(dir_ / "in" / "frame_0005.png"), output5 = readImage(dir_ / "out" / "frame_0005.png");
+    const Image input5 = readImage(dir_ / "in" / "frame_0005.png"),
+                output5 = readImage(dir_ / "out" / "frame_0005.png");
     for (size_t i = 0; i < input5.data().size(); ++i) ASSERT_EQ(input5.data()[i], output5.data()[i]);
 }
 
@@ -92,19 +99,21 @@ TEST_F(LiveTest, LightsTheSceneWithTheLightCamerasFrames) {
         writeImage(sky, dir_ / "light" / fmt::format("frame_{:04d}.png", i));
     }
     const fs::path stats = dir_ / "stats.json";
-    const CliResult r = run("live " + quote(liveScene(true).string()) + " --camera " + quote(camera) +
-                            " --light-camera " + quote((dir_ / "light" / "frame_####.png").string()) + " -o " +
-                            quote((dir_ / "out" / "frame_####.png").string()) + " --json " +
-                            quote(stats.string()) + " -q");
+    const CliResult r =
+        run("live " + quote(liveScene(true).string()) + " --camera " + quote(camera) + " --light-camera " +
+            quote((dir_ / "light" / "frame_####.png").string()) + " -o " +
+            quote((dir_ / "out" / "frame_####.png").string()) + " --json " + quote(stats.string()) + " -q");
     ASSERT_EQ(r.exitCode, 0) << r.err;
-    EXPECT_NE(r.err.find("frame 3: 78.8 % of the light camera's pixels are at its white"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("frame 3: 78.8 % of the light camera's pixels are at its white"), std::string::npos)
+        << r.err;
     EXPECT_EQ(lineCount(r.err), 2u) << r.err;  // and the loader's about the scene's own 8-bit probe
     const json s = json::parse(readText(stats));
     EXPECT_EQ(s["summary"]["light_frames"], kFrames);
     EXPECT_GT(s["frames"][0]["environment_ms"].get<double>(), 0.0);
     // The box brightens with the sky, over a few frames (the light camera's average).
     auto boxBrightness = [&](int i) {
-        return luminance(readImage(dir_ / "out" / fmt::format("frame_{:04d}.png", i)).rgb(kWidth / 2, kHeight / 2 + 10));
+        return luminance(
+            readImage(dir_ / "out" / fmt::format("frame_{:04d}.png", i)).rgb(kWidth / 2, kHeight / 2 + 10));
     };
     EXPECT_NEAR(boxBrightness(1), boxBrightness(2), 0.02f);
     EXPECT_GT(boxBrightness(3), boxBrightness(2) + 0.02f);
@@ -143,7 +152,8 @@ TEST_F(LiveTest, RefusesWhatItCannotRun) {
     // Light-camera frames that the scene's projection cannot take: an equirectangular map must be 2:1.
     fs::create_directories(dir_ / "light");
     writeImage(Image(32, 16, 3, 0.5f), dir_ / "light" / "frame_0000.png");
-    for (int i = 0; i < 2; ++i) writeImage(Image(24, 24, 3, 0.5f), dir_ / "light" / fmt::format("frame_{:04d}.png", i));
+    for (int i = 0; i < 2; ++i)
+        writeImage(Image(24, 24, 3, 0.5f), dir_ / "light" / fmt::format("frame_{:04d}.png", i));
     writeImage(Image(32, 16, 3, 0.5f), dir_ / "sky.png");
     json withSky = json::parse(readText(liveScene()));
     withSky["environment"] = {{"file", (dir_ / "sky.png").string()}};
@@ -151,7 +161,8 @@ TEST_F(LiveTest, RefusesWhatItCannotRun) {
             " --light-camera " + quote((dir_ / "light" / "frame_####.png").string()) + " --json " +
             quote((dir_ / "s.json").string()));
     EXPECT_EQ(r.exitCode, 1);
-    EXPECT_NE(r.err.find("light/frame_####.png: expected an equirectangular image twice as wide as high, got 24x24"),
+    EXPECT_NE(r.err.find(
+                  "light/frame_####.png: expected an equirectangular image twice as wide as high, got 24x24"),
               std::string::npos)
         << r.err;
     // A frame of another size in the middle: the frames before it are written whole, then one line.
@@ -159,7 +170,8 @@ TEST_F(LiveTest, RefusesWhatItCannotRun) {
     r = run("live " + quote(liveScene().string()) + " --camera " + quote(camera) + " -o " +
             quote((dir_ / "out" / "frame_####.png").string()) + " -q");
     EXPECT_EQ(r.exitCode, 1);
-    EXPECT_NE(r.err.find("frame_0003.png: the frames changed size: 80x60, the first was 160x120"), std::string::npos)
+    EXPECT_NE(r.err.find("frame_0003.png: the frames changed size: 80x60, the first was 160x120"),
+              std::string::npos)
         << r.err;
     EXPECT_EQ(lineCount(r.err), 1u) << r.err;
     EXPECT_EQ(readImage(dir_ / "out" / "frame_0002.png").width(), kWidth);

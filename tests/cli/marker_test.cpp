@@ -39,14 +39,16 @@ TEST_F(MarkerCommandTest, WritesAPdfOfTheTrueSizeAndAPng) {
     table >> offset >> generation >> kind;  // the free entry
     for (int object = 1; object < count; ++object) {
         table >> offset >> generation >> kind;
-        EXPECT_EQ(text.substr(std::stoul(offset), std::to_string(object).size() + 6), std::to_string(object) + " 0 obj");
+        EXPECT_EQ(text.substr(std::stoul(offset), std::to_string(object).size() + 6),
+                  std::to_string(object) + " 0 obj");
     }
     // Rasterized (2 points a pixel), the page holds tag 42.
     const int side = 256;
     Image page(side, side, 3, 1.0f);
     const std::regex rect(R"(([0-9.]+) ([0-9.]+) ([0-9.]+) ([0-9.]+) re f)");
     for (std::sregex_iterator it(text.begin(), text.end(), rect), end; it != end; ++it) {
-        const double x = std::stod((*it)[1]), y = std::stod((*it)[2]), w = std::stod((*it)[3]), h = std::stod((*it)[4]);
+        const double x = std::stod((*it)[1]), y = std::stod((*it)[2]), w = std::stod((*it)[3]),
+                     h = std::stod((*it)[4]);
         for (int py = 0; py < side; ++py)
             for (int px = 0; px < side; ++px) {
                 const double sx = (px + 0.5) * 2.0, sy = 510.2362 - (py + 0.5) * 2.0;

@@ -17,7 +17,8 @@ constexpr int kWidth = 320, kHeight = 240, kFrames = 12;
 constexpr float kFovDeg = 40.0f;
 
 std::vector<Marker> trackMarkers() {
-    return {floorMarker(3, 0.12f, glm::vec3(0.0f)), floorMarker(7, 0.12f, glm::vec3(0.25f, 0.0f, -0.1f), 30.0f)};
+    return {floorMarker(3, 0.12f, glm::vec3(0.0f)),
+            floorMarker(7, 0.12f, glm::vec3(0.25f, 0.0f, -0.1f), 30.0f)};
 }
 
 // The camera of frame i: on an arc about 0.9 units from the markers, 2 degrees a frame (1 degree of arc a
@@ -127,9 +128,10 @@ TEST_F(TrackTest, RefusesWhatCannotBeRegistered) {
     EXPECT_EQ(lineCount(r.err), 1u) << r.err;
     // Frames of another size than the scene's camera.
     json small = tinyScene();
-    small["markers"] = json::array({{{"id", 3}, {"size", 0.12}, {"transform", {{"rotate_deg", {-90, 0, 0}}}}}});
-    r = run("track " + quote(pattern) + " --scene " + quote(writeScene(small, "small.json").string()) + " -o " +
-            quote(out.string()));
+    small["markers"] =
+        json::array({{{"id", 3}, {"size", 0.12}, {"transform", {{"rotate_deg", {-90, 0, 0}}}}}});
+    r = run("track " + quote(pattern) + " --scene " + quote(writeScene(small, "small.json").string()) +
+            " -o " + quote(out.string()));
     EXPECT_EQ(r.exitCode, 1);
     EXPECT_NE(r.err.find("frames of 320x240, the scene's camera"), std::string::npos) << r.err;
     // Frames in which no marker of the scene is seen: other tags only.
@@ -137,11 +139,13 @@ TEST_F(TrackTest, RefusesWhatCannotBeRegistered) {
     others[0].id = 11, others[1].id = 12;
     fs::remove_all(dir_ / "in");
     writeCapture(others);
-    r = run("track " + quote(pattern) + " --scene " + quote(trackScene().string()) + " -o " + quote(out.string()));
+    r = run("track " + quote(pattern) + " --scene " + quote(trackScene().string()) + " -o " +
+            quote(out.string()));
     EXPECT_EQ(r.exitCode, 1);
-    EXPECT_NE(r.err.find("no frame registered: none of the scene's markers (tag36h11, ids 3, 7) was seen in 12 "
-                         "frames; tags of other ids were"),
-              std::string::npos)
+    EXPECT_NE(
+        r.err.find("no frame registered: none of the scene's markers (tag36h11, ids 3, 7) was seen in 12 "
+                   "frames; tags of other ids were"),
+        std::string::npos)
         << r.err;
     EXPECT_FALSE(fs::exists(out));
     EXPECT_TRUE(temporaries().empty());

@@ -29,9 +29,9 @@ std::vector<std::pair<glm::vec3, glm::vec3>> viewsAround(int count) {
         const float azimuth = 2.0f * std::numbers::pi_v<float> * t * 3.0f;
         const float elevation = glm::radians(35.0f + 40.0f * std::fmod(t * 7.0f, 1.0f));
         const float distance = 0.7f + 0.4f * std::fmod(t * 5.0f, 1.0f);
-        const glm::vec3 position = distance * glm::vec3(std::cos(elevation) * std::cos(azimuth),
-                                                        std::sin(elevation),
-                                                        std::cos(elevation) * std::sin(azimuth));
+        const glm::vec3 position =
+            distance * glm::vec3(std::cos(elevation) * std::cos(azimuth), std::sin(elevation),
+                                 std::cos(elevation) * std::sin(azimuth));
         const glm::vec3 target(0.05f * std::cos(5.0f * azimuth), 0.0f, 0.05f * std::sin(3.0f * azimuth));
         views.emplace_back(position, target);
     }
@@ -64,7 +64,8 @@ void expectRegistration(int width, int height, int views, float maxPositionMedia
         const Camera camera = markerCamera(width, height, 40.0f, position, target);
         const Image frame = renderMarkerFrame(camera, markers, 1.5f, static_cast<uint64_t>(seed++));
         const MarkerDetector::Result found = detector.detect(frame);
-        ASSERT_EQ(found.sightings.size(), 1u) << "camera at " << position.x << " " << position.y << " " << position.z;
+        ASSERT_EQ(found.sightings.size(), 1u)
+            << "camera at " << position.x << " " << position.y << " " << position.z;
         const std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers, camera);
         ASSERT_TRUE(pose);
         const test::PoseError e = poseError(pose->worldFromCamera, camera.worldFromCamera);
@@ -75,9 +76,9 @@ void expectRegistration(int width, int height, int views, float maxPositionMedia
     const float p = median(positionErrors), r = median(rotationErrors);
     testing::Test::RecordProperty("position_error_median_cm", std::to_string(100.0f * p));
     testing::Test::RecordProperty("rotation_error_median_deg", std::to_string(r));
-    std::printf("%dx%d: position error median %.3f cm (max %.3f), rotation %.3f deg (max %.3f)\n", width, height,
-                100.0f * p, 100.0f * *std::max_element(positionErrors.begin(), positionErrors.end()), r,
-                *std::max_element(rotationErrors.begin(), rotationErrors.end()));
+    std::printf("%dx%d: position error median %.3f cm (max %.3f), rotation %.3f deg (max %.3f)\n", width,
+                height, 100.0f * p, 100.0f * *std::max_element(positionErrors.begin(), positionErrors.end()),
+                r, *std::max_element(rotationErrors.begin(), rotationErrors.end()));
     EXPECT_LE(p, maxPositionMedian);
     EXPECT_LE(r, maxRotationMedian);
 }
@@ -94,7 +95,8 @@ TEST(MarkerRegistration, UsesEveryMarkerSeenThroughTheLensDistortion) {
     // Two markers, a lens with barrel distortion: the corners are undistorted before the pose is solved.
     const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f)),
                                          floorMarker(8, 0.1f, glm::vec3(-0.2f, 0.0f, 0.1f), 45.0f)};
-    Camera camera = markerCamera(320, 240, 50.0f, {0.3f, 0.6f, 0.6f}, {0.15f, 0.0f, -0.1f});  // markers off-centre
+    Camera camera =
+        markerCamera(320, 240, 50.0f, {0.3f, 0.6f, 0.6f}, {0.15f, 0.0f, -0.1f});  // markers off-centre
     camera.distortion.model = LensDistortion::Model::OpenCV;
     camera.distortion.k1 = -0.2f;
     camera.distortion.k2 = 0.05f;
@@ -117,8 +119,8 @@ TEST(MarkerRegistration, UsesEveryMarkerSeenThroughTheLensDistortion) {
     const std::optional<MarkerPose> wrong = solveCameraPose(found.sightings, markers, pinhole);
     ASSERT_TRUE(wrong);
     const test::PoseError w = poseError(wrong->worldFromCamera, camera.worldFromCamera);
-    std::printf("with the lens model %.2f cm, %.2f deg; without %.2f cm, %.2f deg\n", 100 * e.position, e.rotationDeg,
-                100 * w.position, w.rotationDeg);
+    std::printf("with the lens model %.2f cm, %.2f deg; without %.2f cm, %.2f deg\n", 100 * e.position,
+                e.rotationDeg, 100 * w.position, w.rotationDeg);
     EXPECT_GT(w.position, 2.0f * e.position);
 }
 
@@ -130,8 +132,9 @@ glm::vec2 objectPixel(const Camera& intrinsics, const glm::mat4& worldFromCamera
 
 TEST(MarkerTracker, HoldsAStillCameraStillAndFollowsAMovingOne) {
     const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f))};
-    // A still camera, 30 frames at 30 per second with a webcam's noise (4 levels): the object stays within 0.1 px RMS
-    // of where it is on average (the jitter a viewer sees; the pose's constant error is another matter).
+    // A still camera, 30 frames at 30 per second with a webcam's noise (4 levels): the object stays within
+    // 0.1 px RMS of where it is on average (the jitter a viewer sees; the pose's constant error is another
+    // matter).
     {
         const Camera camera = markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0.0f, 0.0f, 0.0f});
         MarkerTracker tracker(markers, camera);
@@ -143,7 +146,8 @@ TEST(MarkerTracker, HoldsAStillCameraStillAndFollowsAMovingOne) {
             ASSERT_EQ(t.state, TrackedFrame::State::Registered);
             if (i < 10) continue;  // once the filter has settled
             smoothed.push_back(objectPixel(camera, t.worldFromCamera));
-            const std::optional<MarkerPose> pose = solveCameraPose(detector.detect(frame).sightings, markers, camera);
+            const std::optional<MarkerPose> pose =
+                solveCameraPose(detector.detect(frame).sightings, markers, camera);
             raw.push_back(objectPixel(camera, pose->worldFromCamera));
         }
         auto jitter = [](const std::vector<glm::vec2>& p) {
@@ -153,8 +157,8 @@ TEST(MarkerTracker, HoldsAStillCameraStillAndFollowsAMovingOne) {
             for (glm::vec2 v : p) squared += glm::dot(v - mean, v - mean) / static_cast<float>(p.size());
             return std::sqrt(squared);
         };
-        std::printf("still camera: the object jitters %.3f px RMS smoothed, %.3f px unsmoothed\n", jitter(smoothed),
-                    jitter(raw));
+        std::printf("still camera: the object jitters %.3f px RMS smoothed, %.3f px unsmoothed\n",
+                    jitter(smoothed), jitter(raw));
         EXPECT_LT(jitter(smoothed), 0.1f);
         EXPECT_LT(jitter(smoothed), jitter(raw));
     }
@@ -164,12 +168,15 @@ TEST(MarkerTracker, HoldsAStillCameraStillAndFollowsAMovingOne) {
         std::vector<float> offsets;
         for (int i = 0; i < 30; ++i) {
             const float azimuth = glm::radians(20.0f + 1.3f * static_cast<float>(i));
-            const Camera camera = markerCamera(320, 240, 40.0f,
-                                               0.9f * glm::vec3(0.6f * std::cos(azimuth), 0.8f, 0.6f * std::sin(azimuth)),
-                                               {0.0f, 0.0f, 0.0f});
-            const TrackedFrame t = tracker.track(renderMarkerFrame(camera, markers, 1.5f, static_cast<uint64_t>(i)), i / 30.0);
+            const Camera camera = markerCamera(
+                320, 240, 40.0f, 0.9f * glm::vec3(0.6f * std::cos(azimuth), 0.8f, 0.6f * std::sin(azimuth)),
+                {0.0f, 0.0f, 0.0f});
+            const TrackedFrame t =
+                tracker.track(renderMarkerFrame(camera, markers, 1.5f, static_cast<uint64_t>(i)), i / 30.0);
             ASSERT_EQ(t.state, TrackedFrame::State::Registered);
-            if (i >= 10) offsets.push_back(glm::length(objectPixel(camera, t.worldFromCamera) - objectPixel(camera, camera.worldFromCamera)));
+            if (i >= 10)
+                offsets.push_back(glm::length(objectPixel(camera, t.worldFromCamera) -
+                                              objectPixel(camera, camera.worldFromCamera)));
         }
         std::printf("moving camera: object %.3f px from the truth (median), %.3f px (max)\n", median(offsets),
                     *std::max_element(offsets.begin(), offsets.end()));
@@ -190,21 +197,24 @@ TEST(MarkerRegistration, SolvesTheExactCornersOfAMarkerSeenHeadOn) {
     const std::vector<Marker> markers = {wall};
     auto orbit = [](float degrees) {
         const float a = glm::radians(degrees);
-        return markerCamera(320, 240, 40.0f, glm::vec3(1.3f * std::sin(a), 0.4f, 1.3f * std::cos(a)), {0.0f, 0.4f, 0.0f});
+        return markerCamera(320, 240, 40.0f, glm::vec3(1.3f * std::sin(a), 0.4f, 1.3f * std::cos(a)),
+                            {0.0f, 0.4f, 0.0f});
     };
     const Camera left = orbit(-3.0f), right = orbit(3.0f);
     // The exact corners seen from the right.
     MarkerSighting sighting;
     const std::array<glm::vec3, 4> corners = markerCorners(wall);
     for (int k = 0; k < 4; ++k) {
-        const glm::vec3 q(glm::inverse(right.worldFromCamera) * wall.worldFromMarker * glm::vec4(corners[k], 1.0f));
+        const glm::vec3 q(glm::inverse(right.worldFromCamera) * wall.worldFromMarker *
+                          glm::vec4(corners[k], 1.0f));
         sighting.corners[k] = glm::dvec2(right.imagePoint(q));
     }
     const std::vector<MarkerSighting> sightings = {sighting};
     const std::optional<MarkerPose> alone = solveCameraPose(sightings, markers, right);
     ASSERT_TRUE(alone);
     EXPECT_LT(poseError(alone->worldFromCamera, right.worldFromCamera).position, 0.01f);
-    const std::optional<MarkerPose> afterLeft = solveCameraPose(sightings, markers, right, left.worldFromCamera);
+    const std::optional<MarkerPose> afterLeft =
+        solveCameraPose(sightings, markers, right, left.worldFromCamera);
     ASSERT_TRUE(afterLeft);
     EXPECT_LT(poseError(afterLeft->worldFromCamera, right.worldFromCamera).position, 0.01f);
     EXPECT_LT(afterLeft->reprojectionErrorPx, 0.01);
@@ -245,7 +255,8 @@ TEST(MarkerRegistration, RefusesNothingToSolveFrom) {
     Image nan(320, 240, 3, std::numeric_limits<float>::quiet_NaN());
     EXPECT_TRUE(detector.detect(nan).sightings.empty());
     camera.fx = 0.0f;
-    const MarkerDetector::Result found = detector.detect(renderMarkerFrame(markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0, 0, 0}), markers));
+    const MarkerDetector::Result found = detector.detect(
+        renderMarkerFrame(markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0, 0, 0}), markers));
     ASSERT_EQ(found.sightings.size(), 1u);
     EXPECT_FALSE(solveCameraPose(found.sightings, markers, camera));
 }
