@@ -57,13 +57,15 @@ std::vector<int> framesFound(const FramePattern& pattern, const fs::path& shown)
 
 CLI::App* addEncodeCommand(CLI::App& app, EncodeArgs& args) {
     CLI::App* command = app.add_subcommand(
-        "encode", "Encode frames written before (e.g. by chunks of `render --frames`) into an H.264 MP4");
+        "encode",
+        "Encode frames written before (e.g. by chunks of `render --frames`) into an H.264 MP4, or into a Y4M "
+        "(uncompressed: a fake camera for a browser)");
     command
         ->add_option("frames", args.frames,
                      "The frames' files, the number's place as #### or %04d (out/frame_####.png); PNG "
                      "(8-bit sRGB) or EXR/HDR (linear, encoded as PNGs are)")
         ->required();
-    command->add_option("-o,--output", args.video, "The video (.mp4)")->required();
+    command->add_option("-o,--output", args.video, "The video (.mp4, or .y4m)")->required();
     command->add_option("--frames", args.range,
                         "The frames A:B (A included, B not); default: every frame found, which must be "
                         "consecutive");
@@ -79,7 +81,7 @@ CLI::App* addEncodeCommand(CLI::App& app, EncodeArgs& args) {
 
 int runEncode(const EncodeArgs& args) {
     checkVideoPath(args.video, "encode");
-    checkVideoEncoder("encode");
+    checkVideoEncoder(args.video, "encode");
     const FramePattern pattern = parseFramePattern(args.frames);
     std::vector<int> indices;
     if (!args.range.empty()) {
@@ -124,9 +126,9 @@ int runEncode(const EncodeArgs& args) {
     video->commit();
     if (progress) fmt::print(stderr, "\n");
     if (!args.quiet)
-        fmt::print(stderr, "deltagi: wrote {} ({} frames {}:{}, {}x{}, {:.6g} frames/s, CRF {})\n",
-                   args.video.string(), inputs.size(), indices.front(), indices.back() + 1, width, height,
-                   args.settings.fps, args.settings.crf);
+        fmt::print(stderr, "deltagi: wrote {} ({} frames {}:{}, {}x{}, {:.6g} frames/s{})\n", args.video.string(),
+                   inputs.size(), indices.front(), indices.back() + 1, width, height, args.settings.fps,
+                   isY4m(args.video) ? ", uncompressed" : fmt::format(", CRF {}", args.settings.crf));
     return 0;
 }
 

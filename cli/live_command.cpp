@@ -66,7 +66,7 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
                         "The light camera, the same kinds: each frame becomes the environment, through the "
                         "scene's \"environment\" projection, rotation and intensity");
     command->add_option("-o,--output", args.output, "The augmented frames (out/frame_####.png)");
-    command->add_option("--video", args.video, "The augmented frames as an H.264 MP4");
+    command->add_option("--video", args.video, "The augmented frames as an H.264 MP4 (.mp4) or uncompressed (.y4m)");
     command->add_option("--json", args.json, "Each frame's latency, drops, pose and stage times (JSON)");
     command->add_flag(
         "--realtime", args.realtime,
@@ -97,7 +97,7 @@ int runLive(const LiveArgs& args) {
                          "nothing to write: give -o FRAME_####.png, --video OUT.mp4 and/or --json OUT.json");
     if (!args.video.empty()) {
         checkVideoPath(args.video, "--video");
-        checkVideoEncoder("--video");
+        checkVideoEncoder(args.video, "--video");
     }
     Scene scene = loadAndWarn(args.scene, args.overrides);
     if (scene.markers.empty())

@@ -287,7 +287,7 @@ int runRender(const RenderArgs& args) {
     }
     if (!args.video.empty()) {
         cli::checkVideoPath(args.video, "--video");
-        cli::checkVideoEncoder("--video");
+        cli::checkVideoEncoder(args.video, "--video");
         outputs.push_back(args.video);
     }
     if (!args.layers.empty()) {
@@ -583,7 +583,7 @@ int main(int argc, char** argv) {
     CLI::Option* videoOption =
         renderCommand->add_option("--video", renderArgs.video,
                                   "With a \"sequence\": also (or, without -o, only) write the composites as "
-                                  "an H.264 MP4 (8-bit sRGB as the PNGs, yuv420p)");
+                                  "an H.264 MP4 (8-bit sRGB as the PNGs, yuv420p), or .y4m: uncompressed");
     renderCommand
         ->add_option("--fps", renderArgs.videoSettings.fps,
                      "The video's frames per second (default: the sequence's, sequence.fps or 30)")

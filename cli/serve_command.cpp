@@ -5,6 +5,10 @@
 // session's scene when it changed, renders, encodes the view as a JPEG and hands it to every client; each
 // client has a sender thread that writes its replies, the latest state and the latest frame (a frame not
 // yet sent when a newer one comes is dropped: no queue grows when a browser is slower than the renderer).
+//
+// A page may send the frames of the user's camera (getUserMedia) as binary messages, JPEGs of the scene
+// camera's size: the newest waits for the render thread (one that a newer replaces is dropped, and counted),
+// which registers it by the scene's markers and renders the objects over it from the registered pose.
 #include "serve_command.h"
 
 #include <civetweb.h>
@@ -31,6 +35,7 @@
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
 #include "live/live_session.h"
+#include "live/marker_registration.h"
 #include "web_assets.h"
 
 namespace deltagi::cli {
@@ -47,6 +52,8 @@ constexpr auto kRefineDelay = std::chrono::milliseconds(150);
 constexpr size_t kMaxClients = 32;
 constexpr size_t kMaxQueuedReplies = 32;
 constexpr size_t kMaxWaitingMessages = 256;
+// A camera frame's JPEG: 8 MiB is far above what a browser encodes for 4096 x 4096 at quality 0.9.
+constexpr size_t kMaxCameraFrameBytes = 8 * 1024 * 1024;
 
 struct Frame {
     uint64_t number = 0;
@@ -61,6 +68,9 @@ class Client {
     }
     ~Client() { close(); }
     int id() const { return id_; }
+    // The camera frames this client sent (numbered from 1); civetweb reads one connection's messages on one
+    // thread.
+    int64_t cameraFrames = 0;
 
     void reply(std::string text) {
         std::lock_guard lock(mutex_);
@@ -139,9 +149,31 @@ bool isLoopback(const std::string& host) {
     return host == "127.0.0.1" || host == "localhost" || host == "::1" || host == "[::1]";
 }
 
+// A scene-camera frame waiting for the render thread.
+struct CameraInput {
+    std::string jpeg;
+    Clock::time_point arrived;
+    std::weak_ptr<Client> client;
+    int clientId = 0;
+    int64_t number = 0;  // the client's count
+};
+
+// The newest registered camera frame, which the frames are rendered over until the next.
+struct LiveCamera {
+    glm::mat4 worldFromCamera{1.0f};
+    Image image;    // the camera's size
+    Image reduced;  // at 1 / reducedScale of it, for the interactive frames
+    int reducedScale = 1;
+    std::optional<glm::vec3> viewpoint;  // the first registered camera's position (cli/live_command.cpp)
+};
+
 class Server {
   public:
-    Server(const ServeArgs& args) : args_(args), session_(args.scene, args.overrides) {}
+    Server(const ServeArgs& args) : args_(args), session_(args.scene, args.overrides) {
+        const Scene& scene = session_.scene();
+        if (!scene.markers.empty()) tracker_.emplace(scene.markers, scene.camera, TrackingOptions{});
+        cameraSize_ = {scene.camera.width, scene.camera.height};
+    }
 
     int run();
 
@@ -154,6 +186,10 @@ class Server {
     std::string lastLog;
 
   private:
+    void onCameraFrame(const std::shared_ptr<Client>& client, const char* data, size_t size);
+    // Decodes and registers a camera frame; false (the client told why) when it cannot be.
+    bool registerFrame(const CameraInput& input, int64_t dropped, TrackedFrame& tracked, Image& image,
+                       json& info);
     void renderLoop();
     void handleMessages();
     void publishState();
@@ -167,6 +203,13 @@ class Server {
     std::shared_ptr<const Frame> latestFrame_;
     std::shared_ptr<const Image> latestComposite_;
     bool latestRefined_ = false;
+    std::optional<CameraInput> cameraInput_;  // the newest camera frame not yet taken by the render thread
+    int64_t cameraDropped_ = 0;               // camera frames replaced by a newer one before being taken
+
+    // The render thread's own.
+    std::optional<MarkerTracker> tracker_;  // when the scene places markers
+    std::pair<int, int> cameraSize_;
+    const Clock::time_point started_ = Clock::now();
 
     // Messages wait here for the handler thread: civetweb's threads have a small stack, and a message is
     // parsed and checked on a thread of this program's own.
@@ -301,6 +344,10 @@ void Server::onMessage(mg_connection* connection, int opcode, const char* data, 
         if (it == clients_.end()) return;
         client = it->second;
     }
+    if (opcode == MG_WEBSOCKET_OPCODE_BINARY) {
+        onCameraFrame(client, data, size);
+        return;
+    }
     if (opcode != MG_WEBSOCKET_OPCODE_TEXT) {
         client->reply(json{{"type", "error"}, {"message", "message: expected a JSON text message"}}.dump());
         return;
@@ -320,6 +367,65 @@ void Server::onMessage(mg_connection* connection, int opcode, const char* data, 
     }
     inbox_.push_back({client, std::string(data, size)});
     inboxWake_.notify_one();
+}
+
+void Server::onCameraFrame(const std::shared_ptr<Client>& client, const char* data, size_t size) {
+    const int64_t number = ++client->cameraFrames;
+    if (size > kMaxCameraFrameBytes) {
+        client->reply(json{{"type", "error"},
+                           {"message", fmt::format("camera frame {}: {} bytes, more than {}", number, size,
+                                                   kMaxCameraFrameBytes)}}
+                          .dump());
+        return;
+    }
+    CameraInput input{std::string(data, size), Clock::now(), client, client->id(), number};
+    std::lock_guard lock(sessionMutex_);
+    if (cameraInput_) ++cameraDropped_;
+    cameraInput_ = std::move(input);
+    changed_.notify_all();
+}
+
+bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFrame& tracked, Image& image,
+                           json& info) {
+    const auto fail = [&](const std::string& message) {
+        if (std::shared_ptr<Client> client = input.client.lock())
+            client->reply(json{{"type", "error"},
+                               {"message", fmt::format("camera frame {}: {}", input.number, message)}}
+                              .dump());
+        return false;
+    };
+    if (!tracker_)
+        return fail(fmt::format("{}: markers: the scene places no marker to register the camera by "
+                                "(docs/scene-format.md, \"markers\")",
+                                args_.scene.string()));
+    const Clock::time_point start = Clock::now();
+    try {
+        image = live::decodeCameraFrame(input.jpeg, cameraSize_.first, cameraSize_.second);
+    } catch (const InputError& e) {
+        return fail(e.message());
+    }
+    const Clock::time_point decoded = Clock::now();
+    const double seconds = std::chrono::duration<double>(input.arrived - started_).count();
+    tracked = tracker_->track(image, seconds);
+    const double trackMs = std::chrono::duration<double, std::milli>(Clock::now() - decoded).count();
+    const char* state = tracked.state == TrackedFrame::State::Registered ? "markers"
+                        : tracked.state == TrackedFrame::State::Held     ? "held"
+                                                                         : "lost";
+    info = {{"client", input.clientId},
+            {"number", input.number},
+            {"dropped", dropped},
+            {"registration", state},
+            {"markers_seen", tracked.markersSeen},
+            {"decode_ms", std::round(std::chrono::duration<double, std::milli>(decoded - start).count() * 100.0) /
+                              100.0},
+            {"track_ms", std::round(trackMs * 100.0) / 100.0}};
+    if (tracked.state == TrackedFrame::State::Registered)
+        info["reprojection_error_px"] = std::round(tracked.reprojectionErrorPx * 1e4) / 1e4;
+    if (tracked.state != TrackedFrame::State::Lost) {  // where the camera is, smoothed (world units)
+        const glm::vec3 p(tracked.worldFromCamera[3]);
+        info["position"] = {std::round(p.x * 1e5) / 1e5, std::round(p.y * 1e5) / 1e5, std::round(p.z * 1e5) / 1e5};
+    }
+    return true;
 }
 
 void Server::handleMessages() {
@@ -375,6 +481,7 @@ void Server::renderLoop() {
     Clock::time_point lastChange = Clock::now();
     uint64_t frameNumber = 0;
     bool layers = false;
+    std::optional<LiveCamera> camera;  // the last registered camera frame, once a page sent one
     for (;;) {
         bool refining = false, sameOptions = false;
         int scale = 1;  // the interactive frames at 1 / scale of the camera's width and height
@@ -382,11 +489,13 @@ void Server::renderLoop() {
         int client = 0;
         int64_t seq = 0;
         uint64_t version = 0;
+        std::optional<CameraInput> cameraInput;
+        int64_t cameraDropped = 0;
         {
             std::unique_lock lock(sessionMutex_);
             for (;;) {
                 if (stop_) return;
-                if (session_.version() != interactiveVersion) break;
+                if (session_.version() != interactiveVersion || cameraInput_) break;
                 if (!refined) {
                     if (Clock::now() >= lastChange + kRefineDelay) break;
                     changed_.wait_until(lock, lastChange + kRefineDelay);
@@ -394,6 +503,8 @@ void Server::renderLoop() {
                 }
                 changed_.wait(lock);
             }
+            cameraInput.swap(cameraInput_);
+            cameraDropped = cameraDropped_;
             const Scene& scene = session_.scene();
             view = session_.view();
             layers = live::viewNeedsLayers(view);
@@ -412,7 +523,7 @@ void Server::renderLoop() {
             // image even with the scene's own options, so the idle refinement renders that one.
             sameOptions =
                 scale == 1 && optionsToJson(wanted) == optionsToJson(own) && own.render.temporalFrames <= 1;
-            if (session_.version() != interactiveVersion) {
+            if (session_.version() != interactiveVersion || cameraInput) {
                 if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
                     live::interactiveScene(scene, wanted, scale, interactive);
                     interactiveStructure = session_.structureVersion();
@@ -433,30 +544,80 @@ void Server::renderLoop() {
                 }
             }
         }
+        // A camera frame: registered, then rendered over (when the markers give a pose) or shown as it is.
+        json cameraInfo;
+        std::optional<Image> unregistered;
+        if (cameraInput) {
+            TrackedFrame tracked;
+            Image image;
+            if (!registerFrame(*cameraInput, cameraDropped, tracked, image, cameraInfo)) {
+                cameraInput.reset();  // the frame is rendered as if it had not come
+            } else if (tracked.state == TrackedFrame::State::Lost) {
+                unregistered = std::move(image);
+                refined = true;  // nothing to refine: the camera image is the frame
+            } else {
+                if (!camera) camera.emplace();
+                camera->worldFromCamera = tracked.worldFromCamera;
+                camera->image = std::move(image);
+                camera->reducedScale = 0;
+                if (!camera->viewpoint) camera->viewpoint = glm::vec3(tracked.worldFromCamera[3]);
+                std::lock_guard lock(sessionMutex_);
+                session_.setCameraPose(tracked.worldFromCamera);  // drags pick as this camera sees
+            }
+        }
+        // The frames are rendered from the registered camera, over its image.
+        if (camera && !unregistered) {
+            Scene& target = refining ? full : interactive;
+            const int targetScale = refining ? 1 : scale;
+            target.camera.worldFromCamera = camera->worldFromCamera;
+            target.options.volume.viewpoint = camera->viewpoint;
+            if (targetScale == 1) {
+                target.background = camera->image;
+            } else {
+                if (camera->reducedScale != targetScale) {
+                    camera->reduced = live::reducedImage(camera->image, targetScale);
+                    camera->reducedScale = targetScale;
+                }
+                target.background = camera->reduced;
+            }
+        }
         try {
             // The refined frame is a still: nothing of the frames before it is averaged in.
             if (refining) fullFrames.clearHistory();
-            RenderOutput out = refining ? fullFrames.render(full) : interactiveFrames.render(interactive);
+            std::optional<RenderOutput> rendered;
+            if (!unregistered)
+                rendered = refining ? fullFrames.render(full) : interactiveFrames.render(interactive);
             const auto encodeStart = Clock::now();
             auto frame = std::make_shared<Frame>();
             frame->number = ++frameNumber;
-            frame->jpeg = live::encodeJpeg(live::viewPixels(out, view), out.composite.width(),
-                                           out.composite.height(), args_.jpegQuality);
+            const Image& picture = rendered ? rendered->composite : *unregistered;
+            frame->jpeg = live::encodeJpeg(rendered ? live::viewPixels(*rendered, view) : encodeSrgb8(picture),
+                                           picture.width(), picture.height(), args_.jpegQuality);
             const double encodeMs =
                 std::chrono::duration<double, std::milli>(Clock::now() - encodeStart).count();
             json info = {{"type", "frame"},
                          {"number", frame->number},
                          {"version", version},
-                         {"view", live::viewName(view)},
-                         {"refined", refining || sameOptions},
-                         {"scale", refining ? 1 : scale},
+                         {"view", unregistered ? "camera" : live::viewName(view)},
+                         {"refined", !unregistered && (refining || sameOptions)},
+                         {"scale", refining || unregistered ? 1 : scale},
                          {"client", client},
                          {"seq", seq},
-                         {"timings", live::timingsJson(out)},
+                         {"timings", rendered ? live::timingsJson(*rendered)
+                                              : json{{"stages", json::array()}, {"total_ms", 0.0}}},
                          {"encode_ms", std::round(encodeMs * 100.0) / 100.0},
                          {"bytes", frame->jpeg.size()}};
+            if (cameraInput) {
+                cameraInfo["latency_ms"] =
+                    std::round(std::chrono::duration<double, std::milli>(Clock::now() - cameraInput->arrived)
+                                   .count() *
+                               100.0) /
+                    100.0;
+                info["camera"] = cameraInfo;
+            }
             frame->info = info.dump();
-            auto composite = std::make_shared<const Image>(std::move(out.composite));
+            auto composite = std::make_shared<const Image>(rendered ? std::move(rendered->composite)
+                                                                    : std::move(*unregistered));
             {
                 std::lock_guard lock(sessionMutex_);
                 latestFrame_ = frame;

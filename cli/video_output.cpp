@@ -1,5 +1,6 @@
-// H.264 MP4 output (cli/video_output.h): libswscale converts sRGB RGB to BT.709 YUV 4:2:0, libavcodec's
-// libx264 encodes, libavformat's mp4 muxer writes the temporary file that AtomicFile renames into place.
+// Video output (cli/video_output.h): libswscale converts sRGB RGB to YUV 4:2:0, libavcodec's libx264 encodes
+// (MP4) or wraps the raw frames (Y4M), libavformat's muxer writes the temporary file that AtomicFile renames
+// into place.
 #include "video_output.h"
 
 #include <algorithm>
@@ -67,15 +68,22 @@ std::string lowerExtension(const fs::path& path) {
 
 }  // namespace
 
+bool isY4m(const fs::path& path) {
+    return lowerExtension(path) == ".y4m";
+}
+
 void checkVideoPath(const fs::path& path, const std::string& option) {
-    if (lowerExtension(path) != ".mp4")
+    const std::string ext = lowerExtension(path);
+    if (ext != ".mp4" && ext != ".y4m")
         throw InputError(path.string(),
-                         fmt::format("{} writes an H.264 video in an MP4 file: expected .mp4, got '{}'",
+                         fmt::format("{} writes an H.264 video in an MP4 file (.mp4) or uncompressed frames in a "
+                                     "YUV4MPEG2 file (.y4m): got '{}'",
                                      option, path.extension().string()));
 }
 
-void checkVideoEncoder(const std::string& option) {
+void checkVideoEncoder(const fs::path& path, const std::string& option) {
     quietLogs();
+    if (isY4m(path)) return;  // no encoder: raw frames
     if (!h264Encoder())
         throw InputError(option, fmt::format("this FFmpeg (libavcodec {}) has no H.264 encoder: install one "
                                              "built with libx264 (Debian's libavcodec59 is)",
@@ -106,9 +114,14 @@ struct VideoWriter::FFmpeg {
 
 VideoWriter::VideoWriter(const fs::path& destination, int width, int height, VideoSettings settings)
     : file_(destination), width_(width), height_(height), ff_(std::make_unique<FFmpeg>()) {
-    checkVideoEncoder("--video");
-    const AVCodec* encoder = h264Encoder();
+    quietLogs();
+    const bool y4m = isY4m(destination);
+    checkVideoEncoder(destination, "--video");
+    // Y4M: the raw frames, which libavformat's muxer takes wrapped in packets.
+    const AVCodec* encoder = y4m ? avcodec_find_encoder(AV_CODEC_ID_WRAPPED_AVFRAME) : h264Encoder();
+    if (!encoder) fail("cannot start the Y4M file: this FFmpeg has no wrapped_avframe encoder", AVERROR(EINVAL));
     const bool x264 = std::string(encoder->name) == "libx264";
+    const char* container = y4m ? "Y4M" : "MP4";
     const AVRational rate = av_d2q(settings.fps, 1001000);
     FFmpeg& ff = *ff_;
     // yuv420p halves the chroma in both directions: the encoded size is even.
@@ -116,12 +129,13 @@ VideoWriter::VideoWriter(const fs::path& destination, int width, int height, Vid
     ff.encodedHeight = (height + 1) & ~1;
 
     const std::string temporary = file_.temporaryPath().string();
-    int error = avformat_alloc_output_context2(&ff.format, nullptr, "mp4", temporary.c_str());
-    if (error < 0 || !ff.format) fail("cannot start the MP4 file", error);
+    int error = avformat_alloc_output_context2(&ff.format, nullptr, y4m ? "yuv4mpegpipe" : "mp4",
+                                               temporary.c_str());
+    if (error < 0 || !ff.format) fail(fmt::format("cannot start the {} file", container), error);
     ff.format->flags |= AVFMT_FLAG_BITEXACT;  // no version strings or times: the same frames, the same file
 
     ff.codec = avcodec_alloc_context3(encoder);
-    if (!ff.codec) fail("cannot start the H.264 encoder", AVERROR(ENOMEM));
+    if (!ff.codec) fail(fmt::format("cannot start the {} encoder", encoder->name), AVERROR(ENOMEM));
     AVCodecContext& c = *ff.codec;
     c.width = ff.encodedWidth;
     c.height = ff.encodedHeight;
@@ -131,11 +145,15 @@ VideoWriter::VideoWriter(const fs::path& destination, int width, int height, Vid
     c.thread_count = 1;  // x264's output depends on its thread count
     c.flags |= AV_CODEC_FLAG_BITEXACT;
     if (ff.format->oformat->flags & AVFMT_GLOBALHEADER) c.flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
+    // Limited range; BT.709 in the MP4, which says so; BT.601 in the Y4M, which cannot, and whose readers
+    // (Chromium's fake camera) take it as BT.601.
     c.color_range = AVCOL_RANGE_MPEG;
-    c.colorspace = AVCOL_SPC_BT709;
-    c.color_primaries = AVCOL_PRI_BT709;
+    c.colorspace = y4m ? AVCOL_SPC_SMPTE170M : AVCOL_SPC_BT709;
+    c.color_primaries = y4m ? AVCOL_PRI_SMPTE170M : AVCOL_PRI_BT709;
     c.color_trc = AVCOL_TRC_IEC61966_2_1;  // the frames are sRGB-encoded
-    if (x264) {
+    if (y4m) {
+        // nothing to set: the frames go through as they are
+    } else if (x264) {
         av_opt_set(c.priv_data, "preset", "medium", 0);
         av_opt_set_double(c.priv_data, "crf", settings.crf, 0);
         // Macroblock-tree rate control off: with it, Debian 12's libx264 (0.164) reads memory it did not
@@ -160,20 +178,20 @@ VideoWriter::VideoWriter(const fs::path& destination, int width, int height, Vid
     if (error < 0) fail("cannot write file", error);
     AVDictionary* options = nullptr;
     av_dict_set(&options, "movflags", "+faststart", 0);  // the index first: players start before the end
-    error = avformat_write_header(ff.format, &options);
+    error = avformat_write_header(ff.format, y4m ? nullptr : &options);
     av_dict_free(&options);
-    if (error < 0) fail("cannot write the MP4 header", error);
+    if (error < 0) fail(fmt::format("cannot write the {} header", container), error);
 
     ff.sws = sws_getContext(ff.encodedWidth, ff.encodedHeight, AV_PIX_FMT_RGB24, ff.encodedWidth,
                             ff.encodedHeight, AV_PIX_FMT_YUV420P,
                             SWS_BILINEAR | SWS_ACCURATE_RND | SWS_BITEXACT, nullptr, nullptr, nullptr);
     if (!ff.sws) fail("cannot convert RGB to YUV", AVERROR(EINVAL));
-    const int* bt709 = sws_getCoefficients(SWS_CS_ITU709);
-    // Source: full-range RGB; destination: limited-range ("TV") BT.709 YUV, as players expect.
-    sws_setColorspaceDetails(ff.sws, bt709, 1, bt709, 0, 0, 1 << 16, 1 << 16);
+    const int* coefficients = sws_getCoefficients(y4m ? SWS_CS_ITU601 : SWS_CS_ITU709);
+    // Source: full-range RGB; destination: limited-range ("TV") YUV, as players expect.
+    sws_setColorspaceDetails(ff.sws, coefficients, 1, coefficients, 0, 0, 1 << 16, 1 << 16);
 
     ff.packet = av_packet_alloc();
-    if (!ff.packet) fail("cannot start the H.264 encoder", AVERROR(ENOMEM));
+    if (!ff.packet) fail(fmt::format("cannot start the {} encoder", encoder->name), AVERROR(ENOMEM));
     ff.padded.resize(static_cast<size_t>(ff.encodedWidth) * ff.encodedHeight * 3);
 }
 
@@ -247,7 +265,7 @@ void VideoWriter::commit() {
     if (error < 0) fail("cannot finish the video", error);
     writePackets();
     error = av_write_trailer(ff.format);
-    if (error < 0) fail("cannot finish the MP4 file", error);
+    if (error < 0) fail(fmt::format("cannot finish the {} file", isY4m(file_.destination()) ? "Y4M" : "MP4"), error);
     error = avio_closep(&ff.format->pb);
     if (error < 0) fail("cannot write file", error);
     file_.commit();

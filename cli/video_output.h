@@ -1,5 +1,7 @@
-// H.264 MP4 output through the FFmpeg libraries (libavcodec with libx264, libavformat, libswscale): the
-// frames of a sequence as a video, written atomically as every output is (io/atomic_file.h).
+// Video output through the FFmpeg libraries: H.264 in an MP4 (libavcodec with libx264, libavformat,
+// libswscale), or uncompressed 4:2:0 frames in a YUV4MPEG2 file (.y4m: what Chromium's fake camera,
+// --use-file-for-fake-video-capture, and most video tools read). Written atomically as every output is
+// (io/atomic_file.h).
 #pragma once
 
 #include <cstdint>
@@ -19,18 +21,21 @@ struct VideoSettings {
 };
 inline constexpr int kMaxCrf = 51;
 
-// Throws InputError naming `option` when `path` is not a .mp4 file name.
+// Whether `path` names a Y4M (.y4m, any case) rather than an MP4.
+bool isY4m(const std::filesystem::path& path);
+
+// Throws InputError naming `option` when `path` is not a .mp4 or .y4m file name.
 void checkVideoPath(const std::filesystem::path& path, const std::string& option);
 
-// Throws InputError naming `option` when this FFmpeg has no H.264 encoder (libx264, or another H.264 encoder
-// when libx264 is missing).
-void checkVideoEncoder(const std::string& option);
+// Throws InputError naming `option` when `path` is an MP4 and this FFmpeg has no H.264 encoder (libx264, or
+// another H.264 encoder when libx264 is missing).
+void checkVideoEncoder(const std::filesystem::path& path, const std::string& option);
 
 // Frames go in one by one as 8-bit sRGB (the pixels a PNG of the frame holds; a linear image is encoded as
-// the PNG writer does: clamped to [0, 1], sRGB transfer function); they are converted to BT.709 YUV 4:2:0
-// (limited range; an odd width or height is padded by repeating the last column or row) and encoded with
-// libx264 at `settings.crf` (preset medium, no macroblock-tree rate control, one thread, bit-exact: the same
-// frames give the same file, byte for byte). The file is written to a temporary beside `destination` and
+// the PNG writer does: clamped to [0, 1], sRGB transfer function); they are converted to YUV 4:2:0 (limited
+// range, BT.709 for an MP4, BT.601 for a Y4M; an odd width or height is padded by repeating the last column
+// or row) and, for an MP4, encoded with libx264 at `settings.crf` (preset medium, no macroblock-tree rate
+// control, one thread, bit-exact: the same frames give the same file, byte for byte). The file is written to a temporary beside `destination` and
 // renamed into place by commit(); a failure or an interruption before then leaves the previous file, if any,
 // as it was.
 class VideoWriter {

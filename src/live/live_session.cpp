@@ -18,6 +18,7 @@
 #include "deltagi/scene_io.h"
 #include "deltagi/transforms.h"
 #include "io/image_encode.h"
+#include "io/quiet_stderr.h"
 #include "scene/json_reader.h"
 #include "scene/option_table.h"
 
@@ -393,6 +394,10 @@ void Session::options(const json& message) {
     ++structureVersion_;
 }
 
+void Session::setCameraPose(const glm::mat4& worldFromCamera) {
+    scene_->camera.worldFromCamera = worldFromCamera;
+}
+
 json Session::state() const {
     const Camera& camera = scene_->camera;
     const glm::mat4 cameraFromWorld = glm::inverse(camera.worldFromCamera);
@@ -483,22 +488,24 @@ int interactiveScene(const Scene& scene, const Options& options, int scale, Scen
     c.fy *= inverse;
     c.cx *= inverse;  // continuous image coordinates: the image's corners stay its corners
     c.cy *= inverse;
-    if (scene.background) {
-        const Image& photo = *scene.background;
-        Image small(c.width, c.height, 3, 0.0f);
-        const float weight = inverse * inverse;
-        for (int y = 0; y < c.height; ++y)
-            for (int x = 0; x < c.width; ++x)
-                for (int ch = 0; ch < 3; ++ch) {
-                    float sum = 0.0f;
-                    for (int dy = 0; dy < scale; ++dy)
-                        for (int dx = 0; dx < scale; ++dx)
-                            sum += photo.at(x * scale + dx, y * scale + dy, ch);
-                    small.at(x, y, ch) = sum * weight;
-                }
-        out.background = std::move(small);
-    }
+    if (scene.background) out.background = reducedImage(*scene.background, scale);
     return scale;
+}
+
+Image reducedImage(const Image& image, int scale) {
+    if (scale <= 1) return image;
+    const int width = image.width() / scale, height = image.height() / scale, channels = image.channels();
+    Image small(width, height, channels, 0.0f);
+    const float weight = 1.0f / static_cast<float>(scale * scale);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            for (int ch = 0; ch < channels; ++ch) {
+                float sum = 0.0f;
+                for (int dy = 0; dy < scale; ++dy)
+                    for (int dx = 0; dx < scale; ++dx) sum += image.at(x * scale + dx, y * scale + dy, ch);
+                small.at(x, y, ch) = sum * weight;
+            }
+    return small;
 }
 
 namespace {
@@ -608,6 +615,51 @@ std::string encodeJpeg(const std::vector<uint8_t>& rgb, int width, int height, i
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("Compression", fmt::format("jpeg:{}", std::clamp(quality, 1, 100)));
     return encode("jpg", spec, rgb.data());
+}
+
+namespace {
+
+// The first line of a decoder's message (libjpeg's may run to several).
+std::string firstLine(std::string text) {
+    text = text.substr(0, text.find('\n'));
+    while (!text.empty() && (text.back() == '\r' || text.back() == ' ')) text.pop_back();
+    return text;
+}
+
+}  // namespace
+
+Image decodeCameraFrame(std::string_view jpeg, int width, int height) {
+    const std::string where = "camera frame";
+    if (jpeg.size() < 3 || static_cast<unsigned char>(jpeg[0]) != 0xFF ||
+        static_cast<unsigned char>(jpeg[1]) != 0xD8 || static_cast<unsigned char>(jpeg[2]) != 0xFF)
+        throw InputError(where, fmt::format("{} bytes that are not a JPEG image", jpeg.size()));
+    QuietStderr quiet;
+    OIIO::Filesystem::IOMemReader memory(const_cast<char*>(jpeg.data()), jpeg.size());
+    OIIO::Filesystem::IOProxy* proxy = &memory;
+    OIIO::ImageSpec config;
+    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+    auto input = OIIO::ImageInput::create("jpg", false, &config, proxy);
+    OIIO::ImageSpec spec;
+    if (!input || !input->open("frame.jpg", spec, config)) {
+        const std::string reason = firstLine(input ? input->geterror() : OIIO::geterror());
+        throw InputError(where, fmt::format("cannot decode the JPEG image{}", reason.empty() ? "" : ": " + reason));
+    }
+    // The header's size is checked before any pixel is decoded.
+    if (spec.width != width || spec.height != height)
+        throw InputError(where, fmt::format("{}x{}, the scene camera is {}x{}: send frames of its size",
+                                            spec.width, spec.height, width, height));
+    if (spec.nchannels != 1 && spec.nchannels != 3)
+        throw InputError(where, fmt::format("{} channels: expected RGB or grey", spec.nchannels));
+    std::vector<uint8_t> pixels(static_cast<size_t>(width) * height * spec.nchannels);
+    if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data()))
+        throw InputError(where, fmt::format("cannot decode the JPEG image: {}", firstLine(input->geterror())));
+    const std::array<float, 256>& linear = srgb8ToLinearValues();
+    Image image(width, height, 3);
+    std::span<float> out = image.data();
+    const size_t count = static_cast<size_t>(width) * height;
+    for (size_t i = 0; i < count; ++i)
+        for (int c = 0; c < 3; ++c) out[i * 3 + c] = linear[pixels[i * spec.nchannels + (spec.nchannels == 3 ? c : 0)]];
+    return image;
 }
 
 std::string encodePng(const Image& image) {

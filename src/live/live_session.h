@@ -70,6 +70,11 @@ class Session {
     // wherever it is saved).
     nlohmann::json document() const;
 
+    // The pose of the registered scene camera (a live camera's frames, cli/serve_command.cpp): drags pick the
+    // surface under the cursor as this camera sees it, and the state's anchors are its pixels. Not a change
+    // (no version): the document keeps the file's camera.
+    void setCameraPose(const glm::mat4& worldFromCamera);
+
     // The scene, with the objects at the places the messages gave them (a drag only records the place; the
     // meshes are moved here, once for any number of drags between two frames).
     const Scene& scene();
@@ -135,6 +140,15 @@ bool canReduceResolution(int width, int height, int scale);
 // their width and height (the photo averaged over scale x scale blocks) where canReduceResolution allows;
 // returns the scale used (1 or `scale`).
 int interactiveScene(const Scene& scene, const Options& options, int scale, Scene& out);
+
+// `image` averaged over scale x scale blocks (its width and height divided by `scale`, rounded down); a copy
+// for `scale` 1.
+Image reducedImage(const Image& image, int scale);
+
+// A scene-camera frame sent by the page (a JPEG of the camera's width x height, 8-bit sRGB, RGB or grey) as a
+// linear RGB image. The header's size is checked before the pixels are decoded; InputError ("camera frame")
+// for bytes that are not a JPEG of that size.
+Image decodeCameraFrame(std::string_view jpeg, int width, int height);
 
 // The picture of `view`, as 8-bit sRGB RGB pixels (width x height x 3), for the page.
 std::vector<uint8_t> viewPixels(const RenderOutput& output, View view);

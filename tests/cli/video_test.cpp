@@ -1,4 +1,4 @@
-// `deltagi render --video` and `deltagi encode`: the MP4 decoded back with libavformat/libavcodec has the
+// `deltagi render --video` and `deltagi encode`: the MP4 (and the Y4M) decoded back with libavformat/libavcodec has the
 // frames, their size and their colours; the same frames give the same file; outputs are atomic.
 #include <algorithm>
 #include <array>
@@ -29,7 +29,7 @@ using nlohmann::json;
 using test::SequenceTest;
 
 // A video as decoded: the stream's codec, size and frame rate, and each frame's mean R, G, B (8-bit sRGB
-// scale, converted back from BT.709 limited-range YUV 4:2:0).
+// scale, converted back from BT.709 limited-range YUV 4:2:0, or BT.601 for a Y4M).
 struct Decoded {
     std::string codec;
     int width = 0, height = 0;
@@ -38,7 +38,7 @@ struct Decoded {
     std::vector<std::array<double, 3>> means;
 };
 
-Decoded decode(const fs::path& file) {
+Decoded decode(const fs::path& file, bool bt601 = false) {
     Decoded out;
     AVFormatContext* format = nullptr;
     if (avformat_open_input(&format, file.c_str(), nullptr, nullptr) < 0) {
@@ -64,8 +64,9 @@ Decoded decode(const fs::path& file) {
     out.fps = av_q2d(stream->avg_frame_rate);
     AVPacket* packet = av_packet_alloc();
     AVFrame* frame = av_frame_alloc();
-    // BT.709 limited range back to R'G'B' (Rec. ITU-R BT.709-6, 3.2-3.3), in double: the test's own
-    // inverse, not the writer's library run backwards.
+    // BT.709 limited range back to R'G'B' (Rec. ITU-R BT.709-6, 3.2-3.3; BT.601-7, 2.5 for a Y4M), in double:
+    // the test's own inverse, not the writer's library run backwards.
+    const double kr = bt601 ? 0.299 : 0.2126, kb = bt601 ? 0.114 : 0.0722, kg = 1.0 - kr - kb;
     auto take = [&] {
         while (avcodec_receive_frame(codec, frame) >= 0) {
             EXPECT_EQ(frame->format, AV_PIX_FMT_YUV420P);
@@ -75,8 +76,10 @@ Decoded decode(const fs::path& file) {
                     const double luma = (frame->data[0][y * frame->linesize[0] + x] - 16.0) / 219.0;
                     const double pb = (frame->data[1][(y / 2) * frame->linesize[1] + x / 2] - 128.0) / 224.0;
                     const double pr = (frame->data[2][(y / 2) * frame->linesize[2] + x / 2] - 128.0) / 224.0;
-                    const double rgb[3] = {luma + 1.5748 * pr, luma - 0.18733 * pb - 0.46812 * pr,
-                                           luma + 1.8556 * pb};
+                    const double rgb[3] = {
+                        luma + 2.0 * (1.0 - kr) * pr,
+                        luma - 2.0 * kb * (1.0 - kb) / kg * pb - 2.0 * kr * (1.0 - kr) / kg * pr,
+                        luma + 2.0 * (1.0 - kb) * pb};
                     for (int c = 0; c < 3; ++c) mean[c] += std::clamp(rgb[c], 0.0, 1.0) * 255.0;
                 }
             for (double& m : mean) m /= static_cast<double>(frame->width) * frame->height;
@@ -198,7 +201,7 @@ TEST_F(VideoTest, OutputsAreAtomicAndChecked) {
         EXPECT_EQ(entry.path().filename().string().find(".tmp-"), std::string::npos) << entry.path();
 
     EXPECT_EQ(runCli("render " + scene.string() + " --video " + (dir_ / "v.mov").string()), 1);
-    test::expectContains(errors(), {"v.mov", "expected .mp4"});
+    test::expectContains(errors(), {"v.mov", ".mp4", ".y4m"});
     // The scene file itself, by another name, is an input.
     fs::copy_file(scene, dir_ / "scene.mp4");
     EXPECT_EQ(runCli("render " + (dir_ / "scene.mp4").string() + " --video " + (dir_ / "scene.mp4").string()),
@@ -241,6 +244,39 @@ TEST_F(VideoTest, EncodeChecksItsFrames) {
     test::expectContains(errors(), "no frames found");
     EXPECT_EQ(runCli("encode " + (dir_ / "f_3.png").string() + " -o " + (dir_ / "n.mp4").string()), 1);
     test::expectContains(errors(), "frame_####.png");
+}
+
+// `encode -o X.y4m`: uncompressed YUV4MPEG2 (the file Chromium's fake camera reads), its header the frames'
+// size and rate, each frame's colour the PNG's within 4:2:0's rounding (BT.601, limited range); the same
+// frames give the same file.
+TEST_F(VideoTest, EncodeWritesY4m) {
+    const std::array<std::array<float, 3>, 3> colours = {{{0.8f, 0.1f, 0.05f}, {0.1f, 0.6f, 0.2f}, {0.2f, 0.3f, 0.9f}}};
+    for (int i = 0; i < 3; ++i) {
+        Image image(10, 6, 3);
+        for (int y = 0; y < 6; ++y)
+            for (int x = 0; x < 10; ++x)
+                for (int c = 0; c < 3; ++c) image.at(x, y, c) = colours[i][c];
+        writeImage(image, dir_ / ("f_" + std::to_string(i) + ".png"));
+    }
+    const std::string encode =
+        "encode " + (dir_ / "f_#.png").string() + " --fps 15 -q -o " + (dir_ / "camera.y4m").string();
+    ASSERT_EQ(runCli(encode), 0) << errors();
+    const std::string bytes = text(dir_ / "camera.y4m");
+    EXPECT_TRUE(bytes.starts_with("YUV4MPEG2 W10 H6 F15:1")) << bytes.substr(0, 60);
+    EXPECT_EQ(bytes.size(), bytes.find('\n') + 1 + 3 * (6 + 10 * 6 * 3 / 2)) << "3 frames of 'FRAME\\n' + I420";
+    const Decoded video = decode(dir_ / "camera.y4m", true);
+    EXPECT_EQ(video.width, 10);
+    EXPECT_EQ(video.height, 6);
+    EXPECT_DOUBLE_EQ(video.fps, 15.0);
+    ASSERT_EQ(video.means.size(), 3u);
+    for (int i = 0; i < 3; ++i) {
+        const std::array<double, 3> want = srgbMean(readImage(dir_ / ("f_" + std::to_string(i) + ".png")));
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(video.means[i][c], want[c], 2.5) << "frame " << i << " channel " << c;
+    }
+    ASSERT_EQ(runCli(encode + " --crf 30"), 0) << errors();  // the CRF is an MP4's
+    EXPECT_EQ(text(dir_ / "camera.y4m"), bytes);
+    EXPECT_EQ(runCli("encode " + (dir_ / "f_#.png").string() + " -o " + (dir_ / "v.avi").string()), 1);
+    test::expectContains(errors(), {"v.avi", ".mp4", ".y4m"});
 }
 
 }  // namespace

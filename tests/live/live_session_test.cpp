@@ -417,5 +417,61 @@ TEST(LiveSessionImages, ThePngIsTheOneDeltagiRenderWrites) {
     fs::remove_all(folder);
 }
 
+// A page's camera frame: a JPEG of the camera's size decodes to its linear pixels (the sRGB bytes decoded as
+// image files are, within the JPEG's loss); anything else is refused with one line before its pixels are
+// decoded.
+TEST(LiveSessionImages, CameraFramesAreJpegsOfTheCamerasSize) {
+    std::vector<uint8_t> rgb(32 * 24 * 3);
+    for (int y = 0; y < 24; ++y)
+        for (int x = 0; x < 32; ++x) {
+            uint8_t* p = &rgb[(y * 32 + x) * 3];
+            p[0] = x < 16 ? 40 : 200;
+            p[1] = 120;
+            p[2] = y < 12 ? 230 : 10;
+        }
+    const std::string jpeg = encodeJpeg(rgb, 32, 24, 95);
+    const Image frame = decodeCameraFrame(jpeg, 32, 24);
+    ASSERT_EQ(frame.width(), 32);
+    ASSERT_EQ(frame.height(), 24);
+    ASSERT_EQ(frame.channels(), 3);
+    const std::vector<uint8_t> back = encodeSrgb8(frame);  // the linear pixels, encoded again
+    for (int y : {4, 19})
+        for (int x : {4, 27})
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(back[(y * 32 + x) * 3 + c], rgb[(y * 32 + x) * 3 + c], 3) << x << "," << y << "," << c;
+    const auto refused = [](const std::string& bytes, int w, int h, const std::string& part) {
+        try {
+            decodeCameraFrame(bytes, w, h);
+            ADD_FAILURE() << "accepted: " << part;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find("camera frame"), std::string::npos) << what;
+            EXPECT_NE(what.find(part), std::string::npos) << what;
+            EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+        }
+    };
+    refused(jpeg, 64, 48, "32x24, the scene camera is 64x48");
+    refused("", 32, 24, "not a JPEG");
+    refused(std::string("\x89PNG\r\n\x1a\n", 8) + std::string(100, 'x'), 32, 24, "not a JPEG");
+    refused(jpeg.substr(0, 40), 32, 24, "cannot decode");
+    // A header that declares a huge image is refused by its size, not decoded.
+    const std::string huge = encodeJpeg(std::vector<uint8_t>(8 * 8 * 3, 50), 8, 8, 80);
+    refused(huge, 32, 24, "8x8");
+}
+
+TEST_F(LiveSessionTest, DragsPickAsTheRegisteredCameraSees) {
+    auto session = tinySession(160, 120);
+    glm::mat4 pose = session->scene().camera.worldFromCamera;
+    const uint64_t version = session->version();
+    const json anchor = session->state()["objects"][0]["anchor"];
+    const json documentCamera = session->document()["camera"];
+    pose[3] += glm::vec4(0.05f, 0.0f, 0.0f, 0.0f);  // the camera 5 cm to its right (world x)
+    session->setCameraPose(pose);
+    EXPECT_EQ(session->version(), version);  // not a change of the scene
+    const json moved = session->state()["objects"][0]["anchor"];
+    EXPECT_GT(std::abs(moved[0].get<double>() - anchor[0].get<double>()), 1.0) << anchor << " " << moved;
+    EXPECT_EQ(session->document()["camera"], documentCamera);  // what "save scene" writes: the file's camera
+}
+
 }  // namespace
 }  // namespace deltagi::live

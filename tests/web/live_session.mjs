@@ -8,12 +8,13 @@
 //   node tests/web/live_session.mjs --deltagi build/deltagi --scene examples/cornell-box.json \
 //        [--set KEY=VALUE ...] [--out DIR] [--screenshot FILE.png] [--drag-seconds S]
 // Exit status: 0 passed, 1 failed, 77 skipped (no playwright-core or no chromium: scripts/install-deps.sh).
-import { spawn, execFileSync } from 'node:child_process';
+import { execFileSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 
-const SKIP = 77;
+import { browserOrSkip, finish, logger, startServer } from './harness.mjs';
+
 const args = { sets: [], out: null, screenshot: null, dragSeconds: 1.5 };
 for (let i = 2; i < process.argv.length; i++) {
   const a = process.argv[i];
@@ -29,47 +30,15 @@ for (let i = 2; i < process.argv.length; i++) {
 }
 if (!args.deltagi || !args.scene) throw new Error('usage: live_session.mjs --deltagi PATH --scene SCENE.json');
 
-let chromium;
-try {
-  ({ chromium } = await import('playwright-core'));
-} catch {
-  console.log('SKIP: playwright-core is not installed (scripts/install-deps.sh runs npm ci in tests/web)');
-  process.exit(SKIP);
-}
-const browserPath = process.env.DELTAGI_CHROMIUM || '/usr/bin/chromium';
-if (!fs.existsSync(browserPath)) {
-  console.log(`SKIP: no browser at ${browserPath} (scripts/install-deps.sh installs Debian's chromium)`);
-  process.exit(SKIP);
-}
-
+const { launch } = await browserOrSkip();
 const out = args.out || fs.mkdtempSync(path.join(os.tmpdir(), 'deltagi-live-'));
 fs.mkdirSync(out, { recursive: true });
-const started = Date.now();
-const log = (text) => console.log(`[${((Date.now() - started) / 1000).toFixed(1)} s] ${text}`);
-function check(condition, what) {
-  if (!condition) throw new Error(`FAILED: ${what}`);
-  log(`ok: ${what}`);
-}
+const { log, check } = logger();
 
 // ---- the server ------------------------------------------------------------------------------------------
-const serverArgs = ['serve', args.scene, '--port', '0', ...args.sets.flatMap((s) => ['--set', s]),
-  ...(args.interactiveScale ? ['--interactive-scale', args.interactiveScale] : [])];
-log(`${args.deltagi} ${serverArgs.join(' ')}`);
-const server = spawn(args.deltagi, serverArgs, { stdio: ['ignore', 'pipe', 'pipe'] });
-let serverErr = '';
-server.stderr.on('data', (d) => { serverErr += d; });
-const serverExit = new Promise((resolve) => server.on('exit', (code, signal) => resolve({ code, signal })));
-const url = await new Promise((resolve, reject) => {
-  let text = '';
-  const timer = setTimeout(() => reject(new Error(`no URL from deltagi serve in 120 s; stderr: ${serverErr}`)), 120000);
-  server.stdout.on('data', (d) => {
-    text += d;
-    const m = text.match(/http:\/\/\S+\//);
-    if (m) { clearTimeout(timer); resolve(m[0]); }
-  });
-  server.on('exit', (code) => reject(new Error(`deltagi serve exited (${code}): ${serverErr}`)));
-});
-log(`server at ${url}`);
+const serve = await startServer(args.deltagi, args.scene, [...args.sets.flatMap((s) => ['--set', s]),
+  ...(args.interactiveScale ? ['--interactive-scale', args.interactiveScale] : [])], log);
+const { server, url } = serve;
 
 function cpuSeconds(pid) {  // user + system time of the process, from /proc
   const fields = fs.readFileSync(`/proc/${pid}/stat`, 'utf8').split(') ')[1].split(' ');
@@ -95,12 +64,7 @@ function descendantsCpuSeconds(root, skip) {
   return total;
 }
 
-const browser = await chromium.launch({
-  executablePath: browserPath,
-  headless: true,
-  // Root (CI) cannot use chromium's sandbox; containers often give /dev/shm 64 MB, too little for it.
-  args: [...(process.getuid && process.getuid() === 0 ? ['--no-sandbox'] : []), '--disable-dev-shm-usage'],
-});
+const browser = await launch();
 let failed = null;
 try {
   const page = await browser.newPage({ viewport: { width: 1280, height: 1000 }, acceptDownloads: true });
@@ -363,16 +327,5 @@ try {
   check(comparison.rmse <= 1e-4, `saved image vs deltagi render of the saved scene: RMSE ${comparison.rmse}`);
 } catch (e) {
   failed = e;
-} finally {
-  await browser.close();
-  server.kill('SIGTERM');
 }
-const exit = await serverExit;
-if (!failed && !(exit.code === 143 || exit.signal === 'SIGTERM'))
-  failed = new Error(`deltagi serve ended with ${JSON.stringify(exit)}`);
-if (serverErr.trim()) console.log(`server stderr:\n${serverErr.trim()}`);
-if (failed) {
-  console.log(String(failed.stack || failed));
-  process.exit(1);
-}
-log('passed');
+await finish(browser, serve, failed, log);
