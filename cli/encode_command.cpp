@@ -126,8 +126,9 @@ int runEncode(const EncodeArgs& args) {
     video->commit();
     if (progress) fmt::print(stderr, "\n");
     if (!args.quiet)
-        fmt::print(stderr, "deltagi: wrote {} ({} frames {}:{}, {}x{}, {:.6g} frames/s{})\n", args.video.string(),
-                   inputs.size(), indices.front(), indices.back() + 1, width, height, args.settings.fps,
+        fmt::print(stderr, "deltagi: wrote {} ({} frames {}:{}, {}x{}, {:.6g} frames/s{})\n",
+                   args.video.string(), inputs.size(), indices.front(), indices.back() + 1, width, height,
+                   args.settings.fps,
                    isY4m(args.video) ? ", uncompressed" : fmt::format(", CRF {}", args.settings.crf));
     return 0;
 }

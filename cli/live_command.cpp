@@ -66,7 +66,8 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
                         "The light camera, the same kinds: each frame becomes the environment, through the "
                         "scene's \"environment\" projection, rotation and intensity");
     command->add_option("-o,--output", args.output, "The augmented frames (out/frame_####.png)");
-    command->add_option("--video", args.video, "The augmented frames as an H.264 MP4 (.mp4) or uncompressed (.y4m)");
+    command->add_option("--video", args.video,
+                        "The augmented frames as an H.264 MP4 (.mp4) or uncompressed (.y4m)");
     command->add_option("--json", args.json, "Each frame's latency, drops, pose and stage times (JSON)");
     command->add_flag(
         "--realtime", args.realtime,
@@ -82,6 +83,7 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
             "Seconds a frame without markers keeps the last pose (default 0.5); then the camera image "
             "is shown as it is")
         ->check(CLI::Range(0.0, 60.0));
+    addMaxSpeedOption(*command, args.tracking);
     command
         ->add_option("--light-smoothing", args.lightSmoothingSeconds,
                      "Time constant of the light camera's averaging, in seconds (default 0.15)")

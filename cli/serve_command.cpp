@@ -71,6 +71,13 @@ class Client {
     // The camera frames this client sent (numbered from 1); civetweb reads one connection's messages on one
     // thread.
     int64_t cameraFrames = 0;
+    // A message arriving in fragments (read on that thread too).
+    struct Fragments {
+        int opcode = 0;
+        std::string data;
+        size_t size = 0;
+        bool open = false;
+    } fragments;
 
     void reply(std::string text) {
         std::lock_guard lock(mutex_);
@@ -181,7 +188,10 @@ class Server {
     int onRequest(mg_connection* connection);
     bool acceptWebSocket(const mg_connection* connection);
     void onReady(mg_connection* connection);
-    void onMessage(mg_connection* connection, int opcode, const char* data, size_t size);
+    // One WebSocket frame: a message, or a fragment of one (civetweb hands fragments on as they come;
+    // browsers fragment large binary messages).
+    void onFrame(mg_connection* connection, int bits, const char* data, size_t size);
+    void onMessage(const std::shared_ptr<Client>& client, int opcode, const char* data, size_t size);
     void onClose(const mg_connection* connection);
     std::string lastLog;
 
@@ -336,7 +346,9 @@ void Server::onReady(mg_connection* connection) {
     if (latestFrame_) client->frame(latestFrame_);
 }
 
-void Server::onMessage(mg_connection* connection, int opcode, const char* data, size_t size) {
+// A message in fragments is put together here, bounded by the largest message of its kind: the rest of an
+// oversized one is dropped as it comes, and the message is refused as an unfragmented one of its size is.
+void Server::onFrame(mg_connection* connection, int bits, const char* data, size_t size) {
     std::shared_ptr<Client> client;
     {
         std::lock_guard lock(clientsMutex_);
@@ -344,6 +356,34 @@ void Server::onMessage(mg_connection* connection, int opcode, const char* data, 
         if (it == clients_.end()) return;
         client = it->second;
     }
+    const int opcode = bits & 0xf;
+    const bool final = (bits & 0x80) != 0;
+    Client::Fragments& f = client->fragments;
+    if (opcode != MG_WEBSOCKET_OPCODE_CONTINUATION) {
+        if (final) {
+            onMessage(client, opcode, data, size);
+            return;
+        }
+        f = Client::Fragments{opcode, {}, 0, true};
+    } else if (!f.open) {
+        return;  // a continuation of nothing
+    }
+    const size_t limit =
+        f.opcode == MG_WEBSOCKET_OPCODE_BINARY ? kMaxCameraFrameBytes : live::kMaxMessageBytes;
+    f.size += size;
+    if (f.size <= limit) f.data.append(data, size);
+    if (!final) return;
+    f.open = false;
+    if (f.size > limit) {
+        const std::string nothing;
+        onMessage(client, f.opcode, nothing.data(), f.size);  // refused by its size, no bytes read
+    } else {
+        onMessage(client, f.opcode, f.data.data(), f.data.size());
+    }
+    f.data = std::string();
+}
+
+void Server::onMessage(const std::shared_ptr<Client>& client, int opcode, const char* data, size_t size) {
     if (opcode == MG_WEBSOCKET_OPCODE_BINARY) {
         onCameraFrame(client, data, size);
         return;
@@ -395,9 +435,10 @@ bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFra
         return false;
     };
     if (!tracker_)
-        return fail(fmt::format("{}: markers: the scene places no marker to register the camera by "
-                                "(docs/scene-format.md, \"markers\")",
-                                args_.scene.string()));
+        return fail(
+            fmt::format("{}: markers: the scene places no marker to register the camera by "
+                        "(docs/scene-format.md, \"markers\")",
+                        args_.scene.string()));
     const Clock::time_point start = Clock::now();
     try {
         image = live::decodeCameraFrame(input.jpeg, cameraSize_.first, cameraSize_.second);
@@ -416,14 +457,15 @@ bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFra
             {"dropped", dropped},
             {"registration", state},
             {"markers_seen", tracked.markersSeen},
-            {"decode_ms", std::round(std::chrono::duration<double, std::milli>(decoded - start).count() * 100.0) /
-                              100.0},
+            {"decode_ms",
+             std::round(std::chrono::duration<double, std::milli>(decoded - start).count() * 100.0) / 100.0},
             {"track_ms", std::round(trackMs * 100.0) / 100.0}};
     if (tracked.state == TrackedFrame::State::Registered)
         info["reprojection_error_px"] = std::round(tracked.reprojectionErrorPx * 1e4) / 1e4;
     if (tracked.state != TrackedFrame::State::Lost) {  // where the camera is, smoothed (world units)
         const glm::vec3 p(tracked.worldFromCamera[3]);
-        info["position"] = {std::round(p.x * 1e5) / 1e5, std::round(p.y * 1e5) / 1e5, std::round(p.z * 1e5) / 1e5};
+        info["position"] = {std::round(p.x * 1e5) / 1e5, std::round(p.y * 1e5) / 1e5,
+                            std::round(p.z * 1e5) / 1e5};
     }
     return true;
 }
@@ -591,8 +633,9 @@ void Server::renderLoop() {
             auto frame = std::make_shared<Frame>();
             frame->number = ++frameNumber;
             const Image& picture = rendered ? rendered->composite : *unregistered;
-            frame->jpeg = live::encodeJpeg(rendered ? live::viewPixels(*rendered, view) : encodeSrgb8(picture),
-                                           picture.width(), picture.height(), args_.jpegQuality);
+            frame->jpeg =
+                live::encodeJpeg(rendered ? live::viewPixels(*rendered, view) : encodeSrgb8(picture),
+                                 picture.width(), picture.height(), args_.jpegQuality);
             const double encodeMs =
                 std::chrono::duration<double, std::milli>(Clock::now() - encodeStart).count();
             json info = {{"type", "frame"},
@@ -686,7 +729,7 @@ int Server::run() {
             const int opcode = bits & 0xf;
             if (opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
             if (opcode == MG_WEBSOCKET_OPCODE_PING || opcode == MG_WEBSOCKET_OPCODE_PONG) return 1;
-            static_cast<Server*>(self)->onMessage(c, opcode, data, size);
+            static_cast<Server*>(self)->onFrame(c, bits, data, size);
             return 1;
         },
         [](const mg_connection* c, void* self) { static_cast<Server*>(self)->onClose(c); }, this);

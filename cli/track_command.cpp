@@ -64,6 +64,15 @@ void checkFrameSize(const FrameSource& source, const Camera& camera, const fs::p
                                                     camera.width, camera.height));
 }
 
+void addMaxSpeedOption(CLI::App& command, TrackingOptions& tracking) {
+    command
+        .add_option("--max-speed", tracking.maxSpeed,
+                    "Within the hold time, a pose from no more markers than the last frame's that moves the "
+                    "camera faster than this (world units per second; default 2) is not trusted: the last pose "
+                    "stands in (0: every pose is taken)")
+        ->check(CLI::Range(0.0, 1e6));
+}
+
 CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args) {
     CLI::App* command = app.add_subcommand(
         "track", "Register a video by the scene's markers into a transforms file for `render` (a sequence)");
@@ -88,6 +97,7 @@ CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args) {
             "--hold", args.tracking.holdSeconds,
             "Seconds a frame without markers keeps the last pose (default 0.5); later ones are left out")
         ->check(CLI::Range(0.0, 60.0));
+    addMaxSpeedOption(*command, args.tracking);
     command
         ->add_option("--min-cutoff", args.tracking.smoothing.minCutoffHz,
                      "The pose filter's cut-off for a still camera, in Hz (default 1; lower is steadier)")

@@ -27,6 +27,9 @@ struct TrackArgs {
 
 CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args);
 
+// --max-speed, shared with `live`: TrackingOptions::maxSpeed.
+void addMaxSpeedOption(CLI::App& command, TrackingOptions& tracking);
+
 // Throws InputError naming the source when its frames are not of `camera`'s size (the scene camera's
 // intrinsics, from `sceneFile`, must be those of the frames); `live` checks its camera so too.
 void checkFrameSize(const FrameSource& source, const Camera& camera, const std::filesystem::path& sceneFile);

@@ -75,10 +75,11 @@ bool isY4m(const fs::path& path) {
 void checkVideoPath(const fs::path& path, const std::string& option) {
     const std::string ext = lowerExtension(path);
     if (ext != ".mp4" && ext != ".y4m")
-        throw InputError(path.string(),
-                         fmt::format("{} writes an H.264 video in an MP4 file (.mp4) or uncompressed frames in a "
-                                     "YUV4MPEG2 file (.y4m): got '{}'",
-                                     option, path.extension().string()));
+        throw InputError(
+            path.string(),
+            fmt::format("{} writes an H.264 video in an MP4 file (.mp4) or uncompressed frames in a "
+                        "YUV4MPEG2 file (.y4m): got '{}'",
+                        option, path.extension().string()));
 }
 
 void checkVideoEncoder(const fs::path& path, const std::string& option) {
@@ -119,7 +120,8 @@ VideoWriter::VideoWriter(const fs::path& destination, int width, int height, Vid
     checkVideoEncoder(destination, "--video");
     // Y4M: the raw frames, which libavformat's muxer takes wrapped in packets.
     const AVCodec* encoder = y4m ? avcodec_find_encoder(AV_CODEC_ID_WRAPPED_AVFRAME) : h264Encoder();
-    if (!encoder) fail("cannot start the Y4M file: this FFmpeg has no wrapped_avframe encoder", AVERROR(EINVAL));
+    if (!encoder)
+        fail("cannot start the Y4M file: this FFmpeg has no wrapped_avframe encoder", AVERROR(EINVAL));
     const bool x264 = std::string(encoder->name) == "libx264";
     const char* container = y4m ? "Y4M" : "MP4";
     const AVRational rate = av_d2q(settings.fps, 1001000);
@@ -129,8 +131,8 @@ VideoWriter::VideoWriter(const fs::path& destination, int width, int height, Vid
     ff.encodedHeight = (height + 1) & ~1;
 
     const std::string temporary = file_.temporaryPath().string();
-    int error = avformat_alloc_output_context2(&ff.format, nullptr, y4m ? "yuv4mpegpipe" : "mp4",
-                                               temporary.c_str());
+    int error =
+        avformat_alloc_output_context2(&ff.format, nullptr, y4m ? "yuv4mpegpipe" : "mp4", temporary.c_str());
     if (error < 0 || !ff.format) fail(fmt::format("cannot start the {} file", container), error);
     ff.format->flags |= AVFMT_FLAG_BITEXACT;  // no version strings or times: the same frames, the same file
 
@@ -265,7 +267,8 @@ void VideoWriter::commit() {
     if (error < 0) fail("cannot finish the video", error);
     writePackets();
     error = av_write_trailer(ff.format);
-    if (error < 0) fail(fmt::format("cannot finish the {} file", isY4m(file_.destination()) ? "Y4M" : "MP4"), error);
+    if (error < 0)
+        fail(fmt::format("cannot finish the {} file", isY4m(file_.destination()) ? "Y4M" : "MP4"), error);
     error = avio_closep(&ff.format->pb);
     if (error < 0) fail("cannot write file", error);
     file_.commit();

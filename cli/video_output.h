@@ -35,9 +35,9 @@ void checkVideoEncoder(const std::filesystem::path& path, const std::string& opt
 // the PNG writer does: clamped to [0, 1], sRGB transfer function); they are converted to YUV 4:2:0 (limited
 // range, BT.709 for an MP4, BT.601 for a Y4M; an odd width or height is padded by repeating the last column
 // or row) and, for an MP4, encoded with libx264 at `settings.crf` (preset medium, no macroblock-tree rate
-// control, one thread, bit-exact: the same frames give the same file, byte for byte). The file is written to a temporary beside `destination` and
-// renamed into place by commit(); a failure or an interruption before then leaves the previous file, if any,
-// as it was.
+// control, one thread, bit-exact: the same frames give the same file, byte for byte). The file is written to
+// a temporary beside `destination` and renamed into place by commit(); a failure or an interruption before
+// then leaves the previous file, if any, as it was.
 class VideoWriter {
   public:
     VideoWriter(const std::filesystem::path& destination, int width, int height, VideoSettings settings);

@@ -642,7 +642,8 @@ Image decodeCameraFrame(std::string_view jpeg, int width, int height) {
     OIIO::ImageSpec spec;
     if (!input || !input->open("frame.jpg", spec, config)) {
         const std::string reason = firstLine(input ? input->geterror() : OIIO::geterror());
-        throw InputError(where, fmt::format("cannot decode the JPEG image{}", reason.empty() ? "" : ": " + reason));
+        throw InputError(where,
+                         fmt::format("cannot decode the JPEG image{}", reason.empty() ? "" : ": " + reason));
     }
     // The header's size is checked before any pixel is decoded.
     if (spec.width != width || spec.height != height)
@@ -652,13 +653,15 @@ Image decodeCameraFrame(std::string_view jpeg, int width, int height) {
         throw InputError(where, fmt::format("{} channels: expected RGB or grey", spec.nchannels));
     std::vector<uint8_t> pixels(static_cast<size_t>(width) * height * spec.nchannels);
     if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data()))
-        throw InputError(where, fmt::format("cannot decode the JPEG image: {}", firstLine(input->geterror())));
+        throw InputError(where,
+                         fmt::format("cannot decode the JPEG image: {}", firstLine(input->geterror())));
     const std::array<float, 256>& linear = srgb8ToLinearValues();
     Image image(width, height, 3);
     std::span<float> out = image.data();
     const size_t count = static_cast<size_t>(width) * height;
     for (size_t i = 0; i < count; ++i)
-        for (int c = 0; c < 3; ++c) out[i * 3 + c] = linear[pixels[i * spec.nchannels + (spec.nchannels == 3 ? c : 0)]];
+        for (int c = 0; c < 3; ++c)
+            out[i * 3 + c] = linear[pixels[i * spec.nchannels + (spec.nchannels == 3 ? c : 0)]];
     return image;
 }
 

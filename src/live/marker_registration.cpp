@@ -548,8 +548,21 @@ TrackedFrame MarkerTracker::track(const Image& frame, double timeSeconds) {
     out.unknownTags = found.unknown;
     out.tooSmall = found.tooSmall;
     const std::optional<glm::mat4> previous = lastSeen_ ? std::optional<glm::mat4>(lastRaw_) : std::nullopt;
-    if (std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers_, camera_, previous)) {
+    std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers_, camera_, previous);
+    const bool recent = lastSeen_ && timeSeconds - *lastSeen_ <= options_.holdSeconds;
+    // More markers than the last registered frame saw fix the camera better than it was: always taken.
+    if (pose && recent && options_.maxSpeed > 0.0 && pose->markersSeen <= lastMarkersSeen_) {
+        constexpr double kSlack = 0.01;
+        const double moved = glm::distance(glm::dvec3(pose->worldFromCamera[3]), glm::dvec3(lastRaw_[3]));
+        if (moved > options_.maxSpeed * std::max(timeSeconds - *lastSeen_, 0.0) + kSlack) {
+            out.jumped = true;
+            out.markersSeen = pose->markersSeen;
+            pose.reset();
+        }
+    }
+    if (pose) {
         lastRaw_ = pose->worldFromCamera;
+        lastMarkersSeen_ = pose->markersSeen;
         out.state = TrackedFrame::State::Registered;
         out.worldFromCamera = filter_.filter(pose->worldFromCamera, timeSeconds);
         out.reprojectionErrorPx = pose->reprojectionErrorPx;
@@ -558,7 +571,7 @@ TrackedFrame MarkerTracker::track(const Image& frame, double timeSeconds) {
         lastPose_ = out.worldFromCamera;
         return out;
     }
-    if (lastSeen_ && timeSeconds - *lastSeen_ <= options_.holdSeconds) {
+    if (recent) {
         out.state = TrackedFrame::State::Held;
         out.worldFromCamera = lastPose_;
         return out;

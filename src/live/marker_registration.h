@@ -112,6 +112,12 @@ class PoseFilter {
 struct TrackingOptions {
     PoseSmoothing smoothing;
     double holdSeconds = 0.5;  // how long the last pose stands in when no marker is seen
+    // A pose from no more markers than the last registered frame's that would have moved the camera faster
+    // than this (world units per second, metres in the examples; plus 1 cm) since that frame, within the
+    // hold time, is not trusted: the frame is held. One small marker seen alone leaves the tilt uncertain,
+    // and a little corner noise (a JPEG's) can put the camera tens of centimetres off for a frame or two. 0:
+    // every pose is taken.
+    double maxSpeed = 2.0;
 };
 
 struct TrackedFrame {
@@ -125,6 +131,7 @@ struct TrackedFrame {
     double reprojectionErrorPx = 0.0;  // of the unsmoothed solution (Registered only)
     int markersSeen = 0;
     int unknownTags = 0, tooSmall = 0;
+    bool jumped = false;  // Held because the markers' pose moved the camera faster than maxSpeed
 };
 
 class MarkerTracker {
@@ -142,6 +149,7 @@ class MarkerTracker {
     std::optional<double> lastSeen_;
     glm::mat4 lastPose_{1.0f};  // smoothed
     glm::mat4 lastRaw_{1.0f};   // as solved
+    int lastMarkersSeen_ = 0;
 };
 
 }  // namespace deltagi

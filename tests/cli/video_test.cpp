@@ -1,5 +1,6 @@
-// `deltagi render --video` and `deltagi encode`: the MP4 (and the Y4M) decoded back with libavformat/libavcodec has the
-// frames, their size and their colours; the same frames give the same file; outputs are atomic.
+// `deltagi render --video` and `deltagi encode`: the MP4 (and the Y4M) decoded back with
+// libavformat/libavcodec has the frames, their size and their colours; the same frames give the same file;
+// outputs are atomic.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -250,7 +251,8 @@ TEST_F(VideoTest, EncodeChecksItsFrames) {
 // size and rate, each frame's colour the PNG's within 4:2:0's rounding (BT.601, limited range); the same
 // frames give the same file.
 TEST_F(VideoTest, EncodeWritesY4m) {
-    const std::array<std::array<float, 3>, 3> colours = {{{0.8f, 0.1f, 0.05f}, {0.1f, 0.6f, 0.2f}, {0.2f, 0.3f, 0.9f}}};
+    const std::array<std::array<float, 3>, 3> colours = {
+        {{0.8f, 0.1f, 0.05f}, {0.1f, 0.6f, 0.2f}, {0.2f, 0.3f, 0.9f}}};
     for (int i = 0; i < 3; ++i) {
         Image image(10, 6, 3);
         for (int y = 0; y < 6; ++y)
@@ -263,7 +265,8 @@ TEST_F(VideoTest, EncodeWritesY4m) {
     ASSERT_EQ(runCli(encode), 0) << errors();
     const std::string bytes = text(dir_ / "camera.y4m");
     EXPECT_TRUE(bytes.starts_with("YUV4MPEG2 W10 H6 F15:1")) << bytes.substr(0, 60);
-    EXPECT_EQ(bytes.size(), bytes.find('\n') + 1 + 3 * (6 + 10 * 6 * 3 / 2)) << "3 frames of 'FRAME\\n' + I420";
+    EXPECT_EQ(bytes.size(), bytes.find('\n') + 1 + 3 * (6 + 10 * 6 * 3 / 2))
+        << "3 frames of 'FRAME\\n' + I420";
     const Decoded video = decode(dir_ / "camera.y4m", true);
     EXPECT_EQ(video.width, 10);
     EXPECT_EQ(video.height, 6);
@@ -271,7 +274,8 @@ TEST_F(VideoTest, EncodeWritesY4m) {
     ASSERT_EQ(video.means.size(), 3u);
     for (int i = 0; i < 3; ++i) {
         const std::array<double, 3> want = srgbMean(readImage(dir_ / ("f_" + std::to_string(i) + ".png")));
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(video.means[i][c], want[c], 2.5) << "frame " << i << " channel " << c;
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(video.means[i][c], want[c], 2.5) << "frame " << i << " channel " << c;
     }
     ASSERT_EQ(runCli(encode + " --crf 30"), 0) << errors();  // the CRF is an MP4's
     EXPECT_EQ(text(dir_ / "camera.y4m"), bytes);

@@ -438,7 +438,8 @@ TEST(LiveSessionImages, CameraFramesAreJpegsOfTheCamerasSize) {
     for (int y : {4, 19})
         for (int x : {4, 27})
             for (int c = 0; c < 3; ++c)
-                EXPECT_NEAR(back[(y * 32 + x) * 3 + c], rgb[(y * 32 + x) * 3 + c], 3) << x << "," << y << "," << c;
+                EXPECT_NEAR(back[(y * 32 + x) * 3 + c], rgb[(y * 32 + x) * 3 + c], 3)
+                    << x << "," << y << "," << c;
     const auto refused = [](const std::string& bytes, int w, int h, const std::string& part) {
         try {
             decodeCameraFrame(bytes, w, h);

@@ -246,6 +246,42 @@ TEST(MarkerTracker, HoldsTheLastPoseForAWhileThenSaysItIsLost) {
     EXPECT_EQ(tiny.tooSmall, 1);
 }
 
+// A pose that would move the camera faster than TrackingOptions::maxSpeed since the last registered frame is
+// not trusted while the last pose is held; once the hold is over, the markers' pose is taken again.
+TEST(MarkerTracker, HoldsThroughAPoseThatJumps) {
+    const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f))};
+    const Camera here = markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0.0f, 0.0f, 0.0f});
+    const Camera there = markerCamera(320, 240, 40.0f, {0.1f, 0.8f, 0.6f}, {0.0f, 0.0f, 0.0f});  // 22 cm
+    TrackingOptions options;
+    options.holdSeconds = 0.2;
+    MarkerTracker tracker(markers, here, options);
+    const TrackedFrame seen = tracker.track(renderMarkerFrame(here, markers), 0.0);
+    ASSERT_EQ(seen.state, TrackedFrame::State::Registered);
+    const Image far = renderMarkerFrame(there, markers);
+    const TrackedFrame jumped = tracker.track(far, 1.0 / 30.0);
+    EXPECT_EQ(jumped.state, TrackedFrame::State::Held);
+    EXPECT_TRUE(jumped.jumped);
+    EXPECT_EQ(jumped.markersSeen, 1);
+    EXPECT_EQ(jumped.worldFromCamera, seen.worldFromCamera);
+    // 0.1 s later 2 m/s allows 21 cm: still too far.
+    EXPECT_EQ(tracker.track(far, 0.1).state, TrackedFrame::State::Held);
+    // After the hold, the pose is taken.
+    const TrackedFrame taken = tracker.track(far, 0.3);
+    EXPECT_EQ(taken.state, TrackedFrame::State::Registered);
+    EXPECT_FALSE(taken.jumped);
+    EXPECT_LT(glm::distance(glm::vec3(taken.worldFromCamera[3]), there.position()), 0.01f);
+    // More markers than the last frame saw are taken whatever the jump.
+    const std::vector<Marker> two = {markers[0], floorMarker(4, 0.12f, glm::vec3(0.2f, 0.0f, 0.0f))};
+    MarkerTracker more(two, here, options);
+    ASSERT_EQ(more.track(renderMarkerFrame(here, markers), 0.0).state, TrackedFrame::State::Registered);
+    EXPECT_EQ(more.track(renderMarkerFrame(there, two), 1.0 / 30.0).state, TrackedFrame::State::Registered);
+    // With the gate off, a jump is taken at once.
+    options.maxSpeed = 0.0;
+    MarkerTracker open(markers, here, options);
+    ASSERT_EQ(open.track(renderMarkerFrame(here, markers), 0.0).state, TrackedFrame::State::Registered);
+    EXPECT_EQ(open.track(far, 1.0 / 30.0).state, TrackedFrame::State::Registered);
+}
+
 TEST(MarkerRegistration, RefusesNothingToSolveFrom) {
     const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f))};
     Camera camera = markerCamera(320, 240, 40.0f, {0.3f, 0.8f, 0.5f}, {0.0f, 0.0f, 0.0f});
