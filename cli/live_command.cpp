@@ -19,6 +19,7 @@
 #include "live/light_camera.h"
 #include "messages.h"
 #include "outputs.h"
+#include "serve_command.h"
 #include "track_command.h"
 
 namespace fs = std::filesystem;
@@ -90,10 +91,34 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
         ->check(CLI::Range(1e-3, 60.0));
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     command->add_flag("-q,--quiet", args.quiet, "Print nothing but errors");
+    CLI::Option* serve = command->add_flag("--serve", args.serve,
+                      "Show the frames in the browser page of `deltagi serve` (objects dragged there, stage "
+                      "times charted) instead of writing them");
+    command->add_option("--port", args.port, "With --serve: the TCP port (default 8080; 0: any free one, printed)")
+        ->check(CLI::Range(0, 65535))
+        ->needs(serve);
+    command->add_option("--host", args.host, "With --serve: the address to listen on (default 127.0.0.1)")
+        ->needs(serve);
     return command;
 }
 
 int runLive(const LiveArgs& args) {
+    if (args.serve) {
+        if (!args.output.empty() || !args.video.empty() || !args.json.empty())
+            throw InputError("live", "--serve shows the frames in the browser; -o, --video and --json are for a "
+                                     "run without it");
+        ServeArgs serve;
+        serve.scene = args.scene;
+        serve.overrides = args.overrides;
+        serve.host = args.host;
+        serve.port = args.port;
+        serve.camera = args.camera;
+        serve.lightCamera = args.lightCamera;
+        serve.patternFps = args.patternFps;
+        serve.lightSmoothingSeconds = args.lightSmoothingSeconds;
+        serve.tracking = args.tracking;
+        return runServe(serve);
+    }
     if (args.output.empty() && args.video.empty() && args.json.empty())
         throw InputError("live",
                          "nothing to write: give -o FRAME_####.png, --video OUT.mp4 and/or --json OUT.json");

@@ -31,6 +31,10 @@ struct LiveArgs {
     std::vector<std::string> overrides;
     VideoSettings videoSettings;
     bool quiet = false;
+    // --serve: the frames in the browser page instead (`deltagi serve` with this camera), on this address.
+    bool serve = false;
+    std::string host = "127.0.0.1";
+    int port = 8080;
 };
 
 CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args);

@@ -31,11 +31,16 @@
 #include <tbb/global_control.h>
 #include <nlohmann/json.hpp>
 
+#include "deltagi/environment.h"
 #include "deltagi/error.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
+#include "live/frame_source.h"
+#include "live/light_camera.h"
 #include "live/live_session.h"
 #include "live/marker_registration.h"
+#include "messages.h"
+#include "track_command.h"
 #include "web_assets.h"
 
 namespace deltagi::cli {
@@ -158,11 +163,13 @@ bool isLoopback(const std::string& host) {
 
 // A scene-camera frame waiting for the render thread.
 struct CameraInput {
-    std::string jpeg;
+    std::string jpeg;            // from a page
+    std::optional<Image> image;  // from the server's own camera (live --serve), decoded
     Clock::time_point arrived;
+    double timeSeconds = 0.0;  // for the pose filter: the source's timestamp, or the arrival
     std::weak_ptr<Client> client;
-    int clientId = 0;
-    int64_t number = 0;  // the client's count
+    int clientId = 0;    // 0: the server's own camera
+    int64_t number = 0;  // the client's count, or the source's frame number + 1
 };
 
 // The newest registered camera frame, which the frames are rendered over until the next.
@@ -178,7 +185,7 @@ class Server {
   public:
     Server(const ServeArgs& args) : args_(args), session_(args.scene, args.overrides) {
         const Scene& scene = session_.scene();
-        if (!scene.markers.empty()) tracker_.emplace(scene.markers, scene.camera, TrackingOptions{});
+        if (!scene.markers.empty()) tracker_.emplace(scene.markers, scene.camera, args.tracking);
         cameraSize_ = {scene.camera.width, scene.camera.height};
     }
 
@@ -202,6 +209,12 @@ class Server {
                        json& info);
     void renderLoop();
     void handleMessages();
+    // `live --serve`: open the sources (InputError before the server starts), then read them on threads of
+    // their own into cameraInput_ and pendingEnvironment_.
+    void openFeeds();
+    void readCamera();
+    void readLight();
+    void stopWithError(std::exception_ptr error);
     void publishState();
     bool hostAllowed(const mg_connection* connection) const;
 
@@ -215,6 +228,16 @@ class Server {
     bool latestRefined_ = false;
     std::optional<CameraInput> cameraInput_;  // the newest camera frame not yet taken by the render thread
     int64_t cameraDropped_ = 0;               // camera frames replaced by a newer one before being taken
+    std::shared_ptr<const Environment> pendingEnvironment_;  // the light camera's newest, not yet taken
+    int64_t lightFrames_ = 0;
+    double environmentMs_ = 0.0;  // the newest light frame's averaging and light extraction
+    std::exception_ptr feedError_;  // a source that failed: the server stops and reports it
+
+    // The server's own sources (live --serve) and their readers.
+    std::optional<FrameFeed> cameraFeed_, lightFeed_;
+    std::optional<LightCamera> lightCamera_;
+    std::thread cameraReader_, lightReader_;
+    std::atomic<bool> stopReading_{false};
 
     // The render thread's own.
     std::optional<MarkerTracker> tracker_;  // when the scene places markers
@@ -340,7 +363,9 @@ void Server::onReady(mg_connection* connection) {
         clients_[connection] = client;
     }
     json hello = {{"type", "hello"}, {"client", client->id()}};
-    client->reply(hello.dump());
+    // The server's own camera (live --serve): the page shows its frames and offers none of its own.
+    if (cameraFeed_) hello["camera"] = cameraFeed_->source().name();
+    client->reply(hello.dump(-1, ' ', false, json::error_handler_t::replace));
     std::lock_guard lock(sessionMutex_);
     client->state(std::make_shared<const std::string>(session_.state().dump()));
     if (latestFrame_) client->frame(latestFrame_);
@@ -418,7 +443,13 @@ void Server::onCameraFrame(const std::shared_ptr<Client>& client, const char* da
                           .dump());
         return;
     }
-    CameraInput input{std::string(data, size), Clock::now(), client, client->id(), number};
+    CameraInput input;
+    input.jpeg.assign(data, size);
+    input.arrived = Clock::now();
+    input.timeSeconds = std::chrono::duration<double>(input.arrived - started_).count();
+    input.client = client;
+    input.clientId = client->id();
+    input.number = number;
     std::lock_guard lock(sessionMutex_);
     if (cameraInput_) ++cameraDropped_;
     cameraInput_ = std::move(input);
@@ -440,14 +471,17 @@ bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFra
                         "(docs/scene-format.md, \"markers\")",
                         args_.scene.string()));
     const Clock::time_point start = Clock::now();
-    try {
-        image = live::decodeCameraFrame(input.jpeg, cameraSize_.first, cameraSize_.second);
-    } catch (const InputError& e) {
-        return fail(e.message());
+    if (input.image) {
+        image = *input.image;
+    } else {
+        try {
+            image = live::decodeCameraFrame(input.jpeg, cameraSize_.first, cameraSize_.second);
+        } catch (const InputError& e) {
+            return fail(e.message());
+        }
     }
     const Clock::time_point decoded = Clock::now();
-    const double seconds = std::chrono::duration<double>(input.arrived - started_).count();
-    tracked = tracker_->track(image, seconds);
+    tracked = tracker_->track(image, input.timeSeconds);
     const double trackMs = std::chrono::duration<double, std::milli>(Clock::now() - decoded).count();
     const char* state = tracked.state == TrackedFrame::State::Registered ? "markers"
                         : tracked.state == TrackedFrame::State::Held     ? "held"
@@ -468,6 +502,82 @@ bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFra
                             std::round(p.z * 1e5) / 1e5};
     }
     return true;
+}
+
+void Server::openFeeds() {
+    if (args_.camera.empty()) return;
+    const Scene& scene = session_.scene();
+    if (!tracker_)
+        throw InputError(args_.scene.string(), "markers: the scene places no marker to register the camera by");
+    cameraFeed_.emplace(openFrameSource(args_.camera, args_.patternFps), true);
+    checkFrameSize(cameraFeed_->source(), scene.camera, args_.scene);
+    if (!args_.lightCamera.empty()) {
+        lightCamera_.emplace(args_.scene, args_.overrides, args_.lightSmoothingSeconds);
+        lightFeed_.emplace(openFrameSource(args_.lightCamera, args_.patternFps), true);
+    }
+}
+
+void Server::stopWithError(std::exception_ptr error) {
+    std::lock_guard lock(sessionMutex_);
+    if (!feedError_) feedError_ = error;
+    stop_ = true;
+    changed_.notify_all();
+}
+
+// Each frame of the server's camera goes where a page's would; one that a newer replaces before the render
+// thread took it is dropped. Files are replayed at their timestamps' pace, as a camera would give them.
+void Server::readCamera() {
+    constexpr auto kPoll = std::chrono::milliseconds(100);
+    int64_t frames = 0;
+    try {
+        while (!stopReading_) {
+            std::optional<FrameFeed::Arrival> arrival = cameraFeed_->takeUntil(Clock::now() + kPoll);
+            if (!arrival) {
+                if (!cameraFeed_->ended()) continue;
+                note("deltagi: {}: ended after {} frames; the session goes on over the last\n",
+                     cameraFeed_->source().name(), frames);
+                return;
+            }
+            ++frames;
+            CameraInput input;
+            input.image = std::move(arrival->frame.image);
+            input.arrived = arrival->arrived;
+            input.timeSeconds = arrival->frame.timeSeconds;
+            input.number = arrival->frame.index + 1;
+            std::lock_guard lock(sessionMutex_);
+            cameraDropped_ += arrival->dropped + (cameraInput_ ? 1 : 0);
+            cameraInput_ = std::move(input);
+            changed_.notify_all();
+        }
+    } catch (...) {
+        stopWithError(std::current_exception());
+    }
+}
+
+// Each light-camera frame, averaged with those before it, becomes the environment of the next frame.
+void Server::readLight() {
+    constexpr auto kPoll = std::chrono::milliseconds(100);
+    try {
+        while (!stopReading_) {
+            std::optional<FrameFeed::Arrival> arrival = lightFeed_->takeUntil(Clock::now() + kPoll);
+            if (!arrival) {
+                if (!lightFeed_->ended()) continue;
+                note("deltagi: {}: ended; the session goes on in its last light\n", lightFeed_->source().name());
+                return;
+            }
+            const Clock::time_point start = Clock::now();
+            auto environment = std::make_shared<const Environment>(lightCamera_->environment(
+                std::move(arrival->frame.image), arrival->frame.timeSeconds, lightFeed_->source().name()));
+            const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+            std::lock_guard lock(sessionMutex_);
+            pendingEnvironment_ = std::move(environment);
+            ++lightFrames_;
+            environmentMs_ = ms;
+            changed_.notify_all();
+        }
+    } catch (...) {
+        stopWithError(std::current_exception());
+    }
 }
 
 void Server::handleMessages() {
@@ -524,7 +634,10 @@ void Server::renderLoop() {
     uint64_t frameNumber = 0;
     bool layers = false;
     std::optional<LiveCamera> camera;  // the last registered camera frame, once a page sent one
+    std::shared_ptr<const Environment> environment;  // the light camera's newest (live --serve)
+    bool interactiveLit = false, fullLit = false;    // whether the two scenes have it
     for (;;) {
+        json lightInfo;
         bool refining = false, sameOptions = false;
         int scale = 1;  // the interactive frames at 1 / scale of the camera's width and height
         View view;
@@ -537,7 +650,7 @@ void Server::renderLoop() {
             std::unique_lock lock(sessionMutex_);
             for (;;) {
                 if (stop_) return;
-                if (session_.version() != interactiveVersion || cameraInput_) break;
+                if (session_.version() != interactiveVersion || cameraInput_ || pendingEnvironment_) break;
                 if (!refined) {
                     if (Clock::now() >= lastChange + kRefineDelay) break;
                     changed_.wait_until(lock, lastChange + kRefineDelay);
@@ -547,6 +660,13 @@ void Server::renderLoop() {
             }
             cameraInput.swap(cameraInput_);
             cameraDropped = cameraDropped_;
+            const bool newLight = pendingEnvironment_ != nullptr;
+            if (newLight) {
+                environment = std::move(pendingEnvironment_);
+                pendingEnvironment_.reset();
+                interactiveLit = fullLit = false;
+                lightInfo = {{"frames", lightFrames_}, {"environment_ms", std::round(environmentMs_ * 100.0) / 100.0}};
+            }
             const Scene& scene = session_.scene();
             view = session_.view();
             layers = live::viewNeedsLayers(view);
@@ -565,10 +685,11 @@ void Server::renderLoop() {
             // image even with the scene's own options, so the idle refinement renders that one.
             sameOptions =
                 scale == 1 && optionsToJson(wanted) == optionsToJson(own) && own.render.temporalFrames <= 1;
-            if (session_.version() != interactiveVersion || cameraInput) {
+            if (session_.version() != interactiveVersion || cameraInput || newLight) {
                 if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
                     live::interactiveScene(scene, wanted, scale, interactive);
                     interactiveStructure = session_.structureVersion();
+                    interactiveLit = false;
                 } else {
                     interactive.virtuals = scene.virtuals;
                 }
@@ -581,6 +702,7 @@ void Server::renderLoop() {
                     full = scene;
                     full.options = own;
                     fullStructure = session_.structureVersion();
+                    fullLit = false;
                 } else {
                     full.virtuals = scene.virtuals;
                 }
@@ -606,6 +728,12 @@ void Server::renderLoop() {
                 std::lock_guard lock(sessionMutex_);
                 session_.setCameraPose(tracked.worldFromCamera);  // drags pick as this camera sees
             }
+        }
+        // The light camera's environment, in the scene about to be rendered.
+        if (environment && !unregistered) {
+            bool& lit = refining ? fullLit : interactiveLit;
+            if (!lit) setEnvironment(refining ? full : interactive, *environment);
+            lit = true;
         }
         // The frames are rendered from the registered camera, over its image.
         if (camera && !unregistered) {
@@ -658,6 +786,7 @@ void Server::renderLoop() {
                     100.0;
                 info["camera"] = cameraInfo;
             }
+            if (!lightInfo.is_null()) info["light"] = lightInfo;
             frame->info = info.dump();
             auto composite = std::make_shared<const Image>(rendered ? std::move(rendered->composite)
                                                                     : std::move(*unregistered));
@@ -686,6 +815,7 @@ void Server::renderLoop() {
 int Server::run() {
     for (const std::string& warning : session_.scene().warnings)
         fmt::print(stderr, "deltagi: warning: {}\n", warning);
+    openFeeds();
     if (!isLoopback(args_.host))
         fmt::print(stderr,
                    "deltagi: warning: listening on {}: anyone who can reach this machine there can watch and "
@@ -736,10 +866,16 @@ int Server::run() {
 
     std::thread handler([this] { handleMessages(); });
     std::thread renderer([this] { renderLoop(); });
+    if (cameraFeed_) cameraReader_ = std::thread([this] { readCamera(); });
+    if (lightFeed_) lightReader_ = std::thread([this] { readLight(); });
     const std::string shown = args_.host.find(':') != std::string::npos ? "[" + args_.host + "]" : args_.host;
     fmt::print("deltagi serve: http://{}:{}/ ({}; Ctrl-C stops)\n", shown, port_, args_.scene.string());
     std::fflush(stdout);
-    renderer.join();  // runs until SIGINT or SIGTERM ends the process (cli/outputs.cpp)
+    // Runs until SIGINT or SIGTERM ends the process (cli/outputs.cpp), or a source of live --serve fails.
+    renderer.join();
+    stopReading_ = true;
+    for (std::thread* reader : {&cameraReader_, &lightReader_})
+        if (reader->joinable()) reader->join();
     {
         std::lock_guard lock(inboxMutex_);
         stopHandler_ = true;
@@ -748,6 +884,7 @@ int Server::run() {
     handler.join();
     mg_stop(context);
     mg_exit_library();
+    if (feedError_) std::rethrow_exception(feedError_);
     return 0;
 }
 

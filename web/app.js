@@ -7,16 +7,16 @@ const $ = (id) => document.getElementById(id);
 const canvas = $('frame');
 const context = canvas.getContext('2d');
 const live = (window.deltagi = {
-    client: 0,
-    state: null,
-    frames: 0,       // frames drawn
-    lastInfo: null,  // the info of the last frame drawn
-    shownTimes: [],  // performance.now() of each frame drawn
-    latencies: [],   // per mouse event of a drag: ms to the first frame drawn that shows it
-    drawn: [],       // per frame drawn: [performance.now(), frame ms, refined, stages, JPEG ms]
-    errors: [],
-    // The user's camera: frames sent, and per picture drawn over one of them the ms from its capture.
-    camera: {sent: 0, shown: 0, latencies: [], info: null},
+  client: 0,
+  state: null,
+  frames: 0,          // frames drawn
+  lastInfo: null,     // the info of the last frame drawn
+  shownTimes: [],     // performance.now() of each frame drawn
+  latencies: [],      // per mouse event of a drag: ms to the first frame drawn that shows it
+  drawn: [],          // per frame drawn: [performance.now(), frame ms, refined, stages, JPEG ms]
+  errors: [],
+  // The user's camera: frames sent, and per picture drawn over one of them the ms from its capture.
+  camera: { sent: 0, shown: 0, latencies: [], info: null },
 });
 let socket = null;
 let seq = 0;
@@ -61,11 +61,15 @@ function connect() {
     }
     const message = JSON.parse(event.data);
     if (message.type === 'hello') {
-        live.client = message.client;
-        camera.number = 0;  // the server counts a new connection's camera frames from 1
-        camera.inFlight.clear();
-    } else if (message.type === 'state')
-        applyState(message);
+      live.client = message.client;
+      camera.number = 0;  // the server counts a new connection's camera frames from 1
+      camera.inFlight.clear();
+      // The server reads a camera of its own (deltagi live --serve): its frames come, the page sends none.
+      live.serverCamera = message.camera || null;
+      $('camera-toggle').hidden = Boolean(live.serverCamera);
+      if (live.serverCamera) $('camera-status').textContent = `the server's camera: ${live.serverCamera}`;
+    }
+    else if (message.type === 'state') applyState(message);
     else if (message.type === 'error') {
       showError(message.message);
       const refused = /^camera frame (\d+):/.exec(message.message);
@@ -108,7 +112,7 @@ async function draw(blob, info) {
   live.drawn.push([now, info.timings.total_ms, info.refined, info.timings.stages, info.encode_ms]);
   if (live.shownTimes.length > 10000) live.shownTimes.splice(0, 5000);
   if (live.drawn.length > 10000) live.drawn.splice(0, 5000);
-  if (info.camera && info.camera.client === live.client) cameraShown(info, now);
+  if (info.camera && (info.camera.client === live.client || info.camera.client === 0)) cameraShown(info, now);
   awaiting = awaiting.filter((drag) => {
     if (drag.number > info.number) return true;
     for (const t of drag.inputs) live.latencies.push(now - t);
@@ -337,113 +341,104 @@ for (const control of document.querySelectorAll('[data-option]')) {
 const kCameraQuality = 0.85;
 const kCameraInFlight = 2;
 const kCameraTimeout = 2000;  // ms after which an unanswered frame no longer holds the next back
-const camera = {
-    stream: null,
-    video: null,
-    canvas: null,
-    number: 0,
-    inFlight: new Map(),
-    waiting: false
-};
+const camera = { stream: null, video: null, canvas: null, number: 0, inFlight: new Map(), waiting: false };
 
 function cameraAnswered(number) {
-    const sent = camera.inFlight.get(number);
-    if (sent) sent.answered = true;
-    if (camera.waiting) sendCameraFrame();
+  const sent = camera.inFlight.get(number);
+  if (sent) sent.answered = true;
+  if (camera.waiting) sendCameraFrame();
 }
 
+// A frame drawn over a camera frame: the page's own (the latency from its capture) or the server's (from its
+// arrival in the server to the JPEG sent, what the server measures).
 function cameraShown(info, now) {
-    const sent = camera.inFlight.get(info.camera.number);
-    if (sent) live.camera.latencies.push(now - sent.captured);
-    if (live.camera.latencies.length > 10000) live.camera.latencies.splice(0, 5000);
-    for (const n of camera.inFlight.keys())
-        if (n <= info.camera.number) camera.inFlight.delete(n);
-    live.camera.shown += 1;
-    live.camera.info = info.camera;
-    const c = info.camera;
-    const registration = c.registration === 'markers' ?
-        `registered by ${c.markers_seen} marker${c.markers_seen === 1 ? '' : 's'} (${
-            c.reprojection_error_px.toFixed(2)} px)` :
-        c.registration === 'held' ? 'no marker: the last pose' :
-                                    'no marker: the camera image as it is';
-    const latency = median(live.camera.latencies.slice(-30));
-    $('camera-status').textContent = `${registration} · ${latency.toFixed(0)} ms from capture to picture ` +
-        `(median of the last 30) · ${c.dropped} dropped`;
+  const own = info.camera.client !== 0;
+  const sent = own ? camera.inFlight.get(info.camera.number) : null;
+  if (sent) live.camera.latencies.push(now - sent.captured);
+  if (!own) live.camera.latencies.push(info.camera.latency_ms);
+  if (live.camera.latencies.length > 10000) live.camera.latencies.splice(0, 5000);
+  if (own) for (const n of camera.inFlight.keys()) if (n <= info.camera.number) camera.inFlight.delete(n);
+  live.camera.shown += 1;
+  live.camera.info = info.camera;
+  const c = info.camera;
+  const registration = c.registration === 'markers'
+    ? `registered by ${c.markers_seen} marker${c.markers_seen === 1 ? '' : 's'} (${c.reprojection_error_px.toFixed(2)} px)`
+    : c.registration === 'held' ? 'no marker: the last pose' : 'no marker: the camera image as it is';
+  const latency = median(live.camera.latencies.slice(-30));
+  $('camera-status').textContent = `${own ? '' : `${live.serverCamera}: `}${registration} · ` +
+    `${latency.toFixed(0)} ms from ${own ? 'capture to picture' : 'arrival to JPEG'} (median of the last 30) · ` +
+    `${c.dropped} dropped` + (info.light ? ` · light frame ${info.light.frames}` : '');
 }
 
 function sendCameraFrame() {
-    if (!camera.stream || !live.state || !socket || socket.readyState !== WebSocket.OPEN) return;
-    const now = performance.now();
-    for (const [n, sent] of camera.inFlight)
-        if (now - sent.captured > kCameraTimeout) camera.inFlight.delete(n);
-    const unanswered = [...camera.inFlight.values()].filter((sent) => !sent.answered).length;
-    if (unanswered >= kCameraInFlight || camera.video.readyState < 2) {
-        camera.waiting = true;
-        return;
-    }
-    camera.waiting = false;
-    const {width, height} = live.state;
-    if (camera.canvas.width !== width || camera.canvas.height !== height) {
-        camera.canvas.width = width;
-        camera.canvas.height = height;
-    }
-    const captured = performance.now();
-    camera.canvas.getContext('2d').drawImage(camera.video, 0, 0, width, height);
-    const number = ++camera.number;
-    camera.inFlight.set(number, {captured, answered: false});
-    camera.canvas.toBlob((blob) => {
-        if (!blob || !socket || socket.readyState !== WebSocket.OPEN) return;
-        socket.send(blob);
-        live.camera.sent += 1;
-    }, 'image/jpeg', kCameraQuality);
+  if (!camera.stream || !live.state || !socket || socket.readyState !== WebSocket.OPEN) return;
+  const now = performance.now();
+  for (const [n, sent] of camera.inFlight) if (now - sent.captured > kCameraTimeout) camera.inFlight.delete(n);
+  const unanswered = [...camera.inFlight.values()].filter((sent) => !sent.answered).length;
+  if (unanswered >= kCameraInFlight || camera.video.readyState < 2) {
+    camera.waiting = true;
+    return;
+  }
+  camera.waiting = false;
+  const { width, height } = live.state;
+  if (camera.canvas.width !== width || camera.canvas.height !== height) {
+    camera.canvas.width = width;
+    camera.canvas.height = height;
+  }
+  const captured = performance.now();
+  camera.canvas.getContext('2d').drawImage(camera.video, 0, 0, width, height);
+  const number = ++camera.number;
+  camera.inFlight.set(number, { captured, answered: false });
+  camera.canvas.toBlob((blob) => {
+    if (!blob || !socket || socket.readyState !== WebSocket.OPEN) return;
+    socket.send(blob);
+    live.camera.sent += 1;
+  }, 'image/jpeg', kCameraQuality);
 }
 
 function onVideoFrame() {
-    if (!camera.video) return;
-    sendCameraFrame();
-    camera.video.requestVideoFrameCallback(onVideoFrame);
+  if (!camera.video) return;
+  sendCameraFrame();
+  camera.video.requestVideoFrameCallback(onVideoFrame);
 }
 
 async function startCamera() {
-    if (!live.state) return;
-    if (!navigator.mediaDevices || !navigator.mediaDevices.getUserMedia) {
-        showError(
-            'camera: the browser gives pages a camera only over https or from this machine ' +
-            '(http://localhost or http://127.0.0.1)');
-        return;
-    }
-    const {width, height} = live.state;
-    try {
-        camera.stream = await navigator.mediaDevices.getUserMedia(
-            {video: {width: {ideal: width}, height: {ideal: height}}, audio: false});
-    } catch (e) {
-        showError(`camera: ${e.name}: ${e.message}`);
-        return;
-    }
-    camera.video = document.createElement('video');
-    camera.video.muted = true;
-    camera.video.playsInline = true;
-    camera.video.srcObject = camera.stream;
-    await camera.video.play();
-    camera.canvas = document.createElement('canvas');
-    const vw = camera.video.videoWidth, vh = camera.video.videoHeight;
-    // The scene camera's intrinsics hold for its own aspect: another one is stretched, and registers badly.
-    if (Math.abs(vw * height - vh * width) > Math.max(vw, width))
-        showError(
-            `camera: the camera gives ${vw}x${vh}, the scene camera is ${width}x${height}: ` +
-            'the frames are stretched to it, and the markers register badly; calibrate the scene camera at this size');
-    $('camera-toggle').textContent = 'stop the camera';
-    camera.video.requestVideoFrameCallback(onVideoFrame);
+  if (!live.state) return;
+  if (!navigator.mediaDevices || !navigator.mediaDevices.getUserMedia) {
+    showError('camera: the browser gives pages a camera only over https or from this machine ' +
+      '(http://localhost or http://127.0.0.1)');
+    return;
+  }
+  const { width, height } = live.state;
+  try {
+    camera.stream = await navigator.mediaDevices.getUserMedia(
+      { video: { width: { ideal: width }, height: { ideal: height } }, audio: false });
+  } catch (e) {
+    showError(`camera: ${e.name}: ${e.message}`);
+    return;
+  }
+  camera.video = document.createElement('video');
+  camera.video.muted = true;
+  camera.video.playsInline = true;
+  camera.video.srcObject = camera.stream;
+  await camera.video.play();
+  camera.canvas = document.createElement('canvas');
+  const vw = camera.video.videoWidth, vh = camera.video.videoHeight;
+  // The scene camera's intrinsics hold for its own aspect: another one is stretched, and registers badly.
+  if (Math.abs(vw * height - vh * width) > Math.max(vw, width))
+    showError(`camera: the camera gives ${vw}x${vh}, the scene camera is ${width}x${height}: ` +
+      'the frames are stretched to it, and the markers register badly; calibrate the scene camera at this size');
+  $('camera-toggle').textContent = 'stop the camera';
+  camera.video.requestVideoFrameCallback(onVideoFrame);
 }
 
 function stopCamera() {
-    if (camera.stream)
-        for (const track of camera.stream.getTracks()) track.stop();
-    camera.stream = null;
-    camera.video = null;
-    camera.inFlight.clear();
-    camera.waiting = false;
-    $('camera-toggle').textContent = 'use my camera';
+  if (camera.stream) for (const track of camera.stream.getTracks()) track.stop();
+  camera.stream = null;
+  camera.video = null;
+  camera.inFlight.clear();
+  camera.waiting = false;
+  $('camera-toggle').textContent = 'use my camera';
 }
 $('camera-toggle').onclick = () => (camera.stream ? stopCamera() : startCamera());
 

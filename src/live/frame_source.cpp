@@ -303,6 +303,19 @@ std::optional<FrameFeed::Arrival> FrameFeed::poll() {
     return std::nullopt;
 }
 
+std::optional<FrameFeed::Arrival> FrameFeed::takeUntil(Clock::time_point deadline) {
+    std::unique_lock lock(mutex_);
+    changed_.wait_until(lock, deadline, [&] { return newest_.has_value() || ended_; });
+    if (newest_) return takeLocked(lock);
+    if (ended_ && error_) std::rethrow_exception(error_);
+    return std::nullopt;
+}
+
+bool FrameFeed::ended() const {
+    std::lock_guard lock(mutex_);
+    return ended_ && !newest_;
+}
+
 int FrameFeed::droppedTotal() const {
     std::lock_guard lock(mutex_);
     return droppedTotal_;

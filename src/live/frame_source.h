@@ -68,6 +68,11 @@ class FrameFeed {
     std::optional<Arrival> take();
     // The newest frame if one arrived since the last take(), without waiting; nothing otherwise.
     std::optional<Arrival> poll();
+    // As take(), waiting at most until `deadline`: nothing when no frame came by then or the source has
+    // ended (ended() tells which).
+    std::optional<Arrival> takeUntil(Clock::time_point deadline);
+    // The source has ended (or failed, which take() rethrows) and every frame was taken.
+    bool ended() const;
     const FrameSource& source() const { return *source_; }
     int droppedTotal() const;
 

@@ -179,5 +179,32 @@ TEST_F(LiveTest, RefusesWhatItCannotRun) {
     EXPECT_TRUE(temporaries().empty());
 }
 
+// `live --serve` refuses what it cannot run before it listens, and a camera that fails mid-run (a frame of
+// another size, as a device that changes mode) ends it with one line naming the source and exit 1.
+TEST_F(LiveTest, ServeRefusesWhatItCannotRun) {
+    const std::string camera = writeCapture();
+    const std::string live = "live " + quote(liveScene().string()) + " --camera " + quote(camera);
+    CliResult r = run(live + " --serve --port 0 -o " + quote((dir_ / "f_####.png").string()));
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("--serve shows the frames in the browser"), std::string::npos) << r.err;
+    r = run(live + " --port 0 --json " + quote((dir_ / "s.json").string()));
+    EXPECT_EQ(r.exitCode, 2);
+    EXPECT_NE(r.err.find("--port requires --serve"), std::string::npos) << r.err;
+    json unmarked = json::parse(readText(liveScene()));
+    unmarked.erase("markers");
+    r = run("live " + quote(writeScene(unmarked, "unmarked.json").string()) + " --camera " + quote(camera) +
+            " --serve --port 0");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("markers: the scene places no marker"), std::string::npos) << r.err;
+    EXPECT_EQ(r.out.find("http://"), std::string::npos) << "listened: " << r.out;
+    writeImage(Image(80, 60, 3, 0.5f), dir_ / "in" / "frame_0003.png");
+    r = run(live + " --serve --port 0");
+    EXPECT_EQ(r.exitCode, 1);
+    EXPECT_NE(r.err.find("frame_0003.png: the frames changed size: 80x60, the first was 160x120"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+}
+
 }  // namespace
 }  // namespace deltagi::test

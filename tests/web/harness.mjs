@@ -41,10 +41,10 @@ export function logger() {
   return { log, check };
 }
 
-// `deltagi serve` with `serverArgs` after the scene (--port 0 added): {server, url, exit (a promise of
-// {code, signal}), stderr() (what it printed so far)}.
-export async function startServer(deltagi, scene, serverArgs, log) {
-  const all = ['serve', scene, '--port', '0', ...serverArgs];
+// `deltagi COMMAND...` that serves the page (`serve SCENE ...`, `live SCENE --serve ...`; --port 0 added):
+// {server, url, exit (a promise of {code, signal}), stderr() (what it printed so far)}.
+export async function startServer(deltagi, command, log) {
+  const all = [...command, '--port', '0'];
   log(`${deltagi} ${all.join(' ')}`);
   const server = spawn(deltagi, all, { stdio: ['ignore', 'pipe', 'pipe'] });
   let stderr = '';

@@ -5,7 +5,8 @@
 // markers and renders the objects over it. Checks: the frames are registered, the camera's position is the
 // capture's true one, the objects are in the picture (the mask view), a frame that is not a JPEG of the
 // camera's size is refused with one line, and once the camera stops the idle frame is rendered from the last
-// registered pose. Prints the frames shown per second and the capture-to-picture latency (figures, not
+// registered pose. Then `deltagi live --serve` reads the capture itself, with a light camera, and the page shows
+// its frames registered. Prints the frames shown per second and the capture-to-picture latency (figures, not
 // asserted).
 //
 //   node tests/web/live_camera.mjs --deltagi build/deltagi --capture out/live-capture \
@@ -61,11 +62,12 @@ const truth = JSON.parse(fs.readFileSync(path.join(args.capture, 'truth.json'), 
 const distanceToTruth = (p) => Math.min(...truth.map((t) => Math.hypot(p[0] - t[0], p[1] - t[1], p[2] - t[2])));
 
 // ---- the server and the browser with its fake camera -------------------------------------------------------------
-const serve = await startServer(args.deltagi, path.join(args.capture, 'scene.json'),
-  args.sets.flatMap((s) => ['--set', s]), log);
+const scene = path.join(args.capture, 'scene.json');
+const serve = await startServer(args.deltagi, ['serve', scene, ...args.sets.flatMap((s) => ['--set', s])], log);
 const browser = await launch(['--use-fake-ui-for-media-stream', '--use-fake-device-for-media-stream',
   `--use-file-for-fake-video-capture=${y4m}`]);
 let failed = null;
+let second = null;  // the server of `live --serve`
 const median = (v) => (v.length ? [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)] : NaN);
 try {
   const page = await browser.newPage({ viewport: { width: 1280, height: 1000 } });
@@ -171,7 +173,52 @@ try {
     bytes.set([0xff, 0xd8, 0xff, 0xe0]);
     socket.send(bytes);
   }, '^camera frame \\d+: cannot decode', 'a cut JPEG');
+  await page.close();
+
+  // ---- `deltagi live --serve`: the server's own camera and light camera, shown in the page -----------------------
+  // The light camera's two frames are printed markers taken as fish-eye skies: a light that changes. The
+  // frames come at 2 per second: with the sky's extracted lights each is a frame of the real light anew
+  // (docs/live.md).
+  fs.mkdirSync(path.join(out, 'light'), { recursive: true });
+  for (const [i, id] of [[0, 5], [1, 6]])
+    execFileSync(args.deltagi, ['marker', String(id), '--size', '0.1', '-o', path.join(out, 'light', `frame_000${i}.png`), '--quiet']);
+  const environment = JSON.stringify({ file: path.join(out, 'light', 'frame_0000.png'), projection: 'fisheye' });
+  second = await startServer(args.deltagi, ['live', scene, '--camera', path.join(args.capture, 'camera/frame_####.png'),
+    '--light-camera', path.join(out, 'light/frame_####.png'), '--fps', '2', '--serve',
+    '--set', `environment=${environment}`, ...args.sets.flatMap((s) => ['--set', s])], log);
+  const served = await browser.newPage({ viewport: { width: 1280, height: 1000 } });
+  served.on('pageerror', (e) => { failed = failed || new Error(`page error: ${e.message}`); });
+  await served.goto(second.url);
+  const seen = [];
+  let lit = 0;
+  const until = Date.now() + 60000;
+  while (Date.now() < until && seen.length < 6) {
+    await served.waitForTimeout(50);
+    const info = await served.evaluate(() => window.deltagi.lastInfo);
+    if (info && info.light) lit = Math.max(lit, info.light.frames);
+    if (info && info.camera && (!seen.length || seen[seen.length - 1].number !== info.camera.number)) seen.push(info.camera);
+  }
+  const pageCamera = await served.evaluate(() => ({
+    hidden: document.getElementById('camera-toggle').hidden,
+    status: document.getElementById('camera-status').textContent,
+  }));
+  check(pageCamera.hidden && pageCamera.status.includes('frame_####.png'),
+    `the page shows the server's camera and offers none of its own: "${pageCamera.status}"`);
+  const servedRegistered = seen.filter((i) => i.registration === 'markers' && i.client === 0);
+  check(servedRegistered.length >= 0.75 * seen.length && seen.length >= 4,
+    `${servedRegistered.length} of ${seen.length} of the server camera's frames shown registered by markers`);
+  const servedOffsets = servedRegistered.map((i) => distanceToTruth(i.position));
+  check(median(servedOffsets) < 0.015, `their camera position median ${(100 * median(servedOffsets)).toFixed(2)} cm from the truth`);
+  check(lit >= 1, `frames lit by the light camera's frames (up to frame ${lit})`);
 } catch (e) {
   failed = e;
+} finally {
+  if (second) second.server.kill('SIGTERM');
+}
+if (second) {
+  const exit = await second.exit;
+  if (!failed && !(exit.code === 143 || exit.signal === 'SIGTERM'))
+    failed = new Error(`deltagi live --serve ended with ${JSON.stringify(exit)}: ${second.stderr()}`);
+  if (second.stderr().trim()) console.log(`live --serve stderr:\n${second.stderr().trim()}`);
 }
 await finish(browser, serve, failed, log);

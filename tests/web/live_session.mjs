@@ -36,7 +36,7 @@ fs.mkdirSync(out, { recursive: true });
 const { log, check } = logger();
 
 // ---- the server ------------------------------------------------------------------------------------------
-const serve = await startServer(args.deltagi, args.scene, [...args.sets.flatMap((s) => ['--set', s]),
+const serve = await startServer(args.deltagi, ['serve', args.scene, ...args.sets.flatMap((s) => ['--set', s]),
   ...(args.interactiveScale ? ['--interactive-scale', args.interactiveScale] : [])], log);
 const { server, url } = serve;
 
