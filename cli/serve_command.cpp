@@ -11,6 +11,7 @@
 // which registers it by the scene's markers and renders the objects over it from the registered pose.
 #include "serve_command.h"
 
+#include <arpa/inet.h>
 #include <civetweb.h>
 
 #include <algorithm>
@@ -161,6 +162,14 @@ bool isLoopback(const std::string& host) {
     return host == "127.0.0.1" || host == "localhost" || host == "::1" || host == "[::1]";
 }
 
+// An IPv4 address, or an IPv6 one in brackets.
+bool isAddress(const std::string& name) {
+    in6_addr address{};
+    if (name.size() > 2 && name.front() == '[' && name.back() == ']')
+        return inet_pton(AF_INET6, name.substr(1, name.size() - 2).c_str(), &address) == 1;
+    return inet_pton(AF_INET, name.c_str(), &address) == 1;
+}
+
 // A scene-camera frame waiting for the render thread.
 struct CameraInput {
     std::string jpeg;            // from a page
@@ -261,19 +270,29 @@ class Server {
     int port_ = 0;
 };
 
-// The Host header names this server (a page of another site reaching the loopback server through a DNS name
-// that points to 127.0.0.1 does not), and a WebSocket's Origin, when given, is this server's page.
+// Whatever address the server listens on, a request's Host names it by an address (a page of another site
+// reaches it by an address only as itself: a site whose DNS name is made to point here, to read the session
+// through the user's browser, sends that name), by "localhost" or by a name the user allowed (--allow-host),
+// with this server's port or none; and a WebSocket's Origin, when given, is this server's page
+// ("http://" + Host): a page of another site cannot open the session's socket.
 bool Server::hostAllowed(const mg_connection* connection) const {
-    if (!isLoopback(args_.host)) return true;  // bound elsewhere on purpose (the warning says so)
-    const char* host = mg_get_header(connection, "Host");
-    if (!host) return false;
-    const std::string h(host);
-    bool ok = false;
-    for (const char* name : {"127.0.0.1", "localhost", "[::1]"})
-        if (h == name || h == fmt::format("{}:{}", name, port_)) ok = true;
-    if (!ok) return false;
+    const char* header = mg_get_header(connection, "Host");
+    if (!header) return false;
+    const std::string host(header);
+    std::string name = host, port;
+    const size_t close = host.find(']');
+    const size_t colon = host.rfind(':');
+    if (colon != std::string::npos && (close == std::string::npos || colon > close)) {
+        name = host.substr(0, colon);
+        port = host.substr(colon + 1);
+    }
+    if (!port.empty() && port != std::to_string(port_)) return false;
+    const bool named = name == "localhost" || isAddress(name) ||
+                       std::find(args_.allowedHosts.begin(), args_.allowedHosts.end(), name) !=
+                           args_.allowedHosts.end();
+    if (!named) return false;
     const char* origin = mg_get_header(connection, "Origin");
-    return !origin || std::string(origin) == "http://" + h;
+    return !origin || std::string(origin) == "http://" + host;
 }
 
 void respond(mg_connection* connection, int status, const char* statusText, const char* type,
@@ -298,7 +317,9 @@ int Server::onRequest(mg_connection* connection) {
     const std::string uri = request->local_uri ? request->local_uri : "";
     const std::string method = request->request_method ? request->request_method : "";
     if (!hostAllowed(connection)) {
-        respond(connection, 403, "Forbidden", "text/plain", "deltagi serve: unexpected Host or Origin\n");
+        respond(connection, 403, "Forbidden", "text/plain",
+                "deltagi serve: unexpected Host or Origin (open the page by this machine's address, "
+                "localhost, or a name given with --allow-host)\n");
         return 403;
     }
     if (method != "GET" && method != "HEAD") {
@@ -316,7 +337,7 @@ int Server::onRequest(mg_connection* connection) {
         std::string text;
         {
             std::lock_guard lock(sessionMutex_);
-            text = session_.document().dump(2) + "\n";
+            text = live::jsonText(session_.document(), 2) + "\n";
         }
         respond(connection, 200, "OK", "application/json", text,
                 "Content-Disposition: attachment; filename=\"scene.json\"\r\n");
@@ -365,9 +386,9 @@ void Server::onReady(mg_connection* connection) {
     json hello = {{"type", "hello"}, {"client", client->id()}};
     // The server's own camera (live --serve): the page shows its frames and offers none of its own.
     if (cameraFeed_) hello["camera"] = cameraFeed_->source().name();
-    client->reply(hello.dump(-1, ' ', false, json::error_handler_t::replace));
+    client->reply(live::jsonText(hello));
     std::lock_guard lock(sessionMutex_);
-    client->state(std::make_shared<const std::string>(session_.state().dump()));
+    client->state(std::make_shared<const std::string>(live::jsonText(session_.state())));
     if (latestFrame_) client->frame(latestFrame_);
 }
 
@@ -414,20 +435,19 @@ void Server::onMessage(const std::shared_ptr<Client>& client, int opcode, const 
         return;
     }
     if (opcode != MG_WEBSOCKET_OPCODE_TEXT) {
-        client->reply(json{{"type", "error"}, {"message", "message: expected a JSON text message"}}.dump());
+        client->reply(live::jsonText(json{{"type", "error"}, {"message", "message: expected a JSON text message"}}));
         return;
     }
     if (size > live::kMaxMessageBytes) {  // refused as the handler refuses it, without a copy
         client->reply(
-            json{{"type", "error"},
-                 {"message", fmt::format("message: {} bytes, more than {}", size, live::kMaxMessageBytes)}}
-                .dump());
+            live::jsonText(json{{"type", "error"},
+                 {"message", fmt::format("message: {} bytes, more than {}", size, live::kMaxMessageBytes)}}));
         return;
     }
     std::lock_guard lock(inboxMutex_);
     if (inbox_.size() >= kMaxWaitingMessages) {
         client->reply(
-            json{{"type", "error"}, {"message", "message: too many messages waiting; dropped"}}.dump());
+            live::jsonText(json{{"type", "error"}, {"message", "message: too many messages waiting; dropped"}}));
         return;
     }
     inbox_.push_back({client, std::string(data, size)});
@@ -437,10 +457,9 @@ void Server::onMessage(const std::shared_ptr<Client>& client, int opcode, const 
 void Server::onCameraFrame(const std::shared_ptr<Client>& client, const char* data, size_t size) {
     const int64_t number = ++client->cameraFrames;
     if (size > kMaxCameraFrameBytes) {
-        client->reply(json{{"type", "error"},
+        client->reply(live::jsonText(json{{"type", "error"},
                            {"message", fmt::format("camera frame {}: {} bytes, more than {}", number, size,
-                                                   kMaxCameraFrameBytes)}}
-                          .dump());
+                                                   kMaxCameraFrameBytes)}}));
         return;
     }
     CameraInput input;
@@ -460,9 +479,8 @@ bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFra
                            json& info) {
     const auto fail = [&](const std::string& message) {
         if (std::shared_ptr<Client> client = input.client.lock())
-            client->reply(json{{"type", "error"},
-                               {"message", fmt::format("camera frame {}: {}", input.number, message)}}
-                              .dump());
+            client->reply(live::jsonText(json{{"type", "error"},
+                               {"message", fmt::format("camera frame {}: {}", input.number, message)}}));
         return false;
     };
     if (!tracker_)
@@ -596,7 +614,7 @@ void Server::handleMessages() {
             result = session_.handle(message.text, message.client->id());
             if (result.changed) changed_.notify_all();
         }
-        if (!result.reply.is_null()) message.client->reply(result.reply.dump());
+        if (!result.reply.is_null()) message.client->reply(live::jsonText(result.reply));
         if (result.changed) publishState();
     }
 }
@@ -617,7 +635,7 @@ void Server::publishState() {
     std::shared_ptr<const std::string> state;
     {
         std::lock_guard lock(sessionMutex_);
-        state = std::make_shared<const std::string>(session_.state().dump());
+        state = std::make_shared<const std::string>(live::jsonText(session_.state()));
     }
     std::lock_guard lock(clientsMutex_);
     for (auto& [connection, client] : clients_) client->state(state);
@@ -787,7 +805,7 @@ void Server::renderLoop() {
                 info["camera"] = cameraInfo;
             }
             if (!lightInfo.is_null()) info["light"] = lightInfo;
-            frame->info = info.dump();
+            frame->info = live::jsonText(info);
             auto composite = std::make_shared<const Image>(rendered ? std::move(rendered->composite)
                                                                     : std::move(*unregistered));
             {
@@ -802,7 +820,7 @@ void Server::renderLoop() {
             // A frame that cannot be rendered (the memory for the volumes, a bad state): every client is
             // told, and the session waits for the next change.
             const std::string text =
-                json{{"type", "error"}, {"message", fmt::format("frame: {}", e.what())}}.dump();
+                live::jsonText(json{{"type", "error"}, {"message", fmt::format("frame: {}", e.what())}});
             interactiveFrames.clear();
             fullFrames.clear();
             std::lock_guard lock(clientsMutex_);
@@ -834,8 +852,10 @@ int Server::run() {
         return 1;
     };
     const char* options[] = {
-        "listening_ports", ports.c_str(),        "num_threads", "40",   "websocket_timeout_ms",
-        "3600000",         "request_timeout_ms", "10000",       nullptr};
+        // A thread per connection: enough for the clients (kMaxClients) and as many slow or idle connections
+        // again, each of which gives up its thread after the request timeout.
+        "listening_ports", ports.c_str(), "num_threads", "128", "websocket_timeout_ms", "3600000",
+        "request_timeout_ms", "5000", nullptr};
     mg_context* context = mg_start(&callbacks, this, options);
     if (!context) {
         mg_exit_library();
@@ -900,6 +920,9 @@ CLI::App* addServeCommand(CLI::App& app, ServeArgs& args, int maxThreads) {
         "--host", args.host,
         "Address to listen on (default 127.0.0.1: this machine only; say 0.0.0.0 to let others "
         "in, with a warning)");
+    command->add_option("--allow-host", args.allowedHosts,
+                        "A host name the page may be opened by, besides this machine's addresses and localhost "
+                        "(repeatable; requests naming others are refused)");
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     command->add_option("--threads", args.threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, maxThreads));

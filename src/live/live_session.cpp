@@ -673,6 +673,10 @@ std::string encodePng(const Image& image) {
     return encode("png", spec, bytes.data());
 }
 
+std::string jsonText(const json& value, int indent) {
+    return value.dump(indent, ' ', false, json::error_handler_t::replace);
+}
+
 json timingsJson(const RenderOutput& output) {
     json stages = json::array();
     for (const StageTiming& t : output.timings) stages.push_back({t.name, std::round(t.ms * 100.0) / 100.0});
