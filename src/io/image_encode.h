@@ -1,9 +1,11 @@
 // The sRGB transfer functions of image_io.cpp, for code outside it: the live session's colour scale (its PNG
-// and JPEG bytes are encodeSrgb8()'s, include/deltagi/image.h) and the textures' decoding (texture.cpp).
+// and JPEG bytes are encodeSrgb8()'s, include/deltagi/image.h) and the textures' decoding (texture.cpp); and
+// the PNG writer's bytes in memory.
 #pragma once
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "deltagi/image.h"
@@ -16,5 +18,9 @@ float linearToSrgbValue(float linear);
 float srgbToLinearValue(float encoded);
 // srgbToLinearValue(i / 255) for every 8-bit value i, the table image_io.cpp reads 8-bit files with.
 const std::array<float, 256>& srgb8ToLinearValues();
+
+// The PNG file writeImage() writes for `image` (8-bit sRGB, encodeSrgb8()'s bytes), in memory. Throws
+// InputError naming `where` when the encoder fails.
+std::string encodePngBytes(const Image& image, const std::string& where);
 
 }  // namespace deltagi

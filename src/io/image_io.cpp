@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <string>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
@@ -186,6 +187,22 @@ void checkOutputFolder(const std::filesystem::path& path) {
 
 }  // namespace
 
+std::string encodePngBytes(const Image& image, const std::string& where) {
+    OIIO::ImageSpec spec(image.width(), image.height(), image.channels(), OIIO::TypeDesc::UINT8);
+    if (image.channels() == 1) spec.channelnames = {"Y"};
+    if (image.channels() == 4) spec.alpha_channel = 3;
+    const std::vector<uint8_t> pixels = encodeSrgb8(image);
+    std::vector<unsigned char> bytes;
+    OIIO::Filesystem::IOVecOutput proxy(bytes);
+    auto output = OIIO::ImageOutput::create("png");
+    if (!output) throw InputError(where, "cannot write image: no PNG encoder: " + OIIO::geterror());
+    output->set_ioproxy(&proxy);
+    const bool ok = output->open("image.png", spec) &&
+                    output->write_image(OIIO::TypeDesc::UINT8, pixels.data()) && output->close();
+    if (!ok) throw InputError(where, "cannot write image: " + output->geterror());
+    return std::string(bytes.begin(), bytes.end());
+}
+
 void writeImage(const Image& image, const std::filesystem::path& path) {
     checkImagePath(image, path);
     checkOutputFolder(path);
@@ -206,9 +223,15 @@ void writeImage(const Image& image, AtomicFile& file) {
         rgbForHdr = toRgb(image.data(), image.width(), image.height(), image.channels());
         source = &rgbForHdr;
     }
+    // A PNG is encoded in memory and written by AtomicFile, which checks every write: OpenImageIO's PNG
+    // writer does not see a full disk, and would leave an empty file.
+    if (ext == ".png") {
+        file.write(encodePngBytes(*source, path.string()));
+        file.close();
+        return;
+    }
     int channels = source->channels();
-    OIIO::ImageSpec spec(source->width(), source->height(), channels,
-                         ext == ".png" ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
+    OIIO::ImageSpec spec(source->width(), source->height(), channels, OIIO::TypeDesc::FLOAT);
     if (channels == 1) spec.channelnames = {"Y"};
     if (channels == 4) spec.alpha_channel = 3;
 
@@ -218,17 +241,11 @@ void writeImage(const Image& image, AtomicFile& file) {
     if (!output || !output->open(temporary, spec))
         throw InputError(path.string(),
                          "cannot write image: " + (output ? output->geterror() : OIIO::geterror()));
-    bool ok;
-    if (ext == ".png") {
-        std::vector<uint8_t> bytes = encodeSrgb8(*source);
-        ok = output->write_image(OIIO::TypeDesc::UINT8, bytes.data());
-    } else {
-        std::vector<float> pixels(source->data().begin(), source->data().end());
-        for (float& v : pixels) v = finiteOrZero(v);
-        if (ext == ".hdr")
-            for (float& v : pixels) v = std::max(v, 0.0f);  // RGBE has no sign
-        ok = output->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
-    }
+    std::vector<float> pixels(source->data().begin(), source->data().end());
+    for (float& v : pixels) v = finiteOrZero(v);
+    if (ext == ".hdr")
+        for (float& v : pixels) v = std::max(v, 0.0f);  // RGBE has no sign
+    bool ok = output->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
     ok = output->close() && ok;
     if (!ok) throw InputError(path.string(), "cannot write image: " + output->geterror());
     file.close();

@@ -666,11 +666,7 @@ Image decodeCameraFrame(std::string_view jpeg, int width, int height) {
 }
 
 std::string encodePng(const Image& image) {
-    OIIO::ImageSpec spec(image.width(), image.height(), image.channels(), OIIO::TypeDesc::UINT8);
-    if (image.channels() == 1) spec.channelnames = {"Y"};
-    if (image.channels() == 4) spec.alpha_channel = 3;
-    const std::vector<uint8_t> bytes = encodeSrgb8(image);
-    return encode("png", spec, bytes.data());
+    return encodePngBytes(image, "live session");
 }
 
 std::string jsonText(const json& value, int indent) {

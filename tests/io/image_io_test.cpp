@@ -1,4 +1,6 @@
 // Image files: round trips, sRGB decoding, and the errors for missing files and non-finite pixels.
+#include <fcntl.h>
+#include <sys/mount.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -196,6 +198,48 @@ TEST(ImageIoSharedDataTest, VeniceSunsetHdrMean) {
     EXPECT_NEAR(mean.x, 0.525, 0.0015);
     EXPECT_NEAR(mean.y, 0.561, 0.0015);
     EXPECT_NEAR(mean.z, 0.662, 0.0015);
+}
+
+// A full disk (a 256 KiB tmpfs, filled; mounting needs root, skipped otherwise): an image that does not fit
+// fails with one error naming the file, and the previous file stays as it was, whatever the format.
+TEST(ImageWrite, AFullDiskKeepsThePreviousFile) {
+    if (geteuid() != 0) GTEST_SKIP() << "mounting a tmpfs needs root";
+    const fs::path dir = fs::temp_directory_path() / ("deltagi-full-disk-" + std::to_string(getpid()));
+    fs::create_directories(dir);
+    if (mount("tmpfs", dir.c_str(), "tmpfs", 0, "size=256k") != 0) {
+        const std::string why = std::strerror(errno);
+        fs::remove_all(dir);
+        GTEST_SKIP() << "cannot mount a tmpfs here: " << why;
+    }
+    Image noise(160, 120, 3);
+    uint32_t state = 12345;
+    for (float& v : noise.data()) {
+        state = state * 1664525u + 1013904223u;
+        v = static_cast<float>(state >> 8) / 16777216.0f;
+    }
+    for (const char* name : {"x.png", "x.exr", "x.hdr"}) {
+        std::ofstream(dir / name) << "previous";
+    }
+    const int fill = ::open((dir / "fill").c_str(), O_WRONLY | O_CREAT, 0644);
+    const std::string block(4096, 'f');
+    while (::write(fill, block.data(), block.size()) > 0) {
+    }
+    ::close(fill);
+    for (const char* name : {"x.png", "x.exr", "x.hdr"}) {
+        try {
+            writeImage(noise, dir / name);
+            ADD_FAILURE() << name << " was written on a full disk";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+        }
+        std::ifstream in(dir / name);
+        EXPECT_EQ(std::string(std::istreambuf_iterator<char>(in), {}), "previous") << name;
+    }
+    size_t files = 0;
+    for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir)) ++files;
+    EXPECT_EQ(files, 4u) << "a temporary was left";
+    umount(dir.c_str());
+    fs::remove_all(dir);
 }
 
 }  // namespace
