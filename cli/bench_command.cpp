@@ -11,6 +11,7 @@
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
 #include "outputs.h"
+#include "validators.h"
 
 namespace deltagi::cli {
 
@@ -28,12 +29,12 @@ CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
     command
         ->add_option("--motion", args.options.motionVoxels,
                      "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still)")
-        ->check(CLI::Range(0.0f, 1000.0f));
+        ->check(finiteRange(0.0, 1000.0));
     command
         ->add_option("--camera-motion", args.options.cameraDegrees,
                      "Move the camera too: swing it up to DEG degrees either way about the objects' centre "
                      "(default 0: still); each pose's photo is rendered first, untimed")
-        ->check(CLI::Range(0.0f, 90.0f));
+        ->check(finiteRange(0.0, 90.0));
     command->add_flag(
         "--live", args.options.live,
         "The live frame: the real light changes every frame too (point and spot lights move, "

@@ -13,6 +13,7 @@
 #include "deltagi/image.h"
 #include "deltagi/scene_io.h"
 #include "outputs.h"
+#include "validators.h"
 
 namespace fs = std::filesystem;
 
@@ -70,7 +71,7 @@ CLI::App* addEncodeCommand(CLI::App& app, EncodeArgs& args) {
                         "The frames A:B (A included, B not); default: every frame found, which must be "
                         "consecutive");
     command->add_option("--fps", args.settings.fps, "Frames per second (default 30)")
-        ->check(CLI::Range(1e-3, kMaxFrameRate));
+        ->check(finiteRange(1e-3, kMaxFrameRate));
     command
         ->add_option("--crf", args.settings.crf,
                      "x264's constant rate factor, 0 (lossless) to 51 (default 18)")

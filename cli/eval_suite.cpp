@@ -11,6 +11,7 @@
 
 #include "deltagi/error.h"
 #include "evaluation/quality_suite.h"
+#include "validators.h"
 
 namespace deltagi::cli {
 
@@ -65,7 +66,7 @@ void addSuiteOptions(CLI::App& eval, SuiteArgs& args) {
                     fmt::format("With --suite: minutes of rendering between a reference's checkpoints, which "
                                 "an interrupted suite goes on from (default {:g}; 0: none)",
                                 kDefaultCheckpointMinutes))
-        ->check(CLI::NonNegativeNumber)
+        ->check(finiteNumber(0.0, false, "a number of minutes >= 0"))
         ->needs("--suite");
 }
 

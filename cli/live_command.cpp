@@ -21,6 +21,7 @@
 #include "outputs.h"
 #include "serve_command.h"
 #include "track_command.h"
+#include "validators.h"
 
 namespace fs = std::filesystem;
 using nlohmann::ordered_json;
@@ -75,7 +76,7 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
         "Replay files at their frames' pace, as a camera would give them: frames that arrive while "
         "one renders are dropped, the newest wins (a device always is)");
     command->add_option("--fps", args.patternFps, "The frame rate of numbered images (default 30)")
-        ->check(CLI::Range(1e-3, 1000.0));
+        ->check(finiteRange(1e-3, 1000.0));
     command->add_option("--max-frames", args.maxFrames, "Stop after this many frames (default: all)")
         ->check(CLI::Range(1, 100000000));
     command
@@ -83,12 +84,12 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
             "--hold", args.tracking.holdSeconds,
             "Seconds a frame without markers keeps the last pose (default 0.5); then the camera image "
             "is shown as it is")
-        ->check(CLI::Range(0.0, 60.0));
+        ->check(finiteRange(0.0, 60.0));
     addMaxSpeedOption(*command, args.tracking);
     command
         ->add_option("--light-smoothing", args.lightSmoothingSeconds,
                      "Time constant of the light camera's averaging, in seconds (default 0.15)")
-        ->check(CLI::Range(1e-3, 60.0));
+        ->check(finiteRange(1e-3, 60.0));
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     command->add_flag("-q,--quiet", args.quiet, "Print nothing but errors");
     CLI::Option* serve = command->add_flag("--serve", args.serve,

@@ -45,6 +45,7 @@
 #include "marker_command.h"
 #include "messages.h"
 #include "outputs.h"
+#include "validators.h"
 #include "serve_command.h"
 #include "stability_command.h"
 #include "track_command.h"
@@ -53,6 +54,8 @@
 namespace fs = std::filesystem;
 using namespace deltagi;
 using cli::checkOutputs;
+using cli::finiteNumber;
+using cli::finiteRange;
 using cli::framePath;
 using cli::OutputFiles;
 using cli::refuseInputs;
@@ -104,25 +107,6 @@ struct CompareArgs {
     bool json = false;
 };
 
-// A finite number, at least `lo` (above it when `open`). CLI11's NonNegativeNumber takes "nan" and prints its
-// range as the largest double in full; this names what is expected instead.
-CLI::Validator finiteNumber(double lo, bool open, const std::string& what) {
-    return CLI::Validator(
-        [=](std::string& text) -> std::string {
-            size_t used = 0;
-            double value = 0.0;
-            try {
-                value = std::stod(text, &used);
-            } catch (const std::exception&) {
-                used = 0;
-            }
-            if (used == 0 || used != text.size() || !std::isfinite(value) ||
-                (open ? value <= lo : value < lo))
-                return fmt::format("expected {}, got '{}'", what, text);
-            return {};
-        },
-        what);
-}
 
 int reportError(const std::string& message, int exitCode) {
     note("deltagi: error: {}\n", oneLine(message));
@@ -588,7 +572,7 @@ int main(int argc, char** argv) {
         ->add_option("--fps", renderArgs.videoSettings.fps,
                      "The video's frames per second (default: the sequence's, sequence.fps or 30)")
         ->check(finiteNumber(0.0, true, "a number of frames per second > 0"))
-        ->check(CLI::Range(0.0, kMaxFrameRate))
+        ->check(finiteRange(0.0, kMaxFrameRate))
         ->needs(videoOption);
     renderCommand
         ->add_option("--crf", renderArgs.videoSettings.crf,

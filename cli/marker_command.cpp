@@ -10,6 +10,7 @@
 #include "live/marker_registration.h"
 #include "messages.h"
 #include "outputs.h"
+#include "validators.h"
 
 namespace fs = std::filesystem;
 
@@ -61,7 +62,7 @@ CLI::App* addMarkerCommand(CLI::App& app, MarkerArgs& args) {
     command->add_option("id", args.id, "The tag's id, 0-586")->required()->check(CLI::Range(0, 586));
     command->add_option("-o,--output", args.output, "marker.pdf (true size) or marker.png")->required();
     command->add_option("--size", args.size, "The black square's side in metres (default 0.12)")
-        ->check(CLI::Range(1e-3, 10.0));
+        ->check(finiteRange(1e-3, 10.0));
     command->add_option("--margin", args.margin, "Cells of extra white paper around the tag (default 1)")
         ->check(CLI::Range(0, 20));
     command->add_option("--pixels-per-cell", args.pixelsPerCell, "PNG pixels per cell (default 32)")

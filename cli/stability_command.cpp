@@ -9,6 +9,7 @@
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
 #include "outputs.h"
+#include "validators.h"
 
 namespace deltagi::cli {
 
@@ -26,17 +27,18 @@ CLI::App* addStabilityCommand(CLI::App& app, StabilityArgs& args, int maxThreads
     command
         ->add_option("--object-step", args.motion.objectStepVoxels,
                      "How far the objects move each frame, in voxels of the volume (default 0.25)")
-        ->check(CLI::Range(0.0f, 1000.0f));
+        ->check(finiteRange(0.0, 1000.0));
     command
         ->add_option("--direction", args.direction, "Direction of the objects' motion X,Y,Z (default 1,0,0)")
         ->delimiter(',')
-        ->expected(3);
+        ->expected(3)
+        ->check(finiteRange(-1e6, 1e6));
     command
         ->add_option(
             "--camera-step", args.motion.cameraStepDeg,
             "Degrees the camera turns each frame about the objects' centre (default 0); the measure then "
             "follows the surface points from frame to frame instead of fixed pixels")
-        ->check(CLI::Range(-45.0f, 45.0f));
+        ->check(finiteRange(-45.0, 45.0));
     command->add_option("--json", args.json, "Also write the figures as JSON here");
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     command->add_option("--threads", args.threads, "Worker threads (default: all cores)")

@@ -13,6 +13,7 @@
 #include "deltagi/scene_io.h"
 #include "live/frame_source.h"
 #include "outputs.h"
+#include "validators.h"
 
 namespace fs = std::filesystem;
 using nlohmann::ordered_json;
@@ -70,7 +71,7 @@ void addMaxSpeedOption(CLI::App& command, TrackingOptions& tracking) {
                     "Within the hold time, a pose from no more markers than the last frame's that moves the "
                     "camera faster than this (world units per second; default 2) is not trusted: the last pose "
                     "stands in (0: every pose is taken)")
-        ->check(CLI::Range(0.0, 1e6));
+        ->check(finiteRange(0.0, 1e6));
 }
 
 CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args) {
@@ -89,24 +90,24 @@ CLI::App* addTrackCommand(CLI::App& app, TrackArgs& args) {
         "--frames-folder", args.framesFolder,
         "Where the frames go as PNG photos, relative to the output's folder (default frames)");
     command->add_option("--fps", args.patternFps, "The frame rate of numbered images (default 30)")
-        ->check(CLI::Range(1e-3, 1000.0));
+        ->check(finiteRange(1e-3, 1000.0));
     command->add_option("--max-frames", args.maxFrames, "Stop after this many frames (default: all)")
         ->check(CLI::Range(1, 1000000));
     command
         ->add_option(
             "--hold", args.tracking.holdSeconds,
             "Seconds a frame without markers keeps the last pose (default 0.5); later ones are left out")
-        ->check(CLI::Range(0.0, 60.0));
+        ->check(finiteRange(0.0, 60.0));
     addMaxSpeedOption(*command, args.tracking);
     command
         ->add_option("--min-cutoff", args.tracking.smoothing.minCutoffHz,
                      "The pose filter's cut-off for a still camera, in Hz (default 1; lower is steadier)")
-        ->check(CLI::Range(1e-3, 1000.0));
+        ->check(finiteRange(1e-3, 1000.0));
     command
         ->add_option("--beta", args.tracking.smoothing.positionBeta,
                      "How fast the filter's cut-off rises with the camera's speed, per world unit per second "
                      "(default 20; higher follows motion with less lag)")
-        ->check(CLI::Range(0.0, 1e6));
+        ->check(finiteRange(0.0, 1e6));
     command->add_flag("--no-smoothing", args.noSmoothing, "Each frame's own pose, unfiltered");
     command->add_flag("-q,--quiet", args.quiet, "Print nothing but errors");
     return command;

@@ -232,6 +232,11 @@ double JsonNode::number(const Interval& range) const {
     if (!std::isfinite(v) || std::abs(v) > std::numeric_limits<float>::max())
         fail("expected a finite number (within the range of a 32-bit float), got " + value_->dump());
     if (!range.contains(v)) fail(fmt::format("expected a number in {}, got {}", range.str(), v));
+    // ... and as the float it becomes: 1e-320 is > 0, but 0 as a float.
+    const double asFloat = static_cast<float>(v);
+    if (!range.contains(asFloat))
+        fail(fmt::format("expected a number in {}, got {}, which is {} as a 32-bit float", range.str(), v,
+                         asFloat));
     return v;
 }
 

@@ -594,4 +594,21 @@ TEST(SceneInfo, VolumeBytesSumsTheMipChain) {
     EXPECT_EQ(deltagi::volumeBytes(128), 16u * (2396745u));  // (8^8 - 1) / 7 voxels
 }
 
+// Numbers on the command line that are not finite are refused before any work, with one line naming the option
+// (CLI11's own range checks take "nan").
+TEST_F(CliTest, OptionsThatAreNotFiniteNumbersAreRefused) {
+    const std::string scene = quote(writeScene(tinyScene(), "scene.json").string());
+    for (const std::string& args : std::vector<std::string>{
+             "bench " + scene + " --motion nan", "bench " + scene + " --camera-motion inf",
+          "stability " + scene + " --object-step nan", "stability " + scene + " --direction 1,nan,0",
+          "eval --suite " + scene + " --checkpoint-minutes nan", "encode f_####.png -o v.mp4 --fps nan",
+          "track v.mp4 --scene " + scene + " -o t.json --max-speed nan", "live " + scene + " --camera v.mp4 --hold -inf",
+          "marker 3 --size nan -o m.png", "render " + scene + " -o x.png --fps nan"}) {
+        const CliResult r = run(args);
+        EXPECT_EQ(r.exitCode, 2) << args << ": " << r.err;
+        EXPECT_EQ(lineCount(r.err), 1u) << args << ": " << r.err;
+        EXPECT_NE(r.err.find("expected a number"), std::string::npos) << args << ": " << r.err;
+    }
+}
+
 }  // namespace
