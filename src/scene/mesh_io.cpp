@@ -5,13 +5,16 @@
 #include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
+#include <nlohmann/json.hpp>
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
@@ -313,7 +316,139 @@ std::string importError(const Assimp::Importer& importer) {
     return error.empty() ? "unknown error" : error;
 }
 
+// The deepest nesting of JSON arrays and objects in `text` (strings skipped).
+size_t jsonDepth(std::string_view text) {
+    size_t depth = 0, deepest = 0;
+    bool inString = false;
+    for (size_t i = 0; i < text.size(); ++i) {
+        const char c = text[i];
+        if (inString) {
+            if (c == '\\') ++i;
+            else if (c == '"') inString = false;
+        } else if (c == '"') {
+            inString = true;
+        } else if (c == '[' || c == '{') {
+            deepest = std::max(deepest, ++depth);
+        } else if ((c == ']' || c == '}') && depth > 0) {
+            --depth;
+        }
+    }
+    return deepest;
+}
+
+// The deepest nesting of XML elements in `text` (comments, declarations and CDATA skipped; roughly: enough to
+// bound what a recursive reader would go through).
+size_t xmlDepth(std::string_view text) {
+    size_t depth = 0, deepest = 0;
+    for (size_t i = text.find('<'); i != std::string_view::npos; i = text.find('<', i + 1)) {
+        if (text.compare(i, 4, "<!--") == 0) {
+            i = text.find("-->", i);
+            if (i == std::string_view::npos) break;
+        } else if (text.compare(i, 9, "<![CDATA[") == 0) {
+            i = text.find("]]>", i);
+            if (i == std::string_view::npos) break;
+        } else if (i + 1 < text.size() && text[i + 1] == '/') {
+            if (depth > 0) --depth;
+        } else if (i + 1 < text.size() && text[i + 1] != '?' && text[i + 1] != '!') {
+            const size_t close = text.find('>', i);
+            if (close == std::string_view::npos) break;
+            if (text[close - 1] != '/') deepest = std::max(deepest, ++depth);
+        }
+    }
+    return deepest;
+}
+
+// The deepest chain of glTF nodes (children), cycles counted as deep; 0 without nodes.
+size_t gltfNodeDepth(const nlohmann::json& document) {
+    const auto nodes = document.find("nodes");
+    if (nodes == document.end() || !nodes->is_array()) return 0;
+    const size_t count = nodes->size();
+    std::vector<size_t> depth(count, 0);  // 0: not yet known
+    std::vector<int> state(count, 0);     // 0 new, 1 on the path, 2 done
+    size_t deepest = 0;
+    for (size_t root = 0; root < count; ++root) {
+        if (state[root] != 0) continue;
+        // Iterative depth-first: (node, next child) pairs.
+        std::vector<std::pair<size_t, size_t>> path{{root, 0}};
+        state[root] = 1;
+        while (!path.empty()) {
+            auto& [node, next] = path.back();
+            const nlohmann::json& entry = (*nodes)[node];
+            const nlohmann::json* children =
+                entry.is_object() && entry.contains("children") ? &entry["children"] : nullptr;
+            if (children && children->is_array() && next < children->size()) {
+                const nlohmann::json& c = (*children)[next++];
+                if (!c.is_number_unsigned() || c.get<uint64_t>() >= count) continue;
+                const size_t child = c.get<size_t>();
+                if (state[child] == 1) return std::numeric_limits<size_t>::max();  // a cycle
+                if (state[child] == 0) {
+                    state[child] = 1;
+                    path.push_back({child, 0});
+                }
+                continue;
+            }
+            size_t d = 1;
+            if (children && children->is_array())
+                for (const nlohmann::json& c : *children)
+                    if (c.is_number_unsigned() && c.get<uint64_t>() < count) d = std::max(d, depth[c.get<size_t>()] + 1);
+            depth[node] = d;
+            state[node] = 2;
+            deepest = std::max(deepest, d);
+            path.pop_back();
+        }
+    }
+    return deepest;
+}
+
 }  // namespace
+
+void checkMeshFileStructure(const std::filesystem::path& file, const std::string& where) {
+    const std::string name = file.filename().string();
+    std::string extension = file.extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    const bool gltf = extension == ".gltf", glb = extension == ".glb",
+               xml = extension == ".dae" || extension == ".xml";
+    if (!gltf && !glb && !xml) return;
+    std::ifstream in(file, std::ios::binary);
+    std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    if (glb) {  // the JSON chunk: 12 bytes of header, its length and type, then the JSON
+        if (text.size() < 20) return;  // Assimp reports it
+        uint32_t length = 0;
+        std::memcpy(&length, text.data() + 12, 4);
+        text = text.substr(20, std::min<size_t>(length, text.size() - 20));
+    }
+    const size_t depth = xml ? xmlDepth(text) : jsonDepth(text);
+    if (depth > kMaxFileNesting)
+        throw InputError(where, fmt::format("'{}' nests {} levels deep, more than the {} this program reads", name,
+                                            depth, kMaxFileNesting));
+    if (xml) return;
+    const nlohmann::json document = nlohmann::json::parse(text, nullptr, false);
+    if (document.is_discarded() || !document.is_object()) return;  // Assimp reports it
+    const size_t nodes = gltfNodeDepth(document);
+    if (nodes > kMaxFileNesting)
+        throw InputError(where, nodes == std::numeric_limits<size_t>::max()
+                                    ? fmt::format("'{}': its nodes are their own children (a cycle)", name)
+                                    : fmt::format("'{}': its nodes nest {} levels deep, more than the {} this "
+                                                  "program reads",
+                                                  name, nodes, kMaxFileNesting));
+    // Files a glTF names (buffers, images): regular files only, or reading one (a FIFO) would wait forever.
+    for (const char* kind : {"buffers", "images"}) {
+        const auto list = document.find(kind);
+        if (list == document.end() || !list->is_array()) continue;
+        for (const nlohmann::json& entry : *list) {
+            if (!entry.is_object() || !entry.contains("uri") || !entry["uri"].is_string()) continue;
+            const std::string uri = entry["uri"].get<std::string>();
+            if (uri.starts_with("data:")) continue;
+            std::error_code error;
+            const std::filesystem::file_status status = std::filesystem::status(file.parent_path() / uri, error);
+            if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+                throw InputError(where, fmt::format("'{}': {} '{}' is not a regular file (a folder, a FIFO, a "
+                                                    "device)",
+                                                    name, std::string(kind) == "buffers" ? "buffer" : "image", uri));
+        }
+    }
+}
 
 void checkMeshFileClaims(const std::filesystem::path& file, const std::string& where, uint64_t memoryBytes) {
     std::error_code error;
@@ -361,6 +496,7 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
 
 std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
                                    const std::string& baseName, std::vector<std::string>* warnings) {
+    checkMeshFileStructure(file, where);
     checkMeshFileClaims(file, where, physicalMemoryBytes());
     Assimp::Importer importer;
     importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, kCreaseAngleDeg);

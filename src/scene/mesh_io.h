@@ -100,6 +100,13 @@ inline constexpr float kCreaseAngleDeg = 80.0f;
 std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
                                    const std::string& baseName, std::vector<std::string>* warnings = nullptr);
 
+// Nesting bounded before a file reaches Assimp, whose readers recurse (a glTF with 20,000 nested nodes or
+// 200,000 '[', a Collada file of 20,000 nested <node>, overflowed the stack): JSON or XML nesting and glTF
+// node chains deeper than kMaxFileNesting, node cycles, and buffers or images of a glTF that are not regular
+// files, each an InputError naming `where` and the file.
+inline constexpr size_t kMaxFileNesting = 1000;
+void checkMeshFileStructure(const std::filesystem::path& file, const std::string& where);
+
 // Run by loadMeshFile before Assimp reads anything: checks the element counts a PLY or OFF header claims
 // against the file's size (a truncated file, or a header claiming 3.5e11 vertices in 300 bytes), and the
 // memory loading the file needs (from those counts, else in proportion to the file's size) against

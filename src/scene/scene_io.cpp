@@ -652,8 +652,15 @@ SceneRead readScene(const json& document, const fs::path& file) {
 }
 
 SceneRead readScene(const fs::path& file, const std::vector<std::string>& overrides) {
+    // Checked before it is opened: opening a FIFO waits for a writer.
+    std::error_code error;
+    const fs::file_status status = fs::status(file, error);
+    if (fs::exists(status) && !fs::is_regular_file(status))
+        throw InputError(file.string(), "cannot open scene file: not a regular file (a folder, a FIFO, a device)");
+    if (error && error != std::errc::no_such_file_or_directory)
+        throw InputError(file.string(), "cannot open scene file: " + error.message());
     std::ifstream in(file, std::ios::binary);
-    if (!fs::is_regular_file(file) || !in) throw InputError(file.string(), "cannot open scene file");
+    if (!fs::is_regular_file(status) || !in) throw InputError(file.string(), "cannot open scene file");
     std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
     json document = parseJson(text, file.string());
     for (const std::string& override : overrides) applyOverride(document, override);

@@ -2,6 +2,7 @@
 // double), mesh files whose headers claim more than they hold, the memory guard, intensities that would
 // overflow the render's floats, and the warnings for scenes that render but not as meant. The bad-input
 // corpus (tests/bad-inputs) runs the same cases through the command line.
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cstdint>
@@ -218,6 +219,41 @@ TEST_F(MeshFileTest, BrokenIndicesAndNonFiniteVerticesAreErrorsNotCrashes) {
     ASSERT_EQ(meshes.size(), 1u);
     EXPECT_EQ(meshes[0].mesh.name, "good");
     EXPECT_EQ(meshes[0].mesh.triangles.size(), 1u);
+}
+
+// Files whose nesting would overflow the stack of Assimp's recursive readers are refused before it reads them
+// (issue 37); so are glTF node cycles and buffers that are not regular files (a FIFO would block the read).
+TEST_F(MeshFileTest, DeepNestingAndFifosAreRefusedBeforeAssimp) {
+    // 20,000 glTF nodes, each the child of the one before.
+    std::string nodes;
+    for (int i = 0; i < 20000; ++i)
+        nodes += (i ? "," : "") + (i + 1 < 20000 ? "{\"children\":[" + std::to_string(i + 1) + "]}" : std::string("{}"));
+    const std::string asset = R"("asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}])";
+    const fs::path chain = write("chain.gltf", "{" + asset + ",\"nodes\":[" + nodes + "]}");
+    expectContains(inputErrorOf([&] { loadMeshFile(chain, "where", "chain"); }),
+                   {"where: 'chain.gltf': its nodes nest 20000 levels deep, more than the 1000"});
+    const fs::path brackets = write("brackets.gltf", "{\"a\":" + std::string(200000, '[') + "}");
+    expectContains(inputErrorOf([&] { loadMeshFile(brackets, "where", "b"); }),
+                   {"'brackets.gltf' nests 200001 levels deep"});
+    const fs::path cycle =
+        write("cycle.gltf", "{" + asset + R"(,"nodes":[{"children":[1]},{"children":[0]}]})");
+    expectContains(inputErrorOf([&] { loadMeshFile(cycle, "where", "c"); }), {"a cycle"});
+    std::string collada = "<?xml version=\"1.0\"?><COLLADA><library_visual_scenes><visual_scene>";
+    for (int i = 0; i < 20000; ++i) collada += "<node>";
+    for (int i = 0; i < 20000; ++i) collada += "</node>";
+    collada += "</visual_scene></library_visual_scenes></COLLADA>";
+    const fs::path dae = write("deep.dae", collada);
+    expectContains(inputErrorOf([&] { loadMeshFile(dae, "where", "d"); }), {"'deep.dae' nests 20003 levels"});
+    // A buffer that is a FIFO.
+    const fs::path fifo = dir_ / "buffer.bin";
+    ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+    const fs::path piped = write("piped.gltf", "{" + asset + R"(,"nodes":[{}],"buffers":[{"uri":"buffer.bin","byteLength":36}]})");
+    expectContains(inputErrorOf([&] { loadMeshFile(piped, "where", "p"); }),
+                   {"'piped.gltf': buffer 'buffer.bin' is not a regular file"});
+    // A scene file that is a FIFO.
+    const fs::path scene = dir_ / "scene.json";
+    ASSERT_EQ(mkfifo(scene.c_str(), 0600), 0);
+    expectContains(inputErrorOf([&] { loadScene(scene); }), {"scene.json: cannot open scene file: not a regular file"});
 }
 
 // ---- scenes -----------------------------------------------------------------------------------------------
