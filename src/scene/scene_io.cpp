@@ -540,6 +540,41 @@ bool encloses(const TriangleMesh& mesh, glm::vec3 point) {
 
 // What renders, but probably not as meant: no light at all, a virtual object around the camera, a virtual
 // object outside the voxel volume (no indirect light for it, none from it).
+// Positions farther out than kMaxCoordinate: a float has no precision left there for a ray to start or end
+// by a surface, and Embree's ray checks fail (a camera at 5e18 aborted inside it).
+constexpr float kMaxCoordinate = 1e8f;
+
+bool farOut(const glm::vec3& p) {
+    return !(std::abs(p.x) <= kMaxCoordinate && std::abs(p.y) <= kMaxCoordinate && std::abs(p.z) <= kMaxCoordinate);
+}
+
+std::string pointText(const glm::vec3& p) {
+    return fmt::format("({:.4g}, {:.4g}, {:.4g})", p.x, p.y, p.z);
+}
+
+void checkCoordinates(const Scene& scene, const std::string& file) {
+    const auto fail = [&](const std::string& where, const glm::vec3& p) {
+        throw InputError(file + ": " + where,
+                         fmt::format("at {}: farther out than {:g} world units on an axis, where a 32-bit float "
+                                     "cannot place a ray by a surface",
+                                     pointText(p), kMaxCoordinate));
+    };
+    if (farOut(scene.camera.position())) fail("camera", scene.camera.position());
+    for (const SequenceFrame& frame : scene.sequence)
+        if (farOut(frame.camera.position()))
+            fail(fmt::format("sequence: frame {} ({})", frame.index, frame.photo.filename().string()),
+                 frame.camera.position());
+    for (size_t i = 0; i < scene.lights.size(); ++i)
+        if (scene.lights[i].type != Light::Type::Directional && farOut(scene.lights[i].position))
+            fail(fmt::format("lights[{}].position", i), scene.lights[i].position);
+    for (const auto& [meshes, key] : {std::pair{&scene.real, "scene"}, std::pair{&scene.virtuals, "virtual"}})
+        for (const TriangleMesh& mesh : *meshes) {
+            const Bounds3f b = mesh.bounds();
+            for (const glm::vec3& corner : {b.min, b.max})
+                if (farOut(corner)) fail(fmt::format("{}: mesh '{}'", key, mesh.name), corner);
+        }
+}
+
 std::vector<std::string> sceneWarnings(const Scene& scene) {
     std::vector<std::string> warnings;
     bool lit = scene.environment.has_value();
@@ -643,6 +678,7 @@ SceneRead readScene(const json& document, const fs::path& file) {
         poseObjects(scene, scene.sequence.front().index);
         fixVolumeRegionOverAnimation(scene);
     }
+    checkCoordinates(scene, file.string());
     for (const std::string& warning : lightPlacementWarnings(scene))
         scene.warnings.push_back(file.string() + ": " + warning);
     for (const std::string& warning : sceneWarnings(scene))
