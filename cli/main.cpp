@@ -389,11 +389,16 @@ ReferenceOutput readReferenceAovs(const fs::path& folder, const Camera& camera) 
             throw InputError(path.string(),
                              "missing: --reference expects the folder of `deltagi reference --aov` or "
                              "`deltagi eval --aov`");
+        const auto wrongSize = [&](int width, int height) {
+            return InputError(path.string(), fmt::format("{}x{}, but the scene's camera is {}x{}", width, height,
+                                                         camera.width, camera.height));
+        };
+        if (const auto size = imageFileSize(path);  // by the header, before decoding
+            size && (size->first != camera.width || size->second != camera.height))
+            throw wrongSize(size->first, size->second);
         *image = readImage(path);
         if (image->width() != camera.width || image->height() != camera.height)
-            throw InputError(path.string(),
-                             fmt::format("{}x{}, but the scene's camera is {}x{}", image->width(),
-                                         image->height(), camera.width, camera.height));
+            throw wrongSize(image->width(), image->height());
     }
     return r;
 }
@@ -432,6 +437,12 @@ int runCompare(const CompareArgs& args) {
         checkOutputs({args.difference},
                      {{args.test, "the image to judge"}, {args.reference, "the reference image"}});
     }
+    // By their headers first: images of two sizes are not decoded.
+    const auto testSize = imageFileSize(args.test), referenceSize = imageFileSize(args.reference);
+    if (testSize && referenceSize && testSize != referenceSize)
+        throw InputError(args.test.string() + " vs " + args.reference.string(),
+                         fmt::format("images differ in size: {}x{} and {}x{}", testSize->first, testSize->second,
+                                     referenceSize->first, referenceSize->second));
     const Image test = readImage(args.test);
     const Image reference = readImage(args.reference);
     ImageMetrics metrics;

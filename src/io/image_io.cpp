@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <string>
 
+#include <unistd.h>
+
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -103,6 +105,14 @@ ImageFile readImageFile(const std::filesystem::path& path) {
     if (width <= 0 || height <= 0 || channels <= 0)
         throw InputError(path.string(), fmt::format("cannot read image: it is {}x{} with {} channels", width,
                                                     height, channels));
+    // The header's size, checked before anything is allocated: a 138-byte PNG may declare 100,000 x 100,000.
+    const double needed = static_cast<double>(width) * height * (channels * 5.0 + 12.0);
+    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
+    if (memory > 0.0 && needed > memory / 2.0)
+        throw InputError(path.string(),
+                         fmt::format("cannot read image: it declares {}x{} pixels, which need about {:.1f} GiB, "
+                                     "more than half of the {:.1f} GiB of physical memory",
+                                     width, height, needed / (1 << 30), memory / (1 << 30)));
     size_t count = static_cast<size_t>(width) * height * channels;
     std::vector<float> pixels(count);
     // Integer pixels are sRGB-encoded (PNG, JPEG); float pixels are linear (EXR, HDR).

@@ -471,16 +471,23 @@ std::vector<bool> realMeshRequests(const std::vector<bool>& requests, const Scen
 
 void readBackground(const JsonNode& node, const fs::path& sceneFolder, Scene& scene) {
     scene.backgroundFile = inputFile(node, sceneFolder);
+    const Camera& camera = scene.camera;
+    const auto wrongSize = [&](int width, int height) {
+        node.fail(fmt::format("expected an image of the camera's size {}, got {} ('{}')",
+                              sizeText(camera.width, camera.height), sizeText(width, height),
+                              scene.backgroundFile.string()));
+    };
+    // By its header first: a photo of another size is not decoded.
+    if (const auto size = imageFileSize(scene.backgroundFile);
+        size && (size->first != camera.width || size->second != camera.height))
+        wrongSize(size->first, size->second);
     try {
         scene.background = readImage(scene.backgroundFile);
     } catch (const InputError& e) {
         node.fail(e.what());
     }
-    const Camera& camera = scene.camera;
     if (scene.background->width() != camera.width || scene.background->height() != camera.height)
-        node.fail(fmt::format(
-            "expected an image of the camera's size {}, got {} ('{}')", sizeText(camera.width, camera.height),
-            sizeText(scene.background->width(), scene.background->height()), scene.backgroundFile.string()));
+        wrongSize(scene.background->width(), scene.background->height());
 }
 
 // "sequence": {"transforms": FILE, "frames": "A:B", "fps": N}: the frames' cameras and photos; the first
