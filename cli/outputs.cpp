@@ -73,7 +73,26 @@ void refuseInputs(const std::vector<fs::path>& outputs, const std::vector<RunInp
         }
 }
 
+// Two outputs of one run that are one file (`-o X --layers X`, `-o D/background.exr --aov D`, one pattern
+// twice): one would overwrite the other.
+void refuseDuplicates(const std::vector<fs::path>& outputs) {
+    std::vector<fs::path> seen;
+    for (const fs::path& output : outputs) {
+        std::error_code error;
+        fs::path key = fs::weakly_canonical(fs::absolute(output, error), error);
+        if (error) key = fs::absolute(output).lexically_normal();
+        for (size_t i = 0; i < seen.size(); ++i)
+            if (seen[i] == key)
+                throw InputError(output.string(),
+                                 fmt::format("is given twice as an output of this run (also as '{}'): one would "
+                                             "overwrite the other",
+                                             outputs[i].string()));
+        seen.push_back(std::move(key));
+    }
+}
+
 void checkOutputs(const std::vector<fs::path>& outputs, const std::vector<RunInput>& inputs) {
+    refuseDuplicates(outputs);
     refuseInputs(outputs, inputs);
     for (const fs::path& output : outputs) checkWritable(output);
 }

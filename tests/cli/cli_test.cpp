@@ -611,4 +611,18 @@ TEST_F(CliTest, OptionsThatAreNotFiniteNumbersAreRefused) {
     }
 }
 
+// Two outputs of one run that name one file are refused before any work: one would overwrite the other.
+TEST_F(CliTest, TwoOutputsThatAreOneFileAreRefused) {
+    const std::string scene = quote(writeScene(tinyScene(), "scene.json").string());
+    const std::string d = dir_.string();
+    for (const std::string& outputs :
+         std::vector<std::string>{"-o " + d + "/x.exr --layers " + d + "/x.exr",
+                                  "-o " + d + "/background.exr --aov " + d,
+                                  "-o " + d + "/./y.exr --layers " + d + "/sub/../y.exr"}) {
+        const CliResult r = run("render " + scene + " -q " + outputs);
+        expectOneErrorLine(r, {"is given twice as an output of this run"});
+        EXPECT_FALSE(fs::exists(dir_ / "x.exr") || fs::exists(dir_ / "y.exr")) << outputs;
+    }
+}
+
 }  // namespace
