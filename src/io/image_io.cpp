@@ -90,7 +90,9 @@ std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& pa
         OIIO::geterror();  // cleared, not to show up in a later message
         return std::nullopt;
     }
-    return std::pair{input->spec().width, input->spec().height};
+    const OIIO::ImageSpec& spec = input->spec();  // the display window, as readImage() gives it
+    return std::pair{spec.full_width > 0 ? spec.full_width : spec.width,
+                     spec.full_height > 0 ? spec.full_height : spec.height};
 }
 
 ImageFile readImageFile(const std::filesystem::path& path) {
@@ -129,7 +131,23 @@ ImageFile readImageFile(const std::filesystem::path& path) {
             for (float& v : pixels) v = srgbToLinear(v);
     }
     input->close();
-    return {toRgb(pixels, width, height, channels), isFloatFormat(spec.format)};
+    Image rgb = toRgb(pixels, width, height, channels);
+    // The display window is the image (an EXR's data window may be offset within it, or smaller: pixels
+    // outside it are 0); the common case, both the same, is returned as read.
+    const int fullWidth = spec.full_width > 0 ? spec.full_width : width;
+    const int fullHeight = spec.full_height > 0 ? spec.full_height : height;
+    const int dx = spec.x - spec.full_x, dy = spec.y - spec.full_y;
+    if (dx == 0 && dy == 0 && fullWidth == width && fullHeight == height)
+        return {std::move(rgb), isFloatFormat(spec.format)};
+    const double fullBytes = static_cast<double>(fullWidth) * fullHeight * 12.0;
+    if (fullWidth <= 0 || fullHeight <= 0 || (memory > 0.0 && fullBytes > memory / 2.0))
+        throw InputError(path.string(), fmt::format("cannot read image: its display window is {}x{}", fullWidth,
+                                                    fullHeight));
+    Image full(fullWidth, fullHeight, 3, 0.0f);
+    for (int y = std::max(0, -dy); y < height && y + dy < fullHeight; ++y)
+        for (int x = std::max(0, -dx); x < width && x + dx < fullWidth; ++x)
+            for (int c = 0; c < 3; ++c) full.at(x + dx, y + dy, c) = rgb.at(x, y, c);
+    return {std::move(full), isFloatFormat(spec.format)};
 }
 
 Image readImage(const std::filesystem::path& path) {

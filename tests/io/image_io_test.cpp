@@ -10,6 +10,7 @@
 #include <fstream>
 #include <string>
 
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include "deltagi/error.h"
@@ -240,6 +241,34 @@ TEST(ImageWrite, AFullDiskKeepsThePreviousFile) {
     EXPECT_EQ(files, 4u) << "a temporary was left";
     umount(dir.c_str());
     fs::remove_all(dir);
+}
+
+// An EXR whose data window is offset within a larger display window is read as the display window, its
+// pixels in their place and the rest 0 (it was read as the data window alone, shifted to the corner).
+TEST(ImageRead, AnExrIsItsDisplayWindow) {
+    const fs::path file = fs::temp_directory_path() / ("deltagi-window-" + std::to_string(getpid()) + ".exr");
+    OIIO::ImageSpec spec(4, 2, 3, OIIO::TypeDesc::FLOAT);
+    spec.x = 3;
+    spec.y = 1;
+    spec.full_x = 0;
+    spec.full_y = 0;
+    spec.full_width = 8;
+    spec.full_height = 5;
+    std::vector<float> pixels(4 * 2 * 3);
+    for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = 1.0f + static_cast<float>(i);
+    auto output = OIIO::ImageOutput::create(file.string());
+    ASSERT_TRUE(output && output->open(file.string(), spec));
+    ASSERT_TRUE(output->write_image(OIIO::TypeDesc::FLOAT, pixels.data()));
+    output->close();
+    const Image image = readImage(file);
+    ASSERT_EQ(image.width(), 8);
+    ASSERT_EQ(image.height(), 5);
+    EXPECT_EQ(imageFileSize(file), (std::pair{8, 5}));
+    EXPECT_EQ(image.at(0, 0, 0), 0.0f);
+    EXPECT_EQ(image.at(3, 1, 0), 1.0f);  // the data window's first pixel
+    EXPECT_EQ(image.at(6, 2, 2), pixels.back());
+    EXPECT_EQ(image.at(7, 4, 1), 0.0f);
+    fs::remove(file);
 }
 
 }  // namespace
