@@ -400,20 +400,44 @@ size_t gltfNodeDepth(const nlohmann::json& document) {
     return deepest;
 }
 
+// Each glTF material's KHR_materials_emissive_strength (1 where it gives none, or a value that is not a
+// finite number >= 0).
+std::vector<float> gltfEmissiveStrengths(const nlohmann::json& document) {
+    std::vector<float> strengths;
+    const auto materials = document.find("materials");
+    if (materials == document.end() || !materials->is_array()) return strengths;
+    for (const nlohmann::json& material : *materials) {
+        float strength = 1.0f;
+        const nlohmann::json* value = nullptr;
+        if (material.is_object() && material.contains("extensions") && material["extensions"].is_object() &&
+            material["extensions"].contains("KHR_materials_emissive_strength")) {
+            const nlohmann::json& extension = material["extensions"]["KHR_materials_emissive_strength"];
+            if (extension.is_object() && extension.contains("emissiveStrength"))
+                value = &extension["emissiveStrength"];
+        }
+        if (value && value->is_number()) {
+            const double v = value->get<double>();
+            if (std::isfinite(v) && v >= 0.0 && v <= 1e20) strength = static_cast<float>(v);
+        }
+        strengths.push_back(strength);
+    }
+    return strengths;
+}
+
 }  // namespace
 
-void checkMeshFileStructure(const std::filesystem::path& file, const std::string& where) {
+std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path& file, const std::string& where) {
     const std::string name = file.filename().string();
     std::string extension = file.extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),
                    [](unsigned char c) { return std::tolower(c); });
     const bool gltf = extension == ".gltf", glb = extension == ".glb",
                xml = extension == ".dae" || extension == ".xml";
-    if (!gltf && !glb && !xml) return;
+    if (!gltf && !glb && !xml) return std::nullopt;
     std::ifstream in(file, std::ios::binary);
     std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
     if (glb) {  // the JSON chunk: 12 bytes of header, its length and type, then the JSON
-        if (text.size() < 20) return;  // Assimp reports it
+        if (text.size() < 20) return std::nullopt;  // Assimp reports it
         uint32_t length = 0;
         std::memcpy(&length, text.data() + 12, 4);
         text = text.substr(20, std::min<size_t>(length, text.size() - 20));
@@ -422,9 +446,9 @@ void checkMeshFileStructure(const std::filesystem::path& file, const std::string
     if (depth > kMaxFileNesting)
         throw InputError(where, fmt::format("'{}' nests {} levels deep, more than the {} this program reads", name,
                                             depth, kMaxFileNesting));
-    if (xml) return;
-    const nlohmann::json document = nlohmann::json::parse(text, nullptr, false);
-    if (document.is_discarded() || !document.is_object()) return;  // Assimp reports it
+    if (xml) return std::nullopt;
+    nlohmann::json document = nlohmann::json::parse(text, nullptr, false);
+    if (document.is_discarded() || !document.is_object()) return std::nullopt;  // Assimp reports it
     const size_t nodes = gltfNodeDepth(document);
     if (nodes > kMaxFileNesting)
         throw InputError(where, nodes == std::numeric_limits<size_t>::max()
@@ -448,6 +472,7 @@ void checkMeshFileStructure(const std::filesystem::path& file, const std::string
                                                     name, std::string(kind) == "buffers" ? "buffer" : "image", uri));
         }
     }
+    return document;
 }
 
 void checkMeshFileClaims(const std::filesystem::path& file, const std::string& where, uint64_t memoryBytes) {
@@ -496,8 +521,9 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
 
 std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std::string& where,
                                    const std::string& baseName, std::vector<std::string>* warnings) {
-    checkMeshFileStructure(file, where);
+    const std::optional<nlohmann::json> gltf = checkMeshFileStructure(file, where);
     checkMeshFileClaims(file, where, physicalMemoryBytes());
+    const std::vector<float> emissiveStrengths = gltf ? gltfEmissiveStrengths(*gltf) : std::vector<float>{};
     Assimp::Importer importer;
     importer.SetPropertyFloat(AI_CONFIG_PP_GSN_MAX_SMOOTHING_ANGLE, kCreaseAngleDeg);
     // Bake node transforms but keep one mesh per node: joining meshes of equal material would name, say, all
@@ -549,8 +575,16 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
         readAttributes(source, isGltf(file), result.mesh);
         if (source.mMaterialIndex < scene->mNumMaterials) {
             std::optional<FileMaterial>& material = materials[source.mMaterialIndex];
-            if (!material)
-                material = readFileMaterial(*scene->mMaterials[source.mMaterialIndex], materialReader);
+            if (!material) {
+                const aiMaterial& read = *scene->mMaterials[source.mMaterialIndex];
+                material = readFileMaterial(read, materialReader);
+                // KHR_materials_emissive_strength, which Debian's Assimp (5.2) does not read; glTF materials
+                // come in the file's order.
+                float assimpStrength = 0.0f;
+                if (material->emission && source.mMaterialIndex < emissiveStrengths.size() &&
+                    read.Get(AI_MATKEY_EMISSIVE_INTENSITY, assimpStrength) != AI_SUCCESS)
+                    *material->emission *= emissiveStrengths[source.mMaterialIndex];
+            }
             result.material = *material;
         }
         std::string name =

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <nlohmann/json.hpp>
 
 #include "deltagi/scene.h"
 #include "deltagi/texture.h"
@@ -105,7 +106,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
 // node chains deeper than kMaxFileNesting, node cycles, and buffers or images of a glTF that are not regular
 // files, each an InputError naming `where` and the file.
 inline constexpr size_t kMaxFileNesting = 1000;
-void checkMeshFileStructure(const std::filesystem::path& file, const std::string& where);
+// Returns a glTF's JSON document (for what Assimp does not read), nothing for other files.
+std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path& file, const std::string& where);
 
 // Run by loadMeshFile before Assimp reads anything: checks the element counts a PLY or OFF header claims
 // against the file's size (a truncated file, or a header claiming 3.5e11 vertices in 300 bytes), and the

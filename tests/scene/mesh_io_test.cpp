@@ -523,5 +523,23 @@ TEST_F(MeshIoTest, SceneTexturesOverrideTheFilesAndNeedTextureCoordinates) {
               "texture"});
 }
 
+// KHR_materials_emissive_strength, which Debian's Assimp does not read, multiplies the emissive factor
+// (docs/scene-format.md: emission is factor x strength).
+TEST_F(MeshIoTest, GltfEmissiveStrengthMultipliesTheEmissiveFactor) {
+    json document;
+    document["materials"] = json::array(
+        {{{"name", "lamp"},
+          {"emissiveFactor", {1.0, 0.5, 0.25}},
+          {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 40.0}}}}}}});
+    document["extensionsUsed"] = {"KHR_materials_emissive_strength"};
+    const fs::path file = test::writeQuadGltf(dir_, "lamp", document);
+    const std::vector<FileMesh> meshes = loadMeshFile(file, "where", "lamp");
+    ASSERT_EQ(meshes.size(), 1u);
+    ASSERT_TRUE(meshes[0].material.emission.has_value());
+    EXPECT_NEAR(meshes[0].material.emission->x, 40.0f, 1e-4f);
+    EXPECT_NEAR(meshes[0].material.emission->y, 20.0f, 1e-4f);
+    EXPECT_NEAR(meshes[0].material.emission->z, 10.0f, 1e-4f);
+}
+
 }  // namespace
 }  // namespace deltagi
