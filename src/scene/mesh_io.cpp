@@ -313,6 +313,10 @@ void validateRawScene(aiScene& scene, const std::filesystem::path& file, const s
 // range".
 std::string importError(const Assimp::Importer& importer) {
     std::string error = importer.GetErrorString();
+    // Assimp catches its own allocation failures (a count in the data that the header checks cannot see, a
+    // PLY face claiming 4e9 indices) and reports the exception's name.
+    if (error.find("bad_alloc") != std::string::npos)
+        return "it is corrupt or too large: reading it ran out of memory (a count in it beyond its data)";
     return error.empty() ? "unknown error" : error;
 }
 
@@ -536,7 +540,12 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
     const aiScene* scene = nullptr;
     {
         WarningLog log;
-        scene = importer.ReadFile(file.string(), aiProcess_ValidateDataStructure);
+        try {
+            scene = importer.ReadFile(file.string(), aiProcess_ValidateDataStructure);
+        } catch (const std::bad_alloc&) {
+            // A count in the data that the header checks cannot see (a PLY face claiming 4e9 indices).
+            throw InputError(where, fmt::format("'{}' is corrupt or too large: reading it ran out of memory", name));
+        }
         if (scene == nullptr) {
             // Validation fails a file of points alone ("Mesh contains no faces"): say what is wrong.
             const std::string error = importError(importer);

@@ -43,8 +43,14 @@ fs::path inputFile(const JsonNode& node, const fs::path& sceneFolder) {
     if (path.empty()) node.fail("expected a file name, got an empty string");
     if (path.is_relative()) path = sceneFolder / path;
     path = path.lexically_normal();
-    if (fs::is_regular_file(path)) return path;
-    if (fs::is_directory(path)) node.fail(fmt::format("'{}' is a folder, expected a file", path.string()));
+    std::error_code error;  // a symbolic link loop, a folder that cannot be searched: said, not thrown
+    const fs::file_status status = fs::status(path, error);
+    if (fs::is_regular_file(status)) return path;
+    if (fs::is_directory(status)) node.fail(fmt::format("'{}' is a folder, expected a file", path.string()));
+    if (fs::exists(status))
+        node.fail(fmt::format("'{}' is not a regular file (a device, a FIFO, a socket)", path.string()));
+    if (error && error != std::errc::no_such_file_or_directory)
+        node.fail(fmt::format("cannot read '{}': {}", path.string(), error.message()));
     std::string hint;
     for (const fs::path& part : path.parent_path())
         if (part == "shared")

@@ -625,4 +625,12 @@ TEST_F(CliTest, TwoOutputsThatAreOneFileAreRefused) {
     }
 }
 
+// An output name too long for its temporary beside it is refused before the work, not after it.
+TEST_F(CliTest, AnOutputNameTooLongForItsTemporaryIsRefusedFirst) {
+    const std::string scene = quote(writeScene(tinyScene(), "scene.json").string());
+    const CliResult r = run("render " + scene + " -q -o " + quote((dir_ / (std::string(244, 'a') + ".png")).string()));
+    expectOneErrorLine(r, {"the file name is 248 bytes", "choose a shorter name"});
+    EXPECT_EQ(r.err.find("ms"), std::string::npos) << "rendered first: " << r.err;
+}
+
 }  // namespace

@@ -290,6 +290,30 @@ TEST(SceneWarningTest, AGoodSceneHasNone) {
     EXPECT_TRUE(loadFromJson(smallScene()).warnings.empty());
 }
 
+// Mesh files that cannot be read say why in one line: a symbolic link loop, a device, a PLY whose face
+// claims 4e9 indices (Assimp's allocation fails inside it).
+TEST_F(MeshFileTest, UnreadableFilesSayWhy) {
+    fs::create_symlink(dir_ / "loop-b.ply", dir_ / "loop-a.ply");
+    fs::create_symlink(dir_ / "loop-a.ply", dir_ / "loop-b.ply");
+    const std::string header =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 1\nproperty list uint uint vertex_indices\nend_header\n";
+    std::string data(9 * 4, '\0');
+    const uint32_t claimed = 4000000000u;
+    data.append(reinterpret_cast<const char*>(&claimed), 4);
+    data.append(12, '\0');
+    write("claims.ply", header + data);
+    for (const auto& [file, message] :
+         std::vector<std::pair<std::string, std::string>>{
+             {(dir_ / "loop-a.ply").string(), "Too many levels of symbolic links"},
+             {"/dev/zero", "'/dev/zero' is not a regular file"},
+             {(dir_ / "claims.ply").string(), "reading it ran out of memory"}}) {
+        json scene = smallScene();
+        scene["scene"][0] = {{"file", file}};
+        expectContains(inputErrorOf([&] { loadFromJson(scene); }), {"s.json: scene[0].file: ", message});
+    }
+}
+
 TEST(SceneWarningTest, NoLight) {
     json scene = smallScene();
     scene["lights"][0]["intensity"] = 0;
