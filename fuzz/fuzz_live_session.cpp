@@ -1,5 +1,5 @@
 // libFuzzer target: the live session's message handler (src/live/live_session.h), as `deltagi serve` calls it
-// for each WebSocket message. Every input must end in a reply or a change; an exception that escapes
+// for each WebSocket message (raw bytes; those starting with 0xFF also as a camera frame's JPEG). Every input must end in a reply or a change; an exception that escapes
 // handle(), a crash or a sanitizer finding is a finding. The session is the tiny scene of
 // tests/test_scene_json.h, written once to a temporary folder; after each message the scene must still be one
 // the renderer takes.
@@ -47,12 +47,22 @@ deltagi::live::Session& session() {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    // A binary message: a camera frame (a JPEG of the camera's size), decoded or refused with InputError.
+    if (size > 0 && data[0] == 0xFF) {
+        try {
+            (void)deltagi::live::decodeCameraFrame(std::string_view(reinterpret_cast<const char*>(data), size),
+                                                   64, 48);
+        } catch (const deltagi::InputError&) {
+        }
+    }
     deltagi::live::Session& s = session();
     const deltagi::live::MessageResult result =
         s.handle(std::string_view(reinterpret_cast<const char*>(data), size), 1);
     if (!result.changed && !result.reply.is_object()) std::abort();  // neither a reply nor a change
     deltagi::checkFrame(s.scene());  // throws (a finding) if a message left a scene the renderer refuses
-    (void)s.state().dump();
-    (void)s.document().dump();
+    // What the server sends: text that is not UTF-8 in a message must not make these throw.
+    (void)deltagi::live::jsonText(result.reply);
+    (void)deltagi::live::jsonText(s.state());
+    (void)deltagi::live::jsonText(s.document(), 2);
     return 0;
 }

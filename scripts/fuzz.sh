@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
-# Fuzzes the scene reader, mesh loading, the live session's message handler and camera frames (video decoding
-# and the marker detector) with libFuzzer (clang 16 from Debian 12): builds build-fuzz/ with -DDELTAGI_FUZZ=ON,
+# Fuzzes the scene reader, mesh loading (with the nesting checks before Assimp), the live session's message
+# handler (raw bytes, and camera frames' JPEGs), camera frames (video decoding and the marker detector) and image
+# files (headers and decoding) with libFuzzer (clang 16 from Debian 12): builds build-fuzz/ with -DDELTAGI_FUZZ=ON,
 # seeds each target, runs each for a fixed budget and prints executions and findings.
 #   scripts/fuzz.sh [SECONDS_PER_TARGET]      (default 300)
 # Seeds: the scenes of examples/ and tests/bad-inputs/ (and ../shared/data/scenes when present) for the scene
@@ -21,13 +22,14 @@ scripts/install-deps.sh clang-16 libclang-rt-16-dev assimp-testmodels
 build=build-fuzz
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-16 \
   -DDELTAGI_FUZZ=ON -DDELTAGI_BUILD_TESTS=OFF -DDELTAGI_BUILD_BENCHMARKS=OFF
-cmake --build "$build" -j2 --target fuzz_scene_reader fuzz_mesh_loader fuzz_live_session fuzz_camera_frames
+cmake --build "$build" -j2 --target fuzz_scene_reader fuzz_mesh_loader fuzz_live_session fuzz_camera_frames \
+  fuzz_image_reader
 
 # Seeds, rebuilt each run (the corpus folders keep what the fuzzer found).
 seeds="$build/seeds"
 rm -rf "$seeds"
-mkdir -p "$seeds/scene" "$seeds/mesh" "$seeds/live" "$seeds/frames" "$build/corpus-scene" "$build/corpus-mesh" \
-  "$build/corpus-live" "$build/corpus-frames" "$build/findings"
+mkdir -p "$seeds/scene" "$seeds/mesh" "$seeds/live" "$seeds/frames" "$seeds/image" "$build/corpus-scene" \
+  "$build/corpus-mesh" "$build/corpus-live" "$build/corpus-frames" "$build/corpus-image" "$build/findings"
 for f in examples/*.json tests/bad-inputs/*.json ../shared/data/scenes/*.json; do
   [ -f "$f" ] && [ "$(stat -c %s "$f")" -le 65536 ] && cp "$f" "$seeds/scene/$(echo "$f" | tr / _)"
 done
@@ -74,13 +76,22 @@ if [ -x build/deltagi ]; then
   { printf '\x00'; cat "$frames/marker.mp4"; } > "$seeds/frames/marker-mp4"
 fi
 
+# Images (first byte: 0 .png, 1 .jpg, 2 .exr, 3 .hdr): the bad inputs' photos and maps, and a marker.
+for f in tests/bad-inputs/*.png tests/bad-inputs/*.hdr tests/bad-inputs/*.exr tests/bad-inputs/*.jpg; do
+  [ -f "$f" ] || continue
+  case "${f##*.}" in png) byte='\x00' ;; jpg) byte='\x01' ;; exr) byte='\x02' ;; hdr) byte='\x03' ;; esac
+  { printf "$byte"; cat "$f"; } > "$seeds/image/$(basename "$f")"
+done
+[ -f "${frames:-}/frame_0000.png" ] && { printf '\x00'; cat "$frames/frame_0000.png"; } > "$seeds/image/marker.png"
+
 status=0
-for target in scene mesh live frames; do
+for target in scene mesh live frames image; do
   case $target in
     scene) binary="$build/fuzz/fuzz_scene_reader" ;;
     mesh) binary="$build/fuzz/fuzz_mesh_loader" ;;
     live) binary="$build/fuzz/fuzz_live_session" ;;
     frames) binary="$build/fuzz/fuzz_camera_frames" ;;
+    image) binary="$build/fuzz/fuzz_image_reader" ;;
   esac
   log="$build/fuzz-$target.log"
   echo "== fuzz_$target: $budget s, $(ls "$seeds/$target" | wc -l) seeds"
