@@ -112,10 +112,12 @@ int runEncode(const EncodeArgs& args) {
     int width = 0, height = 0;
     for (size_t k = 0; k < inputs.size(); ++k) {
         if (video)  // by the header first: a frame of another size is not decoded
-            if (const auto size = imageFileSize(inputs[k].path); size && (size->first != width || size->second != height))
-                throw InputError(inputs[k].path.string(),
-                                 fmt::format("is {}x{}, the first frame {}x{}: a video's frames have one size",
-                                             size->first, size->second, width, height));
+            if (const auto size = imageFileSize(inputs[k].path);
+                size && (size->first != width || size->second != height))
+                throw InputError(
+                    inputs[k].path.string(),
+                    fmt::format("is {}x{}, the first frame {}x{}: a video's frames have one size",
+                                size->first, size->second, width, height));
         const Image image = readImage(inputs[k].path);
         if (!video) {
             width = image.width(), height = image.height();

@@ -92,10 +92,13 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
         ->check(finiteRange(1e-3, 60.0));
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     command->add_flag("-q,--quiet", args.quiet, "Print nothing but errors");
-    CLI::Option* serve = command->add_flag("--serve", args.serve,
-                      "Show the frames in the browser page of `deltagi serve` (objects dragged there, stage "
-                      "times charted) instead of writing them");
-    command->add_option("--port", args.port, "With --serve: the TCP port (default 8080; 0: any free one, printed)")
+    CLI::Option* serve = command->add_flag(
+        "--serve", args.serve,
+        "Show the frames in the browser page of `deltagi serve` (objects dragged there, stage "
+        "times charted) instead of writing them");
+    command
+        ->add_option("--port", args.port,
+                     "With --serve: the TCP port (default 8080; 0: any free one, printed)")
         ->check(CLI::Range(0, 65535))
         ->needs(serve);
     command->add_option("--host", args.host, "With --serve: the address to listen on (default 127.0.0.1)")
@@ -106,8 +109,9 @@ CLI::App* addLiveCommand(CLI::App& app, LiveArgs& args) {
 int runLive(const LiveArgs& args) {
     if (args.serve) {
         if (!args.output.empty() || !args.video.empty() || !args.json.empty())
-            throw InputError("live", "--serve shows the frames in the browser; -o, --video and --json are for a "
-                                     "run without it");
+            throw InputError("live",
+                             "--serve shows the frames in the browser; -o, --video and --json are for a "
+                             "run without it");
         ServeArgs serve;
         serve.scene = args.scene;
         serve.overrides = args.overrides;

@@ -45,10 +45,10 @@
 #include "marker_command.h"
 #include "messages.h"
 #include "outputs.h"
-#include "validators.h"
 #include "serve_command.h"
 #include "stability_command.h"
 #include "track_command.h"
+#include "validators.h"
 #include "video_output.h"
 
 namespace fs = std::filesystem;
@@ -106,7 +106,6 @@ struct CompareArgs {
     float maxValue = 0.0f;  // 0: the 99th percentile of the image
     bool json = false;
 };
-
 
 int reportError(const std::string& message, int exitCode) {
     note("deltagi: error: {}\n", oneLine(message));
@@ -390,8 +389,8 @@ ReferenceOutput readReferenceAovs(const fs::path& folder, const Camera& camera) 
                              "missing: --reference expects the folder of `deltagi reference --aov` or "
                              "`deltagi eval --aov`");
         const auto wrongSize = [&](int width, int height) {
-            return InputError(path.string(), fmt::format("{}x{}, but the scene's camera is {}x{}", width, height,
-                                                         camera.width, camera.height));
+            return InputError(path.string(), fmt::format("{}x{}, but the scene's camera is {}x{}", width,
+                                                         height, camera.width, camera.height));
         };
         if (const auto size = imageFileSize(path);  // by the header, before decoding
             size && (size->first != camera.width || size->second != camera.height))
@@ -441,8 +440,8 @@ int runCompare(const CompareArgs& args) {
     const auto testSize = imageFileSize(args.test), referenceSize = imageFileSize(args.reference);
     if (testSize && referenceSize && testSize != referenceSize)
         throw InputError(args.test.string() + " vs " + args.reference.string(),
-                         fmt::format("images differ in size: {}x{} and {}x{}", testSize->first, testSize->second,
-                                     referenceSize->first, referenceSize->second));
+                         fmt::format("images differ in size: {}x{} and {}x{}", testSize->first,
+                                     testSize->second, referenceSize->first, referenceSize->second));
     const Image test = readImage(args.test);
     const Image reference = readImage(args.reference);
     ImageMetrics metrics;

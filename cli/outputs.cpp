@@ -83,10 +83,11 @@ void refuseDuplicates(const std::vector<fs::path>& outputs) {
         if (error) key = fs::absolute(output).lexically_normal();
         for (size_t i = 0; i < seen.size(); ++i)
             if (seen[i] == key)
-                throw InputError(output.string(),
-                                 fmt::format("is given twice as an output of this run (also as '{}'): one would "
-                                             "overwrite the other",
-                                             outputs[i].string()));
+                throw InputError(
+                    output.string(),
+                    fmt::format("is given twice as an output of this run (also as '{}'): one would "
+                                "overwrite the other",
+                                outputs[i].string()));
         seen.push_back(std::move(key));
     }
 }

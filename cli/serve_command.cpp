@@ -239,7 +239,7 @@ class Server {
     int64_t cameraDropped_ = 0;               // camera frames replaced by a newer one before being taken
     std::shared_ptr<const Environment> pendingEnvironment_;  // the light camera's newest, not yet taken
     int64_t lightFrames_ = 0;
-    double environmentMs_ = 0.0;  // the newest light frame's averaging and light extraction
+    double environmentMs_ = 0.0;    // the newest light frame's averaging and light extraction
     std::exception_ptr feedError_;  // a source that failed: the server stops and reports it
 
     // The server's own sources (live --serve) and their readers.
@@ -287,9 +287,9 @@ bool Server::hostAllowed(const mg_connection* connection) const {
         port = host.substr(colon + 1);
     }
     if (!port.empty() && port != std::to_string(port_)) return false;
-    const bool named = name == "localhost" || isAddress(name) ||
-                       std::find(args_.allowedHosts.begin(), args_.allowedHosts.end(), name) !=
-                           args_.allowedHosts.end();
+    const bool named =
+        name == "localhost" || isAddress(name) ||
+        std::find(args_.allowedHosts.begin(), args_.allowedHosts.end(), name) != args_.allowedHosts.end();
     if (!named) return false;
     const char* origin = mg_get_header(connection, "Origin");
     return !origin || std::string(origin) == "http://" + host;
@@ -435,19 +435,20 @@ void Server::onMessage(const std::shared_ptr<Client>& client, int opcode, const 
         return;
     }
     if (opcode != MG_WEBSOCKET_OPCODE_TEXT) {
-        client->reply(live::jsonText(json{{"type", "error"}, {"message", "message: expected a JSON text message"}}));
+        client->reply(
+            live::jsonText(json{{"type", "error"}, {"message", "message: expected a JSON text message"}}));
         return;
     }
     if (size > live::kMaxMessageBytes) {  // refused as the handler refuses it, without a copy
-        client->reply(
-            live::jsonText(json{{"type", "error"},
+        client->reply(live::jsonText(
+            json{{"type", "error"},
                  {"message", fmt::format("message: {} bytes, more than {}", size, live::kMaxMessageBytes)}}));
         return;
     }
     std::lock_guard lock(inboxMutex_);
     if (inbox_.size() >= kMaxWaitingMessages) {
-        client->reply(
-            live::jsonText(json{{"type", "error"}, {"message", "message: too many messages waiting; dropped"}}));
+        client->reply(live::jsonText(
+            json{{"type", "error"}, {"message", "message: too many messages waiting; dropped"}}));
         return;
     }
     inbox_.push_back({client, std::string(data, size)});
@@ -458,8 +459,8 @@ void Server::onCameraFrame(const std::shared_ptr<Client>& client, const char* da
     const int64_t number = ++client->cameraFrames;
     if (size > kMaxCameraFrameBytes) {
         client->reply(live::jsonText(json{{"type", "error"},
-                           {"message", fmt::format("camera frame {}: {} bytes, more than {}", number, size,
-                                                   kMaxCameraFrameBytes)}}));
+                                          {"message", fmt::format("camera frame {}: {} bytes, more than {}",
+                                                                  number, size, kMaxCameraFrameBytes)}}));
         return;
     }
     CameraInput input;
@@ -479,8 +480,8 @@ bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFra
                            json& info) {
     const auto fail = [&](const std::string& message) {
         if (std::shared_ptr<Client> client = input.client.lock())
-            client->reply(live::jsonText(json{{"type", "error"},
-                               {"message", fmt::format("camera frame {}: {}", input.number, message)}}));
+            client->reply(live::jsonText(json{
+                {"type", "error"}, {"message", fmt::format("camera frame {}: {}", input.number, message)}}));
         return false;
     };
     if (!tracker_)
@@ -526,7 +527,8 @@ void Server::openFeeds() {
     if (args_.camera.empty()) return;
     const Scene& scene = session_.scene();
     if (!tracker_)
-        throw InputError(args_.scene.string(), "markers: the scene places no marker to register the camera by");
+        throw InputError(args_.scene.string(),
+                         "markers: the scene places no marker to register the camera by");
     cameraFeed_.emplace(openFrameSource(args_.camera, args_.patternFps), true);
     checkFrameSize(cameraFeed_->source(), scene.camera, args_.scene);
     if (!args_.lightCamera.empty()) {
@@ -580,7 +582,8 @@ void Server::readLight() {
             std::optional<FrameFeed::Arrival> arrival = lightFeed_->takeUntil(Clock::now() + kPoll);
             if (!arrival) {
                 if (!lightFeed_->ended()) continue;
-                note("deltagi: {}: ended; the session goes on in its last light\n", lightFeed_->source().name());
+                note("deltagi: {}: ended; the session goes on in its last light\n",
+                     lightFeed_->source().name());
                 return;
             }
             const Clock::time_point start = Clock::now();
@@ -651,7 +654,7 @@ void Server::renderLoop() {
     Clock::time_point lastChange = Clock::now();
     uint64_t frameNumber = 0;
     bool layers = false;
-    std::optional<LiveCamera> camera;  // the last registered camera frame, once a page sent one
+    std::optional<LiveCamera> camera;                // the last registered camera frame, once a page sent one
     std::shared_ptr<const Environment> environment;  // the light camera's newest (live --serve)
     bool interactiveLit = false, fullLit = false;    // whether the two scenes have it
     for (;;) {
@@ -683,7 +686,8 @@ void Server::renderLoop() {
                 environment = std::move(pendingEnvironment_);
                 pendingEnvironment_.reset();
                 interactiveLit = fullLit = false;
-                lightInfo = {{"frames", lightFrames_}, {"environment_ms", std::round(environmentMs_ * 100.0) / 100.0}};
+                lightInfo = {{"frames", lightFrames_},
+                             {"environment_ms", std::round(environmentMs_ * 100.0) / 100.0}};
             }
             const Scene& scene = session_.scene();
             view = session_.view();
@@ -854,8 +858,8 @@ int Server::run() {
     const char* options[] = {
         // A thread per connection: enough for the clients (kMaxClients) and as many slow or idle connections
         // again, each of which gives up its thread after the request timeout.
-        "listening_ports", ports.c_str(), "num_threads", "128", "websocket_timeout_ms", "3600000",
-        "request_timeout_ms", "5000", nullptr};
+        "listening_ports", ports.c_str(),        "num_threads", "128",  "websocket_timeout_ms",
+        "3600000",         "request_timeout_ms", "5000",        nullptr};
     mg_context* context = mg_start(&callbacks, this, options);
     if (!context) {
         mg_exit_library();
@@ -920,9 +924,10 @@ CLI::App* addServeCommand(CLI::App& app, ServeArgs& args, int maxThreads) {
         "--host", args.host,
         "Address to listen on (default 127.0.0.1: this machine only; say 0.0.0.0 to let others "
         "in, with a warning)");
-    command->add_option("--allow-host", args.allowedHosts,
-                        "A host name the page may be opened by, besides this machine's addresses and localhost "
-                        "(repeatable; requests naming others are refused)");
+    command->add_option(
+        "--allow-host", args.allowedHosts,
+        "A host name the page may be opened by, besides this machine's addresses and localhost "
+        "(repeatable; requests naming others are refused)");
     command->add_option("--set", args.overrides, "Override a scene key: KEY=VALUE (repeatable)");
     command->add_option("--threads", args.threads, "Worker threads (default: all cores)")
         ->check(CLI::Range(1, maxThreads));

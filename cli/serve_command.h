@@ -23,7 +23,8 @@ struct ServeArgs {
     int threads = 0;
     int jpegQuality = 85;
     int interactiveScale = 2;  // the frames while something changes at 1 / this of the width and height
-    std::vector<std::string> allowedHosts;  // names the page may be opened by, besides addresses and localhost
+    std::vector<std::string>
+        allowedHosts;  // names the page may be opened by, besides addresses and localhost
 
     // `deltagi live --serve`: a scene camera (and a light camera) the server reads itself, as `live` does,
     // instead of the page's; empty: none (the page may send its own).

@@ -67,10 +67,11 @@ void checkFrameSize(const FrameSource& source, const Camera& camera, const fs::p
 
 void addMaxSpeedOption(CLI::App& command, TrackingOptions& tracking) {
     command
-        .add_option("--max-speed", tracking.maxSpeed,
-                    "Within the hold time, a pose from no more markers than the last frame's that moves the "
-                    "camera faster than this (world units per second; default 2) is not trusted: the last pose "
-                    "stands in (0: every pose is taken)")
+        .add_option(
+            "--max-speed", tracking.maxSpeed,
+            "Within the hold time, a pose from no more markers than the last frame's that moves the "
+            "camera faster than this (world units per second; default 2) is not trusted: the last pose "
+            "stands in (0: every pose is taken)")
         ->check(finiteRange(0.0, 1e6));
 }
 

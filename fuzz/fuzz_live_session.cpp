@@ -1,8 +1,8 @@
 // libFuzzer target: the live session's message handler (src/live/live_session.h), as `deltagi serve` calls it
-// for each WebSocket message (raw bytes; those starting with 0xFF also as a camera frame's JPEG). Every input must end in a reply or a change; an exception that escapes
-// handle(), a crash or a sanitizer finding is a finding. The session is the tiny scene of
-// tests/test_scene_json.h, written once to a temporary folder; after each message the scene must still be one
-// the renderer takes.
+// for each WebSocket message (raw bytes; those starting with 0xFF also as a camera frame's JPEG). Every input
+// must end in a reply or a change; an exception that escapes handle(), a crash or a sanitizer finding is a
+// finding. The session is the tiny scene of tests/test_scene_json.h, written once to a temporary folder;
+// after each message the scene must still be one the renderer takes.
 #include <unistd.h>
 
 #include <cstddef>
@@ -50,8 +50,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // A binary message: a camera frame (a JPEG of the camera's size), decoded or refused with InputError.
     if (size > 0 && data[0] == 0xFF) {
         try {
-            (void)deltagi::live::decodeCameraFrame(std::string_view(reinterpret_cast<const char*>(data), size),
-                                                   64, 48);
+            (void)deltagi::live::decodeCameraFrame(
+                std::string_view(reinterpret_cast<const char*>(data), size), 64, 48);
         } catch (const deltagi::InputError&) {
         }
     }

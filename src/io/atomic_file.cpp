@@ -212,13 +212,15 @@ void checkWritable(const fs::path& path) {
     constexpr size_t kTemporaryExtra = 40;
     const long nameMax = ::pathconf(nearestExistingFolder(path, path).c_str(), _PC_NAME_MAX);
     const size_t limit = nameMax > 0 ? static_cast<size_t>(nameMax) : 255;
-    const size_t length = path.filename().string().size() + path.extension().string().size() + kTemporaryExtra;
+    const size_t length =
+        path.filename().string().size() + path.extension().string().size() + kTemporaryExtra;
     if (length > limit)
-        throw InputError(path.string(),
-                         fmt::format("the file name is {} bytes; with its temporary's part the longest this file "
-                                     "system takes is {} bytes: choose a shorter name",
-                                     path.filename().string().size(),
-                                     limit - kTemporaryExtra - path.extension().string().size()));
+        throw InputError(
+            path.string(),
+            fmt::format("the file name is {} bytes; with its temporary's part the longest this file "
+                        "system takes is {} bytes: choose a shorter name",
+                        path.filename().string().size(),
+                        limit - kTemporaryExtra - path.extension().string().size()));
     const fs::path folder = nearestExistingFolder(path, path);
     static std::atomic<unsigned> counter{0};
     const fs::path probe = folder / fmt::format(".deltagi-probe-{}-{}", getpid(), counter++);

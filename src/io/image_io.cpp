@@ -109,12 +109,14 @@ ImageFile readImageFile(const std::filesystem::path& path) {
                                                     height, channels));
     // The header's size, checked before anything is allocated: a 138-byte PNG may declare 100,000 x 100,000.
     const double needed = static_cast<double>(width) * height * (channels * 5.0 + 12.0);
-    const double memory = static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
+    const double memory =
+        static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGESIZE));
     if (memory > 0.0 && needed > memory / 2.0)
-        throw InputError(path.string(),
-                         fmt::format("cannot read image: it declares {}x{} pixels, which need about {:.1f} GiB, "
-                                     "more than half of the {:.1f} GiB of physical memory",
-                                     width, height, needed / (1 << 30), memory / (1 << 30)));
+        throw InputError(
+            path.string(),
+            fmt::format("cannot read image: it declares {}x{} pixels, which need about {:.1f} GiB, "
+                        "more than half of the {:.1f} GiB of physical memory",
+                        width, height, needed / (1 << 30), memory / (1 << 30)));
     size_t count = static_cast<size_t>(width) * height * channels;
     std::vector<float> pixels(count);
     // Integer pixels are sRGB-encoded (PNG, JPEG); float pixels are linear (EXR, HDR).
@@ -141,8 +143,8 @@ ImageFile readImageFile(const std::filesystem::path& path) {
         return {std::move(rgb), isFloatFormat(spec.format)};
     const double fullBytes = static_cast<double>(fullWidth) * fullHeight * 12.0;
     if (fullWidth <= 0 || fullHeight <= 0 || (memory > 0.0 && fullBytes > memory / 2.0))
-        throw InputError(path.string(), fmt::format("cannot read image: its display window is {}x{}", fullWidth,
-                                                    fullHeight));
+        throw InputError(path.string(), fmt::format("cannot read image: its display window is {}x{}",
+                                                    fullWidth, fullHeight));
     Image full(fullWidth, fullHeight, 3, 0.0f);
     for (int y = std::max(0, -dy); y < height && y + dy < fullHeight; ++y)
         for (int x = std::max(0, -dx); x < width && x + dx < fullWidth; ++x)

@@ -158,8 +158,8 @@ std::string encodeJpeg(const std::vector<uint8_t>& rgb, int width, int height, i
 std::string encodePng(const Image& image);
 
 // JSON text of `value` for a client or a download (`indent` as json::dump's): bytes of a string that are not
-// UTF-8 (a message's own bytes quoted back in an error, a cut character, a file name) become U+FFFD rather than
-// throw.
+// UTF-8 (a message's own bytes quoted back in an error, a cut character, a file name) become U+FFFD rather
+// than throw.
 std::string jsonText(const nlohmann::json& value, int indent = -1);
 
 // The frame's stage timings as JSON: {"stages": [[name, ms], ...], "total_ms": ms}.

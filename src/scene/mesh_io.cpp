@@ -14,10 +14,10 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
-#include <nlohmann/json.hpp>
 #include <assimp/DefaultLogger.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/LogStream.hpp>
+#include <nlohmann/json.hpp>
 
 #include "deltagi/error.h"
 #include "io/image_encode.h"
@@ -327,8 +327,10 @@ size_t jsonDepth(std::string_view text) {
     for (size_t i = 0; i < text.size(); ++i) {
         const char c = text[i];
         if (inString) {
-            if (c == '\\') ++i;
-            else if (c == '"') inString = false;
+            if (c == '\\')
+                ++i;
+            else if (c == '"')
+                inString = false;
         } else if (c == '"') {
             inString = true;
         } else if (c == '[' || c == '{') {
@@ -394,7 +396,8 @@ size_t gltfNodeDepth(const nlohmann::json& document) {
             size_t d = 1;
             if (children && children->is_array())
                 for (const nlohmann::json& c : *children)
-                    if (c.is_number_unsigned() && c.get<uint64_t>() < count) d = std::max(d, depth[c.get<size_t>()] + 1);
+                    if (c.is_number_unsigned() && c.get<uint64_t>() < count)
+                        d = std::max(d, depth[c.get<size_t>()] + 1);
             depth[node] = d;
             state[node] = 2;
             deepest = std::max(deepest, d);
@@ -430,7 +433,8 @@ std::vector<float> gltfEmissiveStrengths(const nlohmann::json& document) {
 
 }  // namespace
 
-std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path& file, const std::string& where) {
+std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path& file,
+                                                     const std::string& where) {
     const std::string name = file.filename().string();
     std::string extension = file.extension().string();
     std::transform(extension.begin(), extension.end(), extension.begin(),
@@ -448,18 +452,19 @@ std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path
     }
     const size_t depth = xml ? xmlDepth(text) : jsonDepth(text);
     if (depth > kMaxFileNesting)
-        throw InputError(where, fmt::format("'{}' nests {} levels deep, more than the {} this program reads", name,
-                                            depth, kMaxFileNesting));
+        throw InputError(where, fmt::format("'{}' nests {} levels deep, more than the {} this program reads",
+                                            name, depth, kMaxFileNesting));
     if (xml) return std::nullopt;
     nlohmann::json document = nlohmann::json::parse(text, nullptr, false);
     if (document.is_discarded() || !document.is_object()) return std::nullopt;  // Assimp reports it
     const size_t nodes = gltfNodeDepth(document);
     if (nodes > kMaxFileNesting)
-        throw InputError(where, nodes == std::numeric_limits<size_t>::max()
-                                    ? fmt::format("'{}': its nodes are their own children (a cycle)", name)
-                                    : fmt::format("'{}': its nodes nest {} levels deep, more than the {} this "
-                                                  "program reads",
-                                                  name, nodes, kMaxFileNesting));
+        throw InputError(where,
+                         nodes == std::numeric_limits<size_t>::max()
+                             ? fmt::format("'{}': its nodes are their own children (a cycle)", name)
+                             : fmt::format("'{}': its nodes nest {} levels deep, more than the {} this "
+                                           "program reads",
+                                           name, nodes, kMaxFileNesting));
     // Files a glTF names (buffers, images): regular files only, or reading one (a FIFO) would wait forever.
     for (const char* kind : {"buffers", "images"}) {
         const auto list = document.find(kind);
@@ -469,11 +474,13 @@ std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path
             const std::string uri = entry["uri"].get<std::string>();
             if (uri.starts_with("data:")) continue;
             std::error_code error;
-            const std::filesystem::file_status status = std::filesystem::status(file.parent_path() / uri, error);
+            const std::filesystem::file_status status =
+                std::filesystem::status(file.parent_path() / uri, error);
             if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
-                throw InputError(where, fmt::format("'{}': {} '{}' is not a regular file (a folder, a FIFO, a "
-                                                    "device)",
-                                                    name, std::string(kind) == "buffers" ? "buffer" : "image", uri));
+                throw InputError(where,
+                                 fmt::format("'{}': {} '{}' is not a regular file (a folder, a FIFO, a "
+                                             "device)",
+                                             name, std::string(kind) == "buffers" ? "buffer" : "image", uri));
         }
     }
     return document;
@@ -544,7 +551,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
             scene = importer.ReadFile(file.string(), aiProcess_ValidateDataStructure);
         } catch (const std::bad_alloc&) {
             // A count in the data that the header checks cannot see (a PLY face claiming 4e9 indices).
-            throw InputError(where, fmt::format("'{}' is corrupt or too large: reading it ran out of memory", name));
+            throw InputError(where,
+                             fmt::format("'{}' is corrupt or too large: reading it ran out of memory", name));
         }
         if (scene == nullptr) {
             // Validation fails a file of points alone ("Mesh contains no faces"): say what is wrong.

@@ -107,7 +107,8 @@ std::vector<FileMesh> loadMeshFile(const std::filesystem::path& file, const std:
 // files, each an InputError naming `where` and the file.
 inline constexpr size_t kMaxFileNesting = 1000;
 // Returns a glTF's JSON document (for what Assimp does not read), nothing for other files.
-std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path& file, const std::string& where);
+std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path& file,
+                                                     const std::string& where);
 
 // Run by loadMeshFile before Assimp reads anything: checks the element counts a PLY or OFF header claims
 // against the file's size (a truncated file, or a header claiming 3.5e11 vertices in 300 bytes), and the

@@ -558,7 +558,8 @@ bool encloses(const TriangleMesh& mesh, glm::vec3 point) {
 constexpr float kMaxCoordinate = 1e8f;
 
 bool farOut(const glm::vec3& p) {
-    return !(std::abs(p.x) <= kMaxCoordinate && std::abs(p.y) <= kMaxCoordinate && std::abs(p.z) <= kMaxCoordinate);
+    return !(std::abs(p.x) <= kMaxCoordinate && std::abs(p.y) <= kMaxCoordinate &&
+             std::abs(p.z) <= kMaxCoordinate);
 }
 
 std::string pointText(const glm::vec3& p) {
@@ -567,10 +568,11 @@ std::string pointText(const glm::vec3& p) {
 
 void checkCoordinates(const Scene& scene, const std::string& file) {
     const auto fail = [&](const std::string& where, const glm::vec3& p) {
-        throw InputError(file + ": " + where,
-                         fmt::format("at {}: farther out than {:g} world units on an axis, where a 32-bit float "
-                                     "cannot place a ray by a surface",
-                                     pointText(p), kMaxCoordinate));
+        throw InputError(
+            file + ": " + where,
+            fmt::format("at {}: farther out than {:g} world units on an axis, where a 32-bit float "
+                        "cannot place a ray by a surface",
+                        pointText(p), kMaxCoordinate));
     };
     if (farOut(scene.camera.position())) fail("camera", scene.camera.position());
     for (const SequenceFrame& frame : scene.sequence)
@@ -705,7 +707,8 @@ SceneRead readScene(const fs::path& file, const std::vector<std::string>& overri
     std::error_code error;
     const fs::file_status status = fs::status(file, error);
     if (fs::exists(status) && !fs::is_regular_file(status))
-        throw InputError(file.string(), "cannot open scene file: not a regular file (a folder, a FIFO, a device)");
+        throw InputError(file.string(),
+                         "cannot open scene file: not a regular file (a folder, a FIFO, a device)");
     if (error && error != std::errc::no_such_file_or_directory)
         throw InputError(file.string(), "cannot open scene file: " + error.message());
     std::ifstream in(file, std::ios::binary);

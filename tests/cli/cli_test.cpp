@@ -594,16 +594,17 @@ TEST(SceneInfo, VolumeBytesSumsTheMipChain) {
     EXPECT_EQ(deltagi::volumeBytes(128), 16u * (2396745u));  // (8^8 - 1) / 7 voxels
 }
 
-// Numbers on the command line that are not finite are refused before any work, with one line naming the option
-// (CLI11's own range checks take "nan").
+// Numbers on the command line that are not finite are refused before any work, with one line naming the
+// option (CLI11's own range checks take "nan").
 TEST_F(CliTest, OptionsThatAreNotFiniteNumbersAreRefused) {
     const std::string scene = quote(writeScene(tinyScene(), "scene.json").string());
     for (const std::string& args : std::vector<std::string>{
              "bench " + scene + " --motion nan", "bench " + scene + " --camera-motion inf",
-          "stability " + scene + " --object-step nan", "stability " + scene + " --direction 1,nan,0",
-          "eval --suite " + scene + " --checkpoint-minutes nan", "encode f_####.png -o v.mp4 --fps nan",
-          "track v.mp4 --scene " + scene + " -o t.json --max-speed nan", "live " + scene + " --camera v.mp4 --hold -inf",
-          "marker 3 --size nan -o m.png", "render " + scene + " -o x.png --fps nan"}) {
+             "stability " + scene + " --object-step nan", "stability " + scene + " --direction 1,nan,0",
+             "eval --suite " + scene + " --checkpoint-minutes nan", "encode f_####.png -o v.mp4 --fps nan",
+             "track v.mp4 --scene " + scene + " -o t.json --max-speed nan",
+             "live " + scene + " --camera v.mp4 --hold -inf", "marker 3 --size nan -o m.png",
+             "render " + scene + " -o x.png --fps nan"}) {
         const CliResult r = run(args);
         EXPECT_EQ(r.exitCode, 2) << args << ": " << r.err;
         EXPECT_EQ(lineCount(r.err), 1u) << args << ": " << r.err;
@@ -615,10 +616,9 @@ TEST_F(CliTest, OptionsThatAreNotFiniteNumbersAreRefused) {
 TEST_F(CliTest, TwoOutputsThatAreOneFileAreRefused) {
     const std::string scene = quote(writeScene(tinyScene(), "scene.json").string());
     const std::string d = dir_.string();
-    for (const std::string& outputs :
-         std::vector<std::string>{"-o " + d + "/x.exr --layers " + d + "/x.exr",
-                                  "-o " + d + "/background.exr --aov " + d,
-                                  "-o " + d + "/./y.exr --layers " + d + "/sub/../y.exr"}) {
+    for (const std::string& outputs : std::vector<std::string>{
+             "-o " + d + "/x.exr --layers " + d + "/x.exr", "-o " + d + "/background.exr --aov " + d,
+             "-o " + d + "/./y.exr --layers " + d + "/sub/../y.exr"}) {
         const CliResult r = run("render " + scene + " -q " + outputs);
         expectOneErrorLine(r, {"is given twice as an output of this run"});
         EXPECT_FALSE(fs::exists(dir_ / "x.exr") || fs::exists(dir_ / "y.exr")) << outputs;
@@ -628,7 +628,8 @@ TEST_F(CliTest, TwoOutputsThatAreOneFileAreRefused) {
 // An output name too long for its temporary beside it is refused before the work, not after it.
 TEST_F(CliTest, AnOutputNameTooLongForItsTemporaryIsRefusedFirst) {
     const std::string scene = quote(writeScene(tinyScene(), "scene.json").string());
-    const CliResult r = run("render " + scene + " -q -o " + quote((dir_ / (std::string(244, 'a') + ".png")).string()));
+    const CliResult r =
+        run("render " + scene + " -q -o " + quote((dir_ / (std::string(244, 'a') + ".png")).string()));
     expectOneErrorLine(r, {"the file name is 248 bytes", "choose a shorter name"});
     EXPECT_EQ(r.err.find("ms"), std::string::npos) << "rendered first: " << r.err;
 }

@@ -144,11 +144,15 @@ TEST_F(ServeTest, StaysUpThroughMalformedMessagesAndBytesThatAreNotUtf8) {
     ASSERT_TRUE(socket.open());
     std::vector<std::string> messages = {
         "\xff\xfe",
-        R"({"type": ")" "\xff" R"("})",
+        R"({"type": ")"
+        "\xff"
+        R"("})",
         // An error that quotes the value, cut where a two-byte character is cut.
         R"({"type": "drag", "object": 0, "x": ")" + std::string(40, '\xc3') + R"(", "y": 1})",
         R"({"type": "drag", "object": 0, "x": "ééééééééééééééééééééééééééééééééééééééé", "y": 1})",
-        R"({"type": "options", "values": {")" + std::string(30, 'k') + "\xe2\x82" R"(": 1}})",
+        R"({"type": "options", "values": {")" + std::string(30, 'k') +
+            "\xe2\x82"
+            R"(": 1}})",
     };
     std::mt19937 random(7);
     for (int i = 0; i < 1000; ++i) {

@@ -227,7 +227,8 @@ TEST_F(MeshFileTest, DeepNestingAndFifosAreRefusedBeforeAssimp) {
     // 20,000 glTF nodes, each the child of the one before.
     std::string nodes;
     for (int i = 0; i < 20000; ++i)
-        nodes += (i ? "," : "") + (i + 1 < 20000 ? "{\"children\":[" + std::to_string(i + 1) + "]}" : std::string("{}"));
+        nodes += (i ? "," : "") +
+                 (i + 1 < 20000 ? "{\"children\":[" + std::to_string(i + 1) + "]}" : std::string("{}"));
     const std::string asset = R"("asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}])";
     const fs::path chain = write("chain.gltf", "{" + asset + ",\"nodes\":[" + nodes + "]}");
     expectContains(inputErrorOf([&] { loadMeshFile(chain, "where", "chain"); }),
@@ -247,13 +248,15 @@ TEST_F(MeshFileTest, DeepNestingAndFifosAreRefusedBeforeAssimp) {
     // A buffer that is a FIFO.
     const fs::path fifo = dir_ / "buffer.bin";
     ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
-    const fs::path piped = write("piped.gltf", "{" + asset + R"(,"nodes":[{}],"buffers":[{"uri":"buffer.bin","byteLength":36}]})");
+    const fs::path piped = write(
+        "piped.gltf", "{" + asset + R"(,"nodes":[{}],"buffers":[{"uri":"buffer.bin","byteLength":36}]})");
     expectContains(inputErrorOf([&] { loadMeshFile(piped, "where", "p"); }),
                    {"'piped.gltf': buffer 'buffer.bin' is not a regular file"});
     // A scene file that is a FIFO.
     const fs::path scene = dir_ / "scene.json";
     ASSERT_EQ(mkfifo(scene.c_str(), 0600), 0);
-    expectContains(inputErrorOf([&] { loadScene(scene); }), {"scene.json: cannot open scene file: not a regular file"});
+    expectContains(inputErrorOf([&] { loadScene(scene); }),
+                   {"scene.json: cannot open scene file: not a regular file"});
 }
 
 // ---- scenes -----------------------------------------------------------------------------------------------
@@ -303,8 +306,7 @@ TEST_F(MeshFileTest, UnreadableFilesSayWhy) {
     data.append(reinterpret_cast<const char*>(&claimed), 4);
     data.append(12, '\0');
     write("claims.ply", header + data);
-    for (const auto& [file, message] :
-         std::vector<std::pair<std::string, std::string>>{
+    for (const auto& [file, message] : std::vector<std::pair<std::string, std::string>>{
              {(dir_ / "loop-a.ply").string(), "Too many levels of symbolic links"},
              {"/dev/zero", "'/dev/zero' is not a regular file"},
              {(dir_ / "claims.ply").string(), "reading it ran out of memory"}}) {

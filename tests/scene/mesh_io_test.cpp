@@ -527,10 +527,10 @@ TEST_F(MeshIoTest, SceneTexturesOverrideTheFilesAndNeedTextureCoordinates) {
 // (docs/scene-format.md: emission is factor x strength).
 TEST_F(MeshIoTest, GltfEmissiveStrengthMultipliesTheEmissiveFactor) {
     json document;
-    document["materials"] = json::array(
-        {{{"name", "lamp"},
-          {"emissiveFactor", {1.0, 0.5, 0.25}},
-          {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 40.0}}}}}}});
+    document["materials"] =
+        json::array({{{"name", "lamp"},
+                      {"emissiveFactor", {1.0, 0.5, 0.25}},
+                      {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 40.0}}}}}}});
     document["extensionsUsed"] = {"KHR_materials_emissive_strength"};
     const fs::path file = test::writeQuadGltf(dir_, "lamp", document);
     const std::vector<FileMesh> meshes = loadMeshFile(file, "where", "lamp");
