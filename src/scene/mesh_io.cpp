@@ -125,10 +125,16 @@ constexpr double kBytesPerFace = 96.0;
 constexpr double kBytesPerFileByte = 16.0;
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 
+struct PlyProperty {
+    uint64_t bytes = 0;      // a scalar's size, or a list's count's
+    uint64_t itemBytes = 0;  // a list's items' size; 0: a scalar
+};
+
 struct ClaimedElement {
     std::string name;
     uint64_t count = 0;
     uint64_t minBytes = 0;  // the fewest bytes one element takes in the file
+    std::vector<PlyProperty> properties;
 };
 
 constexpr int kMaxPlyHeaderLines = 10000;
@@ -146,7 +152,7 @@ uint64_t streamPosition(std::istream& in) {
 // be well formed, else InputError(where, ...): Assimp's PLY reader crashed or spun on malformed headers
 // (found by scripts/fuzz.sh).
 std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes, const std::string& name,
-                                        const std::string& where) {
+                                        const std::string& where, std::string& plyFormat) {
     static const std::map<std::string, uint64_t> kTypeBytes = {
         {"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},  {"short", 2}, {"ushort", 2},
         {"int16", 2}, {"uint16", 2},  {"int", 4},    {"uint", 4},   {"int32", 4}, {"uint32", 4},
@@ -161,6 +167,7 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes,
             where, fmt::format("'{}' is corrupt: line {} of its PLY header is \"{}\", expected {}", name,
                                lineNumber, shown, expected));
     };
+    plyFormat = "ascii";
     for (int number = 1; number <= kMaxPlyHeaderLines && std::getline(in, line); ++number) {
         if (!line.empty() && line.back() == '\r') line.pop_back();
         if (std::any_of(line.begin(), line.end(),
@@ -178,6 +185,7 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes,
                 (version != "1.0" && version != "1"))
                 throw corrupt(number, "\"format ascii|binary_little_endian|binary_big_endian 1.0\"");
             binary = format != "ascii";
+            plyFormat = format;
         } else if (word == "element") {
             ClaimedElement element;
             // A count beyond 64 bits would slip past the size check.
@@ -196,6 +204,7 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes,
                 throw corrupt(number,
                               "\"property TYPE NAME\" or \"property list TYPE TYPE NAME\" with known types");
             elements.back().minBytes += binary ? size->second : 2;
+            elements.back().properties.push_back({size->second, list ? kTypeBytes.at(itemType) : 0});
         } else if (word == "end_header" && !(words >> extra)) {
             headerBytes = streamPosition(in);
             return elements;
@@ -206,6 +215,50 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes,
     throw InputError(where, fmt::format("'{}' is corrupt: its PLY header has no line \"end_header\" within "
                                         "{} lines",
                                         name, kMaxPlyHeaderLines));
+}
+
+// The lists in a binary PLY's data, element by element: a list whose count claims more items than the bytes
+// left could hold (a face of 4e9 indices) would have Assimp allocate for it; ASCII lists are bounded by their
+// line. Scans at most the elements the file holds.
+void checkPlyLists(std::istream& in, const std::vector<ClaimedElement>& elements, const std::string& format,
+                   uint64_t dataBytes, const std::string& name, const std::string& where) {
+    if (format == "ascii") return;
+    const bool big = format == "binary_big_endian";
+    uint64_t left = dataBytes;
+    auto readCount = [&](uint64_t bytes) -> std::optional<uint64_t> {
+        unsigned char b[8] = {};
+        if (bytes > left || !in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(bytes))) return std::nullopt;
+        left -= bytes;
+        uint64_t v = 0;
+        for (uint64_t i = 0; i < bytes; ++i) v |= static_cast<uint64_t>(b[big ? bytes - 1 - i : i]) << (8 * i);
+        return v;
+    };
+    for (const ClaimedElement& element : elements) {
+        const bool hasList = std::any_of(element.properties.begin(), element.properties.end(),
+                                         [](const PlyProperty& p) { return p.itemBytes > 0; });
+        if (!hasList) {  // fixed size: skip the whole element at once
+            uint64_t size = 0;
+            for (const PlyProperty& p : element.properties) size += p.bytes;
+            const double total = static_cast<double>(size) * static_cast<double>(element.count);
+            if (total > static_cast<double>(left)) return;  // checkMeshFileClaims reports it
+            in.seekg(static_cast<std::streamoff>(size * element.count), std::ios::cur);
+            left -= size * element.count;
+            continue;
+        }
+        for (uint64_t i = 0; i < element.count; ++i)
+            for (const PlyProperty& p : element.properties) {
+                const std::optional<uint64_t> value = readCount(p.bytes);
+                if (!value) return;  // truncated: checkMeshFileClaims or Assimp reports it
+                if (p.itemBytes == 0) continue;
+                const double items = static_cast<double>(*value) * static_cast<double>(p.itemBytes);
+                if (items > static_cast<double>(left))
+                    throw InputError(where, fmt::format("'{}' is truncated or corrupt: {} {} of its data claims a "
+                                                        "list of {} items, more than the {} bytes left hold",
+                                                        name, element.name, i, *value, left));
+                in.seekg(static_cast<std::streamoff>(*value * p.itemBytes), std::ios::cur);
+                left -= *value * p.itemBytes;
+            }
+    }
 }
 
 // OFF: "OFF" (or COFF, NOFF, ...) then "vertices faces edges"; a vertex takes at least "0 0 0\n", a face
@@ -501,7 +554,12 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
                    [](unsigned char c) { return std::tolower(c); });
     // Assimp picks its PLY reader by the extension or by these 3 bytes.
     if (extension == ".ply" || std::string(magic, 3) == "ply")
-        elements = plyElements(in, headerBytes, file.filename().string(), where);
+    {
+        std::string plyFormat;
+        elements = plyElements(in, headerBytes, file.filename().string(), where, plyFormat);
+        checkPlyLists(in, elements, plyFormat, fileBytes - std::min(fileBytes, headerBytes), file.filename().string(),
+                      where);
+    }
     else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
              std::string(magic, 4) == "STOF")
         elements = offElements(in, headerBytes);
