@@ -223,6 +223,8 @@ class Server {
     void openFeeds();
     void readCamera();
     void readLight();
+    template <typename Use>
+    void readFeed(FrameFeed& feed, const char* ended, Use use);
     void stopWithError(std::exception_ptr error);
     void publishState();
     bool hostAllowed(const mg_connection* connection) const;
@@ -544,61 +546,58 @@ void Server::stopWithError(std::exception_ptr error) {
     changed_.notify_all();
 }
 
-// Each frame of the server's camera goes where a page's would; one that a newer replaces before the render
-// thread took it is dropped. Files are replayed at their timestamps' pace, as a camera would give them.
-void Server::readCamera() {
+// Takes `feed`'s frames until the server stops or the source ends (said once on stderr, with `ended`'s text);
+// `use` takes each. A source that fails stops the server with its error.
+template <typename Use>
+void Server::readFeed(FrameFeed& feed, const char* ended, Use use) {
     constexpr auto kPoll = std::chrono::milliseconds(100);
     int64_t frames = 0;
     try {
         while (!stopReading_) {
-            std::optional<FrameFeed::Arrival> arrival = cameraFeed_->takeUntil(Clock::now() + kPoll);
+            std::optional<FrameFeed::Arrival> arrival = feed.takeUntil(Clock::now() + kPoll);
             if (!arrival) {
-                if (!cameraFeed_->ended()) continue;
-                note("deltagi: {}: ended after {} frames; the session goes on over the last\n",
-                     cameraFeed_->source().name(), frames);
+                if (!feed.ended()) continue;
+                note("deltagi: {}: ended after {} frames; the session goes on {}\n", feed.source().name(),
+                     frames, ended);
                 return;
             }
             ++frames;
-            CameraInput input;
-            input.image = std::move(arrival->frame.image);
-            input.arrived = arrival->arrived;
-            input.timeSeconds = arrival->frame.timeSeconds;
-            input.number = arrival->frame.index + 1;
-            std::lock_guard lock(sessionMutex_);
-            cameraDropped_ += arrival->dropped + (cameraInput_ ? 1 : 0);
-            cameraInput_ = std::move(input);
-            changed_.notify_all();
+            use(*arrival);
         }
     } catch (...) {
         stopWithError(std::current_exception());
     }
 }
 
+// Each frame of the server's camera goes where a page's would; one that a newer replaces before the render
+// thread took it is dropped. Files are replayed at their timestamps' pace, as a camera would give them.
+void Server::readCamera() {
+    readFeed(*cameraFeed_, "over the last", [&](FrameFeed::Arrival& arrival) {
+        CameraInput input;
+        input.image = std::move(arrival.frame.image);
+        input.arrived = arrival.arrived;
+        input.timeSeconds = arrival.frame.timeSeconds;
+        input.number = arrival.frame.index + 1;
+        std::lock_guard lock(sessionMutex_);
+        cameraDropped_ += arrival.dropped + (cameraInput_ ? 1 : 0);
+        cameraInput_ = std::move(input);
+        changed_.notify_all();
+    });
+}
+
 // Each light-camera frame, averaged with those before it, becomes the environment of the next frame.
 void Server::readLight() {
-    constexpr auto kPoll = std::chrono::milliseconds(100);
-    try {
-        while (!stopReading_) {
-            std::optional<FrameFeed::Arrival> arrival = lightFeed_->takeUntil(Clock::now() + kPoll);
-            if (!arrival) {
-                if (!lightFeed_->ended()) continue;
-                note("deltagi: {}: ended; the session goes on in its last light\n",
-                     lightFeed_->source().name());
-                return;
-            }
-            const Clock::time_point start = Clock::now();
-            auto environment = std::make_shared<const Environment>(lightCamera_->environment(
-                std::move(arrival->frame.image), arrival->frame.timeSeconds, lightFeed_->source().name()));
-            const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-            std::lock_guard lock(sessionMutex_);
-            pendingEnvironment_ = std::move(environment);
-            ++lightFrames_;
-            environmentMs_ = ms;
-            changed_.notify_all();
-        }
-    } catch (...) {
-        stopWithError(std::current_exception());
-    }
+    readFeed(*lightFeed_, "in its last light", [&](FrameFeed::Arrival& arrival) {
+        const Clock::time_point start = Clock::now();
+        auto environment = std::make_shared<const Environment>(lightCamera_->environment(
+            std::move(arrival.frame.image), arrival.frame.timeSeconds, lightFeed_->source().name()));
+        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        std::lock_guard lock(sessionMutex_);
+        pendingEnvironment_ = std::move(environment);
+        ++lightFrames_;
+        environmentMs_ = ms;
+        changed_.notify_all();
+    });
 }
 
 void Server::handleMessages() {

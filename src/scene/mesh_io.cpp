@@ -227,10 +227,12 @@ void checkPlyLists(std::istream& in, const std::vector<ClaimedElement>& elements
     uint64_t left = dataBytes;
     auto readCount = [&](uint64_t bytes) -> std::optional<uint64_t> {
         unsigned char b[8] = {};
-        if (bytes > left || !in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(bytes))) return std::nullopt;
+        if (bytes > left || !in.read(reinterpret_cast<char*>(b), static_cast<std::streamsize>(bytes)))
+            return std::nullopt;
         left -= bytes;
         uint64_t v = 0;
-        for (uint64_t i = 0; i < bytes; ++i) v |= static_cast<uint64_t>(b[big ? bytes - 1 - i : i]) << (8 * i);
+        for (uint64_t i = 0; i < bytes; ++i)
+            v |= static_cast<uint64_t>(b[big ? bytes - 1 - i : i]) << (8 * i);
         return v;
     };
     for (const ClaimedElement& element : elements) {
@@ -252,9 +254,10 @@ void checkPlyLists(std::istream& in, const std::vector<ClaimedElement>& elements
                 if (p.itemBytes == 0) continue;
                 const double items = static_cast<double>(*value) * static_cast<double>(p.itemBytes);
                 if (items > static_cast<double>(left))
-                    throw InputError(where, fmt::format("'{}' is truncated or corrupt: {} {} of its data claims a "
-                                                        "list of {} items, more than the {} bytes left hold",
-                                                        name, element.name, i, *value, left));
+                    throw InputError(where,
+                                     fmt::format("'{}' is truncated or corrupt: {} {} of its data claims a "
+                                                 "list of {} items, more than the {} bytes left hold",
+                                                 name, element.name, i, *value, left));
                 in.seekg(static_cast<std::streamoff>(*value * p.itemBytes), std::ios::cur);
                 left -= *value * p.itemBytes;
             }
@@ -489,9 +492,7 @@ std::vector<float> gltfEmissiveStrengths(const nlohmann::json& document) {
 std::optional<nlohmann::json> checkMeshFileStructure(const std::filesystem::path& file,
                                                      const std::string& where) {
     const std::string name = file.filename().string();
-    std::string extension = file.extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
+    const std::string extension = lowerExtension(file);
     const bool gltf = extension == ".gltf", glb = extension == ".glb",
                xml = extension == ".dae" || extension == ".xml";
     if (!gltf && !glb && !xml) return std::nullopt;
@@ -549,19 +550,15 @@ void checkMeshFileClaims(const std::filesystem::path& file, const std::string& w
     in.seekg(0);
     std::vector<ClaimedElement> elements;
     uint64_t headerBytes = 0;
-    std::string extension = file.extension().string();
-    std::transform(extension.begin(), extension.end(), extension.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
+    const std::string extension = lowerExtension(file);
     // Assimp picks its PLY reader by the extension or by these 3 bytes.
-    if (extension == ".ply" || std::string(magic, 3) == "ply")
-    {
+    if (extension == ".ply" || std::string(magic, 3) == "ply") {
         std::string plyFormat;
         elements = plyElements(in, headerBytes, file.filename().string(), where, plyFormat);
-        checkPlyLists(in, elements, plyFormat, fileBytes - std::min(fileBytes, headerBytes), file.filename().string(),
-                      where);
-    }
-    else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
-             std::string(magic, 4) == "STOF")
+        checkPlyLists(in, elements, plyFormat, fileBytes - std::min(fileBytes, headerBytes),
+                      file.filename().string(), where);
+    } else if (std::string(magic, 3) == "OFF" || std::string(magic + 1, 3) == "OFF" ||
+               std::string(magic, 4) == "STOF")
         elements = offElements(in, headerBytes);
 
     double neededMemory = 0.0, neededBytes = 0.0;
