@@ -1,10 +1,10 @@
 // `deltagi serve`: the web server, the render thread and the clients' senders (serve_command.h).
 //
-// Threads: civetweb's workers answer HTTP requests and read each WebSocket's messages, which go to the
-// session's handler under `sessionMutex`; one render thread owns the renderers and their scenes, copies the
-// session's scene when it changed, renders, encodes the view as a JPEG and hands it to every client; each
-// client has a sender thread that writes its replies, the latest state and the latest frame (a frame not
-// yet sent when a newer one comes is dropped: no queue grows when a browser is slower than the renderer).
+// Threads: the web server's two (web_server.h) answer HTTP requests, read each WebSocket's messages and write
+// to each what its Client has waiting; a handler thread passes the messages to the session under
+// `sessionMutex_`; one render thread owns the renderers and their scenes, copies the session's scene when it
+// changed, renders, encodes the view as a JPEG and hands it to every client (a frame not yet sent when a
+// newer one comes is dropped: no queue grows when a browser is slower than the renderer).
 //
 // A page may send the frames of the user's camera (getUserMedia) as binary messages, JPEGs of the scene
 // camera's size: the newest waits for the render thread (one that a newer replaces is dropped, and counted),
@@ -12,7 +12,6 @@
 #include "serve_command.h"
 
 #include <arpa/inet.h>
-#include <civetweb.h>
 
 #include <algorithm>
 #include <atomic>
@@ -43,6 +42,7 @@
 #include "messages.h"
 #include "track_command.h"
 #include "web_assets.h"
+#include "web_server.h"
 
 namespace deltagi::cli {
 namespace {
@@ -67,95 +67,70 @@ struct Frame {
     std::string jpeg;
 };
 
+// One page's socket: what is to be sent to it waits here, and the socket takes it (next()) whenever it has
+// written the previous message. Replies queue (the oldest are dropped beyond kMaxQueuedReplies); of the
+// states and the frames only the newest waits: a frame not yet sent when a newer one comes is dropped, and no
+// queue grows when a browser is slower than the renderer.
 class Client {
   public:
-    Client(mg_connection* connection, int id) : connection_(connection), id_(id) {
-        sender_ = std::thread([this] { send(); });
-    }
-    ~Client() { close(); }
+    Client(std::weak_ptr<WebSocket> socket, int id) : socket_(std::move(socket)), id_(id) {}
     int id() const { return id_; }
-    // The camera frames this client sent (numbered from 1); civetweb reads one connection's messages on one
-    // thread.
+    // The camera frames this client sent (numbered from 1); one socket's messages come one at a time.
     int64_t cameraFrames = 0;
-    // A message arriving in fragments (read on that thread too).
-    struct Fragments {
-        int opcode = 0;
-        std::string data;
-        size_t size = 0;
-        bool open = false;
-    } fragments;
 
     void reply(std::string text) {
-        std::lock_guard lock(mutex_);
-        if (replies_.size() >= kMaxQueuedReplies) replies_.pop_front();
-        replies_.push_back(std::move(text));
-        wake_.notify_one();
-    }
-    void state(std::shared_ptr<const std::string> state) {
-        std::lock_guard lock(mutex_);
-        state_ = std::move(state);
-        wake_.notify_one();
-    }
-    void frame(std::shared_ptr<const Frame> frame) {
-        std::lock_guard lock(mutex_);
-        frame_ = std::move(frame);
-        wake_.notify_one();
-    }
-    // Stops the sender; civetweb frees the connection only after its close handler returns.
-    void close() {
         {
             std::lock_guard lock(mutex_);
-            closed_ = true;
-            wake_.notify_one();
+            if (replies_.size() >= kMaxQueuedReplies) replies_.pop_front();
+            replies_.push_back(std::make_shared<const std::string>(std::move(text)));
         }
-        if (sender_.joinable()) sender_.join();
+        wake();
+    }
+    void state(std::shared_ptr<const std::string> state) {
+        {
+            std::lock_guard lock(mutex_);
+            state_ = std::move(state);
+        }
+        wake();
+    }
+    void frame(std::shared_ptr<const Frame> frame) {
+        {
+            std::lock_guard lock(mutex_);
+            frame_ = std::move(frame);
+        }
+        wake();
+    }
+    // The next message to write: the replies, the state, then the frame's info and its picture.
+    std::optional<WebSocketMessage> next() {
+        std::lock_guard lock(mutex_);
+        if (picture_) return WebSocketMessage{true, std::exchange(picture_, nullptr)};
+        if (!replies_.empty()) {
+            WebSocketMessage message{false, std::move(replies_.front())};
+            replies_.pop_front();
+            return message;
+        }
+        if (state_) return WebSocketMessage{false, std::exchange(state_, nullptr)};
+        if (frame_ && frame_->number != sent_) {
+            sent_ = frame_->number;
+            picture_ = std::shared_ptr<const std::string>(frame_, &frame_->jpeg);
+            return WebSocketMessage{false, std::shared_ptr<const std::string>(frame_, &frame_->info)};
+        }
+        return std::nullopt;
     }
 
   private:
-    void send() {
-        uint64_t sent = 0;
-        for (;;) {
-            std::deque<std::string> replies;
-            std::shared_ptr<const std::string> state;
-            std::shared_ptr<const Frame> frame;
-            {
-                std::unique_lock lock(mutex_);
-                wake_.wait(lock, [&] {
-                    return closed_ || !replies_.empty() || state_ || (frame_ && frame_->number != sent);
-                });
-                if (closed_) return;
-                replies.swap(replies_);
-                state.swap(state_);
-                if (frame_ && frame_->number != sent) frame = frame_;
-            }
-            bool ok = true;
-            for (const std::string& text : replies) ok = ok && write(MG_WEBSOCKET_OPCODE_TEXT, text);
-            if (state) ok = ok && write(MG_WEBSOCKET_OPCODE_TEXT, *state);
-            if (frame) {
-                ok = ok && write(MG_WEBSOCKET_OPCODE_TEXT, frame->info) &&
-                     write(MG_WEBSOCKET_OPCODE_BINARY, frame->jpeg);
-                sent = frame->number;
-            }
-            if (!ok) {  // the browser went away: wait for the close handler
-                std::unique_lock lock(mutex_);
-                wake_.wait(lock, [&] { return closed_; });
-                return;
-            }
-        }
-    }
-    bool write(int opcode, const std::string& data) {
-        return mg_websocket_write(connection_, opcode, data.data(), data.size()) > 0;
+    void wake() {
+        if (std::shared_ptr<WebSocket> socket = socket_.lock()) socket->wake();
     }
 
-    mg_connection* connection_;
+    std::weak_ptr<WebSocket> socket_;
     int id_;
     std::mutex mutex_;
-    std::condition_variable wake_;
-    std::deque<std::string> replies_;
+    std::deque<std::shared_ptr<const std::string>> replies_;
     std::shared_ptr<const std::string> state_;
     std::shared_ptr<const Frame> frame_;
-    bool closed_ = false;
-    std::thread sender_;
+    std::shared_ptr<const std::string> picture_;  // the picture of the frame whose info went last
+    uint64_t sent_ = 0;
 };
 
 bool isLoopback(const std::string& host) {
@@ -200,19 +175,15 @@ class Server {
 
     int run();
 
-    // civetweb's callbacks
-    int onRequest(mg_connection* connection);
-    bool acceptWebSocket(const mg_connection* connection);
-    void onReady(mg_connection* connection);
-    // One WebSocket frame: a message, or a fragment of one (civetweb hands fragments on as they come;
-    // browsers fragment large binary messages).
-    void onFrame(mg_connection* connection, int bits, const char* data, size_t size);
-    void onMessage(const std::shared_ptr<Client>& client, int opcode, const char* data, size_t size);
-    void onClose(const mg_connection* connection);
-    std::string lastLog;
-
   private:
-    void onCameraFrame(const std::shared_ptr<Client>& client, const char* data, size_t size);
+    // The web server's handlers (web_server.h).
+    HttpResponse onRequest(const HttpRequest& request);
+    bool acceptWebSocket(const HttpRequest& request);
+    std::function<std::optional<WebSocketMessage>()> onOpen(const std::shared_ptr<WebSocket>& socket);
+    void onMessage(const std::shared_ptr<WebSocket>& socket, bool binary, std::string_view data);
+    void onClose(const std::shared_ptr<WebSocket>& socket);
+
+    void onCameraFrame(const std::shared_ptr<Client>& client, std::string_view data);
     // Decodes and registers a camera frame; false (the client told why) when it cannot be.
     bool registerFrame(const CameraInput& input, int64_t dropped, TrackedFrame& tracked, Image& image,
                        json& info);
@@ -227,7 +198,7 @@ class Server {
     void readFeed(FrameFeed& feed, const char* ended, Use use);
     void stopWithError(std::exception_ptr error);
     void publishState();
-    bool hostAllowed(const mg_connection* connection) const;
+    bool hostAllowed(const HttpRequest& request) const;
 
     ServeArgs args_;
     std::mutex sessionMutex_;  // the session and the fields below it
@@ -255,8 +226,8 @@ class Server {
     std::pair<int, int> cameraSize_;
     const Clock::time_point started_ = Clock::now();
 
-    // Messages wait here for the handler thread: civetweb's threads have a small stack, and a message is
-    // parsed and checked on a thread of this program's own.
+    // Messages wait here for the handler thread, which parses and checks them: the web server's threads only
+    // move bytes.
     struct Incoming {
         std::shared_ptr<Client> client;
         std::string text;
@@ -267,7 +238,7 @@ class Server {
     bool stopHandler_ = false;
 
     std::mutex clientsMutex_;
-    std::map<const mg_connection*, std::shared_ptr<Client>> clients_;
+    std::map<const WebSocket*, std::shared_ptr<Client>> clients_;
     int nextClient_ = 1;
     int port_ = 0;
 };
@@ -277,10 +248,9 @@ class Server {
 // through the user's browser, sends that name), by "localhost" or by a name the user allowed (--allow-host),
 // with this server's port or none; and a WebSocket's Origin, when given, is this server's page
 // ("http://" + Host): a page of another site cannot open the session's socket.
-bool Server::hostAllowed(const mg_connection* connection) const {
-    const char* header = mg_get_header(connection, "Host");
-    if (!header) return false;
-    const std::string host(header);
+bool Server::hostAllowed(const HttpRequest& request) const {
+    if (!request.host) return false;
+    const std::string& host = *request.host;
     std::string name = host, port;
     const size_t close = host.find(']');
     const size_t colon = host.rfind(':');
@@ -293,17 +263,7 @@ bool Server::hostAllowed(const mg_connection* connection) const {
         name == "localhost" || isAddress(name) ||
         std::find(args_.allowedHosts.begin(), args_.allowedHosts.end(), name) != args_.allowedHosts.end();
     if (!named) return false;
-    const char* origin = mg_get_header(connection, "Origin");
-    return !origin || std::string(origin) == "http://" + host;
-}
-
-void respond(mg_connection* connection, int status, const char* statusText, const char* type,
-             const std::string& body, const char* extraHeaders = "") {
-    mg_printf(connection,
-              "HTTP/1.1 %d %s\r\nContent-Type: %s\r\nContent-Length: %zu\r\nCache-Control: no-store\r\n"
-              "X-Content-Type-Options: nosniff\r\n%sConnection: close\r\n\r\n",
-              status, statusText, type, body.size(), extraHeaders);
-    mg_write(connection, body.data(), body.size());
+    return !request.origin || *request.origin == "http://" + host;
 }
 
 const char* contentType(const std::string& name) {
@@ -314,36 +274,30 @@ const char* contentType(const std::string& name) {
 }
 
 // Only the page's own files and two generated downloads; no name from a request reaches the file system.
-int Server::onRequest(mg_connection* connection) {
-    const mg_request_info* request = mg_get_request_info(connection);
-    const std::string uri = request->local_uri ? request->local_uri : "";
-    const std::string method = request->request_method ? request->request_method : "";
-    if (!hostAllowed(connection)) {
-        respond(connection, 403, "Forbidden", "text/plain",
+HttpResponse Server::onRequest(const HttpRequest& request) {
+    if (!hostAllowed(request))
+        return {403,
+                "text/plain",
                 "deltagi serve: unexpected Host or Origin (open the page by this machine's address, "
-                "localhost, or a name given with --allow-host)\n");
-        return 403;
-    }
-    if (method != "GET" && method != "HEAD") {
-        respond(connection, 405, "Method Not Allowed", "text/plain", "GET only\n");
-        return 405;
-    }
-    const std::string name = uri == "/" ? "index.html" : uri.substr(1);
+                "localhost, or "
+                "a name given with --allow-host)\n",
+                {}};
+    if (request.method != "GET" && request.method != "HEAD") return {405, "text/plain", "GET only\n", {}};
+    const std::string name = request.path == "/" ? "index.html" : request.path.substr(1);
     for (const assets::Asset& asset : assets::kAssets)
-        if (name == asset.name) {
-            respond(connection, 200, "OK", contentType(name),
-                    std::string(reinterpret_cast<const char*>(asset.data), asset.size));
-            return 200;
-        }
+        if (name == asset.name)
+            return {200,
+                    contentType(name),
+                    std::string(reinterpret_cast<const char*>(asset.data), asset.size),
+                    {}};
     if (name == "scene.json") {
         std::string text;
         {
             std::lock_guard lock(sessionMutex_);
             text = live::jsonText(session_.document(), 2) + "\n";
         }
-        respond(connection, 200, "OK", "application/json", text,
-                "Content-Disposition: attachment; filename=\"scene.json\"\r\n");
-        return 200;
+        return {
+            200, "application/json", text, {{"Content-Disposition", "attachment; filename=\"scene.json\""}}};
     }
     if (name == "image.png") {
         std::shared_ptr<const Image> composite;
@@ -353,98 +307,59 @@ int Server::onRequest(mg_connection* connection) {
             composite = latestComposite_;
             refined = latestRefined_;
         }
-        if (!composite) {
-            respond(connection, 503, "Service Unavailable", "text/plain", "no frame yet\n");
-            return 503;
-        }
-        try {
-            respond(
-                connection, 200, "OK", "image/png", live::encodePng(*composite),
-                refined
-                    ? "Content-Disposition: attachment; filename=\"image.png\"\r\nX-Deltagi-Refined: 1\r\n"
-                    : "Content-Disposition: attachment; filename=\"image.png\"\r\nX-Deltagi-Refined: 0\r\n");
-        } catch (const std::exception& e) {
-            respond(connection, 500, "Internal Server Error", "text/plain", std::string(e.what()) + "\n");
-        }
-        return 200;
+        if (!composite) return {503, "text/plain", "no frame yet\n", {}};
+        return {200,
+                "image/png",
+                live::encodePng(*composite),
+                {{"Content-Disposition", "attachment; filename=\"image.png\""},
+                 {"X-Deltagi-Refined", refined ? "1" : "0"}}};
     }
-    respond(connection, 404, "Not Found", "text/plain", "not found\n");
-    return 404;
+    return {404, "text/plain", "not found\n", {}};
 }
 
-bool Server::acceptWebSocket(const mg_connection* connection) {
-    if (!hostAllowed(connection)) return false;
+bool Server::acceptWebSocket(const HttpRequest& request) {
+    if (!hostAllowed(request)) return false;
     std::lock_guard lock(clientsMutex_);
     return clients_.size() < kMaxClients;
 }
 
-void Server::onReady(mg_connection* connection) {
+std::function<std::optional<WebSocketMessage>()> Server::onOpen(const std::shared_ptr<WebSocket>& socket) {
     std::shared_ptr<Client> client;
     {
         std::lock_guard lock(clientsMutex_);
-        client = std::make_shared<Client>(connection, nextClient_++);
-        clients_[connection] = client;
+        client = std::make_shared<Client>(socket, nextClient_++);
+        clients_[socket.get()] = client;
     }
     json hello = {{"type", "hello"}, {"client", client->id()}};
     // The server's own camera (live --serve): the page shows its frames and offers none of its own.
     if (cameraFeed_) hello["camera"] = cameraFeed_->source().name();
     client->reply(live::jsonText(hello));
-    std::lock_guard lock(sessionMutex_);
-    client->state(std::make_shared<const std::string>(live::jsonText(session_.state())));
-    if (latestFrame_) client->frame(latestFrame_);
+    {
+        std::lock_guard lock(sessionMutex_);
+        client->state(std::make_shared<const std::string>(live::jsonText(session_.state())));
+        if (latestFrame_) client->frame(latestFrame_);
+    }
+    return [client] { return client->next(); };
 }
 
-// A message in fragments is put together here, bounded by the largest message of its kind: the rest of an
-// oversized one is dropped as it comes, and the message is refused as an unfragmented one of its size is.
-void Server::onFrame(mg_connection* connection, int bits, const char* data, size_t size) {
+// A message, put together from its fragments by the web server, which refuses one over kMaxCameraFrameBytes
+// from its header; a text message is checked further by the session (16 KiB, JSON).
+void Server::onMessage(const std::shared_ptr<WebSocket>& socket, bool binary, std::string_view data) {
     std::shared_ptr<Client> client;
     {
         std::lock_guard lock(clientsMutex_);
-        auto it = clients_.find(connection);
+        auto it = clients_.find(socket.get());
         if (it == clients_.end()) return;
         client = it->second;
     }
-    const int opcode = bits & 0xf;
-    const bool final = (bits & 0x80) != 0;
-    Client::Fragments& f = client->fragments;
-    if (opcode != MG_WEBSOCKET_OPCODE_CONTINUATION) {
-        if (final) {
-            onMessage(client, opcode, data, size);
-            return;
-        }
-        f = Client::Fragments{opcode, {}, 0, true};
-    } else if (!f.open) {
-        return;  // a continuation of nothing
-    }
-    const size_t limit =
-        f.opcode == MG_WEBSOCKET_OPCODE_BINARY ? kMaxCameraFrameBytes : live::kMaxMessageBytes;
-    f.size += size;
-    if (f.size <= limit) f.data.append(data, size);
-    if (!final) return;
-    f.open = false;
-    if (f.size > limit) {
-        const std::string nothing;
-        onMessage(client, f.opcode, nothing.data(), f.size);  // refused by its size, no bytes read
-    } else {
-        onMessage(client, f.opcode, f.data.data(), f.data.size());
-    }
-    f.data = std::string();
-}
-
-void Server::onMessage(const std::shared_ptr<Client>& client, int opcode, const char* data, size_t size) {
-    if (opcode == MG_WEBSOCKET_OPCODE_BINARY) {
-        onCameraFrame(client, data, size);
+    if (binary) {
+        onCameraFrame(client, data);
         return;
     }
-    if (opcode != MG_WEBSOCKET_OPCODE_TEXT) {
-        client->reply(
-            live::jsonText(json{{"type", "error"}, {"message", "message: expected a JSON text message"}}));
-        return;
-    }
-    if (size > live::kMaxMessageBytes) {  // refused as the handler refuses it, without a copy
-        client->reply(live::jsonText(
-            json{{"type", "error"},
-                 {"message", fmt::format("message: {} bytes, more than {}", size, live::kMaxMessageBytes)}}));
+    if (data.size() > live::kMaxMessageBytes) {  // refused as the handler refuses it, without a copy
+        client->reply(live::jsonText(json{{"type", "error"},
+                                          {"message", fmt::format("message: {} bytes, more than {}",
+                                                                  data.size(), live::kMaxMessageBytes)}}));
         return;
     }
     std::lock_guard lock(inboxMutex_);
@@ -453,20 +368,14 @@ void Server::onMessage(const std::shared_ptr<Client>& client, int opcode, const 
             json{{"type", "error"}, {"message", "message: too many messages waiting; dropped"}}));
         return;
     }
-    inbox_.push_back({client, std::string(data, size)});
+    inbox_.push_back({client, std::string(data)});
     inboxWake_.notify_one();
 }
 
-void Server::onCameraFrame(const std::shared_ptr<Client>& client, const char* data, size_t size) {
+void Server::onCameraFrame(const std::shared_ptr<Client>& client, std::string_view data) {
     const int64_t number = ++client->cameraFrames;
-    if (size > kMaxCameraFrameBytes) {
-        client->reply(live::jsonText(json{{"type", "error"},
-                                          {"message", fmt::format("camera frame {}: {} bytes, more than {}",
-                                                                  number, size, kMaxCameraFrameBytes)}}));
-        return;
-    }
     CameraInput input;
-    input.jpeg.assign(data, size);
+    input.jpeg.assign(data);
     input.arrived = Clock::now();
     input.timeSeconds = std::chrono::duration<double>(input.arrived - started_).count();
     input.client = client;
@@ -621,16 +530,9 @@ void Server::handleMessages() {
     }
 }
 
-void Server::onClose(const mg_connection* connection) {
-    std::shared_ptr<Client> client;
-    {
-        std::lock_guard lock(clientsMutex_);
-        auto it = clients_.find(connection);
-        if (it == clients_.end()) return;
-        client = it->second;
-        clients_.erase(it);
-    }
-    client->close();
+void Server::onClose(const std::shared_ptr<WebSocket>& socket) {
+    std::lock_guard lock(clientsMutex_);
+    clients_.erase(socket.get());
 }
 
 void Server::publishState() {
@@ -842,51 +744,18 @@ int Server::run() {
                    "deltagi: warning: listening on {}: anyone who can reach this machine there can watch and "
                    "change the session (the default, 127.0.0.1, is this machine only)\n",
                    args_.host);
-    // civetweb's form: 127.0.0.1:8080, [::1]:8080
-    const std::string address = args_.host == "localhost" ? "127.0.0.1" : args_.host;
-    const std::string ports = address.find(':') != std::string::npos
-                                  ? fmt::format("[{}]:{}", address, args_.port)
-                                  : fmt::format("{}:{}", address, args_.port);
-    mg_init_library(MG_FEATURES_WEBSOCKET);
-    mg_callbacks callbacks{};
-    callbacks.log_message = [](const mg_connection* connection, const char* message) {
-        auto* self = static_cast<Server*>(mg_get_user_data(mg_get_context(connection)));
-        if (self) self->lastLog = message;
-        return 1;
+    WebServer::Handlers handlers;
+    handlers.request = [this](const HttpRequest& request) { return onRequest(request); };
+    handlers.acceptWebSocket = [this](const HttpRequest& request) { return acceptWebSocket(request); };
+    handlers.open = [this](const std::shared_ptr<WebSocket>& socket) { return onOpen(socket); };
+    handlers.message = [this](const std::shared_ptr<WebSocket>& socket, bool binary, std::string_view data) {
+        onMessage(socket, binary, data);
     };
-    const char* options[] = {
-        // A thread per connection: enough for the clients (kMaxClients) and as many slow or idle connections
-        // again, each of which gives up its thread after the request timeout.
-        "listening_ports", ports.c_str(),        "num_threads", "128",  "websocket_timeout_ms",
-        "3600000",         "request_timeout_ms", "5000",        nullptr};
-    mg_context* context = mg_start(&callbacks, this, options);
-    if (!context) {
-        mg_exit_library();
-        throw InputError(fmt::format("serve: {}", ports),
-                         fmt::format("cannot listen{} (is the port in use? --port 0 takes any free one)",
-                                     lastLog.empty() ? "" : ": " + lastLog));
-    }
-    mg_server_port listening[4]{};
-    const int count = mg_get_server_ports(context, 4, listening);
-    port_ = count > 0 ? listening[0].port : args_.port;
-    mg_set_request_handler(
-        context, "/", [](mg_connection* c, void* self) { return static_cast<Server*>(self)->onRequest(c); },
-        this);
-    mg_set_websocket_handler(
-        context, "/ws",
-        [](const mg_connection* c, void* self) {
-            return static_cast<Server*>(self)->acceptWebSocket(c) ? 0 : 1;
-        },
-        [](mg_connection* c, void* self) { static_cast<Server*>(self)->onReady(c); },
-        [](mg_connection* c, int bits, char* data, size_t size, void* self) {
-            const int opcode = bits & 0xf;
-            if (opcode == MG_WEBSOCKET_OPCODE_CONNECTION_CLOSE) return 0;
-            if (opcode == MG_WEBSOCKET_OPCODE_PING || opcode == MG_WEBSOCKET_OPCODE_PONG) return 1;
-            static_cast<Server*>(self)->onFrame(c, bits, data, size);
-            return 1;
-        },
-        [](const mg_connection* c, void* self) { static_cast<Server*>(self)->onClose(c); }, this);
-
+    handlers.close = [this](const std::shared_ptr<WebSocket>& socket) { onClose(socket); };
+    WebServer::Limits limits;
+    limits.maxMessageBytes = kMaxCameraFrameBytes;
+    WebServer web(args_.host, args_.port, limits, std::move(handlers));
+    port_ = web.port();
     std::thread handler([this] { handleMessages(); });
     std::thread renderer([this] { renderLoop(); });
     if (cameraFeed_) cameraReader_ = std::thread([this] { readCamera(); });
@@ -905,8 +774,7 @@ int Server::run() {
         inboxWake_.notify_all();
     }
     handler.join();
-    mg_stop(context);
-    mg_exit_library();
+    web.stop();
     if (feedError_) std::rethrow_exception(feedError_);
     return 0;
 }

@@ -18,7 +18,7 @@ packages=(
   libembree-dev libtbb-dev libassimp-dev libopenimageio-dev
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev libxxhash-dev
   libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libavdevice-dev libapriltag-dev
-  libcivetweb-dev
+  libboost-dev
 )
 if [ "$render_only" = 0 ]; then
   # The tests, the microbenchmarks, the Python module and the browser test.

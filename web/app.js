@@ -47,8 +47,10 @@ function connect() {
   socket = new WebSocket(`ws://${location.host}/ws`);
   socket.binaryType = 'blob';
   socket.onopen = () => status('connected');
-  socket.onclose = () => {
+  socket.onclose = (event) => {
     status('disconnected; trying again');
+    // The server closes a socket that sent a message over its bound (a camera frame over 8 MiB).
+    if (event.code === 1009) showError('the server refused a message as too large (over 8 MiB)');
     inFlight = [];
     setTimeout(connect, 1000);
   };
