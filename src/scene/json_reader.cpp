@@ -293,24 +293,33 @@ glm::mat4 JsonNode::matrix4() const {
 
 namespace {
 
-constexpr int kVolumeCount = 4;                // two visibility and two light volumes
-constexpr double kBytesPerVoxel = 16.0;        // 4 floats
-constexpr double kMipChainFactor = 8.0 / 7.0;  // 1 + 1/8 + 1/64 + ...
+// Per voxel of the volumes' finest level: the four volumes with their mip chains take 73 bytes (4 x 4 floats x
+// 8/7), but a render's peak holds about 290-320 (measured at 64^3-256^3: the voxelization's grids, the
+// injection's, the real scene's cached light beside the frame's), rounded up.
+constexpr double kBytesPerVoxel = 320.0;
 constexpr double kRsmFaces = 6.0;              // a cube map per light (the worst case: point lights)
 // Per light, the map of the scene alone and the update of its texels that meet the objects (in the worst
 // case, all of them): about 155 MB per light at the default 512^2, as measured (issue 11).
 constexpr double kRsmMapsPerLight = 2.0;
 constexpr double kBytesPerRsmTexel = 48.0;       // position, normal, flux (3 floats each) and depth, padded
-constexpr double kBytesPerGBufferSample = 64.0;  // position, normal, albedo, specular, roughness, ids
+// The frame's images, measured as peaks of `deltagi render` (tests/cli/memory_guard_test.cpp): about 485
+// bytes per pixel at 1 sample per pixel, 26-33 more per further sample (the G-buffers of the scene with and
+// without the objects, the cone tracing's and the filters' images, the layers and the outputs), rounded up.
+constexpr double kBytesPerPixel = 512.0;
+constexpr double kBytesPerSample = 40.0;
+// A triangle as rendered, measured alike (about 250 bytes): the mesh, its object-space copy, Embree's BVH.
+constexpr double kBytesPerTriangle = 256.0;
+// The program, its libraries, its threads and the images of a small frame.
+constexpr double kBaseBytes = 200.0e6;
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 
 struct MemoryParts {
-    double volumes, rsms, gbuffer;
-    double total() const { return volumes + rsms + gbuffer; }
+    double volumes, rsms, gbuffer, meshes;
+    double total() const { return kBaseBytes + volumes + rsms + gbuffer + meshes; }
 };
 
-MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lightCount,
-                        size_t directionalCount) {
+MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lightCount, size_t directionalCount,
+                        uint64_t triangles) {
     const double r = options.volume.resolution;
     // Each light's largest map: the importance of "auto" only makes some smaller.
     auto texels = [&](bool directional) {
@@ -318,39 +327,45 @@ MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lig
             rsmResolutionCeiling(options.rsm.resolution, options.volume.resolution, directional);
         return side * side * kRsmFaces * kRsmMapsPerLight;
     };
-    return {kVolumeCount * kBytesPerVoxel * r * r * r * kMipChainFactor,
+    return {kBytesPerVoxel * r * r * r,
             kBytesPerRsmTexel * (texels(false) * static_cast<double>(lightCount) +
                                  texels(true) * static_cast<double>(directionalCount)),
-            static_cast<double>(camera.width) * camera.height * options.render.samplesPerPixel *
-                kBytesPerGBufferSample};
+            static_cast<double>(camera.width) * camera.height *
+                (kBytesPerPixel + kBytesPerSample * options.render.samplesPerPixel),
+            static_cast<double>(triangles) * kBytesPerTriangle};
 }
 
 }  // namespace
 
 uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
-                              size_t directionalCount) {
-    return static_cast<uint64_t>(memoryParts(options, camera, lightCount, directionalCount).total());
+                              size_t directionalCount, uint64_t triangles) {
+    return static_cast<uint64_t>(memoryParts(options, camera, lightCount, directionalCount, triangles).total());
 }
 
 void checkRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
-                       uint64_t physicalMemoryBytes, const std::string& file, size_t directionalCount) {
-    MemoryParts parts = memoryParts(options, camera, lightCount, directionalCount);
+                       uint64_t physicalMemoryBytes, const std::string& file, size_t directionalCount,
+                       uint64_t triangles) {
+    MemoryParts parts = memoryParts(options, camera, lightCount, directionalCount, triangles);
     if (parts.total() <= static_cast<double>(physicalMemoryBytes)) return;
     // Name what dominates: the G-buffer grows with the camera's resolution (and
     // options.render.samples_per_pixel).
     std::string key = parts.rsms > parts.volumes ? "options.rsm.resolution" : "options.volume.resolution";
     std::string what;
-    if (parts.gbuffer > std::max(parts.rsms, parts.volumes)) {
+    if (parts.gbuffer > std::max({parts.rsms, parts.volumes, parts.meshes})) {
         key = "camera";
         what = fmt::format("{}x{} pixels at {} samples per pixel: ", camera.width, camera.height,
                            options.render.samplesPerPixel);
+    } else if (parts.meshes > std::max(parts.rsms, parts.volumes)) {
+        key = "meshes";
+        what = fmt::format("{} triangles: ", triangles);
     }
     throw InputError(
         file + ": " + key,
         what + fmt::format("the render needs about {:.1f} GiB (volumes {:.1f} GiB, reflective shadow maps "
-                           "{:.1f} GiB, G-buffer {:.1f} GiB), more than the {:.1f} GiB of physical memory",
-                           parts.total() / kGiB, parts.volumes / kGiB, parts.rsms / kGiB,
-                           parts.gbuffer / kGiB, static_cast<double>(physicalMemoryBytes) / kGiB));
+                           "{:.1f} GiB, frame images {:.1f} GiB, meshes {:.1f} GiB), more than the {:.1f} GiB "
+                           "of physical memory",
+                           parts.total() / kGiB, parts.volumes / kGiB, parts.rsms / kGiB, parts.gbuffer / kGiB,
+                           parts.meshes / kGiB, static_cast<double>(physicalMemoryBytes) / kGiB));
 }
 
 uint64_t physicalMemoryBytes() {

@@ -281,7 +281,7 @@ std::vector<ClaimedElement> offElements(std::istream& in, uint64_t& headerBytes)
         if (!(counts >> vertices >> faces)) return {};
     }
     headerBytes = streamPosition(in);
-    return {{"vertex", vertices, 6}, {"face", faces, 2}};
+    return {{"vertex", vertices, 6, {}}, {"face", faces, 2, {}}};
 }
 
 // ---- Assimp's output --------------------------------------------------------------------------------------

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include "scene/json_reader.h"
+
 namespace deltagi {
 namespace {
 
@@ -140,6 +142,10 @@ SceneInfo sceneInfo(const Scene& scene) {
     info.mipLevels = mipLevelCount(info.region.resolution);
     info.bytesPerVolume = volumeBytes(info.region.resolution);
     info.bytesAllVolumes = kVolumeCount * info.bytesPerVolume;
+    const size_t directional = static_cast<size_t>(std::count_if(
+        scene.lights.begin(), scene.lights.end(), [](const Light& l) { return l.type == Light::Type::Directional; }));
+    info.renderBytes = estimateRenderMemory(scene.options, scene.camera, scene.lights.size() - directional,
+                                            directional, info.realTriangles + info.virtualTriangles);
     return info;
 }
 
@@ -162,6 +168,7 @@ nlohmann::json toJson(const SceneInfo& info) {
           {"mip_levels", info.mipLevels},
           {"bytes_per_volume", info.bytesPerVolume},
           {"bytes_all_volumes", info.bytesAllVolumes}}},
+        {"render_memory_bytes", info.renderBytes},
     };
 }
 

@@ -23,6 +23,8 @@ struct SceneInfo {
     // chain.
     size_t bytesPerVolume = 0;
     size_t bytesAllVolumes = 0;
+    // The memory guard's estimate of a render's peak (estimateRenderMemory, scene/json_reader.h).
+    uint64_t renderBytes = 0;
 };
 
 SceneInfo sceneInfo(const Scene& scene);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iterator>
 
 #include <fmt/format.h>
@@ -209,6 +210,9 @@ struct MeshInputs {
     std::vector<fs::path>& files;
     std::vector<std::string>& warnings;
     TextureCache textures;
+    // The memory guard, given the triangles read so far after each entry (`where` names the entry).
+    std::function<void(uint64_t triangles, const std::string& where)> checkMemory;
+    uint64_t triangles = 0;
 };
 
 glm::vec3 readScale(const JsonNode& node) {
@@ -426,6 +430,8 @@ std::vector<TriangleMesh> readMeshList(const JsonNode& list, MeshInputs& inputs,
             keyframes->animations.push_back(std::move(*animation));
         }
         if (entries) entries->insert(entries->end(), entry.size(), static_cast<int>(i));
+        for (const TriangleMesh& mesh : entry) inputs.triangles += mesh.triangleCount();
+        if (inputs.checkMemory) inputs.checkMemory(inputs.triangles, list.element(i).where());
         std::move(entry.begin(), entry.end(), std::back_inserter(meshes));
     }
     return meshes;
@@ -673,14 +679,20 @@ SceneRead readScene(const json& document, const fs::path& file) {
     const size_t directional =
         static_cast<size_t>(std::count_if(scene.lights.begin(), scene.lights.end(),
                                           [](const Light& l) { return l.type == Light::Type::Directional; }));
-    checkRenderMemory(scene.options, scene.camera, scene.lights.size() - directional, physicalMemoryBytes(),
-                      file.string(), directional + environmentLights);
+    const size_t pointLights = scene.lights.size() - directional;
+    checkRenderMemory(scene.options, scene.camera, pointLights, physicalMemoryBytes(), file.string(),
+                      directional + environmentLights);
     if (!holdsEntries(root, "scene") && !holdsEntries(root, "virtual"))
         root.fail("no meshes: at least one of \"scene\" (the real scene) and \"virtual\" must hold a mesh");
 
     if (auto n = root.find("background")) readBackground(*n, sceneFolder, scene);
     if (auto n = root.find("environment")) readEnvironment(*n, sceneFolder, scene);
-    MeshInputs meshInputs{sceneFolder, scene.meshFiles, scene.warnings, {}};
+    MeshInputs meshInputs{sceneFolder, scene.meshFiles, scene.warnings, {}, {}};
+    // Checked again as the meshes come: their triangles count too (a shape's segments, a file's faces).
+    meshInputs.checkMemory = [&](uint64_t triangles, const std::string& where) {
+        checkRenderMemory(scene.options, scene.camera, pointLights, physicalMemoryBytes(), where,
+                          directional + environmentLights, triangles);
+    };
     const std::vector<bool> albedoEstimates = albedoRequests(root, scene);
     if (auto n = root.find("scene"))
         scene.real = readMeshList(*n, meshInputs, false, nullptr, &scene.realEntries);

@@ -112,13 +112,26 @@ TEST(RenderMemoryTest, AutoResolutionCountsEachLightsOwnMaps) {
               uint64_t{400} << 20);
 }
 
-TEST(RenderMemoryTest, ALargeCameraNamesTheCameraAndTheGBuffer) {
+TEST(RenderMemoryTest, ALargeCameraNamesTheCameraAndTheFrameImages) {
     Options options;
     Camera camera;
     camera.width = camera.height = 16384;
     constexpr uint64_t kGiB = uint64_t{1} << 30;
     expectContains(inputErrorOf([&] { checkRenderMemory(options, camera, 1, 16 * kGiB, "s.json"); }),
-                   {"s.json: camera: 16384x16384 pixels at 4 samples per pixel", "G-buffer 64.0 GiB"});
+                   {"s.json: camera: 16384x16384 pixels at 4 samples per pixel", "frame images 168.0 GiB"});
+}
+
+// A shape's triangles count as rendered (256 bytes each): 100 million of them name the meshes.
+TEST(RenderMemoryTest, ManyTrianglesNameTheMeshes) {
+    Options options;
+    options.volume.resolution = 16;
+    Camera camera;
+    constexpr uint64_t kGiB = uint64_t{1} << 30;
+    EXPECT_EQ(estimateRenderMemory(options, camera, 1, 0, 1000) - estimateRenderMemory(options, camera, 1, 0, 0),
+              256'000u);
+    expectContains(
+        inputErrorOf([&] { checkRenderMemory(options, camera, 1, 16 * kGiB, "s.json: virtual[0]", 0, 100'000'000); }),
+        {"s.json: virtual[0]: meshes: 100000000 triangles", "meshes 23.8 GiB"});
 }
 
 // ---- mesh files -------------------------------------------------------------------------------------------
