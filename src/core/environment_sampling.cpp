@@ -10,10 +10,25 @@ namespace deltagi {
 
 namespace {
 
-// Index k with cdf[k] <= u < cdf[k + 1] among the n intervals of a cdf of n + 1 entries, skipping empty ones.
-int findInterval(const double* cdf, int n, double u) {
-    const int k = static_cast<int>(std::upper_bound(cdf, cdf + n + 1, u) - cdf) - 1;
+// Index k with cdf[k] <= u < cdf[k + 1] among the n intervals of a cdf of n + 1 entries, skipping empty ones
+// (the last k with cdf[k] <= u, clamped to [0, n - 1]), from where `guide` (guideOf) says to start.
+int findInterval(const double* cdf, const int* guide, int n, double u) {
+    int k = guide[std::clamp(static_cast<int>(u * n), 0, n - 1)];
+    while (k > 0 && cdf[k] > u) --k;  // u * n rounded up past a bin
+    while (k < n && cdf[k + 1] <= u) ++k;
     return std::clamp(k, 0, n - 1);
+}
+
+float meanOf(glm::vec3 l) { return (l.x + l.y + l.z) / 3.0f; }
+
+// The guide of a cdf of n + 1 entries: entry j is the last k with cdf[k] <= j / n.
+void guideOf(const double* cdf, int n, int* guide) {
+    int k = 0;
+    for (int j = 0; j < n; ++j) {
+        const double u = static_cast<double>(j) / n;
+        while (k < n && cdf[k + 1] <= u) ++k;
+        guide[j] = k;
+    }
 }
 
 }  // namespace
@@ -33,12 +48,42 @@ EnvironmentSampler::EnvironmentSampler(const Environment& environment)
     }
     total_ = rowCdf_[height_];
     for (double& c : rowCdf_) c = total_ > 0.0 ? c / total_ : 0.0;
+    rowGuide_.resize(height_);
+    guideOf(rowCdf_.data(), height_, rowGuide_.data());
+    columnGuides_.resize(static_cast<size_t>(height_) * width_);
+    for (int y = 0; y < height_; ++y)
+        guideOf(&columnCdfs_[static_cast<size_t>(y) * (width_ + 1)], width_,
+                &columnGuides_[static_cast<size_t>(y) * width_]);
+    rowCentres_.resize(height_);
+    for (int y = 0; y < height_; ++y) {
+        const double elevation = 0.5 * (equirectRowElevation(y, height_) + equirectRowElevation(y + 1, height_));
+        rowCentres_[y] = {static_cast<float>(std::cos(elevation)), static_cast<float>(std::sin(elevation)), 0.0f};
+    }
+    columnCentres_.resize(width_);
+    for (int x = 0; x < width_; ++x) {
+        const double phi = 2.0 * std::numbers::pi * ((x + 0.5) / width_ - 0.5);
+        columnCentres_[x] = {static_cast<float>(std::sin(phi)), static_cast<float>(-std::cos(phi))};
+    }
+    // A point of a pixel is within half its height in elevation plus half its width (at most, at the
+    // equator) in longitude of the centre; a little more for the floats.
+    pixelRadius_ = static_cast<float>(0.5 * std::numbers::pi / height_ + std::numbers::pi / width_) + 1e-4f;
 }
 
-float EnvironmentSampler::meanRadiance(glm::ivec2 p) const {
-    const glm::vec3 l = environment_.radiance.rgb(p.x, p.y);
-    return (l.x + l.y + l.z) / 3.0f;
+glm::ivec2 EnvironmentSampler::pixelOf(float u1, float u2) const {
+    const int y = findInterval(rowCdf_.data(), rowGuide_.data(), height_, u1);
+    const int x = findInterval(&columnCdfs_[static_cast<size_t>(y) * (width_ + 1)],
+                               &columnGuides_[static_cast<size_t>(y) * width_], width_, u2);
+    return {x, y};
 }
+
+glm::vec3 EnvironmentSampler::pixelCentre(float u1, float u2) const {
+    const glm::ivec2 p = pixelOf(u1, u2);
+    const glm::vec3 row = rowCentres_[p.y];
+    const glm::vec2 column = columnCentres_[p.x];
+    return environment_.worldFromEnvironment * glm::vec3(column.x * row.x, row.y, column.y * row.x);
+}
+
+float EnvironmentSampler::meanRadiance(glm::ivec2 p) const { return meanOf(environment_.radiance.rgb(p.x, p.y)); }
 
 glm::ivec2 EnvironmentSampler::pixelOf(glm::vec3 worldDirection) const {
     const glm::vec2 uv = equirectUv(environment_.environmentFromWorld() * worldDirection);
@@ -49,9 +94,8 @@ glm::ivec2 EnvironmentSampler::pixelOf(glm::vec3 worldDirection) const {
 EnvironmentSampler::Sample EnvironmentSampler::sample(float u1, float u2) const {
     Sample s;
     if (!(total_ > 0.0)) return s;
-    const int y = findInterval(rowCdf_.data(), height_, u1);
+    const auto [x, y] = pixelOf(u1, u2);
     const double* cdf = &columnCdfs_[static_cast<size_t>(y) * (width_ + 1)];
-    const int x = findInterval(cdf, width_, u2);
     // The numbers' positions inside the chosen intervals are uniform: reuse them within the pixel.
     const double fy = std::clamp((u1 - rowCdf_[y]) / std::max(rowCdf_[y + 1] - rowCdf_[y], 1e-300), 0.0, 1.0);
     const double fx = std::clamp((u2 - cdf[x]) / std::max(cdf[x + 1] - cdf[x], 1e-300), 0.0, 1.0);
@@ -64,7 +108,7 @@ EnvironmentSampler::Sample EnvironmentSampler::sample(float u1, float u2) const 
                       static_cast<float>(-std::cos(phi) * cosTheta));
     s.wi = glm::normalize(environment_.worldFromEnvironment * d);
     s.radiance = environment_.radiance.rgb(x, y);
-    s.pdf = static_cast<float>(meanRadiance({x, y}) / total_);
+    s.pdf = static_cast<float>(meanOf(s.radiance) / total_);
     return s;
 }
 
@@ -76,6 +120,13 @@ float EnvironmentSampler::pdf(glm::vec3 worldDirection) const {
 glm::vec3 EnvironmentSampler::radiance(glm::vec3 worldDirection) const {
     const glm::ivec2 p = pixelOf(worldDirection);
     return environment_.radiance.rgb(p.x, p.y);
+}
+
+EnvironmentSampler::Value EnvironmentSampler::value(glm::vec3 worldDirection) const {
+    if (!(total_ > 0.0)) return {radiance(worldDirection), 0.0f};
+    const glm::ivec2 p = pixelOf(worldDirection);
+    const glm::vec3 radiance = environment_.radiance.rgb(p.x, p.y);
+    return {radiance, static_cast<float>(meanOf(radiance) / total_)};
 }
 
 }  // namespace deltagi

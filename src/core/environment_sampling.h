@@ -27,9 +27,21 @@ class EnvironmentSampler {
     Sample sample(float u1, float u2) const;
     float pdf(glm::vec3 worldDirection) const;
     glm::vec3 radiance(glm::vec3 worldDirection) const;
+    // Both at once (one look-up of the pixel).
+    struct Value {
+        glm::vec3 radiance{0.0f};
+        float pdf = 0.0f;
+    };
+    Value value(glm::vec3 worldDirection) const;
+
+    // Where sample(u1, u2) goes, cheaply: the world direction of the centre of its pixel, which lies within
+    // pixelRadius() (radians) of the sample's direction. For culling samples before drawing them.
+    glm::vec3 pixelCentre(float u1, float u2) const;
+    float pixelRadius() const { return pixelRadius_; }
 
   private:
     glm::ivec2 pixelOf(glm::vec3 worldDirection) const;
+    glm::ivec2 pixelOf(float u1, float u2) const;  // the pixel sample(u1, u2) falls in
     float meanRadiance(glm::ivec2 pixel) const;
 
     const Environment& environment_;
@@ -37,6 +49,12 @@ class EnvironmentSampler {
     double total_ = 0.0;              // sum over pixels of meanRadiance * dOmega
     std::vector<double> rowCdf_;      // height + 1 entries, 0 ... 1
     std::vector<double> columnCdfs_;  // per row, width + 1 entries, 0 ... 1
+    // Where the search for u starts: the interval of floor(u * n) / n (rows: n = height; each row's columns:
+    // n = width), so that a sample scans a step or two instead of searching the whole cdf.
+    std::vector<int> rowGuide_, columnGuides_;
+    std::vector<glm::vec3> rowCentres_;     // per row: (cos, sin, 0) of the elevation of its centre
+    std::vector<glm::vec2> columnCentres_;  // per column: (sin, -cos) of the longitude of its centre
+    float pixelRadius_ = 0.0f;
 };
 
 }  // namespace deltagi

@@ -170,17 +170,34 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
                     frame * glm::vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta));
                 const float cosSurface = glm::dot(wi, p.normal);
                 if (cosSurface <= 0.0f) continue;
-                const glm::vec3 radiance = sampler.radiance(wi);
-                if (radiance == glm::vec3(0.0f)) continue;
+                const EnvironmentSampler::Value map = sampler.value(wi);
+                if (map.radiance == glm::vec3(0.0f)) continue;
                 if (!objects->occludedTopLayer(origin, wi, 0.0f, kInfinity)) continue;
                 if (rays.scene->occluded(origin, wi, 0.0f, kInfinity)) continue;
                 const float pdf = cone.pdf();
-                const float weight = pdf / (pdf + sampler.pdf(wi));
-                sum -= evalBrdf(m, p.normal, p.toEye, wi) * radiance * (cosSurface * weight / pdf);
+                const float weight = pdf / (pdf + map.pdf);
+                sum -= evalBrdf(m, p.normal, p.toEye, wi) * map.radiance * (cosSurface * weight / pdf);
+            }
+        }
+        // Relit: a map sample counts only if its ray may meet the objects' sphere (coneMayMeetSphere below).
+        // Most do not; those whose pixel lies farther from the sphere's direction than the sphere's angular
+        // radius plus the pixel's own are passed over before they are drawn (the same samples count).
+        float cullCos = -2.0f;  // no culling
+        glm::vec3 cullAxis(0.0f);
+        if (mode == ShadowMode::DeltaShadow) {
+            const glm::vec3 toCentre = objectCentre - origin;
+            const float distance = glm::length(toCentre);
+            const float limit = distance > objectRadius
+                                    ? std::asin(objectRadius / distance) + sampler.pixelRadius() + 1e-3f
+                                    : std::numbers::pi_v<float>;
+            if (limit < std::numbers::pi_v<float>) {
+                cullAxis = toCentre / distance;
+                cullCos = std::cos(limit);
             }
         }
         for (int k = 0; k < count; ++k) {
             const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
+            if (cullCos > -2.0f && glm::dot(sampler.pixelCentre(u1, u2), cullAxis) < cullCos) continue;
             const EnvironmentSampler::Sample s = sampler.sample(u1, u2);
             const float cosSurface = glm::dot(s.wi, p.normal);
             if (!(s.pdf > 0.0f) || cosSurface <= 0.0f || s.radiance == glm::vec3(0.0f)) continue;

@@ -1,0 +1,93 @@
+// The environment map's importance sampling (src/core/environment_sampling.h): a sample lands in the pixel that
+// inverting the map's row and column CDFs gives (the guided search is exact, empty rows and columns skipped),
+// its pdf and radiance are the map's there, and the centre of its pixel lies within pixelRadius() of it (what
+// the relit shadow rays cull by, src/pipeline/area_light_rays.cpp).
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "core/environment.h"
+#include "core/environment_sampling.h"
+
+namespace deltagi {
+namespace {
+
+// Every pixel's red channel names it (1 + its index), green carries the weight; some rows and columns black.
+Environment numberedMap(int width, int height) {
+    Environment e;
+    e.radiance = Image(width, height, 3);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const bool black = y % 5 == 3 || x % 7 == 2;
+            const float weight = black ? 0.0f : 1.0f + static_cast<float>((x * 31 + y * 17) % 13);
+            e.radiance.setRgb(x, y, {black ? 0.0f : static_cast<float>(1 + y * width + x), weight, 0.0f});
+        }
+    e.worldFromEnvironment = glm::mat3(glm::rotate(glm::mat4(1.0f), 0.7f, glm::normalize(glm::vec3(1, 2, 3))));
+    return e;
+}
+
+// The pixel sample(u1, u2) must land in: the last row whose cdf is at most u1, then the last column of that
+// row's cdf at most u2 (the CDFs built as the sampler documents them: mean radiance times solid angle).
+glm::ivec2 invertedPixel(const Image& map, double u1, double u2) {
+    const int w = map.width(), h = map.height();
+    auto mean = [&](int x, int y) {
+        const glm::vec3 l = map.rgb(x, y);
+        return (l.x + l.y + l.z) / 3.0f;
+    };
+    std::vector<double> rows(h + 1, 0.0);
+    for (int y = 0; y < h; ++y) {
+        double row = 0.0;
+        for (int x = 0; x < w; ++x) row += mean(x, y);
+        rows[y + 1] = rows[y] + row * equirectPixelSolidAngle(y, w, h);
+    }
+    int y = 0;
+    for (int k = 0; k < h; ++k)
+        if (rows[k] / rows[h] <= u1) y = k;
+    std::vector<double> columns(w + 1, 0.0);
+    for (int x = 0; x < w; ++x) columns[x + 1] = columns[x] + mean(x, y);
+    int x = 0;
+    for (int k = 0; k < w; ++k)
+        if (columns[k] / columns[w] <= u2) x = k;
+    return {x, y};
+}
+
+TEST(EnvironmentSamplingTest, LandsWhereTheCdfsSayWithTheMapsPdfAndRadiance) {
+    for (const auto [width, height] : {std::pair{16, 8}, std::pair{64, 32}, std::pair{100, 37}}) {
+        const Environment map = numberedMap(width, height);
+        const EnvironmentSampler sampler(map);
+        constexpr int kSide = 48;
+        for (int i = 0; i <= kSide; ++i)
+            for (int j = 0; j <= kSide; ++j) {
+                // The grid's own points (u * n exactly a bin's edge) and points inside the cells.
+                for (const float jitter : {0.0f, 0.37f}) {
+                    const float u1 = std::min((static_cast<float>(i) + jitter) / kSide, 0.99999994f);
+                    const float u2 = std::min((static_cast<float>(j) + jitter) / kSide, 0.99999994f);
+                    const EnvironmentSampler::Sample s = sampler.sample(u1, u2);
+                    const glm::ivec2 p = invertedPixel(map.radiance, u1, u2);
+                    ASSERT_EQ(s.radiance.x, static_cast<float>(1 + p.y * width + p.x))
+                        << width << "x" << height << " u " << u1 << " " << u2;
+                    EXPECT_GT(s.pdf, 0.0f);
+                    // The map looked up at the centre of the sample's pixel (a direction on a pixel's edge may
+                    // round into its neighbour).
+                    const glm::vec3 centre = sampler.pixelCentre(u1, u2);
+                    const EnvironmentSampler::Value value = sampler.value(centre);
+                    EXPECT_EQ(value.radiance, s.radiance);
+                    EXPECT_EQ(value.pdf, s.pdf);
+                    EXPECT_EQ(sampler.pdf(centre), s.pdf);
+                    EXPECT_EQ(sampler.radiance(centre), s.radiance);
+                    const float angle = std::acos(std::clamp(glm::dot(centre, s.wi), -1.0f, 1.0f));
+                    EXPECT_LE(angle, sampler.pixelRadius());
+                }
+            }
+    }
+}
+
+// A map too dark to sample gives no sample, and a pdf of 0 everywhere.
+TEST(EnvironmentSamplingTest, ABlackMapGivesNoSample) {
+    Environment black;
+    black.radiance = Image(8, 4, 3);
+    const EnvironmentSampler sampler(black);
+    EXPECT_EQ(sampler.sample(0.3f, 0.6f).pdf, 0.0f);
+    EXPECT_EQ(sampler.value(glm::vec3(0, 1, 0)).pdf, 0.0f);
+}
+
+}  // namespace
+}  // namespace deltagi
