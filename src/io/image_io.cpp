@@ -18,6 +18,7 @@
 #include "deltagi/image.h"
 #include "io/atomic_file.h"
 #include "io/image_encode.h"
+#include "io/image_input.h"
 #include "io/image_output.h"
 #include "io/quiet_stderr.h"
 
@@ -85,11 +86,9 @@ std::string lowerExtension(const std::filesystem::path& path) {
 
 std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& path) {
     QuietStderr quiet;
-    auto input = OIIO::ImageInput::open(path.string());
-    if (!input) {
-        OIIO::geterror();  // cleared, not to show up in a later message
-        return std::nullopt;
-    }
+    std::string error;
+    auto input = openImageInput(path.string(), nullptr, error);
+    if (!input) return std::nullopt;
     const OIIO::ImageSpec& spec = input->spec();  // the display window, as readImage() gives it
     return std::pair{spec.full_width > 0 ? spec.full_width : spec.width,
                      spec.full_height > 0 ? spec.full_height : spec.height};
@@ -100,8 +99,9 @@ ImageFile readImageFile(const std::filesystem::path& path) {
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha",
                      1);  // keep colours as stored: alpha is dropped, not multiplied
-    auto input = OIIO::ImageInput::open(path.string(), &config);
-    if (!input) throw InputError(path.string(), "cannot read image: " + OIIO::geterror());
+    std::string error;
+    auto input = openImageInput(path.string(), &config, error);
+    if (!input) throw InputError(path.string(), "cannot read image: " + error);
     const OIIO::ImageSpec& spec = input->spec();
     int width = spec.width, height = spec.height, channels = spec.nchannels;
     if (width <= 0 || height <= 0 || channels <= 0)
@@ -336,8 +336,9 @@ void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file) {
 
 std::vector<NamedImage> readLayers(const std::filesystem::path& path) {
     QuietStderr quiet;
-    auto input = OIIO::ImageInput::open(path.string());
-    if (!input) throw InputError(path.string(), "cannot read image: " + OIIO::geterror());
+    std::string error;
+    auto input = openImageInput(path.string(), nullptr, error);
+    if (!input) throw InputError(path.string(), "cannot read image: " + error);
     const OIIO::ImageSpec spec = input->spec();
     const int width = spec.width, height = spec.height, channels = spec.nchannels;
     if (width <= 0 || height <= 0 || channels <= 0)

@@ -21,6 +21,7 @@
 
 #include "deltagi/error.h"
 #include "io/image_encode.h"
+#include "io/image_input.h"
 #include "io/quiet_stderr.h"
 
 namespace deltagi {
@@ -405,8 +406,9 @@ std::shared_ptr<const Texture> Texture::load(const std::filesystem::path& file, 
     QuietStderr quiet;
     OIIO::ImageSpec config;
     config.attribute("oiio:UnassociatedAlpha", 1);  // colours as stored, not multiplied by alpha
-    auto input = OIIO::ImageInput::open(path, &config);
-    if (!input) throw InputError(location, what + "cannot read image: " + OIIO::geterror());
+    std::string message;
+    auto input = openImageInput(path, &config, message);
+    if (!input) throw InputError(location, what + "cannot read image: " + message);
     return readTexels(*input, encoding, location, what, path);
 }
 
@@ -423,6 +425,8 @@ std::shared_ptr<const Texture> Texture::decode(std::span<const std::byte> encode
         throw InputError(
             location, what + (formatHint.empty() ? std::string("not an image format this program reads")
                                                  : fmt::format("unsupported image format '{}'", formatHint)));
+    if (std::optional<std::string> chunks = pngChunkError(encoded, encoded.size()))
+        throw InputError(location, what + "cannot decode the png image: " + *chunks);
     QuietStderr quiet;
     OIIO::Filesystem::IOMemReader memory(encoded.data(), encoded.size());
     OIIO::Filesystem::IOProxy* proxy = &memory;

@@ -15,6 +15,8 @@
 
 #include "deltagi/error.h"
 #include "deltagi/image.h"
+#include "io/image_encode.h"
+#include "io/image_input.h"
 #include "io/image_output.h"
 #include "test_errors.h"
 #include "test_paths.h"
@@ -269,6 +271,35 @@ TEST(ImageRead, AnExrIsItsDisplayWindow) {
     EXPECT_EQ(image.at(6, 2, 2), pixels.back());
     EXPECT_EQ(image.at(7, 4, 1), 0.0f);
     fs::remove(file);
+}
+
+// A PNG's chunks are checked against its bytes before libpng reads them: a chunk longer than what is left (a
+// cut file, a text chunk claiming gigabytes) is named; a whole PNG passes, and so does what is not a PNG.
+TEST(PngChunkTest, AChunkLongerThanTheFileIsNamed) {
+    Image image(8, 4, 3, 0.5f);
+    const std::string png = encodePngBytes(image, "test.png");
+    const auto bytes = [](const std::string& s) { return std::as_bytes(std::span(s.data(), s.size())); };
+    EXPECT_FALSE(pngChunkError(bytes(png), png.size()));
+    EXPECT_FALSE(pngChunkError(bytes("not a png at all"), 16));
+    // Cut inside the IDAT chunk.
+    const std::string cut = png.substr(0, png.find("IDAT") + 10);
+    const std::optional<std::string> truncated = pngChunkError(bytes(cut), cut.size());
+    ASSERT_TRUE(truncated);
+    expectContains(*truncated, {"truncated or corrupt", "'IDAT' chunk claims"});
+    // The first chunk after the header claims 1.7 GB.
+    std::string huge = png;
+    const size_t length = png.find("IDAT") - 4;
+    huge.replace(length, 4, std::string("\x68\x00\x00\x70", 4));
+    const std::optional<std::string> claims = pngChunkError(bytes(huge), huge.size());
+    ASSERT_TRUE(claims);
+    expectContains(*claims, {"'IDAT' chunk claims 1744830576 bytes"});
+    // As a file: refused by openImageInput before OpenImageIO reads it.
+    const std::filesystem::path file = std::filesystem::temp_directory_path() / "deltagi_png_chunk_test.png";
+    std::ofstream(file, std::ios::binary) << huge;
+    std::string error;
+    EXPECT_EQ(openImageInput(file.string(), nullptr, error), nullptr);
+    expectContains(error, {"'IDAT' chunk claims 1744830576 bytes"});
+    std::filesystem::remove(file);
 }
 
 }  // namespace
