@@ -10,7 +10,8 @@
 # memory (4 GB) are written to build-fuzz/findings/. The live session's handler (`deltagi serve`) is seeded with
 # one message of each type, camera frames with a short MP4 of a marker. Every crash found becomes a case of
 # tests/bad-inputs/.
-# Exit status 1 when a target found something. Installs clang 16, libFuzzer and assimp-testmodels when missing
+# Exit status 1 when a target found something. .ci/run runs it for a minute per target. Builds through ccache
+# (scripts/ccache-env.sh). Installs clang 16, libFuzzer and assimp-testmodels when missing
 # (as root). Clang 16, not Debian's default 14: the renderer captures structured bindings in lambdas (C++20),
 # which clang supports from version 16.
 set -euo pipefail
@@ -20,8 +21,9 @@ budget="${1:-300}"
 scripts/install-deps.sh clang-16 libclang-rt-16-dev assimp-testmodels
 
 build=build-fuzz
+source scripts/ccache-env.sh
 cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++-16 \
-  -DDELTAGI_FUZZ=ON -DDELTAGI_BUILD_TESTS=OFF -DDELTAGI_BUILD_BENCHMARKS=OFF
+  -DDELTAGI_FUZZ=ON -DDELTAGI_BUILD_TESTS=OFF -DDELTAGI_BUILD_BENCHMARKS=OFF "${DELTAGI_LAUNCHER[@]}"
 cmake --build "$build" -j2 --target fuzz_scene_reader fuzz_mesh_loader fuzz_live_session fuzz_camera_frames \
   fuzz_image_reader
 
