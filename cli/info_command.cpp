@@ -68,8 +68,9 @@ void printInfoTable(const Scene& scene, const SceneInfo& info) {
                region.voxelSize(), info.mipLevels);
     fmt::print("{:<16} {} per volume, {} for all four\n", "memory", formatBytes(info.bytesPerVolume),
                formatBytes(info.bytesAllVolumes));
-    fmt::print("{:<16} about {} at its peak (the memory guard's estimate: volumes, shadow maps, images, meshes)\n",
-               "render memory", formatBytes(info.renderBytes));
+    fmt::print(
+        "{:<16} about {} at its peak (the memory guard's estimate: volumes, shadow maps, images, meshes)\n",
+        "render memory", formatBytes(info.renderBytes));
     fmt::print("options\n");
     printOptions(optionsToJson(scene.options), "");
 }

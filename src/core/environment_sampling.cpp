@@ -19,7 +19,9 @@ int findInterval(const double* cdf, const int* guide, int n, double u) {
     return std::clamp(k, 0, n - 1);
 }
 
-float meanOf(glm::vec3 l) { return (l.x + l.y + l.z) / 3.0f; }
+float meanOf(glm::vec3 l) {
+    return (l.x + l.y + l.z) / 3.0f;
+}
 
 // The guide of a cdf of n + 1 entries: entry j is the last k with cdf[k] <= j / n.
 void guideOf(const double* cdf, int n, int* guide) {
@@ -56,8 +58,10 @@ EnvironmentSampler::EnvironmentSampler(const Environment& environment)
                 &columnGuides_[static_cast<size_t>(y) * width_]);
     rowCentres_.resize(height_);
     for (int y = 0; y < height_; ++y) {
-        const double elevation = 0.5 * (equirectRowElevation(y, height_) + equirectRowElevation(y + 1, height_));
-        rowCentres_[y] = {static_cast<float>(std::cos(elevation)), static_cast<float>(std::sin(elevation)), 0.0f};
+        const double elevation =
+            0.5 * (equirectRowElevation(y, height_) + equirectRowElevation(y + 1, height_));
+        rowCentres_[y] = {static_cast<float>(std::cos(elevation)), static_cast<float>(std::sin(elevation)),
+                          0.0f};
     }
     columnCentres_.resize(width_);
     for (int x = 0; x < width_; ++x) {
@@ -83,7 +87,9 @@ glm::vec3 EnvironmentSampler::pixelCentre(float u1, float u2) const {
     return environment_.worldFromEnvironment * glm::vec3(column.x * row.x, row.y, column.y * row.x);
 }
 
-float EnvironmentSampler::meanRadiance(glm::ivec2 p) const { return meanOf(environment_.radiance.rgb(p.x, p.y)); }
+float EnvironmentSampler::meanRadiance(glm::ivec2 p) const {
+    return meanOf(environment_.radiance.rgb(p.x, p.y));
+}
 
 glm::ivec2 EnvironmentSampler::pixelOf(glm::vec3 worldDirection) const {
     const glm::vec2 uv = equirectUv(environment_.environmentFromWorld() * worldDirection);

@@ -6,6 +6,8 @@
 
 #include <fmt/format.h>
 
+#include "io/file_names.h"
+
 namespace deltagi {
 
 namespace {
@@ -17,15 +19,8 @@ uint32_t bigEndian32(const std::byte* p) {
            (static_cast<uint32_t>(p[2]) << 8) | static_cast<uint32_t>(p[3]);
 }
 
-bool isPng(const std::string& path) {
-    std::string ext = path.substr(std::min(path.size(), path.rfind('.') == std::string::npos ? path.size()
-                                                                                               : path.rfind('.')));
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return ext == ".png";
-}
-
-// Walks a PNG's chunk headers (the signature checked by the caller), `size` the file's bytes: each chunk's length
-// and type from readHeader(at, header) (false: no more to read), its data and CRC skipped.
+// Walks a PNG's chunk headers (the signature checked by the caller), `size` the file's bytes: each chunk's
+// length and type from readHeader(at, header) (false: no more to read), its data and CRC skipped.
 template <typename ReadHeader>
 std::optional<std::string> walkPngChunks(uint64_t size, ReadHeader readHeader) {
     uint64_t at = 8;
@@ -35,9 +30,10 @@ std::optional<std::string> walkPngChunks(uint64_t size, ReadHeader readHeader) {
         const std::string type(reinterpret_cast<const char*>(chunk + 4), 4);
         const uint64_t left = size - at - 8;
         if (length + 4 > left)
-            return fmt::format("it is truncated or corrupt: its '{}' chunk claims {} bytes, but {} are left in the "
-                               "file",
-                               type, length, left >= 4 ? left - 4 : 0);
+            return fmt::format(
+                "it is truncated or corrupt: its '{}' chunk claims {} bytes, but {} are left in the "
+                "file",
+                type, length, left >= 4 ? left - 4 : 0);
         if (type == "IEND") break;
         at += 8 + length + 4;
     }
@@ -71,7 +67,7 @@ std::optional<std::string> pngChunkError(std::span<const std::byte> bytes, uint6
 
 std::unique_ptr<OIIO::ImageInput> openImageInput(const std::string& path, const OIIO::ImageSpec* config,
                                                  std::string& error) {
-    if (isPng(path))
+    if (lowerExtension(path) == ".png")
         if (std::optional<std::string> chunks = pngFileChunkError(path)) {
             error = *chunks;
             return nullptr;

@@ -20,10 +20,11 @@ namespace deltagi {
 std::unique_ptr<OIIO::ImageInput> openImageInput(const std::string& path, const OIIO::ImageSpec* config,
                                                  std::string& error);
 
-// Whether a PNG's chunks fit in its bytes: each chunk's declared length against the bytes left after it. libpng
-// allocates and clears what a text chunk declares before reading it: a 351-byte PNG whose chunk claimed 1.7 GB
-// took 6 s of page faults per open. `bytes` are the whole file, or its first part with `fileSize` the whole's.
-// The problem in words ("its 'tEXt' chunk claims ... bytes, but ... are left"), or nothing; not a PNG: nothing.
+// Whether a PNG's chunks fit in its bytes: each chunk's declared length against the bytes left after it.
+// libpng allocates and clears what a text chunk declares before reading it: a 351-byte PNG whose chunk
+// claimed 1.7 GB took 6 s of page faults per open. `bytes` are the whole file, or its first part with
+// `fileSize` the whole's. The problem in words ("its 'tEXt' chunk claims ... bytes, but ... are left"), or
+// nothing; not a PNG: nothing.
 std::optional<std::string> pngChunkError(std::span<const std::byte> bytes, uint64_t fileSize);
 
 }  // namespace deltagi

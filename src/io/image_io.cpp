@@ -17,6 +17,7 @@
 #include "deltagi/error.h"
 #include "deltagi/image.h"
 #include "io/atomic_file.h"
+#include "io/file_names.h"
 #include "io/image_encode.h"
 #include "io/image_input.h"
 #include "io/image_output.h"
@@ -74,12 +75,6 @@ Image toRgb(std::span<const float> pixels, int width, int height, int channels) 
         for (int c = 0; c < 3; ++c) out[p * 3 + c] = channels >= 3 ? in[c] : in[0];
     }
     return image;
-}
-
-std::string lowerExtension(const std::filesystem::path& path) {
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return ext;
 }
 
 }  // namespace

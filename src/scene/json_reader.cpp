@@ -293,8 +293,8 @@ glm::mat4 JsonNode::matrix4() const {
 
 namespace {
 
-// Per voxel of the volumes' finest level: the four volumes with their mip chains take 73 bytes (4 x 4 floats x
-// 8/7), but a render's peak holds about 290-320 (measured at 64^3-256^3: the voxelization's grids, the
+// Per voxel of the volumes' finest level: the four volumes with their mip chains take 73 bytes (4 x 4 floats
+// x 8/7), but a render's peak holds about 290-320 (measured at 64^3-256^3: the voxelization's grids, the
 // injection's, the real scene's cached light beside the frame's), rounded up.
 constexpr double kBytesPerVoxel = 320.0;
 constexpr double kRsmFaces = 6.0;              // a cube map per light (the worst case: point lights)
@@ -318,8 +318,8 @@ struct MemoryParts {
     double total() const { return kBaseBytes + volumes + rsms + gbuffer + meshes; }
 };
 
-MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lightCount, size_t directionalCount,
-                        uint64_t triangles) {
+MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lightCount,
+                        size_t directionalCount, uint64_t triangles) {
     const double r = options.volume.resolution;
     // Each light's largest map: the importance of "auto" only makes some smaller.
     auto texels = [&](bool directional) {
@@ -339,7 +339,8 @@ MemoryParts memoryParts(const Options& options, const Camera& camera, size_t lig
 
 uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
                               size_t directionalCount, uint64_t triangles) {
-    return static_cast<uint64_t>(memoryParts(options, camera, lightCount, directionalCount, triangles).total());
+    return static_cast<uint64_t>(
+        memoryParts(options, camera, lightCount, directionalCount, triangles).total());
 }
 
 void checkRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
@@ -361,11 +362,12 @@ void checkRenderMemory(const Options& options, const Camera& camera, size_t ligh
     }
     throw InputError(
         file + ": " + key,
-        what + fmt::format("the render needs about {:.1f} GiB (volumes {:.1f} GiB, reflective shadow maps "
-                           "{:.1f} GiB, frame images {:.1f} GiB, meshes {:.1f} GiB), more than the {:.1f} GiB "
-                           "of physical memory",
-                           parts.total() / kGiB, parts.volumes / kGiB, parts.rsms / kGiB, parts.gbuffer / kGiB,
-                           parts.meshes / kGiB, static_cast<double>(physicalMemoryBytes) / kGiB));
+        what +
+            fmt::format("the render needs about {:.1f} GiB (volumes {:.1f} GiB, reflective shadow maps "
+                        "{:.1f} GiB, frame images {:.1f} GiB, meshes {:.1f} GiB), more than the {:.1f} GiB "
+                        "of physical memory",
+                        parts.total() / kGiB, parts.volumes / kGiB, parts.rsms / kGiB, parts.gbuffer / kGiB,
+                        parts.meshes / kGiB, static_cast<double>(physicalMemoryBytes) / kGiB));
 }
 
 uint64_t physicalMemoryBytes() {

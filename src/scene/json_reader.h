@@ -105,14 +105,14 @@ std::string describeValue(const nlohmann::json& value);
 // at the project's shared data set when the path runs through a "shared" folder).
 std::filesystem::path inputFile(const JsonNode& node, const std::filesystem::path& sceneFolder);
 
-// Estimated peak memory of a render: the program itself, the four volumes with their mip chains, two cube RSMs
-// per light (the scene's and the update with the objects) at the largest resolution options.rsm.resolution
-// gives it (rsmResolutionCeiling: `lightCount` point and spot lights, `directionalCount` directional ones, the
-// environment's included), the frame's images (per pixel and per sample) and the meshes' `triangles`; the
-// constants are measured peaks of `deltagi render`, which the estimate bounds
-// (tests/cli/memory_guard_test.cpp). checkRenderMemory fails, naming `file` and the key that dominates (volume
-// or RSM resolution, the camera or the meshes), when the estimate exceeds `physicalMemoryBytes` (a parameter
-// so that tests can lower it).
+// Estimated peak memory of a render: the program itself, the four volumes with their mip chains, two cube
+// RSMs per light (the scene's and the update with the objects) at the largest resolution
+// options.rsm.resolution gives it (rsmResolutionCeiling: `lightCount` point and spot lights,
+// `directionalCount` directional ones, the environment's included), the frame's images (per pixel and per
+// sample) and the meshes' `triangles`; the constants are measured peaks of `deltagi render`, which the
+// estimate bounds (tests/cli/memory_guard_test.cpp). checkRenderMemory fails, naming `file` and the key that
+// dominates (volume or RSM resolution, the camera or the meshes), when the estimate exceeds
+// `physicalMemoryBytes` (a parameter so that tests can lower it).
 uint64_t estimateRenderMemory(const Options& options, const Camera& camera, size_t lightCount,
                               size_t directionalCount = 0, uint64_t triangles = 0);
 void checkRenderMemory(const Options& options, const Camera& camera, size_t lightCount,

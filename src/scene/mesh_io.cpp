@@ -20,18 +20,13 @@
 #include <nlohmann/json.hpp>
 
 #include "deltagi/error.h"
+#include "io/file_names.h"
 #include "io/image_encode.h"
 #include "scene/json_reader.h"
 
 namespace deltagi {
 
 namespace {
-
-std::string lowerExtension(const std::filesystem::path& file) {
-    std::string ext = file.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return ext;
-}
 
 bool isGltf(const std::filesystem::path& file) {
     const std::string ext = lowerExtension(file);

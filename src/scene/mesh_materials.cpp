@@ -12,6 +12,7 @@
 #include <fmt/format.h>
 
 #include "deltagi/error.h"
+#include "io/file_names.h"
 #include "scene/mesh_io.h"
 
 namespace deltagi {
@@ -30,12 +31,6 @@ constexpr float kNormalMapMinBlue = 0.6f;
 constexpr int kGlNearest = 9728;
 constexpr int kGlNearestMipmapNearest = 9984;
 constexpr int kGlNearestMipmapLinear = 9986;
-
-std::string lowerExtension(const fs::path& file) {
-    std::string ext = file.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
-    return ext;
-}
 
 // Assimp invents a material for files that have none: "DefaultMaterial" for OBJ, and an unnamed one with
 // white diffuse and specular for PLY. Such a stand-in gives no values of its own.

@@ -142,8 +142,9 @@ SceneInfo sceneInfo(const Scene& scene) {
     info.mipLevels = mipLevelCount(info.region.resolution);
     info.bytesPerVolume = volumeBytes(info.region.resolution);
     info.bytesAllVolumes = kVolumeCount * info.bytesPerVolume;
-    const size_t directional = static_cast<size_t>(std::count_if(
-        scene.lights.begin(), scene.lights.end(), [](const Light& l) { return l.type == Light::Type::Directional; }));
+    const size_t directional =
+        static_cast<size_t>(std::count_if(scene.lights.begin(), scene.lights.end(),
+                                          [](const Light& l) { return l.type == Light::Type::Directional; }));
     info.renderBytes = estimateRenderMemory(scene.options, scene.camera, scene.lights.size() - directional,
                                             directional, info.realTriangles + info.virtualTriangles);
     return info;

@@ -48,11 +48,13 @@ class MemoryGuardTest : public CliTest {
         return memory;
     }
 
-    // The estimate bounds the peak, and not by more than twice it (a guard that refuses what fits is no help).
+    // The estimate bounds the peak, and not by more than twice it (a guard that refuses what fits is no
+    // help).
     static void expectBounds(const Memory& m) {
-        EXPECT_GE(m.estimate, m.peak) << "estimate " << m.estimate / 1e6 << " MB, peak " << m.peak / 1e6 << " MB";
-        EXPECT_LT(m.estimate, 2.0 * m.peak) << "estimate " << m.estimate / 1e6 << " MB, peak " << m.peak / 1e6
-                                            << " MB";
+        EXPECT_GE(m.estimate, m.peak)
+            << "estimate " << m.estimate / 1e6 << " MB, peak " << m.peak / 1e6 << " MB";
+        EXPECT_LT(m.estimate, 2.0 * m.peak)
+            << "estimate " << m.estimate / 1e6 << " MB, peak " << m.peak / 1e6 << " MB";
     }
 };
 
@@ -64,10 +66,10 @@ std::vector<std::string> with(std::vector<std::string> overrides, const std::vec
 }
 
 TEST_F(MemoryGuardTest, BoundsTheFrameImagesAtOneAndSixteenSamplesPerPixel) {
-    expectBounds(measure(with(kSmallVolumes, {"camera.width=1024", "camera.height=1024",
-                                              "options.render.samples_per_pixel=1"})));
-    expectBounds(measure(
-        with(kSmallVolumes, {"camera.width=512", "camera.height=512", "options.render.samples_per_pixel=16"})));
+    expectBounds(measure(with(
+        kSmallVolumes, {"camera.width=1024", "camera.height=1024", "options.render.samples_per_pixel=1"})));
+    expectBounds(measure(with(
+        kSmallVolumes, {"camera.width=512", "camera.height=512", "options.render.samples_per_pixel=16"})));
 }
 
 TEST_F(MemoryGuardTest, BoundsTheVolumes) {

@@ -1,7 +1,7 @@
-// The environment map's importance sampling (src/core/environment_sampling.h): a sample lands in the pixel that
-// inverting the map's row and column CDFs gives (the guided search is exact, empty rows and columns skipped),
-// its pdf and radiance are the map's there, and the centre of its pixel lies within pixelRadius() of it (what
-// the relit shadow rays cull by, src/pipeline/area_light_rays.cpp).
+// The environment map's importance sampling (src/core/environment_sampling.h): a sample lands in the pixel
+// that inverting the map's row and column CDFs gives (the guided search is exact, empty rows and columns
+// skipped), its pdf and radiance are the map's there, and the centre of its pixel lies within pixelRadius()
+// of it (what the relit shadow rays cull by, src/pipeline/area_light_rays.cpp).
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "core/environment.h"
@@ -20,7 +20,8 @@ Environment numberedMap(int width, int height) {
             const float weight = black ? 0.0f : 1.0f + static_cast<float>((x * 31 + y * 17) % 13);
             e.radiance.setRgb(x, y, {black ? 0.0f : static_cast<float>(1 + y * width + x), weight, 0.0f});
         }
-    e.worldFromEnvironment = glm::mat3(glm::rotate(glm::mat4(1.0f), 0.7f, glm::normalize(glm::vec3(1, 2, 3))));
+    e.worldFromEnvironment =
+        glm::mat3(glm::rotate(glm::mat4(1.0f), 0.7f, glm::normalize(glm::vec3(1, 2, 3))));
     return e;
 }
 
@@ -65,8 +66,8 @@ TEST(EnvironmentSamplingTest, LandsWhereTheCdfsSayWithTheMapsPdfAndRadiance) {
                     ASSERT_EQ(s.radiance.x, static_cast<float>(1 + p.y * width + p.x))
                         << width << "x" << height << " u " << u1 << " " << u2;
                     EXPECT_GT(s.pdf, 0.0f);
-                    // The map looked up at the centre of the sample's pixel (a direction on a pixel's edge may
-                    // round into its neighbour).
+                    // The map looked up at the centre of the sample's pixel (a direction on a pixel's edge
+                    // may round into its neighbour).
                     const glm::vec3 centre = sampler.pixelCentre(u1, u2);
                     const EnvironmentSampler::Value value = sampler.value(centre);
                     EXPECT_EQ(value.radiance, s.radiance);

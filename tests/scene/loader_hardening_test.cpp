@@ -127,11 +127,13 @@ TEST(RenderMemoryTest, ManyTrianglesNameTheMeshes) {
     options.volume.resolution = 16;
     Camera camera;
     constexpr uint64_t kGiB = uint64_t{1} << 30;
-    EXPECT_EQ(estimateRenderMemory(options, camera, 1, 0, 1000) - estimateRenderMemory(options, camera, 1, 0, 0),
-              256'000u);
-    expectContains(
-        inputErrorOf([&] { checkRenderMemory(options, camera, 1, 16 * kGiB, "s.json: virtual[0]", 0, 100'000'000); }),
-        {"s.json: virtual[0]: meshes: 100000000 triangles", "meshes 23.8 GiB"});
+    EXPECT_EQ(
+        estimateRenderMemory(options, camera, 1, 0, 1000) - estimateRenderMemory(options, camera, 1, 0, 0),
+        256'000u);
+    expectContains(inputErrorOf([&] {
+                       checkRenderMemory(options, camera, 1, 16 * kGiB, "s.json: virtual[0]", 0, 100'000'000);
+                   }),
+                   {"s.json: virtual[0]: meshes: 100000000 triangles", "meshes 23.8 GiB"});
 }
 
 // ---- mesh files -------------------------------------------------------------------------------------------
