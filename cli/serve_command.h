@@ -1,6 +1,7 @@
 // `deltagi serve SCENE.json [--port 8080] [--host 127.0.0.1]`: a live session in the browser (README, "Live
-// session"). A web server (web_server.h, on Boost.Beast) serves the page of web/, embedded at build time, and streams the
-// frames to it as JPEGs over a WebSocket; the page's messages change the scene (src/live/live_session.h).
+// session"). A web server (web_server.h, on Boost.Beast) serves the page of web/, embedded at build time, and
+// streams the frames to it as JPEGs over a WebSocket; the page's messages change the scene
+// (src/live/live_session.h).
 // The scene camera's frames come from the page's camera or, for `deltagi live --serve`, from a source the
 // server reads (docs/live.md).
 #pragma once
