@@ -122,6 +122,12 @@ TEST_F(LiveTest, LightsTheSceneWithTheLightCamerasFrames) {
 
 TEST_F(LiveTest, DropsWhatItCannotKeepUpWithInRealTime) {
     const std::string camera = writeCapture();
+    // The capture played five times over: 30 frames in 30 ms, while the first frame alone renders for longer
+    // (its volumes and maps are new), on a loaded machine too.
+    constexpr int kPlayed = 5 * kFrames;
+    for (int i = kFrames; i < kPlayed; ++i)
+        fs::copy_file(dir_ / "in" / fmt::format("frame_{:04d}.png", i % kFrames),
+                      dir_ / "in" / fmt::format("frame_{:04d}.png", i));
     const fs::path stats = dir_ / "stats.json";
     // 1000 frames a second: every frame but the newest is dropped while one renders.
     const CliResult r = run("live " + quote(liveScene().string()) + " --camera " + quote(camera) +
@@ -129,7 +135,7 @@ TEST_F(LiveTest, DropsWhatItCannotKeepUpWithInRealTime) {
     ASSERT_EQ(r.exitCode, 0) << r.err;
     const json s = json::parse(readText(stats));
     EXPECT_GT(s["summary"]["dropped"].get<int>(), 0);
-    EXPECT_EQ(s["summary"]["frames"].get<int>() + s["summary"]["dropped"].get<int>(), kFrames);
+    EXPECT_EQ(s["summary"]["frames"].get<int>() + s["summary"]["dropped"].get<int>(), kPlayed);
 }
 
 TEST_F(LiveTest, RefusesWhatItCannotRun) {
