@@ -10,8 +10,7 @@
 # memory (4 GB) are written to build-fuzz/findings/. The live session's handler (`deltagi serve`) is seeded with
 # one message of each type, camera frames with a short MP4 of a marker. Every crash found becomes a case of
 # tests/bad-inputs/.
-# Exit status 1 when a target found something. .ci/run runs it for a minute per target. Builds through ccache
-# (scripts/ccache-env.sh). Installs clang 16, libFuzzer and assimp-testmodels when missing
+# Exit status 1 when a target found something. Builds through ccache (scripts/ccache-env.sh). Installs clang 16, libFuzzer and assimp-testmodels when missing
 # (as root). Clang 16, not Debian's default 14: the renderer captures structured bindings in lambdas (C++20),
 # which clang supports from version 16.
 set -euo pipefail
