@@ -1,4 +1,5 @@
-// `deltagi serve`: the web server, the render thread and the clients' senders (serve_command.h).
+// `deltagi serve`: the web server's handlers, the render thread and what each client has waiting
+// (serve_command.h).
 //
 // Threads: the web server's two (web_server.h) answer HTTP requests, read each WebSocket's messages and write
 // to each what its Client has waiting; a handler thread passes the messages to the session under

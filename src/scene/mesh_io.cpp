@@ -121,9 +121,9 @@ constexpr double kBytesPerFileByte = 16.0;
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 
 struct PlyProperty {
-    uint64_t bytes = 0;          // a scalar's size, or a list's count's
-    uint64_t itemBytes = 0;      // a list's items' size; 0: a scalar
-    bool signedCount = false;    // a list's count is of a signed type (char, short, int)
+    uint64_t bytes = 0;        // a scalar's size, or a list's count's
+    uint64_t itemBytes = 0;    // a list's items' size; 0: a scalar
+    bool signedCount = false;  // a list's count is of a signed type (char, short, int)
 };
 
 struct ClaimedElement {
@@ -198,9 +198,10 @@ std::vector<ClaimedElement> plyElements(std::istream& in, uint64_t& headerBytes,
             const bool integralCount = !type.starts_with("float") && type != "double";
             if (size == kTypeBytes.end() || (list && (!kTypeBytes.contains(itemType) || !integralCount)) ||
                 !(words >> propertyName) || (words >> extra))
-                throw corrupt(number,
-                              "\"property TYPE NAME\" or \"property list TYPE TYPE NAME\" with known types (a "
-                              "list's count of an integer type)");
+                throw corrupt(
+                    number,
+                    "\"property TYPE NAME\" or \"property list TYPE TYPE NAME\" with known types (a "
+                    "list's count of an integer type)");
             const bool signedCount = type == "char" || type == "int8" || type == "short" || type == "int16" ||
                                      type == "int" || type == "int32";
             elements.back().minBytes += binary ? size->second : 2;
@@ -255,9 +256,10 @@ void checkPlyLists(std::istream& in, const std::vector<ClaimedElement>& elements
                 if (p.itemBytes == 0) continue;
                 // A negative count of a signed type: Assimp takes it as 4 billion items.
                 if (p.signedCount && (*value >> (8 * p.bytes - 1)) != 0)
-                    throw InputError(where, fmt::format("'{}' is corrupt: {} {} of its data claims a list of a "
-                                                        "negative number of items",
-                                                        name, element.name, i));
+                    throw InputError(where,
+                                     fmt::format("'{}' is corrupt: {} {} of its data claims a list of a "
+                                                 "negative number of items",
+                                                 name, element.name, i));
                 const double items = static_cast<double>(*value) * static_cast<double>(p.itemBytes);
                 if (items > static_cast<double>(left))
                     throw InputError(where,
