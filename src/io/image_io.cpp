@@ -166,6 +166,12 @@ float finiteOrZero(float v) {
     return std::isfinite(v) ? v : 0.0f;
 }
 
+// OpenImageIO's OpenEXR writer stamps the file with the time of writing (its "capDate") unless the spec
+// carries a date: an empty one keeps the files of identical pixels identical, byte for byte.
+void withoutDate(OIIO::ImageSpec& spec) {
+    spec.attribute("DateTime", "");
+}
+
 }  // namespace
 
 std::vector<uint8_t> encodeSrgb8(const Image& image) {
@@ -259,6 +265,7 @@ void writeImage(const Image& image, AtomicFile& file) {
     OIIO::ImageSpec spec(source->width(), source->height(), channels, OIIO::TypeDesc::FLOAT);
     if (channels == 1) spec.channelnames = {"Y"};
     if (channels == 4) spec.alpha_channel = 3;
+    withoutDate(spec);
 
     // OpenImageIO writes by name, to the temporary that keeps the extension (it picks the format by it).
     const std::string temporary = file.temporaryPath().string();
@@ -306,6 +313,7 @@ void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file) {
     OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::FLOAT);
     spec.channelnames = names;
     spec.attribute("compression", "zip");
+    withoutDate(spec);
     // Interleaved, layer after layer within each pixel.
     std::vector<float> pixels(static_cast<size_t>(width) * height * channels);
     for (size_t p = 0, c0 = 0; p < static_cast<size_t>(width) * height; ++p) {
