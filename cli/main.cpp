@@ -168,13 +168,19 @@ void writeAovs(const RenderOutput& output, const Scene& scene, int threads, doub
 // A sequence ("sequence" in the scene): every frame with its camera and photo through one FrameRenderer, each
 // frame's files written and renamed into place when it is done (an interrupted run keeps the finished
 // frames).
-int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
-    if (!args.aovDir.empty())
-        throw InputError("--aov", "not with a sequence: use --layers FRAME_####.exr for each frame's layers");
+int runRenderSequence(const RenderArgs& args, Scene& scene, int threads, double loadMs) {
+    if (!args.aovDir.empty() && args.aovDir.string().find('#') == std::string::npos &&
+        args.aovDir.string().find('%') == std::string::npos)
+        throw InputError(args.aovDir.string(),
+                         "--aov with a sequence writes a folder per frame: give the frame number's place, "
+                         "e.g. aov_####");
     std::vector<fs::path> outputs;
     for (const SequenceFrame& frame : scene.sequence) {
         if (!args.output.empty()) outputs.push_back(framePath(args.output, frame.index));
         if (!args.layers.empty()) outputs.push_back(framePath(args.layers, frame.index));
+        if (!args.aovDir.empty())  // a folder per frame
+            for (const char* name : kRenderAovFiles)
+                outputs.push_back(framePath(args.aovDir, frame.index) / name);
     }
     if (!args.video.empty()) outputs.push_back(args.video);
     // Every frame's photo and the transforms file are inputs too, not only the first frame's photo.
@@ -184,6 +190,21 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
         inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
     refuseInputs(outputs, inputs);
     const std::vector<SequenceFrame>& frames = scene.sequence;  // the loop changes the camera and photo only
+    // Temporal reuse averages a frame with the frames before it (options.render.temporal_frames): a range
+    // that starts later in the file renders those first, unwritten, so that a sequence rendered in chunks
+    // gives the frames it gives at once. Their photos are needed too, and checked now.
+    const int before = std::min(scene.options.render.temporalFrames - 1, frames.front().index);
+    std::vector<SequenceFrame> warmUp;
+    try {
+        if (before > 0)
+            warmUp = readTransforms(scene.sequenceFile, {frames.front().index - before, frames.front().index});
+    } catch (const InputError& e) {
+        throw InputError(e.where(), fmt::format("{} (frames {}:{} are rendered first, unwritten, for the "
+                                                "temporal reuse of options.render.temporal_frames {}; 1 "
+                                                "renders without them)",
+                                                e.message(), frames.front().index - before,
+                                                frames.front().index, scene.options.render.temporalFrames));
+    }
     std::optional<cli::VideoWriter> video;
     if (!args.video.empty()) {
         cli::VideoSettings settings = args.videoSettings;
@@ -203,27 +224,28 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const auto start = std::chrono::steady_clock::now();
     FrameRenderer renderer;
+    double photoMs = loadMs;  // for the first frame, the scene's loading (which read its photo)
     auto renderAt = [&](const SequenceFrame& frame, bool readPhoto) {
         scene.camera = frame.camera;
-        if (readPhoto) scene.background = readFramePhoto(frame, scene.sequenceFile);
+        if (readPhoto) {
+            const auto photoStart = std::chrono::steady_clock::now();
+            scene.background = readFramePhoto(frame, scene.sequenceFile);
+            photoMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - photoStart)
+                          .count();
+        }
         scene.backgroundFile = frame.photo;
         poseObjects(scene, frame.index);  // the keyframed objects (none: nothing moves)
         return renderer.render(scene);
     };
-    // Temporal reuse averages a frame with the frames before it (options.render.temporal_frames): a range
-    // that starts later in the file renders those first, unwritten, so that a sequence rendered in chunks
-    // gives the frames it gives at once.
-    const int before = std::min(scene.options.render.temporalFrames - 1, frames.front().index);
-    if (before > 0)
-        for (const SequenceFrame& frame :
-             readTransforms(scene.sequenceFile, {frames.front().index - before, frames.front().index}))
-            renderAt(frame, true);
+    for (const SequenceFrame& frame : warmUp) renderAt(frame, true);  // the frames before the range
     for (size_t i = 0; i < frames.size(); ++i) {
         const SequenceFrame& frame = frames[i];
         const RenderOutput output = renderAt(frame, i > 0 || before > 0);
         OutputFiles out;
         if (!args.output.empty()) out.image(output.composite, framePath(args.output, frame.index));
         if (!args.layers.empty()) out.layers(compositingLayers(output), framePath(args.layers, frame.index));
+        if (!args.aovDir.empty())
+            writeAovs(output, scene, threads, photoMs, framePath(args.aovDir, frame.index), out);
         out.commit();
         if (video) video->add(output.composite);
         if (progress) {
@@ -238,7 +260,7 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (progress) note("\n");
     std::vector<std::string> written;
-    for (const fs::path* path : {&args.output, &args.layers, &args.video})
+    for (const fs::path* path : {&args.output, &args.layers, &args.aovDir, &args.video})
         if (!path->empty()) written.push_back(path->string());
     if (!args.quiet)
         note("deltagi: wrote {} frames {} to {} ({}x{}, {:.2f} s, {:.2f} frames/s, {})\n", frames.size(),
@@ -281,18 +303,11 @@ int runRender(const RenderArgs& args) {
     checkOutputs(outputs, {{args.scene, "the scene file"}});
 
     const auto loadStart = std::chrono::steady_clock::now();
-    Scene scene = loadAndWarn(args.scene, args.overrides);
+    Scene scene = loadAndWarn(args.scene, args.overrides, args.frames);
     const double loadMs =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - loadStart).count();
-    if (!args.frames.empty()) {
-        if (scene.sequence.empty())
-            throw InputError("--frames", "the scene has no \"sequence\" to take frames from");
-        scene.sequence = readTransforms(scene.sequenceFile, parseFrameRange(args.frames, "--frames"));
-        scene.camera = scene.sequence.front().camera;
-        scene.background = readFramePhoto(scene.sequence.front(), scene.sequenceFile);
-    }
     if (!args.layers.empty()) scene.options.render.layers = true;
-    if (!scene.sequence.empty()) return runRenderSequence(args, scene, threads);
+    if (!scene.sequence.empty()) return runRenderSequence(args, scene, threads, loadMs);
     if (!args.video.empty())
         throw InputError(
             "--video", "needs a scene with a \"sequence\" (the video's frames): a still is written with -o");
@@ -567,7 +582,8 @@ int main(int argc, char** argv) {
                               "frame's (frame_####.png); may be left out with --video");
     renderCommand->add_option(
         "--aov", renderArgs.aovDir,
-        "Also write background, composite, object_mask, delta (.exr) and timings.json here");
+        "Also write background, composite, object_mask, delta (.exr) and timings.json into this folder; "
+        "with a sequence, one folder per frame (aov_####)");
     renderCommand->add_option("--layers", renderArgs.layers,
                               "Also write the compositing layers into one EXR: composite, background, object "
                               "(RGBA, premultiplied), shadow, indirect, delta, depth (see README)");

@@ -1,5 +1,6 @@
 #include "messages.h"
 
+#include "deltagi/error.h"
 #include "deltagi/scene_io.h"
 
 namespace deltagi::cli {
@@ -26,8 +27,17 @@ std::string oneLine(const std::string& message) {
     return out;
 }
 
-Scene loadAndWarn(const std::filesystem::path& file, const std::vector<std::string>& overrides) {
-    Scene scene = loadScene(file, overrides);
+Scene loadAndWarn(const std::filesystem::path& file, const std::vector<std::string>& overrides,
+                  const std::string& frames, const std::string& framesOption) {
+    nlohmann::json document = readSceneDocument(file, overrides);
+    if (!frames.empty()) {
+        parseFrameRange(frames, framesOption);
+        auto sequence = document.is_object() ? document.find("sequence") : document.end();
+        if (!document.is_object() || sequence == document.end())
+            throw InputError(framesOption, "the scene has no \"sequence\" to take frames from");
+        if (sequence->is_object()) (*sequence)["frames"] = frames;  // anything else fails as the scene's own
+    }
+    Scene scene = loadScene(document, file);
     for (const std::string& warning : scene.warnings) note("deltagi: warning: {}\n", oneLine(warning));
     return scene;
 }

@@ -28,8 +28,11 @@ void note(fmt::format_string<Args...> format, Args&&... args) {
 std::string oneLine(const std::string& message);
 
 // Loads a scene and prints what the loader accepted with a warning (always: a warning matters even with
-// --quiet).
-Scene loadAndWarn(const std::filesystem::path& file, const std::vector<std::string>& overrides);
+// --quiet). `frames` (a --frames A:B, empty: none) takes those frames of the scene's "sequence" in place of
+// the scene file's own range: only their photos are read and checked. InputError naming `framesOption` when
+// the scene has no sequence or the range is malformed.
+Scene loadAndWarn(const std::filesystem::path& file, const std::vector<std::string>& overrides,
+                  const std::string& frames = {}, const std::string& framesOption = "--frames");
 
 // "1 mesh", "2 meshes".
 std::string plural(size_t count, const char* one, const char* many);

@@ -29,6 +29,11 @@ Scene loadScene(const std::filesystem::path& file, const std::vector<std::string
 // Same, from an already parsed document; `file` is used for messages and to resolve relative paths.
 Scene loadScene(const nlohmann::json& document, const std::filesystem::path& file);
 
+// The scene file's JSON with `overrides` applied, as loadScene reads it before validating it (InputError
+// when the file cannot be read or is not JSON): for a caller that changes the document before loading it.
+nlohmann::json readSceneDocument(const std::filesystem::path& file,
+                                 const std::vector<std::string>& overrides = {});
+
 // The options as JSON, every key with its value (the defaults where the scene did not set one).
 nlohmann::json optionsToJson(const Options& options);
 

@@ -714,7 +714,7 @@ SceneRead readScene(const json& document, const fs::path& file) {
     return SceneRead{std::move(scene), std::move(estimate)};
 }
 
-SceneRead readScene(const fs::path& file, const std::vector<std::string>& overrides) {
+json readSceneDocument(const fs::path& file, const std::vector<std::string>& overrides) {
     // Checked before it is opened: opening a FIFO waits for a writer.
     std::error_code error;
     const fs::file_status status = fs::status(file, error);
@@ -728,7 +728,11 @@ SceneRead readScene(const fs::path& file, const std::vector<std::string>& overri
     std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
     json document = parseJson(text, file.string());
     for (const std::string& override : overrides) applyOverride(document, override);
-    return readScene(document, file);
+    return document;
+}
+
+SceneRead readScene(const fs::path& file, const std::vector<std::string>& overrides) {
+    return readScene(readSceneDocument(file, overrides), file);
 }
 
 void applyOverride(json& document, const std::string& keyEqualsValue) {

@@ -212,5 +212,43 @@ TEST_F(SequenceTest, RenderingInChunksGivesTheSameFrames) {
     EXPECT_NE(test::readText(dir_ / "err.txt").find("frame_####.png"), std::string::npos);
 }
 
+// A chunk (--frames A:B) reads and checks the photos of its own frames and of those rendered before it for
+// temporal reuse only: a photo missing elsewhere does not stop it. --aov writes a folder per frame.
+TEST_F(SequenceTest, AChunkNeedsOnlyItsOwnPhotosAndWritesAnAovFolderPerFrame) {
+    write(transforms(5));
+    const fs::path scene = writeSequenceScene(test::tinySceneJson(32, 24, {0.8, 0.2, 0.1}));
+    fs::remove(dir_ / "images/frame_0.png");
+    fs::remove(dir_ / "images/frame_4.png");
+    const std::string common = "render " + scene.string() + " -q -o " + (dir_ / "out_####.png").string() +
+                               " --set options.render.temporal_frames=2";
+    EXPECT_EQ(runCli(common), 1);
+    expectContains(errors(), {"frames[0].file_path", "photo not found"});
+    // Frame 1 needs frame 0 before it, and says why.
+    EXPECT_EQ(runCli(common + " --frames 1:3"), 1);
+    expectContains(errors(), {"frames[0].file_path", "photo not found", "temporal_frames 2"});
+    ASSERT_EQ(runCli(common + " --frames 2:4 --aov " + (dir_ / "aov_####").string()), 0) << errors();
+    for (int i : {2, 3}) {
+        const fs::path folder = dir_ / ("aov_000" + std::to_string(i));
+        for (const char* name : {"background.exr", "composite.exr", "object_mask.exr", "delta.exr"})
+            EXPECT_TRUE(fs::exists(folder / name)) << folder / name;
+        const json timings = json::parse(test::readText(folder / "timings.json"));
+        EXPECT_GT(timings["total_ms"].get<double>(), 0.0);
+        EXPECT_EQ(timings["width"], 32);
+        // Each folder holds its own frame: the photos differ.
+        EXPECT_NEAR(readImage(folder / "background.exr").at(0, 0, 0), 0.2f + 0.1f * i, 0.01f);
+    }
+    EXPECT_FALSE(fs::exists(dir_ / "aov_0001"));  // rendered first, not written
+    EXPECT_FALSE(fs::exists(dir_ / "aov_0004"));
+    // Without a frame number's place, one clear line; --frames without a sequence too.
+    EXPECT_EQ(runCli(common + " --frames 2:4 --aov " + (dir_ / "aov").string()), 1);
+    expectContains(errors(), {"aov", "folder per frame", "aov_####"});
+    EXPECT_EQ(runCli("render " + write(test::tinySceneJson(32, 24, {0.8, 0.2, 0.1}), "still.json").string() +
+                     " -q -o " + (dir_ / "still.png").string() + " --frames 1:3"),
+              1);
+    expectContains(errors(), {"--frames", "no \"sequence\""});
+    EXPECT_EQ(runCli(common + " --frames 3:1"), 1);
+    expectContains(errors(), {"--frames", "empty"});
+}
+
 }  // namespace
 }  // namespace deltagi
