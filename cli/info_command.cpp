@@ -1,9 +1,11 @@
 #include "info_command.h"
 
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 #include <nlohmann/json.hpp>
 
 #include "deltagi/error.h"
@@ -53,10 +55,58 @@ void printOptions(const nlohmann::json& json, const std::string& prefix) {
     }
 }
 
+std::string lensText(const LensDistortion& d) {
+    switch (d.model) {
+        case LensDistortion::Model::None: return "none";
+        case LensDistortion::Model::OpenCV:
+            return fmt::format("opencv (k1 {:.4g}, k2 {:.4g}, k3 {:.4g}, p1 {:.4g}, p2 {:.4g})", d.k1, d.k2, d.k3,
+                               d.p1, d.p2);
+        case LensDistortion::Model::Fisheye:
+            return fmt::format("fisheye (k1 {:.4g}, k2 {:.4g}, k3 {:.4g}, k4 {:.4g})", d.k1, d.k2, d.k3, d.k4);
+    }
+    return "?";
+}
+
+// A sequence's frames, file, rate, lenses and moving objects (nothing without a sequence).
+nlohmann::json sequenceJson(const Scene& scene) {
+    if (scene.sequence.empty()) return nullptr;
+    const std::vector<SequenceFrame>& frames = scene.sequence;
+    std::vector<std::string> lenses;  // the distinct lenses, in order of their first frame
+    bool sizeVaries = false;
+    for (const SequenceFrame& frame : frames) {
+        const std::string lens = lensText(frame.camera.distortion);
+        if (std::find(lenses.begin(), lenses.end(), lens) == lenses.end()) lenses.push_back(lens);
+        sizeVaries = sizeVaries || frame.camera.width != frames.front().camera.width ||
+                     frame.camera.height != frames.front().camera.height;
+    }
+    double path = 0.0;  // the camera's way from the first frame to the last
+    for (size_t i = 1; i < frames.size(); ++i)
+        path += glm::distance(frames[i].camera.position(), frames[i - 1].camera.position());
+    return {{"transforms", scene.sequenceFile.string()},
+            {"frames", frames.size()},
+            {"range", fmt::format("{}:{}", frames.front().index, frames.back().index + 1)},
+            {"fps", scene.frameRate},
+            {"lens", lenses},
+            {"sizes_vary", sizeVaries},
+            {"camera_path", path},
+            {"keyframed_objects", scene.animations.size()}};
+}
+
 void printInfoTable(const Scene& scene, const SceneInfo& info) {
     const VolumeRegion& region = info.region;
     fmt::print("{:<16} {}\n", "scene", scene.file.string());
-    fmt::print("{:<16} {}x{}\n", "camera", scene.camera.width, scene.camera.height);
+    fmt::print("{:<16} {}x{}, lens {}{}\n", "camera", scene.camera.width, scene.camera.height,
+               lensText(scene.camera.distortion), scene.sequence.empty() ? "" : " (the first frame's)");
+    if (const nlohmann::json sequence = sequenceJson(scene); !sequence.is_null()) {
+        fmt::print("{:<16} {} frames {} of {}, {:.4g} fps{}\n", "sequence", sequence["frames"].get<size_t>(),
+                   sequence["range"].get<std::string>(), sequence["transforms"].get<std::string>(),
+                   scene.frameRate, sequence["sizes_vary"].get<bool>() ? ", frames of several sizes" : "");
+        const auto lenses = sequence["lens"].get<std::vector<std::string>>();
+        fmt::print("{:<16} the camera's path {:.4g} long, {} keyframed{}\n", "",
+                   sequence["camera_path"].get<double>(),
+                   plural(scene.animations.size(), "object", "objects"),
+                   lenses.size() > 1 ? fmt::format("; lenses {}", fmt::join(lenses, " / ")) : "");
+    }
     fmt::print("{:<16} {} real ({}), {} virtual ({})\n", "triangles", info.realTriangles,
                plural(info.realMeshes, "mesh", "meshes"), info.virtualTriangles,
                plural(info.virtualMeshes, "mesh", "meshes"));
@@ -114,7 +164,10 @@ int runInfo(const InfoArgs& args) {
     if (args.json) {
         nlohmann::json json = toJson(info);
         json["scene"] = scene.file.string();
-        json["camera"] = {{"width", scene.camera.width}, {"height", scene.camera.height}};
+        json["camera"] = {{"width", scene.camera.width},
+                          {"height", scene.camera.height},
+                          {"lens", lensText(scene.camera.distortion)}};
+        json["sequence"] = sequenceJson(scene);
         json["options"] = optionsToJson(scene.options);
         fmt::print("{}\n", json.dump(2));
     } else {

@@ -250,5 +250,30 @@ TEST_F(SequenceTest, AChunkNeedsOnlyItsOwnPhotosAndWritesAnAovFolderPerFrame) {
     expectContains(errors(), {"--frames", "empty"});
 }
 
+// `info` says what a sequence holds: its frames, file, rate, lens and the camera's path.
+TEST_F(SequenceTest, InfoDescribesTheSequence) {
+    write(transforms(3));
+    const fs::path scene = writeSequenceScene(test::tinySceneJson(32, 24, {0.8, 0.2, 0.1}));
+    ASSERT_EQ(runCli("info " + scene.string() + " --json --set sequence.frames=1:3 >" +
+                     (dir_ / "info.json").string()),
+              0)
+        << errors();
+    const json info = json::parse(test::readText(dir_ / "info.json"));
+    const json& sequence = info["sequence"];
+    EXPECT_EQ(sequence["frames"], 2);
+    EXPECT_EQ(sequence["range"], "1:3");
+    EXPECT_EQ(sequence["fps"], 30.0);
+    EXPECT_NEAR(sequence["camera_path"].get<double>(), 0.1, 1e-6);
+    EXPECT_NE(sequence["transforms"].get<std::string>().find("transforms.json"), std::string::npos);
+    ASSERT_EQ(sequence["lens"].size(), 1u);
+    expectContains(sequence["lens"][0].get<std::string>(), {"opencv", "k1 -0.1", "k2 0.01"});
+    EXPECT_EQ(sequence["keyframed_objects"], 0);
+    ASSERT_EQ(runCli("info " + scene.string() + " >" + (dir_ / "info.txt").string()), 0) << errors();
+    expectContains(test::readText(dir_ / "info.txt"), {"3 frames 0:3", "30 fps", "the first frame's"});
+    const fs::path still = write(test::tinySceneJson(32, 24, {0.8, 0.2, 0.1}), "still.json");
+    ASSERT_EQ(runCli("info " + still.string() + " --json >" + (dir_ / "still.json.out").string()), 0);
+    EXPECT_TRUE(json::parse(test::readText(dir_ / "still.json.out"))["sequence"].is_null());
+}
+
 }  // namespace
 }  // namespace deltagi
