@@ -19,6 +19,9 @@ struct StabilityArgs {
     MotionOptions motion;
     std::vector<float> direction;
     int threads = 0;  // 0: all cores
+    // Set by addStabilityCommand: the synthetic motion's options (not with a sequence), and --frames.
+    std::vector<const CLI::Option*> motionOptions;
+    const CLI::Option* framesOption = nullptr;
 };
 
 CLI::App* addStabilityCommand(CLI::App& app, StabilityArgs& args, int maxThreads);

@@ -1,9 +1,15 @@
 #include "evaluation/temporal.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
+#include <fmt/core.h>
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "deltagi/error.h"
+#include "deltagi/keyframes.h"
+#include "deltagi/scene_io.h"
 #include "deltagi/transforms.h"
 
 namespace deltagi {
@@ -33,7 +39,6 @@ MotionFrames renderMotion(Scene& scene, const MotionOptions& options) {
     if (options.cameraStepDeg != 0.0f) scene.options.render.layers = true;
     FrameRenderer renderer;
     MotionFrames out;
-    out.objectStep = step;
     const int warmUp =
         options.warmUpFrames >= 0 ? options.warmUpFrames : scene.options.render.temporalFrames - 1;
     for (int f = -warmUp; f < options.frames; ++f) {
@@ -42,9 +47,87 @@ MotionFrames renderMotion(Scene& scene, const MotionOptions& options) {
         if (f < 0) continue;
         out.frames.push_back(std::move(frame));
         out.cameras.push_back(scene.camera);
+        if (out.objectGroups.empty()) out.objectGroups.emplace_back();
+        out.objectGroups[0].poses.push_back(glm::translate(glm::mat4(1.0f), static_cast<float>(f) * step));
     }
     place(0);
     scene.camera = camera;
+    scene.options.render.layers = layers;
+    return out;
+}
+
+namespace {
+
+// The groups of virtual objects that move as one over a sequence: each animation's meshes, and the meshes
+// without keyframes.
+std::vector<std::vector<size_t>> objectGroupMeshes(const Scene& scene) {
+    std::vector<std::vector<size_t>> groups;
+    std::vector<bool> animated(scene.virtuals.size(), false);
+    for (const ObjectAnimation& animation : scene.animations) {
+        groups.emplace_back();
+        for (size_t m = animation.firstMesh; m < animation.firstMesh + animation.meshCount; ++m) {
+            groups.back().push_back(m);
+            animated.at(m) = true;
+        }
+    }
+    std::vector<size_t> still;
+    for (size_t m = 0; m < scene.virtuals.size(); ++m)
+        if (!animated[m]) still.push_back(m);
+    if (!still.empty()) groups.push_back(std::move(still));
+    return groups;
+}
+
+}  // namespace
+
+MotionFrames renderSequence(Scene& scene, int frames) {
+    if (scene.sequence.empty()) throw InputError(scene.file.string(), "the scene has no \"sequence\"");
+    const std::vector<SequenceFrame> sequence = scene.sequence;
+    const size_t count = frames > 0 ? std::min<size_t>(static_cast<size_t>(frames), sequence.size())
+                                    : sequence.size();
+    if (count < 3)
+        throw InputError(scene.sequenceFile.string(),
+                         fmt::format("at least 3 frames are needed, the sequence has {}", count));
+    const Camera camera = scene.camera;
+    const std::optional<Image> background = scene.background;
+    const std::filesystem::path backgroundFile = scene.backgroundFile;
+    const bool layers = scene.options.render.layers;
+    scene.options.render.layers = true;  // the depth, to follow the surfaces under a moving camera
+    const int first = sequence.front().index;
+    const int before = std::min(scene.options.render.temporalFrames - 1, first);
+    std::vector<SequenceFrame> order =
+        before > 0 ? readTransforms(scene.sequenceFile, {first - before, first}) : std::vector<SequenceFrame>{};
+    order.insert(order.end(), sequence.begin(), sequence.begin() + static_cast<std::ptrdiff_t>(count));
+    const std::vector<std::vector<size_t>> groups = objectGroupMeshes(scene);
+    auto poseAt = [&](size_t group, int frame) {
+        return group < scene.animations.size() ? worldFromObjectAt(scene.animations[group], frame)
+                                               : glm::mat4(1.0f);
+    };
+    FrameRenderer renderer;
+    MotionFrames out;
+    out.objectGroups.resize(groups.size());
+    for (const SequenceFrame& frame : order) {
+        scene.camera = frame.camera;
+        scene.background = readFramePhoto(frame, scene.sequenceFile);
+        scene.backgroundFile = frame.photo;
+        poseObjects(scene, frame.index);
+        RenderOutput output = renderer.render(scene);
+        if (frame.index < first) continue;
+        out.frames.push_back(std::move(output));
+        out.cameras.push_back(frame.camera);
+        out.indices.push_back(frame.index);
+        for (size_t g = 0; g < groups.size(); ++g) {
+            MotionFrames::ObjectGroup& group = out.objectGroups[g];
+            group.poses.push_back(poseAt(g, frame.index) * glm::inverse(poseAt(g, first)));
+            if (groups.size() < 2) continue;
+            Bounds3f bounds;
+            for (size_t m : groups[g]) bounds.extend(scene.virtuals[m].bounds());
+            group.bounds.push_back(bounds);
+        }
+    }
+    poseObjects(scene, first);
+    scene.camera = camera;
+    scene.background = background;
+    scene.backgroundFile = backgroundFile;
     scene.options.render.layers = layers;
     return out;
 }
@@ -212,10 +295,36 @@ TemporalFigures temporalInstability(const MotionFrames& motion) {
     out.followsSurfaces = true;
     std::vector<glm::mat4> cameraFromWorld;
     for (const Camera& c : motion.cameras) cameraFromWorld.push_back(glm::inverse(c.worldFromCamera));
+    const std::vector<MotionFrames::ObjectGroup>& groups = motion.objectGroups;
+    for (const MotionFrames::ObjectGroup& group : groups)
+        if (group.poses.size() != frames.size() || (groups.size() > 1 && group.bounds.size() != frames.size()))
+            throw InputError("objectGroups", "expected a pose (and with several groups, bounds) per frame");
+    // The group whose object shows at point p of frame t: the only one whose bounds (a little larger) hold
+    // it; none when it is not one.
+    auto groupAt = [&](size_t t, glm::vec3 p) -> const MotionFrames::ObjectGroup* {
+        if (groups.size() == 1) return &groups[0];
+        const MotionFrames::ObjectGroup* found = nullptr;
+        for (const MotionFrames::ObjectGroup& group : groups) {
+            Bounds3f b = group.bounds[t];
+            const glm::vec3 margin(0.01f * glm::length(b.diagonal()) + 1e-6f);
+            b.min -= margin;
+            b.max += margin;
+            if (!b.contains(p)) continue;
+            if (found) return nullptr;
+            found = &group;
+        }
+        return found;
+    };
     double realSecond = 0.0, realFirst = 0.0, objectSecond = 0.0, objectFirst = 0.0;
     for (size_t t = 1; t + 1 < frames.size(); ++t) {
         const RenderOutput &a = frames[t - 1], &b = frames[t], &c = frames[t + 1];
         const Camera& camera = motion.cameras[t];
+        // Each group's points now, where they were in the frame before and will be in the frame after.
+        std::vector<std::pair<glm::mat4, glm::mat4>> toBeforeAfter;
+        for (const MotionFrames::ObjectGroup& group : groups) {
+            const glm::mat4 fromNow = glm::inverse(group.poses[t]);
+            toBeforeAfter.emplace_back(group.poses[t - 1] * fromNow, group.poses[t + 1] * fromNow);
+        }
         const glm::vec3 eye = camera.position();
         for (int y = 0; y < height; ++y)
             for (int x = 0; x < width; ++x) {
@@ -225,10 +334,17 @@ TemporalFigures temporalInstability(const MotionFrames& motion) {
                 // rayDirection is 1 long along the camera's axis: the z depth takes it to the point.
                 const glm::vec3 p = eye + depth * camera.rayDirection(static_cast<float>(x) + 0.5f,
                                                                       static_cast<float>(y) + 0.5f);
-                const glm::vec3 step = object ? motion.objectStep : glm::vec3(0.0f);
+                glm::vec3 pBefore = p, pAfter = p;
+                if (object) {
+                    const MotionFrames::ObjectGroup* group = groupAt(t, p);
+                    if (!group) continue;
+                    const auto& [toBefore, toAfter] = toBeforeAfter[static_cast<size_t>(group - groups.data())];
+                    pBefore = glm::vec3(toBefore * glm::vec4(p, 1.0f));
+                    pAfter = glm::vec3(toAfter * glm::vec4(p, 1.0f));
+                }
                 Rgb before, after;
-                if (!valueAt(a, motion.cameras[t - 1], cameraFromWorld[t - 1], p - step, object, before) ||
-                    !valueAt(c, motion.cameras[t + 1], cameraFromWorld[t + 1], p + step, object, after))
+                if (!valueAt(a, motion.cameras[t - 1], cameraFromWorld[t - 1], pBefore, object, before) ||
+                    !valueAt(c, motion.cameras[t + 1], cameraFromWorld[t + 1], pAfter, object, after))
                     continue;
                 const Rgb now = rgbAt(measured(b, object), x, y);
                 if (object) {

@@ -37,13 +37,27 @@ struct MotionOptions {
 struct MotionFrames {
     std::vector<RenderOutput> frames;
     std::vector<Camera> cameras;  // one per frame
-    glm::vec3 objectStep{0.0f};   // how far the objects moved from one frame to the next (world units)
+    // The virtual objects' motion: one entry per group of objects that moves as one (a keyframed object;
+    // the objects that stay), each with one pose per frame (world from where the group is in the first frame)
+    // and, where there are several groups, its bounds in each frame, which tell the groups' pixels apart.
+    struct ObjectGroup {
+        std::vector<glm::mat4> poses;
+        std::vector<Bounds3f> bounds;  // empty with a single group
+    };
+    std::vector<ObjectGroup> objectGroups;
+    std::vector<int> indices;  // a sequence's frames: their indices in the transforms file (else empty)
 };
 
 // Renders options.frames frames of `scene` with one FrameRenderer, as a session would, moving its objects and
 // camera as `options` says (its meshes and camera are put back at the end). With a turning camera the frames
 // carry their depth layer (the measure below follows the surfaces with it).
 MotionFrames renderMotion(Scene& scene, const MotionOptions& options);
+
+// The frames of the scene's "sequence" (its first `frames`; all when 0), each with its camera, photo and
+// keyframed objects, rendered as `deltagi render` renders them: after the temporal_frames - 1 frames of the
+// transforms file before the first, unmeasured. The scene's camera, photo and objects are put back at the
+// end. InputError when the scene has no sequence or fewer than 3 frames are asked for.
+MotionFrames renderSequence(Scene& scene, int frames = 0);
 
 struct TemporalFigures {
     // Over the real pixels (no object in any of the three frames of a triple), of the delta.
@@ -69,11 +83,12 @@ TemporalFigures temporalInstability(std::span<const RenderOutput> frames);
 // object, and looked up in the frames before and after it (projected into their cameras; Catmull-Rom over
 // the 4 x 4 pixels around it), where those pixels all show the same kind of surface (real, or fully covered
 // by an object), flat (no corner between them) and at the point's depth (within 2 %). Points that are
-// hidden, leave the image or lie on an edge or a crease in either frame are not counted.
+// hidden, leave the image or lie on an edge or a crease in either frame are not counted, nor an object's
+// point that lies in the bounds of two groups of objects that move differently (or of none).
 TemporalFigures temporalInstability(const MotionFrames& motion);
 
-// {"frames", "real_instability", "object_instability", "real_samples", "object_samples", "mean_delta":
-// [...]}.
+// {"frames", "real_instability", "object_instability", "follows_surfaces", "real_samples", "object_samples",
+// "mean_delta": [...]}.
 nlohmann::ordered_json temporalToJson(const TemporalFigures& figures);
 
 }  // namespace deltagi

@@ -13,6 +13,7 @@
 #include "deltagi/keyframes.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
+#include "evaluation/temporal.h"
 #include "test_errors.h"
 #include "test_files.h"
 #include "test_scene_json.h"
@@ -205,6 +206,58 @@ TEST_F(KeyframesScene, ChunksRenderTheFramesOfTheWholeRun) {
     }
     EXPECT_GT(sumFirst, 5.0);  // the box is in view
     EXPECT_GT(moved, 0.5 * sumFirst);
+}
+
+// `stability` over a sequence measures the sequence: each frame's camera, and each object's own motion (a
+// keyframed one and one that stays), followed from frame to frame.
+TEST_F(KeyframesScene, StabilityFollowsTheSequencesCamerasAndEachObjectsMotion) {
+    json doc = scene(kMoving);
+    json view = transforms(4, 128, 96);  // a wider view, and larger boxes: patches of 4 x 4 pixels on them
+    view["fl_x"] = view["fl_y"] = 60.0;
+    view["cx"] = 64.0;
+    view["cy"] = 48.0;
+    write(view);
+    doc["virtual"][0]["shape"]["size"] = {0.5, 0.5, 0.5};
+    json still = doc["virtual"][0];
+    still.erase("keyframes");
+    still["name"] = "still box";
+    still["transform"] = {{"translate", {0.0, 0.15, -0.6}}};
+    doc["virtual"].push_back(still);
+    Scene s = loadScene(doc, dir_ / "scene.json");
+    const Camera camera = s.camera;
+    const std::vector<glm::vec3> moving = s.virtuals[0].positions;
+    const MotionFrames m = renderSequence(s);
+    ASSERT_EQ(m.frames.size(), 4u);
+    EXPECT_EQ(m.indices, (std::vector<int>{0, 1, 2, 3}));
+    for (int i = 0; i < 4; ++i) EXPECT_NEAR(m.cameras[i].position().x, 0.1f * i, 1e-6f);
+    // Put back as loaded.
+    EXPECT_EQ(s.camera, camera);
+    EXPECT_EQ(s.virtuals[0].positions, moving);
+    // Two groups: the keyframed box (from -0.3 to 0.3 in x, a quarter turn) and the box that stays.
+    ASSERT_EQ(m.objectGroups.size(), 2u);
+    const glm::vec3 end = m.objectGroups[0].poses[3] * glm::vec4(-0.3f, 0.15f, 0.0f, 1.0f);
+    EXPECT_NEAR(end.x, 0.3f, 1e-5f);
+    EXPECT_EQ(m.objectGroups[1].poses[3], glm::mat4(1.0f));
+    ASSERT_EQ(m.objectGroups[0].bounds.size(), 4u);
+    EXPECT_NEAR(m.objectGroups[0].bounds[3].center().x, 0.3f, 1e-5f);
+    const TemporalFigures followed = temporalInstability(m);
+    EXPECT_TRUE(followed.followsSurfaces);
+    EXPECT_GT(followed.realSamples, 0u);
+    EXPECT_GT(followed.objectSamples, 0u);
+    // Taken as still, the moving box's points are not found again: far fewer object samples.
+    MotionFrames asStill = m;
+    asStill.objectGroups.resize(1);
+    asStill.objectGroups[0].poses.assign(4, glm::mat4(1.0f));
+    asStill.objectGroups[0].bounds.clear();
+    EXPECT_LT(2 * temporalInstability(asStill).objectSamples, followed.objectSamples);
+    EXPECT_THROW(renderSequence(s, 2), InputError);
+
+    // The command: the sequence's frames, and no synthetic motion with it.
+    const fs::path file = write(doc, "scene.json");
+    ASSERT_EQ(runCli("stability " + file.string() + " > " + (dir_ / "out.txt").string()), 0) << errors();
+    expectContains(test::readText(dir_ / "out.txt"), {"4 frames 0:4 of", "following the surface points"});
+    EXPECT_EQ(runCli("stability " + file.string() + " --camera-step 1"), 1);
+    expectContains(errors(), {"--camera-step", "not with a \"sequence\""});
 }
 
 }  // namespace
