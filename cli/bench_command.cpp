@@ -18,18 +18,24 @@ namespace deltagi::cli {
 CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
     CLI::App* command = app.add_subcommand(
         "bench",
-        "Time the pipeline's stages over frames in which the virtual objects move (the paper's Table 1)");
+        "Time the pipeline's stages over frames in which the virtual objects move, or over a scene's tracked "
+        "sequence (the paper's Table 1)");
     command->add_option("scene", args.scene, "Scene file (JSON)")->required();
-    command->add_option("--frames", args.options.frames, "Measured frames (default 10)")
+    command
+        ->add_option("--frames", args.options.frames,
+                     "Measured frames (default 10); a \"sequence\" is played from its first frame again after "
+                     "its last")
         ->check(CLI::Range(1, 100000));
     command->add_option("--warmup", args.options.warmup, "Frames rendered before measuring (default 2)")
         ->check(CLI::Range(0, 100000));
     command->add_flag("--cold", args.options.cold,
                       "Rebuild everything every frame, the static reconstruction's voxels, RSMs and BVH too");
-    command
-        ->add_option("--motion", args.options.motionVoxels,
-                     "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still)")
-        ->check(finiteRange(0.0, 1000.0));
+    args.motionOption =
+        command
+            ->add_option("--motion", args.options.motionVoxels,
+                         "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still; not "
+                         "with a sequence, whose objects follow their keyframes)")
+            ->check(finiteRange(0.0, 1000.0));
     command
         ->add_option("--camera-motion", args.options.cameraDegrees,
                      "Move the camera too: swing it up to DEG degrees either way about the objects' centre "
@@ -63,7 +69,10 @@ int runBench(const BenchArgs& args) {
     }
     Scene scene = loadScene(args.scene, args.overrides);
     if (json) refuseInputs({args.json}, sceneInputs(scene));
-    if (scene.virtuals.empty())
+    if (!scene.sequence.empty() && args.motionOption && args.motionOption->count() > 0)
+        throw InputError("--motion",
+                         "not with a \"sequence\": its objects move as their keyframes say (none: they stay)");
+    if (scene.virtuals.empty() && scene.sequence.empty())
         throw InputError(args.scene.string(),
                          "virtual: the benchmark needs at least one virtual object to move");
 

@@ -18,6 +18,7 @@ struct BenchArgs {
     BenchOptions options;
     int threads = 0;  // 0: all cores
     bool quiet = false;
+    const CLI::Option* motionOption = nullptr;  // --motion, set by addBenchCommand (not with a sequence)
 };
 
 // Adds the subcommand and its options to `app`, storing them in `args`.

@@ -11,6 +11,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "deltagi/environment.h"
+#include "deltagi/error.h"
+#include "deltagi/keyframes.h"
+#include "deltagi/scene_io.h"
 #include "deltagi/transforms.h"
 
 namespace deltagi {
@@ -169,6 +172,18 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
     const int total = options.warmup + options.frames;
     const Camera camera = scene.camera;
     const std::optional<Image> background = scene.background;
+    const std::filesystem::path backgroundFile = scene.backgroundFile;
+    // A tracked sequence: its frames in order, each with its camera, photo and keyframed objects.
+    const std::vector<SequenceFrame>& sequence = scene.sequence;
+    if (!sequence.empty()) {
+        if (options.live || options.cameraDegrees > 0.0f)
+            throw InputError(options.live ? "--live" : "--camera-motion",
+                             "not with a \"sequence\": its frames move the camera and the keyframed objects "
+                             "as the transforms file and the keyframes say");
+        result.sequence = fmt::format("frames {}:{} of {}", sequence.front().index, sequence.back().index + 1,
+                                      scene.sequenceFile.string());
+        result.sequenceFrames = static_cast<int>(sequence.size());
+    }
     const std::optional<glm::vec3> viewpoint = scene.options.volume.viewpoint;
     const RealLight light{scene.lights, scene.environment, kLiveLightVoxels * region.voxelSize()};
     const float cameraDegrees =
@@ -183,7 +198,15 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
 
     FrameRenderer renderer;
     for (int f = 0; f < total; ++f) {
-        placeObjects(f);
+        if (!sequence.empty()) {  // the photo is read before the frame, as a camera's frame arrives
+            const SequenceFrame& frame = sequence[static_cast<size_t>(f) % sequence.size()];
+            scene.camera = frame.camera;
+            scene.background = readFramePhoto(frame, scene.sequenceFile);
+            scene.backgroundFile = frame.photo;
+            poseObjects(scene, frame.index);
+        } else {
+            placeObjects(f);
+        }
         const double environmentMs = options.live ? setLiveLight(scene, light, f) : 0.0;
         if (!poses.empty()) {
             const CameraPose& pose = poses[static_cast<size_t>(f) % poses.size()];
@@ -204,11 +227,15 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
         result.totals.push_back(out.totalMs);
         if (onFrame) onFrame(f - options.warmup, out.totalMs);
     }
-    placeObjects(0);
+    if (sequence.empty())
+        placeObjects(0);
+    else
+        poseObjects(scene, sequence.front().index);
     scene.lights = light.lights;
     scene.environment = light.environment;
     scene.camera = camera;
     scene.background = background;
+    scene.backgroundFile = backgroundFile;
     scene.options.volume.viewpoint = viewpoint;
     return result;
 }
@@ -220,6 +247,7 @@ nlohmann::ordered_json benchToJson(const BenchResult& r) {
     json["cold"] = r.options.cold;
     json["live"] = r.options.live;
     json["camera_motion_deg"] = r.cameraDegrees;
+    json["sequence"] = r.sequence.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(r.sequence);
     json["world_kept_frames"] = r.worldKeptFrames;
     json["light_kept_frames"] = r.lightKeptFrames;
     json["threads"] = r.threads;
@@ -245,6 +273,14 @@ std::string benchTable(const BenchResult& r) {
         out += fmt::format(
             "the real light changing every frame; its shadow maps and injection kept in {} of {} frames\n",
             r.lightKeptFrames, r.options.frames);
+    if (!r.sequence.empty())
+        out += fmt::format("the tracked sequence's {} in order: each frame's camera, photo and keyframed "
+                           "objects{}; the BVH and voxels kept in {} of {} frames\n",
+                           r.sequence,
+                           r.options.warmup + r.options.frames > r.sequenceFrames
+                               ? ", from its first frame again after its last"
+                               : "",
+                           r.worldKeptFrames, r.options.frames);
     if (r.cameraDegrees > 0.0f)
         out += fmt::format("camera swinging +-{} deg; the BVH and voxels kept in {} of {} frames\n",
                            r.cameraDegrees, r.worldKeptFrames, r.options.frames);

@@ -62,18 +62,23 @@ struct BenchResult {
     size_t realTriangles = 0, virtualTriangles = 0;
     int worldKeptFrames = 0;  // measured frames that kept the real scene's BVH and voxels
     int lightKeptFrames = 0;  // measured frames that kept the real scene's light (its RSMs and injection)
+    std::string sequence;     // a tracked sequence's frames, "frames 0:8 of FILE" (empty: none)
+    int sequenceFrames = 0;
 
     BenchStatistics row(const BenchRow& row) const;  // over the measured frames
 };
 
 // Renders options.warmup + options.frames frames of `scene`, moving its virtual objects (their vertices are
 // changed in place and put back at the end), with options.cameraDegrees its camera and with options.live its
-// lights or environment (all put back too).
+// lights or environment (all put back too). A scene with a "sequence" renders its frames in order instead,
+// from its first again after its last, each with its camera, photo (read before the frame, untimed) and
+// keyframed objects; options.motionVoxels does not apply to it, and cameraDegrees or live are an InputError.
 // `onFrame(index, total_ms)` is called after each measured frame.
 BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
                          const std::function<void(int, double)>& onFrame = {});
 
-// {"frames", "warmup", "cold", "live", "camera_motion_deg", "world_kept_frames", "light_kept_frames",
+// {"frames", "warmup", "cold", "live", "camera_motion_deg", "sequence" (null or "frames A:B of FILE"),
+// "world_kept_frames", "light_kept_frames",
 // "threads", "width", "height",
 // "volume_resolution", "triangles": {"real", "virtual"}, then one object {"median", "max", "paper"} per row
 // key ("voxelize_ms" ... "total_ms")}.

@@ -13,6 +13,7 @@
 #include "deltagi/keyframes.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
+#include "evaluation/benchmark.h"
 #include "evaluation/temporal.h"
 #include "test_errors.h"
 #include "test_files.h"
@@ -258,6 +259,31 @@ TEST_F(KeyframesScene, StabilityFollowsTheSequencesCamerasAndEachObjectsMotion) 
     expectContains(test::readText(dir_ / "out.txt"), {"4 frames 0:4 of", "following the surface points"});
     EXPECT_EQ(runCli("stability " + file.string() + " --camera-step 1"), 1);
     expectContains(errors(), {"--camera-step", "not with a \"sequence\""});
+}
+
+// `bench` over a sequence times the sequence: each frame's camera, photo (read before the frame) and keyframed
+// objects, in order, from its first frame again after its last.
+TEST_F(KeyframesScene, BenchPlaysTheSequence) {
+    Scene s = loadScene(scene(kMoving), dir_ / "scene.json");
+    const Camera camera = s.camera;
+    const std::vector<glm::vec3> moving = s.virtuals[0].positions;
+    BenchOptions options;
+    options.warmup = 1;
+    options.frames = 4;  // 5 in all over the 4 frames: the first again at the end
+    std::vector<int> measured;
+    const BenchResult r = runBenchmark(s, options, [&](int frame, double) { measured.push_back(frame); });
+    EXPECT_EQ(measured, (std::vector<int>{0, 1, 2, 3}));
+    EXPECT_EQ(r.sequenceFrames, 4);
+    expectContains(r.sequence, {"frames 0:4 of", "transforms.json"});
+    expectContains(benchTable(r), {"the tracked sequence's frames 0:4", "from its first frame again"});
+    EXPECT_EQ(benchToJson(r)["sequence"], r.sequence);
+    EXPECT_EQ(s.camera, camera);
+    EXPECT_EQ(s.virtuals[0].positions, moving);
+    // Each frame's photo is read as the frame comes: a photo gone since the scene was loaded is named.
+    fs::remove(dir_ / "images/frame_2.png");
+    expectContains(inputErrorOf([&] { runBenchmark(s, options); }), {"frames[2].file_path"});
+    options.live = true;
+    expectContains(inputErrorOf([&] { runBenchmark(s, options); }), {"--live", "not with a \"sequence\""});
 }
 
 }  // namespace
