@@ -57,7 +57,7 @@ QualitySuite loadSuite(const std::filesystem::path& fileOrFolder);
 // ---- The reference cache ----
 
 // Bump when the path tracer changes what it renders: every cached reference is then rendered again.
-constexpr int kReferenceCacheVersion = 1;
+constexpr int kReferenceCacheVersion = 2;
 // The same for the references with a bounce limit (the direct-light-only ones) alone. 2: the last bounce
 // keeps the BRDF sample's MIS share of the direct light (the references with all bounces did not change).
 constexpr int kLimitedReferenceCacheVersion = 2;

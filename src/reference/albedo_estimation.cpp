@@ -13,7 +13,7 @@
 #include "core/environment_sampling.h"
 #include "core/parallel.h"
 #include "core/ray_scene.h"
-#include "core/rng.h"
+#include "core/sampler.h"
 #include "deltagi/error.h"
 #include "reference/path_tracer.h"
 
@@ -255,12 +255,12 @@ class Estimator {
                 glm::dvec3 e(0.0), s(0.0);
                 for (int sample = 0; sample < options_.samplesPerPixel; ++sample) {
                     // The same numbers every pass: the change from pass to pass is the albedos', not noise.
-                    Rng rng(i, static_cast<uint64_t>(sample), options_.seed);
-                    const glm::vec3 reflected = tracer_->radianceFromHit(white, p.direction, rng);
+                    Sampler sampler(i, static_cast<uint64_t>(sample), options_.seed);
+                    const glm::vec3 reflected = tracer_->radianceFromHit(white, p.direction, sampler);
                     if (isFinite(reflected)) e += glm::dvec3(reflected);
                     if (!glossy) continue;
-                    Rng glossRng(i, static_cast<uint64_t>(sample), options_.seed ^ kSpecularStream);
-                    const glm::vec3 shine = tracer_->radianceFromHit(gloss, p.direction, glossRng);
+                    Sampler glossSampler(i, static_cast<uint64_t>(sample), options_.seed ^ kSpecularStream);
+                    const glm::vec3 shine = tracer_->radianceFromHit(gloss, p.direction, glossSampler);
                     if (isFinite(shine)) s += glm::dvec3(shine);
                 }
                 // A white Lambertian surface reflects E / pi in every direction.

@@ -65,11 +65,11 @@ glm::vec3 PathTracer::offsetOrigin(const RayHit& hit, glm::vec3 towards) const {
 }
 
 template <typename Add>
-void PathTracer::sampleLights(const RayHit& hit, glm::vec3 wo, Rng& rng, Add&& add) const {
+void PathTracer::sampleLights(const RayHit& hit, glm::vec3 wo, Sampler& sampler, Add&& add) const {
     for (const Light& light : lights_) {
-        const float u1 = rng.uniform(), u2 = rng.uniform();
+        const glm::vec2 u = sampler.uniform2();
         if (light.fromEnvironment) continue;  // its light is in the map, sampled below
-        const LightSample s = sampleLightPoint(light, hit.position, u1, u2);
+        const LightSample s = sampleLightPoint(light, hit.position, u.x, u.y);
         const float cosTheta = glm::dot(s.wi, hit.normal);
         if (cosTheta <= 0.0f || s.irradiance == glm::vec3(0.0f)) continue;
         const glm::vec3 origin = offsetOrigin(hit, s.wi);
@@ -78,8 +78,8 @@ void PathTracer::sampleLights(const RayHit& hit, glm::vec3 wo, Rng& rng, Add&& a
         add(origin, s.wi, tMax, evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.irradiance * cosTheta);
     }
     if (!environment_) return;
-    const float u1 = rng.uniform(), u2 = rng.uniform();
-    const EnvironmentSampler::Sample s = environment_->sample(u1, u2);
+    const glm::vec2 u = sampler.uniform2();
+    const EnvironmentSampler::Sample s = environment_->sample(u.x, u.y);
     const float cosTheta = glm::dot(s.wi, hit.normal);
     if (!(s.pdf > 0.0f) || cosTheta <= 0.0f || s.radiance == glm::vec3(0.0f)) return;
     const float weight = powerHeuristic(s.pdf, brdfPdf(hit.surface, hit.normal, wo, s.wi));
@@ -87,9 +87,9 @@ void PathTracer::sampleLights(const RayHit& hit, glm::vec3 wo, Rng& rng, Add&& a
         evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.radiance * (cosTheta * weight / s.pdf));
 }
 
-glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
+glm::vec3 PathTracer::directLight(const RayHit& hit, glm::vec3 wo, Sampler& sampler) const {
     glm::vec3 sum(0.0f);
-    sampleLights(hit, wo, rng, [&](glm::vec3 origin, glm::vec3 direction, float tMax, glm::vec3 light) {
+    sampleLights(hit, wo, sampler, [&](glm::vec3 origin, glm::vec3 direction, float tMax, glm::vec3 light) {
         if (!rays_.occluded(origin, direction, 0.0f, tMax)) sum += light;
     });
     return sum;
@@ -123,10 +123,11 @@ void PathTracer::sampleEmitters(const RayHit& hit, glm::vec3 wo, float uTriangle
         evalBrdf(m, hit.normal, wo, wi) * s.radiance * (cosSurface * weight / pdfLight));
 }
 
-glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const {
-    const float uTriangle = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform();
+glm::vec3 PathTracer::emittedLight(const RayHit& hit, glm::vec3 wo, Sampler& sampler) const {
+    const float uTriangle = sampler.uniform();
+    const glm::vec2 u = sampler.uniform2();
     glm::vec3 light(0.0f);
-    sampleEmitters(hit, wo, uTriangle, u1, u2,
+    sampleEmitters(hit, wo, uTriangle, u.x, u.y,
                    [&](glm::vec3 origin, glm::vec3 direction, float tMax, glm::vec3 l) {
                        if (!rays_.occluded(origin, direction, 0.0f, tMax)) light = l;
                    });
@@ -164,20 +165,20 @@ bool PathTracer::scatter(PathState& p, const BrdfSample& s, float uRoulette) con
     return true;
 }
 
-glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const {
-    return radianceFromHit(rays_.intersect(origin, direction), direction, rng);
+glm::vec3 PathTracer::radiance(glm::vec3 origin, glm::vec3 direction, Sampler& sampler) const {
+    return radianceFromHit(rays_.intersect(origin, direction), direction, sampler);
 }
 
-glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const {
+glm::vec3 PathTracer::radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Sampler& sampler) const {
     if (!firstHit.hit()) return environment_ ? environment_->radiance(direction) : glm::vec3(0.0f);
     PathState path;
     path.hit = firstHit;
     path.direction = direction;
-    trace(path, rng);
+    trace(path, sampler);
     return path.radiance;
 }
 
-void PathTracer::trace(PathState& p, Rng& rng) const {
+void PathTracer::trace(PathState& p, Sampler& sampler) const {
     for (; p.hit.hit(); ++p.bounce) {
         const RayHit& hit = p.hit;
         const glm::vec3 wo = -p.direction;
@@ -187,12 +188,15 @@ void PathTracer::trace(PathState& p, Rng& rng) const {
                 p.throughput * hit.surface.emission *
                 (p.bounce > 0 ? emitterWeight(hit, p.direction, p.previousPosition, p.previousPdf) : 1.0f);
         // The emitters' numbers first, then the lights' (the order of the references rendered before).
-        const glm::vec3 emitted = emittedLight(hit, wo, rng);
-        p.radiance += p.throughput * (directLight(hit, wo, rng) + emitted);
+        const glm::vec3 emitted = emittedLight(hit, wo, sampler);
+        p.radiance += p.throughput * (directLight(hit, wo, sampler) + emitted);
         const bool lastBounce = p.bounce + 1 >= settings_.maxBounces;
-        // Always four numbers per bounce, whatever happens, to keep the two correlated paths in step.
-        const float uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), uRoulette = rng.uniform();
-        const BrdfSample s = sampleBrdf(hit.surface, hit.normal, wo, uLobe, u1, u2);
+        // Always the same three requests per bounce, whatever happens, to keep the two correlated paths in
+        // step.
+        const float uLobe = sampler.uniform();
+        const glm::vec2 u = sampler.uniform2();
+        const float uRoulette = sampler.uniform();
+        const BrdfSample s = sampleBrdf(hit.surface, hit.normal, wo, uLobe, u.x, u.y);
         if (!s.valid()) break;
         if (lastBounce) {
             // The bounce limit (a direct-light-only reference: maxBounces 1): the BRDF sample still brings
@@ -221,16 +225,16 @@ DifferentialPathTracer::DifferentialPathTracer(const PathTracer& with, const Pat
       sameEmitters_(with.areaLights_.size() == without.areaLights_.size()) {}
 
 DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 origin, glm::vec3 direction,
-                                                                  const RayHit& firstHit, Rng& rng) const {
+                                                                  const RayHit& firstHit, Sampler& sampler) const {
     Radiance r;
     if (!firstHit.hit()) {  // the same environment (or nothing) in both
-        r.with = r.without = with_.radianceFromHit(firstHit, direction, rng);
+        r.with = r.without = with_.radianceFromHit(firstHit, direction, sampler);
         return r;
     }
     if (firstHit.isVirtual) {  // apart from the start
-        Rng rngWithout = rng;
-        r.with = with_.radianceFromHit(firstHit, direction, rng);
-        r.without = without_.radiance(origin, direction, rngWithout);
+        Sampler samplerWithout = sampler;
+        r.with = with_.radianceFromHit(firstHit, direction, sampler);
+        r.without = without_.radiance(origin, direction, samplerWithout);
         return r;
     }
     const RayScene& real = without_.rays_;
@@ -263,7 +267,9 @@ DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 orig
                               : 1.0f);
         }
         directWith = directWithout = emittedWith = emittedWithout = glm::vec3(0.0f);
-        const float uTriangle = rng.uniform(), uEmitter1 = rng.uniform(), uEmitter2 = rng.uniform();
+        const float uTriangle = sampler.uniform();
+        const glm::vec2 uEmitter = sampler.uniform2();
+        const float uEmitter1 = uEmitter.x, uEmitter2 = uEmitter.y;
         if (sameEmitters_) {
             shared.sampleEmitters(hit, wo, uTriangle, uEmitter1, uEmitter2,
                                   intoBoth(emittedWith, emittedWithout));
@@ -275,12 +281,14 @@ DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 orig
                                         if (!real.occluded(from, towards, 0.0f, tMax)) emittedWithout = light;
                                     });
         }
-        shared.sampleLights(hit, wo, rng, intoBoth(directWith, directWithout));
+        shared.sampleLights(hit, wo, sampler, intoBoth(directWith, directWithout));
         p.radiance += p.throughput * (directWith + emittedWith);
         without += p.throughput * (directWithout + emittedWithout);
         const bool lastBounce = p.bounce + 1 >= shared.settings_.maxBounces;
-        const float uLobe = rng.uniform(), u1 = rng.uniform(), u2 = rng.uniform(), uRoulette = rng.uniform();
-        const BrdfSample s = sampleBrdf(hit.surface, hit.normal, wo, uLobe, u1, u2);
+        const float uLobe = sampler.uniform();
+        const glm::vec2 u = sampler.uniform2();
+        const float uRoulette = sampler.uniform();
+        const BrdfSample s = sampleBrdf(hit.surface, hit.normal, wo, uLobe, u.x, u.y);
         if (!s.valid()) break;
         const glm::vec3 from = shared.offsetOrigin(hit, s.wi);
         if (lastBounce) {
@@ -301,12 +309,12 @@ DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 orig
                 apart.radiance += apart.throughput * shared.environment_->radiance(apart.direction) *
                                   powerHeuristic(s.pdf, shared.environment_->pdf(apart.direction));
             ++apart.bounce;
-            Rng rngWithout = rng;
-            without_.trace(apart, rngWithout);
+            Sampler samplerWithout = sampler;
+            without_.trace(apart, samplerWithout);
             without = apart.radiance;
             p.hit = next;
             ++p.bounce;
-            with_.trace(p, rng);
+            with_.trace(p, sampler);
             break;
         }
         p.hit = next;
@@ -434,12 +442,13 @@ ReferenceOutput renderReference(const Scene& scene, const ReferenceOptions& opti
         parallelFor(0, h, kRowGrain, [&](int64_t y) {
             for (int x = 0; x < w; ++x) {
                 const size_t i = static_cast<size_t>(y) * w + x;
-                Rng pixelRng(i, static_cast<uint64_t>(sample), options.seed);
-                const float jx = pixelRng.uniform(), jy = pixelRng.uniform();
+                Sampler pixelSampler(i, static_cast<uint64_t>(sample), options.seed);
+                const glm::vec2 jitter = pixelSampler.uniform2();
+                const float jx = jitter.x, jy = jitter.y;
                 const glm::vec3 dir = glm::normalize(camera.rayDirection(x + jx, static_cast<float>(y) + jy));
                 const RayHit first = all.intersect(eye, dir);
                 // The same random numbers for both paths: their difference is the object's effect alone.
-                auto [with, without] = tracer.radiance(eye, dir, first, pixelRng);
+                auto [with, without] = tracer.radiance(eye, dir, first, pixelSampler);
                 if (!isFinite(with) || !isFinite(without)) with = without = glm::vec3(0.0f);  // never NaN
                 PixelSums& s = sums[i];
                 s.with += glm::dvec3(with);

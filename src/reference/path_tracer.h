@@ -15,7 +15,7 @@
 #include "core/environment_sampling.h"
 #include "core/lights.h"
 #include "core/ray_scene.h"
-#include "core/rng.h"
+#include "core/sampler.h"
 #include "deltagi/scene.h"
 
 namespace deltagi {
@@ -60,18 +60,18 @@ class PathTracer {
     // Radiance arriving at `origin` from `direction` (unit): what the surface it hits emits and reflects, or
     // the environment when it leaves the scene. Point, spot and directional lights are not visible to the
     // ray.
-    glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Rng& rng) const;
+    glm::vec3 radiance(glm::vec3 origin, glm::vec3 direction, Sampler& sampler) const;
     // The same, when the first hit along `direction` is already known.
-    glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Rng& rng) const;
+    glm::vec3 radianceFromHit(const RayHit& firstHit, glm::vec3 direction, Sampler& sampler) const;
     // Continues `path` (at a hit) until it ends, adding what it gathers to path.radiance.
-    void trace(PathState& path, Rng& rng) const;
+    void trace(PathState& path, Sampler& sampler) const;
     // Direct light reflected towards wo at a hit, one sample per light (2 random numbers per light, always
     // drawn, so that paths with and without the objects consume the same sequence), and one sample of the
     // environment (2 more numbers) weighted against BRDF sampling by the power heuristic (MIS).
-    glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
+    glm::vec3 directLight(const RayHit& hit, glm::vec3 wo, Sampler& sampler) const;
     // Light from emissive surfaces reflected towards wo at a hit: one point on the emitters, weighted by the
     // power heuristic against BRDF sampling (3 random numbers, always drawn).
-    glm::vec3 emittedLight(const RayHit& hit, glm::vec3 wo, Rng& rng) const;
+    glm::vec3 emittedLight(const RayHit& hit, glm::vec3 wo, Sampler& sampler) const;
 
   private:
     friend class DifferentialPathTracer;
@@ -79,7 +79,7 @@ class PathTracer {
     // The light samples of directLight(): add(origin, direction, tMax, value) for each that brings light if
     // nothing lies between (origin + t direction, t < tMax; the caller tests the visibility).
     template <typename Add>
-    void sampleLights(const RayHit& hit, glm::vec3 wo, Rng& rng, Add&& add) const;
+    void sampleLights(const RayHit& hit, glm::vec3 wo, Sampler& sampler, Add&& add) const;
     // The emitter sample of emittedLight() for its three random numbers, the same way.
     template <typename Add>
     void sampleEmitters(const RayHit& hit, glm::vec3 wo, float uTriangle, float u1, float u2,
@@ -120,7 +120,7 @@ class DifferentialPathTracer {
     };
     // Both radiances arriving at `origin` from `direction`, whose first hit in the scene with the objects is
     // `firstHit`.
-    Radiance radiance(glm::vec3 origin, glm::vec3 direction, const RayHit& firstHit, Rng& rng) const;
+    Radiance radiance(glm::vec3 origin, glm::vec3 direction, const RayHit& firstHit, Sampler& sampler) const;
 
   private:
     const PathTracer& with_;

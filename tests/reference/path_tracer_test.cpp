@@ -496,7 +496,7 @@ TEST(Reference, DifferentialPathsAreTheTwoTracersRunApart) {
                         const size_t i = static_cast<size_t>(y) * s.camera.width + x;
                         const glm::vec3 dir = glm::normalize(s.camera.rayDirection(x + 0.5f, y + 0.5f));
                         const RayHit first = all.intersect(eye, dir);
-                        Rng rng(i, sample, 0), rngWith = rng, rngWithout = rng;
+                        Sampler rng(i, sample, 0), rngWith = rng, rngWithout = rng;
                         const DifferentialPathTracer::Radiance joint = both.radiance(eye, dir, first, rng);
                         const glm::vec3 apartWith = with.radianceFromHit(first, dir, rngWith);
                         const glm::vec3 apartWithout = first.isVirtual
