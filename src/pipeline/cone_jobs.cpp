@@ -1,6 +1,8 @@
 #include "pipeline/cone_jobs.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <utility>
 
 #include "core/parallel.h"
@@ -58,6 +60,84 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect
     return values;
 }
 
+// The 2 x 2 points of pixel i's area on the plane of its point (where the camera's rays through the
+// quarters of the pixel meet it), for the surfaces that have no sub-samples of their own.
+std::array<SurfacePoint, 4> pixelQuarters(const SurfacePoint& p, size_t i, const Camera& camera) {
+    std::array<SurfacePoint, 4> out;
+    const glm::vec3 eye = camera.position();
+    const float x = static_cast<float>(i % static_cast<size_t>(camera.width)),
+                y = static_cast<float>(i / static_cast<size_t>(camera.width));
+    for (int k = 0; k < 4; ++k) {
+        out[k] = p;
+        const glm::vec3 dir = camera.rayDirection(x + 0.25f + 0.5f * (k & 1), y + 0.25f + 0.5f * (k >> 1));
+        const float facing = glm::dot(dir, p.normal);
+        const float t = glm::dot(p.position - eye, p.normal) / facing;
+        if (!(std::abs(facing) > 1e-6f) || !(t > 0.0f) || !std::isfinite(t)) continue;
+        out[k].position = eye + t * dir;
+        out[k].toEye = glm::normalize(eye - out[k].position);
+    }
+    return out;
+}
+
+// A light without a size casts a shadow whose edge is a pixel wide, but the shadow's sparse samples and the
+// filter (traceSparse) spread it over their stride and radius. The pixels they leave part-shadowed by such a
+// light are traced again, each on its own over its area (its sub-samples where the job has them, else the
+// quarters of the pixel on its point's plane: an edge smoothed over the pixel, as the path tracer's is), and
+// keep that; elsewhere a hard light's occlusion is 0 or 1 already. Costs rays along the edges only.
+void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& job,
+                        std::span<const Light> lights, const Options& o, const Camera& camera) {
+    const int width = camera.width;
+    std::vector<int> hard;
+    std::vector<Light> hardLights;
+    for (int l = 0; l < static_cast<int>(lights.size()); ++l)
+        if (shadowRayCount(lights[static_cast<size_t>(l)], o.shadow.raySamples) == 1) {
+            hard.push_back(l);
+            hardLights.push_back(lights[static_cast<size_t>(l)]);
+        }
+    if (hard.empty() || shadows.empty()) return;
+    constexpr float kPart = 1e-3f;
+    const auto part = [](float v) { return v > kPart && v < 1.0f - kPart; };
+    const size_t n = lights.size();
+    std::vector<uint32_t> edge;
+    for (int y = job.bounds.y0; y < job.bounds.y1; ++y)
+        for (int x = job.bounds.x0; x < job.bounds.x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
+            if (!job.points[i].valid()) continue;
+            for (int l : hard) {
+                const ShadowOcclusion& s = shadows[i * n + static_cast<size_t>(l)];
+                if (part(s.scene) || part(s.object) || part(s.combined)) {
+                    edge.push_back(static_cast<uint32_t>(i));
+                    break;
+                }
+            }
+        }
+    if (edge.empty()) return;
+    if (job.pixelSamples) {
+        const std::vector<ShadowOcclusion> exact =
+            traceShadowRays(job.points, hardLights, job.rays, o, job.mode, edge, job.pixelSamples, width);
+        for (uint32_t i : edge)
+            for (size_t k = 0; k < hard.size(); ++k)
+                shadows[i * n + static_cast<size_t>(hard[k])] = exact[i * hard.size() + k];
+        return;
+    }
+    std::vector<SurfacePoint> quarters;
+    quarters.reserve(4 * edge.size());
+    for (uint32_t i : edge)
+        for (const SurfacePoint& q : pixelQuarters(job.points[i], i, camera)) quarters.push_back(q);
+    const std::vector<ShadowOcclusion> exact = traceShadowRays(quarters, hardLights, job.rays, o, job.mode);
+    for (size_t e = 0; e < edge.size(); ++e)
+        for (size_t k = 0; k < hard.size(); ++k) {
+            ShadowOcclusion sum;
+            for (size_t q = 0; q < 4; ++q) {
+                const ShadowOcclusion& v = exact[(4 * e + q) * hard.size() + k];
+                sum.scene += 0.25f * v.scene;
+                sum.object += 0.25f * v.object;
+                sum.combined += 0.25f * v.combined;
+            }
+            shadows[edge[e] * n + static_cast<size_t>(hard[k])] = sum;
+        }
+}
+
 // Runs body(j) for the jobs at once (the real surfaces' and the objects'): each job's own passes are
 // parallel, but they end in small tails of work that leave a core idle; the other job fills them. The
 // results do not depend on the order (each job writes only its own).
@@ -87,6 +167,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                 return traceShadowCones(job.points, directLights, job.visibility, o,
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
+        if (o.shadow.method == ShadowMethod::Rays)
+            sharpenHardShadows(results[j].shadows, job, directLights, o, scene.camera);
     });
     forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];

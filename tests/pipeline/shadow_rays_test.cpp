@@ -56,6 +56,55 @@ TEST(ShadowRays, SphereUnderAPointLightCastsItsProjectedUmbra) {
     EXPECT_GT(outside, 500);
 }
 
+// A hard light's shadow keeps its edge a pixel wide, however sparse its samples and wide the filter: every
+// real pixel whose footprint lies wholly in the umbra, or wholly outside it, has the exact value; only the
+// pixels that the edge crosses lie between (issue 36: the filter spread it over 3-4 pixels, the stride's more).
+TEST(ShadowRays, AHardLightsShadowEdgeStaysAPixelWide) {
+    Scene scene = test::floorScene();
+    scene.real[0] = placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor");
+    scene.virtuals.push_back(placed(makeSphere(0.2f, 96), {0, 0.5f, 0}, diffuse(glm::vec3(0.0f)), "ball"));
+    const glm::vec3 light(0.4f, 1.5f, 0.1f), centre(0, 0.5f, 0);
+    scene.lights[0].position = light;
+    scene.camera = test::lookAtCamera({0.0f, 1.6f, 1.6f}, {0, 0, 0}, 160, 120, 60.0f);
+    scene.options.shadow.relightPixelStride = 4;  // sparse, and the filter's radius is the default 2
+    const RenderOutput out = render(scene);
+    const glm::vec3 eye = scene.camera.position();
+    auto floorAt = [&](float px, float py) {
+        const glm::vec3 dir = scene.camera.rayDirection(px, py);
+        return eye + dir * (-eye.y / dir.y);
+    };
+    auto shadowed = [&](glm::vec3 p) {  // does the segment to the light pass through the ball?
+        const glm::vec3 d = glm::normalize(light - p), m = p - centre;
+        const float b = glm::dot(m, d), c = glm::dot(m, m) - 0.04f;
+        return b * b - c > 0.0f && -b > 0.0f;
+    };
+    int umbra = 0, lit = 0, edge = 0;
+    for (int y = 1; y < scene.camera.height - 1; ++y)
+        for (int x = 1; x < scene.camera.width - 1; ++x) {
+            if (out.objectMask.at(x, y, 0) > 0.0f) continue;
+            if (scene.camera.rayDirection(x, y).y >= -0.05f) continue;
+            int corners = 0;
+            for (int c = 0; c < 4; ++c) corners += shadowed(floorAt(x + (c & 1), y + (c >> 1)));
+            const glm::vec3 p = floorAt(x + 0.5f, y + 0.5f);
+            const glm::vec3 toLight = light - p;
+            const float d2 = glm::dot(toLight, toLight);
+            const float direct = 0.5f / std::numbers::pi_v<float> * 2.0f * (toLight.y / std::sqrt(d2)) / d2;
+            const float change = out.delta.at(x, y, 0);
+            if (corners == 4) {
+                EXPECT_NEAR(change, -direct, 0.05f * direct) << "umbra at pixel " << x << ", " << y;
+                ++umbra;
+            } else if (corners == 0 && glm::length(glm::vec2(p.x, p.z)) < 1.5f) {
+                EXPECT_NEAR(change, 0.0f, 0.03f * direct) << "lit at pixel " << x << ", " << y;
+                ++lit;
+            } else if (corners != 0) {
+                ++edge;
+            }
+        }
+    EXPECT_GT(umbra, 200);
+    EXPECT_GT(lit, 2000);
+    EXPECT_GT(edge, 30);
+}
+
 // A disk light of radius a = 0.1 at height 1 above a straight edge at height 0.5 (an opaque plate over
 // x < 0): a floor point at x sees the part of the disk beyond -x, so its visible fraction is the disk's area
 // fraction beyond a chord at distance -x: (acos(d) - d sqrt(1 - d^2)) / pi with d = -x / a. The penumbra is
