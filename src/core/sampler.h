@@ -46,15 +46,33 @@ inline uint32_t owenScramble(uint32_t x, uint32_t seed) {
 
 // The first two Sobol' dimensions of point `index`, as 32-bit fractions: van der Corput's radical inverse,
 // and the dimension whose generator matrix is Pascal's triangle mod 2 (each direction v_k = v_(k-1) ^
-// v_(k-1) >> 1). Together a (0,2)-sequence in base 2.
+// v_(k-1) >> 1). Together a (0,2)-sequence in base 2. The second by bytes: the XOR of the directions of each
+// byte's set bits, from tables made at compile time.
 inline uint32_t dimension0(uint32_t index) {
     return reverseBits(index);
 }
+struct Dimension1Tables {
+    uint32_t byte[4][256];
+    constexpr Dimension1Tables() : byte{} {
+        uint32_t directions[32] = {};
+        uint32_t v = 0x80000000u;
+        for (uint32_t& d : directions) {
+            d = v;
+            v ^= v >> 1;
+        }
+        for (int j = 0; j < 4; ++j)
+            for (int b = 0; b < 256; ++b) {
+                uint32_t x = 0;
+                for (int k = 0; k < 8; ++k)
+                    if (b & (1 << k)) x ^= directions[8 * j + k];
+                byte[j][b] = x;
+            }
+    }
+};
+inline constexpr Dimension1Tables kDimension1{};
 inline uint32_t dimension1(uint32_t index) {
-    uint32_t x = 0;
-    for (uint32_t v = 0x80000000u; index != 0; index >>= 1, v ^= v >> 1)
-        if (index & 1u) x ^= v;
-    return x;
+    return kDimension1.byte[0][index & 0xffu] ^ kDimension1.byte[1][(index >> 8) & 0xffu] ^
+           kDimension1.byte[2][(index >> 16) & 0xffu] ^ kDimension1.byte[3][index >> 24];
 }
 
 // A 32-bit fraction as a float in [0, 1): its top 24 bits, so that the largest value stays below 1.
@@ -69,33 +87,39 @@ class Sampler {
     // The samples of pixel `pixel` for `seed`; `sample` is the sample's index among the pixel's (0, 1, 2,
     // ...): the stratification holds over consecutive indices from 0.
     Sampler(uint64_t pixel, uint64_t sample, uint64_t seed)
-        : stream_(mixBits(pixel ^ mixBits(seed + 0x9e3779b97f4a7c15ull))), index_(static_cast<uint32_t>(sample)) {}
+        : stream_(mixBits(pixel ^ mixBits(seed + 0x9e3779b97f4a7c15ull))),
+          reversedIndex_(sobol::reverseBits(static_cast<uint32_t>(sample))) {}
 
-    // The next dimension's value in [0, 1).
+    // The next dimension's value in [0, 1): the shuffled index's radical inverse, scrambled. (Owen's
+    // scramble of a radical inverse is the radical inverse of Laine-Karras on the index: the reversals
+    // cancel.)
     float uniform() {
-        const uint32_t shuffled = sobol::owenScramble(index_, hash(0));
-        const float value = sobol::toUnit(sobol::owenScramble(sobol::dimension0(shuffled), hash(1)));
+        const uint64_t h = hash();
+        const uint32_t shuffled = shuffle(static_cast<uint32_t>(h));
         ++dimension_;
-        return value;
+        return sobol::toUnit(sobol::reverseBits(sobol::laineKarras(shuffled, static_cast<uint32_t>(h >> 32))));
     }
 
     // The next dimension's pair in [0, 1)^2.
     glm::vec2 uniform2() {
-        const uint32_t shuffled = sobol::owenScramble(index_, hash(0));
-        const glm::vec2 value(sobol::toUnit(sobol::owenScramble(sobol::dimension0(shuffled), hash(1))),
-                              sobol::toUnit(sobol::owenScramble(sobol::dimension1(shuffled), hash(2))));
+        const uint64_t h = hash(), h2 = mixBits(h);
+        const uint32_t shuffled = shuffle(static_cast<uint32_t>(h));
         ++dimension_;
-        return value;
+        return {sobol::toUnit(sobol::reverseBits(sobol::laineKarras(shuffled, static_cast<uint32_t>(h >> 32)))),
+                sobol::toUnit(sobol::owenScramble(sobol::dimension1(shuffled), static_cast<uint32_t>(h2)))};
     }
 
   private:
-    // A seed for this pixel's current dimension, one per use `k`.
-    uint32_t hash(uint32_t k) const {
-        return static_cast<uint32_t>(mixBits(stream_ ^ mixBits((static_cast<uint64_t>(dimension_) << 2) | k)));
+    // 64 bits for this pixel's current dimension.
+    uint64_t hash() const { return mixBits(stream_ ^ (static_cast<uint64_t>(dimension_) * 0x9e3779b97f4a7c15ull)); }
+    // The sample's index after a nested uniform scramble: a permutation of the indices that keeps each
+    // aligned block of 2^k of them together, so that the first 2^k samples stay stratified.
+    uint32_t shuffle(uint32_t seed) const {
+        return sobol::reverseBits(sobol::laineKarras(reversedIndex_, seed));
     }
 
     uint64_t stream_;
-    uint32_t index_;
+    uint32_t reversedIndex_;
     uint32_t dimension_ = 0;
 };
 
