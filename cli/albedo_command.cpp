@@ -16,6 +16,7 @@
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
 #include "io/ply_writer.h"
+#include "messages.h"
 #include "outputs.h"
 
 namespace fs = std::filesystem;
@@ -224,6 +225,7 @@ int runAlbedo(const AlbedoArgs& args) {
     checkOutputs({args.output}, {{args.scene, "the scene file"}});
     const Scene scene = loadScene(args.scene, args.overrides);
     for (const std::string& warning : scene.warnings) fmt::print(stderr, "deltagi: warning: {}\n", warning);
+    noteFirstFrame(scene, "estimate-albedo");
     AlbedoOptions options = args.options;
     const bool perVertex = args.per == "vertex";
     options.granularity = perVertex ? AlbedoGranularity::PerVertex : AlbedoGranularity::PerMesh;

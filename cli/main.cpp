@@ -425,6 +425,7 @@ int runReference(const ReferenceArgs& args) {
     checkOutputs(outputs, {{args.scene, "the scene file"}});
     const Scene scene = loadAndWarn(args.scene, args.overrides);
     refuseInputs(outputs, sceneInputs(scene));
+    cli::noteFirstFrame(scene, "reference");
 
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const ReferenceOutput output = renderReference(
@@ -514,6 +515,34 @@ void writeEvaluationAovs(const Evaluation& e, const fs::path& folder, OutputFile
     out.image(classes, folder / "pixel_classes.exr");
 }
 
+// eval over a scene's sequence: each frame scored (evaluateSequence), the figures per frame, their mean and
+// the worst.
+int runEvalSequence(const ReferenceArgs& args, Scene& scene) {
+    if (!args.aovDir.empty())
+        throw InputError("--aov", "not with a \"sequence\": its figures are per frame (write the frames' images "
+                                  "with render --aov and reference over --set sequence.frames=A:A+1)");
+    if (!args.referenceDir.empty())
+        throw InputError("--reference", "not with a \"sequence\": each frame's reference is rendered");
+    std::vector<cli::RunInput> inputs = sceneInputs(scene);
+    for (const SequenceFrame& frame : scene.sequence)
+        inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
+    refuseInputs({args.output}, inputs);
+    const bool progress = !args.quiet && isatty(STDERR_FILENO);
+    const SequenceEvaluation e = evaluateSequence(scene, referenceOptions(args), [&](int done, int total) {
+        if (progress) note("\rframe {}/{}   ", done, total);
+    });
+    if (progress) note("\n");
+    OutputFiles out;
+    out.json(sequenceEvaluationToJson(e, scene), args.output);
+    out.commit();
+    if (!args.quiet)
+        note("deltagi: {} frames: delta_rel_error mean {:.4f}, worst {:.4f}; object_rel_rmse mean {:.4f}, worst "
+             "{:.4f} (references at {} spp); wrote {}\n",
+             e.frames.size(), e.mean.deltaRelError, e.worst.deltaRelError, e.mean.objectRelRmse,
+             e.worst.objectRelRmse, args.samplesPerPixel, args.output.string());
+    return 0;
+}
+
 int runEval(const ReferenceArgs& args) {
     const ThreadLimit limit(args.threads);
     if (lowerExtension(args.output) != ".json")
@@ -524,8 +553,9 @@ int runEval(const ReferenceArgs& args) {
         for (const char* name : kReferenceAovFiles)
             inputs.push_back({args.referenceDir / name, "a reference image of --reference"});
     checkOutputs(outputs, inputs);
-    const Scene scene = loadAndWarn(args.scene, args.overrides);
+    Scene scene = loadAndWarn(args.scene, args.overrides);
     refuseInputs(outputs, sceneInputs(scene));
+    if (!scene.sequence.empty()) return runEvalSequence(args, scene);
 
     const bool progress = !args.quiet && isatty(STDERR_FILENO) && args.referenceDir.empty();
     if (progress) note("reference\n");

@@ -34,6 +34,10 @@ std::string oneLine(const std::string& message);
 Scene loadAndWarn(const std::filesystem::path& file, const std::vector<std::string>& overrides,
                   const std::string& frames = {}, const std::string& framesOption = "--frames");
 
+// For the commands that take one image of a scene: with a "sequence", says (always) that its first frame is
+// the one taken, and how to pick another.
+void noteFirstFrame(const Scene& scene, const char* command);
+
 // "1 mesh", "2 meshes".
 std::string plural(size_t count, const char* one, const char* many);
 

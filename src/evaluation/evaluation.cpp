@@ -5,11 +5,14 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 
 #include <fmt/format.h>
 
 #include "core/parallel.h"
 #include "deltagi/error.h"
+#include "deltagi/keyframes.h"
+#include "deltagi/scene_io.h"
 #include "reference/path_tracer.h"
 
 namespace deltagi {
@@ -173,6 +176,80 @@ Evaluation evaluate(const Scene& scene, ReferenceOutput reference) {
     singleVisibility.options.render.doubleShadowFix = false;
     e.singleVisibility = deltaFigures(render(singleVisibility).composite, truth, background, e.classes);
     return e;
+}
+
+SequenceEvaluation evaluateSequence(Scene& scene, const ReferenceOptions& referenceOptions,
+                                    const std::function<void(int, int)>& onFrame) {
+    if (scene.sequence.empty()) throw InputError(scene.file.string(), "the scene has no \"sequence\"");
+    const std::vector<SequenceFrame> frames = scene.sequence;
+    const Camera camera = scene.camera;
+    const std::optional<Image> background = scene.background;
+    const std::filesystem::path backgroundFile = scene.backgroundFile;
+    const int first = frames.front().index;
+    const int before = std::min(scene.options.render.temporalFrames - 1, first);
+    std::vector<SequenceFrame> order =
+        before > 0 ? readTransforms(scene.sequenceFile, {first - before, first}) : std::vector<SequenceFrame>{};
+    order.insert(order.end(), frames.begin(), frames.end());
+    FrameRenderer renderer;
+    SequenceEvaluation out;
+    for (const SequenceFrame& frame : order) {
+        scene.camera = frame.camera;
+        scene.background = readFramePhoto(frame, scene.sequenceFile);
+        scene.backgroundFile = frame.photo;
+        poseObjects(scene, frame.index);
+        if (frame.index < first) {
+            renderer.render(scene);
+            continue;
+        }
+        const ReferenceOutput reference = renderReference(scene, referenceOptions);
+        const RenderOutput dgi = renderer.render(scene);  // over the photo, which is the reference's too
+        const PixelClasses classes = classifyPixels(scene, dgi.objectMask, reference.objectMask);
+        out.frames.push_back({frame.index, deltaFigures(dgi.composite, reference.composite, *scene.background,
+                                                        classes),
+                              dgi.totalMs, reference.totalMs});
+        if (onFrame) onFrame(static_cast<int>(out.frames.size()), static_cast<int>(frames.size()));
+    }
+    const double n = static_cast<double>(out.frames.size());
+    auto worstBySize = [](double& worst, double value) {
+        if (std::abs(value) > std::abs(worst)) worst = value;
+    };
+    for (const SequenceFrameEvaluation& f : out.frames) {
+        out.mean.deltaRelError += f.dgi.deltaRelError / n;
+        out.mean.objectRelRmse += f.dgi.objectRelRmse / n;
+        out.mean.compositeRmse += f.dgi.compositeRmse / n;
+        out.mean.biasLit += f.dgi.biasLit / n;
+        out.mean.biasShadowed += f.dgi.biasShadowed / n;
+        out.worst.deltaRelError = std::max(out.worst.deltaRelError, f.dgi.deltaRelError);
+        out.worst.objectRelRmse = std::max(out.worst.objectRelRmse, f.dgi.objectRelRmse);
+        out.worst.compositeRmse = std::max(out.worst.compositeRmse, f.dgi.compositeRmse);
+        worstBySize(out.worst.biasLit, f.dgi.biasLit);
+        worstBySize(out.worst.biasShadowed, f.dgi.biasShadowed);
+    }
+    poseObjects(scene, first);
+    scene.camera = camera;
+    scene.background = background;
+    scene.backgroundFile = backgroundFile;
+    return out;
+}
+
+nlohmann::ordered_json sequenceEvaluationToJson(const SequenceEvaluation& e, const Scene& scene) {
+    nlohmann::ordered_json j;
+    j["sequence"] = scene.sequence.empty() ? std::string()
+                                           : fmt::format("frames {}:{} of {}", scene.sequence.front().index,
+                                                         scene.sequence.back().index + 1,
+                                                         scene.sequenceFile.string());
+    j["mean"] = figuresJson(e.mean);
+    j["worst"] = figuresJson(e.worst);
+    nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    for (const SequenceFrameEvaluation& f : e.frames) {
+        nlohmann::ordered_json frame = {{"index", f.index}};
+        frame.update(figuresJson(f.dgi));
+        frame["dgi_ms"] = f.dgiMs;
+        frame["reference_ms"] = f.referenceMs;
+        frames.push_back(std::move(frame));
+    }
+    j["frames"] = std::move(frames);
+    return j;
 }
 
 nlohmann::ordered_json figuresJson(const DeltaFigures& f) {

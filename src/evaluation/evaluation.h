@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -97,6 +98,26 @@ Evaluation evaluate(const Scene& scene, const ReferenceOptions& referenceOptions
 // many DGI settings can be judged against one ground truth. Throws InputError when its images do not match
 // the scene's camera.
 Evaluation evaluate(const Scene& scene, ReferenceOutput reference);
+
+// A scene's tracked sequence ("sequence") scored frame by frame: each frame's reference rendered over its
+// photo with its camera and keyframed objects, and DGI's frames as `deltagi render` gives them (one
+// FrameRenderer over the frames in order, after the temporal_frames - 1 frames of the transforms file
+// before the first, unscored), so that temporal reuse counts as it does in the frames a user gets.
+struct SequenceFrameEvaluation {
+    int index = 0;  // the frame's place in the transforms file
+    DeltaFigures dgi;
+    double dgiMs = 0.0, referenceMs = 0.0;
+};
+struct SequenceEvaluation {
+    std::vector<SequenceFrameEvaluation> frames;
+    DeltaFigures mean, worst;  // over the frames (worst: the largest of each figure, the biases' by size)
+};
+// `onFrame(done, total)` after each scored frame. The scene's camera, photo and objects are put back.
+SequenceEvaluation evaluateSequence(Scene& scene, const ReferenceOptions& referenceOptions,
+                                    const std::function<void(int, int)>& onFrame = {});
+// {"sequence": "frames A:B of FILE", "mean": figures, "worst": figures, "frames": [{"index", figures...,
+// "dgi_ms", "reference_ms"}]}.
+nlohmann::ordered_json sequenceEvaluationToJson(const SequenceEvaluation& evaluation, const Scene& scene);
 
 // One method's figures, with the keys of `deltagi eval --json`.
 nlohmann::ordered_json figuresJson(const DeltaFigures& figures);

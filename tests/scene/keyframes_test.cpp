@@ -14,6 +14,7 @@
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
 #include "evaluation/benchmark.h"
+#include "evaluation/evaluation.h"
 #include "evaluation/temporal.h"
 #include "test_errors.h"
 #include "test_files.h"
@@ -284,6 +285,50 @@ TEST_F(KeyframesScene, BenchPlaysTheSequence) {
     expectContains(inputErrorOf([&] { runBenchmark(s, options); }), {"frames[2].file_path"});
     options.live = true;
     expectContains(inputErrorOf([&] { runBenchmark(s, options); }), {"--live", "not with a \"sequence\""});
+}
+
+// `eval` over a sequence scores every frame against its own reference (its camera, photo and keyframed
+// objects), with their mean and worst; the other one-image commands say which frame they take.
+TEST_F(KeyframesScene, EvalScoresEveryFrame) {
+    json doc = scene(kMoving);
+    doc["sequence"]["frames"] = "1:4";
+    Scene s = loadScene(doc, dir_ / "scene.json");
+    const Camera camera = s.camera;
+    ReferenceOptions reference;
+    reference.samplesPerPixel = 4;
+    std::vector<int> progress;
+    const SequenceEvaluation e = evaluateSequence(s, reference, [&](int done, int) { progress.push_back(done); });
+    ASSERT_EQ(e.frames.size(), 3u);
+    EXPECT_EQ(progress, (std::vector<int>{1, 2, 3}));
+    double sum = 0.0, worst = 0.0;
+    for (size_t k = 0; k < 3; ++k) {
+        EXPECT_EQ(e.frames[k].index, static_cast<int>(k) + 1);
+        EXPECT_TRUE(std::isfinite(e.frames[k].dgi.deltaRelError));
+        EXPECT_GT(e.frames[k].referenceMs, 0.0);
+        sum += e.frames[k].dgi.deltaRelError;
+        worst = std::max(worst, e.frames[k].dgi.deltaRelError);
+    }
+    EXPECT_NEAR(e.mean.deltaRelError, sum / 3.0, 1e-12);
+    EXPECT_EQ(e.worst.deltaRelError, worst);
+    // The frames differ: the camera and the box move.
+    EXPECT_NE(e.frames[0].dgi.compositeRmse, e.frames[2].dgi.compositeRmse);
+    EXPECT_EQ(s.camera, camera);
+    const json figures = json::parse(sequenceEvaluationToJson(e, s).dump());
+    expectContains(figures["sequence"].get<std::string>(), {"frames 1:4 of"});
+    EXPECT_EQ(figures["frames"].size(), 3u);
+    EXPECT_EQ(figures["frames"][2]["index"], 3);
+    EXPECT_EQ(figures["worst"]["delta_rel_error"], worst);
+
+    const fs::path file = write(doc, "scene.json");
+    ASSERT_EQ(runCli("eval " + file.string() + " --spp 2 --json " + (dir_ / "eval.json").string()), 0)
+        << errors();
+    EXPECT_EQ(json::parse(test::readText(dir_ / "eval.json"))["frames"].size(), 3u);
+    EXPECT_EQ(runCli("eval " + file.string() + " --spp 2 --json " + (dir_ / "e.json").string() + " --aov " +
+                     (dir_ / "aov").string()),
+              1);
+    expectContains(errors(), {"--aov", "not with a \"sequence\""});
+    ASSERT_EQ(runCli("reference " + file.string() + " --spp 1 -q -o " + (dir_ / "ref.exr").string()), 0);
+    expectContains(errors(), {"the sequence's first frame, frame 1 of", "sequence.frames=2:3"});
 }
 
 }  // namespace
