@@ -196,8 +196,7 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads, double 
     const int before = std::min(scene.options.render.temporalFrames - 1, frames.front().index);
     std::vector<SequenceFrame> warmUp;
     try {
-        if (before > 0)
-            warmUp = readTransforms(scene.sequenceFile, {frames.front().index - before, frames.front().index});
+        warmUp = framesBeforeSequence(scene);
     } catch (const InputError& e) {
         throw InputError(e.where(), fmt::format("{} (frames {}:{} are rendered first, unwritten, for the "
                                                 "temporal reuse of options.render.temporal_frames {}; 1 "
@@ -226,15 +225,15 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads, double 
     FrameRenderer renderer;
     double photoMs = loadMs;  // for the first frame, the scene's loading (which read its photo)
     auto renderAt = [&](const SequenceFrame& frame, bool readPhoto) {
-        scene.camera = frame.camera;
         if (readPhoto) {
             const auto photoStart = std::chrono::steady_clock::now();
-            scene.background = readFramePhoto(frame, scene.sequenceFile);
+            showFrame(scene, frame);  // its camera, photo and keyframed objects
             photoMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - photoStart)
                           .count();
+        } else {  // the scene's first frame, loaded with it
+            scene.camera = frame.camera;
+            poseObjects(scene, frame.index);
         }
-        scene.backgroundFile = frame.photo;
-        poseObjects(scene, frame.index);  // the keyframed objects (none: nothing moves)
         return renderer.render(scene);
     };
     for (const SequenceFrame& frame : warmUp) renderAt(frame, true);  // the frames before the range

@@ -82,5 +82,14 @@ std::optional<double> transformsFrameRate(const std::filesystem::path& file);
 // otherwise.
 Image readFramePhoto(const SequenceFrame& frame, const std::filesystem::path& transformsFile);
 
+// The scene as frame `frame` of its sequence: the frame's camera, its photo (read now: InputError as
+// readFramePhoto) and the keyframed objects' poses (poseObjects).
+void showFrame(Scene& scene, const SequenceFrame& frame);
+
+// The frames of the scene's transforms file just before its sequence's first, which a run renders first,
+// unwritten, so that temporal reuse (options.render.temporal_frames) averages as many frames in a range as
+// in the whole file: temporal_frames - 1 of them, fewer at the file's start. InputError as readTransforms.
+std::vector<SequenceFrame> framesBeforeSequence(const Scene& scene);
+
 }  // namespace deltagi
 DELTAGI_API_END

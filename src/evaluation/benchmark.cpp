@@ -199,11 +199,7 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
     FrameRenderer renderer;
     for (int f = 0; f < total; ++f) {
         if (!sequence.empty()) {  // the photo is read before the frame, as a camera's frame arrives
-            const SequenceFrame& frame = sequence[static_cast<size_t>(f) % sequence.size()];
-            scene.camera = frame.camera;
-            scene.background = readFramePhoto(frame, scene.sequenceFile);
-            scene.backgroundFile = frame.photo;
-            poseObjects(scene, frame.index);
+            showFrame(scene, sequence[static_cast<size_t>(f) % sequence.size()]);
         } else {
             placeObjects(f);
         }

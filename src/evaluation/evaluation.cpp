@@ -186,17 +186,12 @@ SequenceEvaluation evaluateSequence(Scene& scene, const ReferenceOptions& refere
     const std::optional<Image> background = scene.background;
     const std::filesystem::path backgroundFile = scene.backgroundFile;
     const int first = frames.front().index;
-    const int before = std::min(scene.options.render.temporalFrames - 1, first);
-    std::vector<SequenceFrame> order =
-        before > 0 ? readTransforms(scene.sequenceFile, {first - before, first}) : std::vector<SequenceFrame>{};
+    std::vector<SequenceFrame> order = framesBeforeSequence(scene);
     order.insert(order.end(), frames.begin(), frames.end());
     FrameRenderer renderer;
     SequenceEvaluation out;
     for (const SequenceFrame& frame : order) {
-        scene.camera = frame.camera;
-        scene.background = readFramePhoto(frame, scene.sequenceFile);
-        scene.backgroundFile = frame.photo;
-        poseObjects(scene, frame.index);
+        showFrame(scene, frame);
         if (frame.index < first) {
             renderer.render(scene);
             continue;

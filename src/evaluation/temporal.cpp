@@ -93,9 +93,7 @@ MotionFrames renderSequence(Scene& scene, int frames) {
     const bool layers = scene.options.render.layers;
     scene.options.render.layers = true;  // the depth, to follow the surfaces under a moving camera
     const int first = sequence.front().index;
-    const int before = std::min(scene.options.render.temporalFrames - 1, first);
-    std::vector<SequenceFrame> order =
-        before > 0 ? readTransforms(scene.sequenceFile, {first - before, first}) : std::vector<SequenceFrame>{};
+    std::vector<SequenceFrame> order = framesBeforeSequence(scene);
     order.insert(order.end(), sequence.begin(), sequence.begin() + static_cast<std::ptrdiff_t>(count));
     const std::vector<std::vector<size_t>> groups = objectGroupMeshes(scene);
     auto poseAt = [&](size_t group, int frame) {
@@ -106,10 +104,7 @@ MotionFrames renderSequence(Scene& scene, int frames) {
     MotionFrames out;
     out.objectGroups.resize(groups.size());
     for (const SequenceFrame& frame : order) {
-        scene.camera = frame.camera;
-        scene.background = readFramePhoto(frame, scene.sequenceFile);
-        scene.backgroundFile = frame.photo;
-        poseObjects(scene, frame.index);
+        showFrame(scene, frame);
         RenderOutput output = renderer.render(scene);
         if (frame.index < first) continue;
         out.frames.push_back(std::move(output));

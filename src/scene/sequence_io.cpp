@@ -1,11 +1,13 @@
 #include "deltagi/scene_io.h"
 
+#include <algorithm>
 #include <fstream>
 #include <iterator>
 
 #include <fmt/format.h>
 
 #include "deltagi/error.h"
+#include "deltagi/keyframes.h"
 #include "deltagi/transforms.h"
 #include "scene/json_reader.h"
 
@@ -190,6 +192,21 @@ Image readFramePhoto(const SequenceFrame& frame, const fs::path& transformsFile)
                                             frame.camera.width, frame.camera.height, photo.width(),
                                             photo.height(), frame.photo.string()));
     return photo;
+}
+
+void showFrame(Scene& scene, const SequenceFrame& frame) {
+    scene.camera = frame.camera;
+    scene.background = readFramePhoto(frame, scene.sequenceFile);
+    scene.backgroundFile = frame.photo;
+    poseObjects(scene, frame.index);
+}
+
+std::vector<SequenceFrame> framesBeforeSequence(const Scene& scene) {
+    if (scene.sequence.empty()) return {};
+    const int first = scene.sequence.front().index;
+    const int before = std::min(scene.options.render.temporalFrames - 1, first);
+    if (before <= 0) return {};
+    return readTransforms(scene.sequenceFile, {first - before, first});
 }
 
 }  // namespace deltagi
