@@ -22,9 +22,10 @@ CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
         "sequence (the paper's Table 1)");
     command->add_option("scene", args.scene, "Scene file (JSON)")->required();
     command
-        ->add_option("--frames", args.options.frames,
-                     "Measured frames (default 10); a \"sequence\" is played from its first frame again after "
-                     "its last")
+        ->add_option(
+            "--frames", args.options.frames,
+            "Measured frames (default 10); a \"sequence\" is played from its first frame again after "
+            "its last")
         ->check(CLI::Range(1, 100000));
     command->add_option("--warmup", args.options.warmup, "Frames rendered before measuring (default 2)")
         ->check(CLI::Range(0, 100000));
@@ -32,9 +33,10 @@ CLI::App* addBenchCommand(CLI::App& app, BenchArgs& args, int maxThreads) {
                       "Rebuild everything every frame, the static reconstruction's voxels, RSMs and BVH too");
     args.motionOption =
         command
-            ->add_option("--motion", args.options.motionVoxels,
-                         "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still; not "
-                         "with a sequence, whose objects follow their keyframes)")
+            ->add_option(
+                "--motion", args.options.motionVoxels,
+                "Radius of the objects' circular motion in voxels (default 1; 0 keeps them still; not "
+                "with a sequence, whose objects follow their keyframes)")
             ->check(finiteRange(0.0, 1000.0));
     command
         ->add_option("--camera-motion", args.options.cameraDegrees,
@@ -70,8 +72,8 @@ int runBench(const BenchArgs& args) {
     Scene scene = loadScene(args.scene, args.overrides);
     if (json) refuseInputs({args.json}, sceneInputs(scene));
     if (!scene.sequence.empty() && args.motionOption && args.motionOption->count() > 0)
-        throw InputError("--motion",
-                         "not with a \"sequence\": its objects move as their keyframes say (none: they stay)");
+        throw InputError(
+            "--motion", "not with a \"sequence\": its objects move as their keyframes say (none: they stay)");
     if (scene.virtuals.empty() && scene.sequence.empty())
         throw InputError(args.scene.string(),
                          "virtual: the benchmark needs at least one virtual object to move");

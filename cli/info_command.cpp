@@ -57,12 +57,14 @@ void printOptions(const nlohmann::json& json, const std::string& prefix) {
 
 std::string lensText(const LensDistortion& d) {
     switch (d.model) {
-        case LensDistortion::Model::None: return "none";
+        case LensDistortion::Model::None:
+            return "none";
         case LensDistortion::Model::OpenCV:
-            return fmt::format("opencv (k1 {:.4g}, k2 {:.4g}, k3 {:.4g}, p1 {:.4g}, p2 {:.4g})", d.k1, d.k2, d.k3,
-                               d.p1, d.p2);
+            return fmt::format("opencv (k1 {:.4g}, k2 {:.4g}, k3 {:.4g}, p1 {:.4g}, p2 {:.4g})", d.k1, d.k2,
+                               d.k3, d.p1, d.p2);
         case LensDistortion::Model::Fisheye:
-            return fmt::format("fisheye (k1 {:.4g}, k2 {:.4g}, k3 {:.4g}, k4 {:.4g})", d.k1, d.k2, d.k3, d.k4);
+            return fmt::format("fisheye (k1 {:.4g}, k2 {:.4g}, k3 {:.4g}, k4 {:.4g})", d.k1, d.k2, d.k3,
+                               d.k4);
     }
     return "?";
 }

@@ -518,8 +518,9 @@ void writeEvaluationAovs(const Evaluation& e, const fs::path& folder, OutputFile
 // the worst.
 int runEvalSequence(const ReferenceArgs& args, Scene& scene) {
     if (!args.aovDir.empty())
-        throw InputError("--aov", "not with a \"sequence\": its figures are per frame (write the frames' images "
-                                  "with render --aov and reference over --set sequence.frames=A:A+1)");
+        throw InputError("--aov",
+                         "not with a \"sequence\": its figures are per frame (write the frames' images "
+                         "with render --aov and reference over --set sequence.frames=A:A+1)");
     if (!args.referenceDir.empty())
         throw InputError("--reference", "not with a \"sequence\": each frame's reference is rendered");
     std::vector<cli::RunInput> inputs = sceneInputs(scene);
@@ -535,10 +536,11 @@ int runEvalSequence(const ReferenceArgs& args, Scene& scene) {
     out.json(sequenceEvaluationToJson(e, scene), args.output);
     out.commit();
     if (!args.quiet)
-        note("deltagi: {} frames: delta_rel_error mean {:.4f}, worst {:.4f}; object_rel_rmse mean {:.4f}, worst "
-             "{:.4f} (references at {} spp); wrote {}\n",
-             e.frames.size(), e.mean.deltaRelError, e.worst.deltaRelError, e.mean.objectRelRmse,
-             e.worst.objectRelRmse, args.samplesPerPixel, args.output.string());
+        note(
+            "deltagi: {} frames: delta_rel_error mean {:.4f}, worst {:.4f}; object_rel_rmse mean {:.4f}, "
+            "worst {:.4f} (references at {} spp); wrote {}\n",
+            e.frames.size(), e.mean.deltaRelError, e.worst.deltaRelError, e.mean.objectRelRmse,
+            e.worst.objectRelRmse, args.samplesPerPixel, args.output.string());
     return 0;
 }
 

@@ -45,9 +45,10 @@ Scene loadAndWarn(const std::filesystem::path& file, const std::vector<std::stri
 void noteFirstFrame(const Scene& scene, const char* command) {
     if (scene.sequence.empty()) return;
     const int index = scene.sequence.front().index;
-    note("deltagi: {} takes one image: the sequence's first frame, frame {} of {} (--set sequence.frames={}:{} "
-         "picks frame {})\n",
-         command, index, scene.sequenceFile.string(), index + 1, index + 2, index + 1);
+    note(
+        "deltagi: {} takes one image: the sequence's first frame, frame {} of {} "
+        "(--set sequence.frames={}:{} picks frame {})\n",
+        command, index, scene.sequenceFile.string(), index + 1, index + 2, index + 1);
 }
 
 std::string plural(size_t count, const char* one, const char* many) {

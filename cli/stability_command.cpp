@@ -33,13 +33,12 @@ CLI::App* addStabilityCommand(CLI::App& app, StabilityArgs& args, int maxThreads
             ->add_option("--object-step", args.motion.objectStepVoxels,
                          "How far the objects move each frame, in voxels of the volume (default 0.25)")
             ->check(finiteRange(0.0, 1000.0)));
-    args.motionOptions.push_back(
-        command
-            ->add_option("--direction", args.direction,
-                         "Direction of the objects' motion X,Y,Z (default 1,0,0)")
-            ->delimiter(',')
-            ->expected(3)
-            ->check(finiteRange(-1e6, 1e6)));
+    args.motionOptions.push_back(command
+                                     ->add_option("--direction", args.direction,
+                                                  "Direction of the objects' motion X,Y,Z (default 1,0,0)")
+                                     ->delimiter(',')
+                                     ->expected(3)
+                                     ->check(finiteRange(-1e6, 1e6)));
     args.motionOptions.push_back(
         command
             ->add_option(
@@ -73,8 +72,8 @@ int runStability(StabilityArgs args) {
                                  "not with a \"sequence\": its frames move the camera and the keyframed "
                                  "objects as the transforms file and the keyframes say");
     const MotionFrames motion =
-        sequence ? renderSequence(scene, args.framesOption && args.framesOption->count() > 0 ? args.motion.frames
-                                                                                            : 0)
+        sequence ? renderSequence(
+                       scene, args.framesOption && args.framesOption->count() > 0 ? args.motion.frames : 0)
                  : renderMotion(scene, args.motion);
     const TemporalFigures figures = temporalInstability(motion);
     if (sequence)
@@ -83,8 +82,8 @@ int runStability(StabilityArgs args) {
                    scene.sequenceFile.string(), scene.camera.width, scene.camera.height);
     else
         fmt::print("{} frames of {}x{}, objects moving {} voxels a frame, camera turning {} deg a frame\n",
-                   motion.frames.size(), scene.camera.width, scene.camera.height, args.motion.objectStepVoxels,
-                   args.motion.cameraStepDeg);
+                   motion.frames.size(), scene.camera.width, scene.camera.height,
+                   args.motion.objectStepVoxels, args.motion.cameraStepDeg);
     if (figures.followsSurfaces)
         fmt::print("following the surface points from frame to frame (the camera moves)\n");
     fmt::print("temporal_instability real pixels (delta):      {:.3f} ({} pixel-triples)\n",

@@ -97,7 +97,8 @@ class Sampler {
         const uint64_t h = hash();
         const uint32_t shuffled = shuffle(static_cast<uint32_t>(h));
         ++dimension_;
-        return sobol::toUnit(sobol::reverseBits(sobol::laineKarras(shuffled, static_cast<uint32_t>(h >> 32))));
+        return sobol::toUnit(
+            sobol::reverseBits(sobol::laineKarras(shuffled, static_cast<uint32_t>(h >> 32))));
     }
 
     // The next dimension's pair in [0, 1)^2.
@@ -105,13 +106,16 @@ class Sampler {
         const uint64_t h = hash(), h2 = mixBits(h);
         const uint32_t shuffled = shuffle(static_cast<uint32_t>(h));
         ++dimension_;
-        return {sobol::toUnit(sobol::reverseBits(sobol::laineKarras(shuffled, static_cast<uint32_t>(h >> 32)))),
-                sobol::toUnit(sobol::owenScramble(sobol::dimension1(shuffled), static_cast<uint32_t>(h2)))};
+        return {
+            sobol::toUnit(sobol::reverseBits(sobol::laineKarras(shuffled, static_cast<uint32_t>(h >> 32)))),
+            sobol::toUnit(sobol::owenScramble(sobol::dimension1(shuffled), static_cast<uint32_t>(h2)))};
     }
 
   private:
     // 64 bits for this pixel's current dimension.
-    uint64_t hash() const { return mixBits(stream_ ^ (static_cast<uint64_t>(dimension_) * 0x9e3779b97f4a7c15ull)); }
+    uint64_t hash() const {
+        return mixBits(stream_ ^ (static_cast<uint64_t>(dimension_) * 0x9e3779b97f4a7c15ull));
+    }
     // The sample's index after a nested uniform scramble: a permutation of the indices that keeps each
     // aligned block of 2^k of them together, so that the first 2^k samples stay stratified.
     uint32_t shuffle(uint32_t seed) const {

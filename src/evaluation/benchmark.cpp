@@ -270,13 +270,14 @@ std::string benchTable(const BenchResult& r) {
             "the real light changing every frame; its shadow maps and injection kept in {} of {} frames\n",
             r.lightKeptFrames, r.options.frames);
     if (!r.sequence.empty())
-        out += fmt::format("the tracked sequence's {} in order: each frame's camera, photo and keyframed "
-                           "objects{}; the BVH and voxels kept in {} of {} frames\n",
-                           r.sequence,
-                           r.options.warmup + r.options.frames > r.sequenceFrames
-                               ? ", from its first frame again after its last"
-                               : "",
-                           r.worldKeptFrames, r.options.frames);
+        out += fmt::format(
+            "the tracked sequence's {} in order: each frame's camera, photo and keyframed "
+            "objects{}; the BVH and voxels kept in {} of {} frames\n",
+            r.sequence,
+            r.options.warmup + r.options.frames > r.sequenceFrames
+                ? ", from its first frame again after its last"
+                : "",
+            r.worldKeptFrames, r.options.frames);
     if (r.cameraDegrees > 0.0f)
         out += fmt::format("camera swinging +-{} deg; the BVH and voxels kept in {} of {} frames\n",
                            r.cameraDegrees, r.worldKeptFrames, r.options.frames);

@@ -199,8 +199,8 @@ SequenceEvaluation evaluateSequence(Scene& scene, const ReferenceOptions& refere
         const ReferenceOutput reference = renderReference(scene, referenceOptions);
         const RenderOutput dgi = renderer.render(scene);  // over the photo, which is the reference's too
         const PixelClasses classes = classifyPixels(scene, dgi.objectMask, reference.objectMask);
-        out.frames.push_back({frame.index, deltaFigures(dgi.composite, reference.composite, *scene.background,
-                                                        classes),
+        out.frames.push_back({frame.index,
+                              deltaFigures(dgi.composite, reference.composite, *scene.background, classes),
                               dgi.totalMs, reference.totalMs});
         if (onFrame) onFrame(static_cast<int>(out.frames.size()), static_cast<int>(frames.size()));
     }
@@ -229,10 +229,10 @@ SequenceEvaluation evaluateSequence(Scene& scene, const ReferenceOptions& refere
 
 nlohmann::ordered_json sequenceEvaluationToJson(const SequenceEvaluation& e, const Scene& scene) {
     nlohmann::ordered_json j;
-    j["sequence"] = scene.sequence.empty() ? std::string()
-                                           : fmt::format("frames {}:{} of {}", scene.sequence.front().index,
-                                                         scene.sequence.back().index + 1,
-                                                         scene.sequenceFile.string());
+    j["sequence"] = scene.sequence.empty()
+                        ? std::string()
+                        : fmt::format("frames {}:{} of {}", scene.sequence.front().index,
+                                      scene.sequence.back().index + 1, scene.sequenceFile.string());
     j["mean"] = figuresJson(e.mean);
     j["worst"] = figuresJson(e.worst);
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();

@@ -82,8 +82,8 @@ std::vector<std::vector<size_t>> objectGroupMeshes(const Scene& scene) {
 MotionFrames renderSequence(Scene& scene, int frames) {
     if (scene.sequence.empty()) throw InputError(scene.file.string(), "the scene has no \"sequence\"");
     const std::vector<SequenceFrame> sequence = scene.sequence;
-    const size_t count = frames > 0 ? std::min<size_t>(static_cast<size_t>(frames), sequence.size())
-                                    : sequence.size();
+    const size_t count =
+        frames > 0 ? std::min<size_t>(static_cast<size_t>(frames), sequence.size()) : sequence.size();
     if (count < 3)
         throw InputError(scene.sequenceFile.string(),
                          fmt::format("at least 3 frames are needed, the sequence has {}", count));
@@ -292,7 +292,8 @@ TemporalFigures temporalInstability(const MotionFrames& motion) {
     for (const Camera& c : motion.cameras) cameraFromWorld.push_back(glm::inverse(c.worldFromCamera));
     const std::vector<MotionFrames::ObjectGroup>& groups = motion.objectGroups;
     for (const MotionFrames::ObjectGroup& group : groups)
-        if (group.poses.size() != frames.size() || (groups.size() > 1 && group.bounds.size() != frames.size()))
+        if (group.poses.size() != frames.size() ||
+            (groups.size() > 1 && group.bounds.size() != frames.size()))
             throw InputError("objectGroups", "expected a pose (and with several groups, bounds) per frame");
     // The group whose object shows at point p of frame t: the only one whose bounds (a little larger) hold
     // it; none when it is not one.
@@ -333,7 +334,8 @@ TemporalFigures temporalInstability(const MotionFrames& motion) {
                 if (object) {
                     const MotionFrames::ObjectGroup* group = groupAt(t, p);
                     if (!group) continue;
-                    const auto& [toBefore, toAfter] = toBeforeAfter[static_cast<size_t>(group - groups.data())];
+                    const auto& [toBefore, toAfter] =
+                        toBeforeAfter[static_cast<size_t>(group - groups.data())];
                     pBefore = glm::vec3(toBefore * glm::vec4(p, 1.0f));
                     pAfter = glm::vec3(toAfter * glm::vec4(p, 1.0f));
                 }

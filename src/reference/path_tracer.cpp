@@ -225,7 +225,8 @@ DifferentialPathTracer::DifferentialPathTracer(const PathTracer& with, const Pat
       sameEmitters_(with.areaLights_.size() == without.areaLights_.size()) {}
 
 DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 origin, glm::vec3 direction,
-                                                                  const RayHit& firstHit, Sampler& sampler) const {
+                                                                  const RayHit& firstHit,
+                                                                  Sampler& sampler) const {
     Radiance r;
     if (!firstHit.hit()) {  // the same environment (or nothing) in both
         r.with = r.without = with_.radianceFromHit(firstHit, direction, sampler);

@@ -58,7 +58,8 @@ TEST(ShadowRays, SphereUnderAPointLightCastsItsProjectedUmbra) {
 
 // A hard light's shadow keeps its edge a pixel wide, however sparse its samples and wide the filter: every
 // real pixel whose footprint lies wholly in the umbra, or wholly outside it, has the exact value; only the
-// pixels that the edge crosses lie between (issue 36: the filter spread it over 3-4 pixels, the stride's more).
+// pixels that the edge crosses lie between (issue 36: the filter spread it over 3-4 pixels, the stride's
+// more).
 TEST(ShadowRays, AHardLightsShadowEdgeStaysAPixelWide) {
     Scene scene = test::floorScene();
     scene.real[0] = placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor");

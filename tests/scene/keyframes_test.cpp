@@ -262,8 +262,8 @@ TEST_F(KeyframesScene, StabilityFollowsTheSequencesCamerasAndEachObjectsMotion) 
     expectContains(errors(), {"--camera-step", "not with a \"sequence\""});
 }
 
-// `bench` over a sequence times the sequence: each frame's camera, photo (read before the frame) and keyframed
-// objects, in order, from its first frame again after its last.
+// `bench` over a sequence times the sequence: each frame's camera, photo (read before the frame) and
+// keyframed objects, in order, from its first frame again after its last.
 TEST_F(KeyframesScene, BenchPlaysTheSequence) {
     Scene s = loadScene(scene(kMoving), dir_ / "scene.json");
     const Camera camera = s.camera;
@@ -297,7 +297,8 @@ TEST_F(KeyframesScene, EvalScoresEveryFrame) {
     ReferenceOptions reference;
     reference.samplesPerPixel = 4;
     std::vector<int> progress;
-    const SequenceEvaluation e = evaluateSequence(s, reference, [&](int done, int) { progress.push_back(done); });
+    const SequenceEvaluation e =
+        evaluateSequence(s, reference, [&](int done, int) { progress.push_back(done); });
     ASSERT_EQ(e.frames.size(), 3u);
     EXPECT_EQ(progress, (std::vector<int>{1, 2, 3}));
     double sum = 0.0, worst = 0.0;
