@@ -183,12 +183,7 @@ int runRenderSequence(const RenderArgs& args, Scene& scene, int threads, double 
                 outputs.push_back(framePath(args.aovDir, frame.index) / name);
     }
     if (!args.video.empty()) outputs.push_back(args.video);
-    // Every frame's photo and the transforms file are inputs too, not only the first frame's photo.
-    std::vector<cli::RunInput> inputs = sceneInputs(scene);
-    inputs.push_back({scene.sequenceFile, "the sequence's transforms file"});
-    for (const SequenceFrame& frame : scene.sequence)
-        inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
-    refuseInputs(outputs, inputs);
+    refuseInputs(outputs, sceneInputs(scene));
     const std::vector<SequenceFrame>& frames = scene.sequence;  // the loop changes the camera and photo only
     // Temporal reuse averages a frame with the frames before it (options.render.temporal_frames): a range
     // that starts later in the file renders those first, unwritten, so that a sequence rendered in chunks
@@ -523,10 +518,6 @@ int runEvalSequence(const ReferenceArgs& args, Scene& scene) {
                          "with render --aov and reference over --set sequence.frames=A:A+1)");
     if (!args.referenceDir.empty())
         throw InputError("--reference", "not with a \"sequence\": each frame's reference is rendered");
-    std::vector<cli::RunInput> inputs = sceneInputs(scene);
-    for (const SequenceFrame& frame : scene.sequence)
-        inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
-    refuseInputs({args.output}, inputs);
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     const SequenceEvaluation e = evaluateSequence(scene, referenceOptions(args), [&](int done, int total) {
         if (progress) note("\rframe {}/{}   ", done, total);

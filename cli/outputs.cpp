@@ -60,6 +60,10 @@ std::vector<RunInput> sceneInputs(const Scene& scene) {
     if (!scene.backgroundFile.empty()) inputs.push_back({scene.backgroundFile, "the background photo"});
     if (scene.environment) inputs.push_back({scene.environment->file, "the environment map"});
     for (const fs::path& mesh : scene.meshFiles) inputs.push_back({mesh, "a mesh file of the scene"});
+    // A sequence: the transforms file and every frame's photo, not only the first frame's.
+    if (!scene.sequence.empty()) inputs.push_back({scene.sequenceFile, "the sequence's transforms file"});
+    for (const SequenceFrame& frame : scene.sequence)
+        inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
     return inputs;
 }
 

@@ -38,7 +38,8 @@ struct RunInput {
     std::string what;
 };
 
-// The scene file and every file it names that the loader read: background photo, environment map, meshes.
+// The scene file and every file it names that the loader read: background photo, environment map, meshes,
+// and a sequence's transforms file and every frame's photo.
 std::vector<RunInput> sceneInputs(const Scene& scene);
 
 // Throws InputError "OUT: is an input of this run (WHAT); choose another output" when an output is one of the

@@ -86,6 +86,19 @@ Image readFramePhoto(const SequenceFrame& frame, const std::filesystem::path& tr
 // readFramePhoto) and the keyframed objects' poses (poseObjects).
 void showFrame(Scene& scene, const SequenceFrame& frame);
 
+// The scene's camera and photo as they are, to put back after a loop of showFrame(); restoring also poses
+// the keyframed objects for the sequence's first frame, as the scene was loaded.
+struct ShownFrame {
+    Camera camera;
+    std::optional<Image> background;
+    std::filesystem::path backgroundFile;
+};
+ShownFrame shownFrame(const Scene& scene);
+void restoreShownFrame(Scene& scene, const ShownFrame& shown);
+
+// "frames A:B of FILE" for the scene's sequence (empty without one).
+std::string sequenceRangeText(const Scene& scene);
+
 // The frames of the scene's transforms file just before its sequence's first, which a run renders first,
 // unwritten, so that temporal reuse (options.render.temporal_frames) averages as many frames in a range as
 // in the whole file: temporal_frames - 1 of them, fewer at the file's start. InputError as readTransforms.

@@ -12,7 +12,6 @@
 
 #include "deltagi/environment.h"
 #include "deltagi/error.h"
-#include "deltagi/keyframes.h"
 #include "deltagi/scene_io.h"
 #include "deltagi/transforms.h"
 
@@ -170,9 +169,7 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
     };
 
     const int total = options.warmup + options.frames;
-    const Camera camera = scene.camera;
-    const std::optional<Image> background = scene.background;
-    const std::filesystem::path backgroundFile = scene.backgroundFile;
+    const ShownFrame shown = shownFrame(scene);
     // A tracked sequence: its frames in order, each with its camera, photo and keyframed objects.
     const std::vector<SequenceFrame>& sequence = scene.sequence;
     if (!sequence.empty()) {
@@ -180,8 +177,7 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
             throw InputError(options.live ? "--live" : "--camera-motion",
                              "not with a \"sequence\": its frames move the camera and the keyframed objects "
                              "as the transforms file and the keyframes say");
-        result.sequence = fmt::format("frames {}:{} of {}", sequence.front().index, sequence.back().index + 1,
-                                      scene.sequenceFile.string());
+        result.sequence = sequenceRangeText(scene);
         result.sequenceFrames = static_cast<int>(sequence.size());
     }
     const std::optional<glm::vec3> viewpoint = scene.options.volume.viewpoint;
@@ -192,7 +188,7 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
     result.cameraDegrees = cameraDegrees;
     if (cameraDegrees > 0.0f) {
         // As a sequence does: the volumes light the real surfaces' side that the first camera sees.
-        if (!viewpoint) scene.options.volume.viewpoint = camera.position();
+        if (!viewpoint) scene.options.volume.viewpoint = shown.camera.position();
         poses = cameraPoses(scene, cameraDegrees, total, options.live ? &light : nullptr);
     }
 
@@ -223,15 +219,10 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
         result.totals.push_back(out.totalMs);
         if (onFrame) onFrame(f - options.warmup, out.totalMs);
     }
-    if (sequence.empty())
-        placeObjects(0);
-    else
-        poseObjects(scene, sequence.front().index);
+    if (sequence.empty()) placeObjects(0);
     scene.lights = light.lights;
     scene.environment = light.environment;
-    scene.camera = camera;
-    scene.background = background;
-    scene.backgroundFile = backgroundFile;
+    restoreShownFrame(scene, shown);
     scene.options.volume.viewpoint = viewpoint;
     return result;
 }

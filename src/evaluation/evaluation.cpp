@@ -5,13 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <optional>
 
 #include <fmt/format.h>
 
 #include "core/parallel.h"
 #include "deltagi/error.h"
-#include "deltagi/keyframes.h"
 #include "deltagi/scene_io.h"
 #include "reference/path_tracer.h"
 
@@ -182,9 +180,7 @@ SequenceEvaluation evaluateSequence(Scene& scene, const ReferenceOptions& refere
                                     const std::function<void(int, int)>& onFrame) {
     if (scene.sequence.empty()) throw InputError(scene.file.string(), "the scene has no \"sequence\"");
     const std::vector<SequenceFrame> frames = scene.sequence;
-    const Camera camera = scene.camera;
-    const std::optional<Image> background = scene.background;
-    const std::filesystem::path backgroundFile = scene.backgroundFile;
+    const ShownFrame shown = shownFrame(scene);
     const int first = frames.front().index;
     std::vector<SequenceFrame> order = framesBeforeSequence(scene);
     order.insert(order.end(), frames.begin(), frames.end());
@@ -220,19 +216,13 @@ SequenceEvaluation evaluateSequence(Scene& scene, const ReferenceOptions& refere
         worstBySize(out.worst.biasLit, f.dgi.biasLit);
         worstBySize(out.worst.biasShadowed, f.dgi.biasShadowed);
     }
-    poseObjects(scene, first);
-    scene.camera = camera;
-    scene.background = background;
-    scene.backgroundFile = backgroundFile;
+    restoreShownFrame(scene, shown);
     return out;
 }
 
 nlohmann::ordered_json sequenceEvaluationToJson(const SequenceEvaluation& e, const Scene& scene) {
     nlohmann::ordered_json j;
-    j["sequence"] = scene.sequence.empty()
-                        ? std::string()
-                        : fmt::format("frames {}:{} of {}", scene.sequence.front().index,
-                                      scene.sequence.back().index + 1, scene.sequenceFile.string());
+    j["sequence"] = sequenceRangeText(scene);
     j["mean"] = figuresJson(e.mean);
     j["worst"] = figuresJson(e.worst);
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();

@@ -87,9 +87,7 @@ MotionFrames renderSequence(Scene& scene, int frames) {
     if (count < 3)
         throw InputError(scene.sequenceFile.string(),
                          fmt::format("at least 3 frames are needed, the sequence has {}", count));
-    const Camera camera = scene.camera;
-    const std::optional<Image> background = scene.background;
-    const std::filesystem::path backgroundFile = scene.backgroundFile;
+    const ShownFrame shown = shownFrame(scene);
     const bool layers = scene.options.render.layers;
     scene.options.render.layers = true;  // the depth, to follow the surfaces under a moving camera
     const int first = sequence.front().index;
@@ -119,10 +117,7 @@ MotionFrames renderSequence(Scene& scene, int frames) {
             group.bounds.push_back(bounds);
         }
     }
-    poseObjects(scene, first);
-    scene.camera = camera;
-    scene.background = background;
-    scene.backgroundFile = backgroundFile;
+    restoreShownFrame(scene, shown);
     scene.options.render.layers = layers;
     return out;
 }
@@ -295,19 +290,15 @@ TemporalFigures temporalInstability(const MotionFrames& motion) {
         if (group.poses.size() != frames.size() ||
             (groups.size() > 1 && group.bounds.size() != frames.size()))
             throw InputError("objectGroups", "expected a pose (and with several groups, bounds) per frame");
-    // The group whose object shows at point p of frame t: the only one whose bounds (a little larger) hold
-    // it; none when it is not one.
-    auto groupAt = [&](size_t t, glm::vec3 p) -> const MotionFrames::ObjectGroup* {
-        if (groups.size() == 1) return &groups[0];
-        const MotionFrames::ObjectGroup* found = nullptr;
-        for (const MotionFrames::ObjectGroup& group : groups) {
-            Bounds3f b = group.bounds[t];
-            const glm::vec3 margin(0.01f * glm::length(b.diagonal()) + 1e-6f);
-            b.min -= margin;
-            b.max += margin;
-            if (!b.contains(p)) continue;
-            if (found) return nullptr;
-            found = &group;
+    // The index of the group whose object shows at point p: the only one whose bounds in this frame (a
+    // little larger: `grown`) hold it; -1 when it is not one.
+    auto groupAt = [&](std::span<const Bounds3f> grown, glm::vec3 p) -> int {
+        if (groups.size() == 1) return 0;
+        int found = -1;
+        for (size_t g = 0; g < grown.size(); ++g) {
+            if (!grown[g].contains(p)) continue;
+            if (found >= 0) return -1;
+            found = static_cast<int>(g);
         }
         return found;
     };
@@ -317,9 +308,16 @@ TemporalFigures temporalInstability(const MotionFrames& motion) {
         const Camera& camera = motion.cameras[t];
         // Each group's points now, where they were in the frame before and will be in the frame after.
         std::vector<std::pair<glm::mat4, glm::mat4>> toBeforeAfter;
+        std::vector<Bounds3f> grown;
         for (const MotionFrames::ObjectGroup& group : groups) {
             const glm::mat4 fromNow = glm::inverse(group.poses[t]);
             toBeforeAfter.emplace_back(group.poses[t - 1] * fromNow, group.poses[t + 1] * fromNow);
+            if (group.bounds.empty()) continue;
+            Bounds3f b = group.bounds[t];
+            const glm::vec3 margin(0.01f * glm::length(b.diagonal()) + 1e-6f);
+            b.min -= margin;
+            b.max += margin;
+            grown.push_back(b);
         }
         const glm::vec3 eye = camera.position();
         for (int y = 0; y < height; ++y)
@@ -332,10 +330,9 @@ TemporalFigures temporalInstability(const MotionFrames& motion) {
                                                                       static_cast<float>(y) + 0.5f);
                 glm::vec3 pBefore = p, pAfter = p;
                 if (object) {
-                    const MotionFrames::ObjectGroup* group = groupAt(t, p);
-                    if (!group) continue;
-                    const auto& [toBefore, toAfter] =
-                        toBeforeAfter[static_cast<size_t>(group - groups.data())];
+                    const int group = groupAt(grown, p);
+                    if (group < 0) continue;
+                    const auto& [toBefore, toAfter] = toBeforeAfter[static_cast<size_t>(group)];
                     pBefore = glm::vec3(toBefore * glm::vec4(p, 1.0f));
                     pAfter = glm::vec3(toAfter * glm::vec4(p, 1.0f));
                 }

@@ -201,6 +201,23 @@ void showFrame(Scene& scene, const SequenceFrame& frame) {
     poseObjects(scene, frame.index);
 }
 
+ShownFrame shownFrame(const Scene& scene) {
+    return {scene.camera, scene.background, scene.backgroundFile};
+}
+
+void restoreShownFrame(Scene& scene, const ShownFrame& shown) {
+    scene.camera = shown.camera;
+    scene.background = shown.background;
+    scene.backgroundFile = shown.backgroundFile;
+    if (!scene.sequence.empty()) poseObjects(scene, scene.sequence.front().index);
+}
+
+std::string sequenceRangeText(const Scene& scene) {
+    if (scene.sequence.empty()) return {};
+    return fmt::format("frames {}:{} of {}", scene.sequence.front().index, scene.sequence.back().index + 1,
+                       scene.sequenceFile.string());
+}
+
 std::vector<SequenceFrame> framesBeforeSequence(const Scene& scene) {
     if (scene.sequence.empty()) return {};
     const int first = scene.sequence.front().index;
