@@ -57,7 +57,7 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     Grid3 indirect(n);
     if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= kGatherLevel) return indirect;
     const VolumeRegion& region = visibility.region();
-    const Grid3& coarse = visibility.level(kGatherLevel);
+    const PackedGrid3& coarse = visibility.level(kGatherLevel);
     const int m = coarse.resolution();
     const int factor = n / m;  // level-0 voxels per coarse voxel along each axis
     const float coarseSize = region.voxelSize() * static_cast<float>(factor);
@@ -67,8 +67,9 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     std::vector<glm::vec3> gathered(coarse.size());
     for (int bounce = 0; bounce < bounces; ++bounce) {
         // The light so far: direct plus the bounces gathered before.
-        Grid3 total = direct.clone();
-        for (size_t i = 0; i < total.size(); ++i) total[i] += indirect[i];
+        PackedGrid3 total(n);
+        parallelFor(0, static_cast<int64_t>(total.size()), 1 << 14,
+                    [&](int64_t i) { total.set(i, direct[i] + indirect[i]); });
         const MipVolume light = buildMipChain(region, std::move(total));
         // Gather at each surface voxel of the coarse level.
         parallelFor(0, static_cast<int64_t>(m) * m, 4, [&](int64_t row) {
@@ -105,7 +106,7 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
 std::vector<bool> bounceViewSides(const MipVolume& visibility, glm::vec3 viewpoint) {
     if (visibility.levelCount() <= kGatherLevel) return {};
     const VolumeRegion& region = visibility.region();
-    const Grid3& coarse = visibility.level(kGatherLevel);
+    const PackedGrid3& coarse = visibility.level(kGatherLevel);
     const int m = coarse.resolution();
     const float coarseSize = region.voxelSize() * static_cast<float>(region.resolution / m);
     std::vector<bool> sides(coarse.size(), false);
@@ -154,7 +155,7 @@ std::vector<glm::vec3> gatherAtObjectVoxels(const VoxelGeometry& objects, const 
     if (box.empty() || objects.albedo.empty() || objectVisibility.levelCount() <= level)
         return std::vector<glm::vec3>(box.empty() ? 0 : box.count(), glm::vec3(0.0f));
     const VolumeRegion& region = objectVisibility.region();
-    const Grid3& coarse = objectVisibility.level(level);
+    const PackedGrid3& coarse = objectVisibility.level(level);
     const int factor = region.resolution / coarse.resolution();
     const float coarseSize = region.voxelSize() * static_cast<float>(factor);
     // The coarse voxels over the box, gathered once each.

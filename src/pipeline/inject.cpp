@@ -295,8 +295,8 @@ std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelB
 
 void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
                    std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
-                   std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight, Grid3& fullLight,
-                   Grid3& deltaLight, const Grid3* bounce) {
+                   std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight,
+                   PackedGrid3& fullLight, PackedGrid3& deltaLight, const Grid3* bounce) {
     const std::vector<uint32_t> gone = goneEntries(sceneTexels, changes);
     forEachRow(box, [&](int y, int z) {
         const std::vector<VoxelTexels> sums =
@@ -306,8 +306,8 @@ void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
             const VoxelTexels& texels = sums[x - box.lo.x];
             glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, i);
             if (bounce) light += (*bounce)[i];
-            fullLight[i] = light;
-            deltaLight[i] = deltaVoxel(light, sceneLight[i]);
+            fullLight.set(i, light);
+            deltaLight.set(i, deltaVoxel(light, sceneLight[i]));
         }
     });
 }

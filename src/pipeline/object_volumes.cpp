@@ -53,10 +53,11 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
         std::vector<ReflectiveShadowMap> withObjects;
         for (size_t l = 0; l < updates.size(); ++l)
             withObjects.push_back(applyRsmUpdate(real.rsms[l], updates[l]));
-        freshFull_ = injectLight(withObjects, region_, both);
+        Grid3 full = injectLight(withObjects, region_, both);
         if (real.bounce)
-            for (size_t i = 0; i < freshFull_->size(); ++i) (*freshFull_)[i] += (*real.bounce)[i];
-        freshDelta_ = deltaVolume(*freshFull_, real.light);
+            for (size_t i = 0; i < full.size(); ++i) full[i] += (*real.bounce)[i];
+        freshDelta_.emplace(deltaVolume(full, real.light));
+        freshFull_.emplace(full);
         lightChanged_ = all;
         return;
     }
@@ -64,8 +65,8 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, all);
     if (newLight) {
         // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).
-        freshFull_ = real.light.clone();
-        if (wholeDelta) freshDelta_ = deltaVolume(*freshFull_, real.light);
+        freshFull_.emplace(real.light);
+        if (wholeDelta) freshDelta_.emplace(deltaVolume(real.light, real.light));
     }
     reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light,
                   newLight ? *freshFull_ : fullLight_.levelForUpdate(0),
@@ -88,18 +89,18 @@ VoxelBox unionOf(VoxelBox a, const VoxelBox& b) {
 }  // namespace
 
 void ObjectVolumes::updateObjectLight(const VoxelBox& box) {
-    const Grid3& full = fullLight_.level(0);
+    const PackedGrid3& full = fullLight_.level(0);
     if (objectLight_.empty()) {
-        Grid3 level0(region_.resolution);
+        PackedGrid3 level0(region_.resolution);
         for (size_t i = 0; i < level0.size(); ++i)
-            if (objects_.visibility[i].x > 0.0f) level0[i] = full[i];
+            if (objects_.visibility[i].x > 0.0f) level0.set(i, full[i]);
         objectLight_ = buildMipChain(region_, std::move(level0));
         return;
     }
-    Grid3& level0 = objectLight_.levelForUpdate(0);
+    PackedGrid3& level0 = objectLight_.levelForUpdate(0);
     forEachRow(box, [&](int y, int z) {
         for (size_t i = full.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i)
-            level0[i] = objects_.visibility[i].x > 0.0f ? full[i] : glm::vec4(0.0f);
+            level0.set(i, objects_.visibility[i].x > 0.0f ? full[i] : glm::vec4(0.0f));
     });
     updateMipChain(objectLight_, box, nonZeroBounds(level0, box));
 }
@@ -118,14 +119,14 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
                                        *options, box, kObjectBounceLevel)
             : gatherObjectBounce(fullLight_, objects_, objectVisibility_, *sceneVisibility, *options, box,
                                  kObjectBounceLevel);
-    Grid3& full = fullLight_.levelForUpdate(0);
-    Grid3& delta = deltaLight_.levelForUpdate(0);
+    PackedGrid3& full = fullLight_.levelForUpdate(0);
+    PackedGrid3& delta = deltaLight_.levelForUpdate(0);
     const glm::ivec3 extent = box.hi - box.lo;
     forEachRow(box, [&](int y, int z) {
         size_t k = (static_cast<size_t>(z - box.lo.z) * extent.y + (y - box.lo.y)) * extent.x;
         for (size_t i = full.index(box.lo.x, y, z), end = i + extent.x; i < end; ++i, ++k) {
-            full[i] += glm::vec4(added[k], 0.0f);
-            delta[i] += glm::vec4(added[k], 0.0f);
+            full.set(i, full[i] + glm::vec4(added[k], 0.0f));
+            delta.set(i, delta[i] + glm::vec4(added[k], 0.0f));
         }
     });
     updateMipChain(fullLight_, box, unionOf(fullLight_.occupiedBounds(), box));
@@ -135,14 +136,14 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
 
 void ObjectVolumes::buildLightMips() {
     if (objectVisibility_.empty()) {
-        objectVisibility_ = buildMipChain(region_, objects_.visibility.clone());
+        objectVisibility_ = buildMipChain(region_, objects_.visibility);
     } else {
         // Level 0 is the objects' voxels again: copy the box that changed.
-        Grid3& level0 = objectVisibility_.levelForUpdate(0);
+        PackedGrid3& level0 = objectVisibility_.levelForUpdate(0);
         const VoxelBox& box = objectsChanged_;
         forEachRow(box, [&](int y, int z) {
-            const size_t first = level0.index(box.lo.x, y, z);
-            std::copy_n(&objects_.visibility[first], box.hi.x - box.lo.x, &level0[first]);
+            for (size_t i = level0.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i)
+                level0.set(i, objects_.visibility[i]);
         });
         updateMipChain(objectVisibility_, box, nonZeroBounds(level0, objects_.bounds));
     }

@@ -79,7 +79,7 @@ class ObjectVolumes {
     VoxelBox lightDiffers_;    // outside it the full light volume is the scene's (the last injection)
     VoxelBox lightChanged_;  // level-0 voxels that this frame's injection rewrote (a new light: of the delta
                              // volume)
-    std::optional<Grid3> freshFull_, freshDelta_;  // made whole this frame, for mipmap()
+    std::optional<PackedGrid3> freshFull_, freshDelta_;  // made whole this frame, for mipmap()
     // Of the real light of version sceneLightVersion_, built on the first frame that needs them:
     std::optional<TexelBins> sceneTexels_;      // the real scene's RSM texels by voxel row
     std::optional<VoxelBox> sceneLightBounds_;  // the real scene's non-zero light voxels

@@ -192,7 +192,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
         updates.push_back(traceRsmUpdate((*light.rsms)[l], all, lights[l], region, objectBounds, viewpoint));
     timer.lap("rsm");
     auto visibility = [&]() -> const MipVolume& {
-        if (!real.visibility) real.visibility = buildMipChain(region, real.geometry->visibility.clone());
+        if (!real.visibility) real.visibility = buildMipChain(region, real.geometry->visibility);
         return *real.visibility;
     };
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
@@ -244,7 +244,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     if (environmentByRays(scene)) environment.emplace(*scene.environment);
     const std::vector<Light> shaded = directLights(scene);
     const VoxelGeometry* geometries[] = {&geometry};
-    const MipVolume visibility = buildMipChain(region, geometry.visibility.clone());
+    const MipVolume visibility = buildMipChain(region, geometry.visibility);
     Grid3 direct = injectLight(rsms, region, geometries);
     if (bounces > 0) {
         const Grid3 bounced = bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene));

@@ -1,10 +1,13 @@
-// Voxel volumes: a cubic grid of 4-float voxels with its mip chain (§3.1, Fig. 1).
+// Voxel volumes: a cubic grid of 4-value voxels with its mip chain (§3.1, Fig. 1).
 //
 // All four volumes of the method share this layout and the region of §3.4:
 //   visibility volume: (occlusion, occlusion * average normal)  -- premultiplied, so a mip level is the plain
 //                      mean of its 8 children: occlusion becomes the fraction of filled sub-voxels (§3.2) and
 //                      the normal the occlusion-weighted mean normal, whose length says how coherent it is;
 //   light volume:      (occlusion * radiance rgb, occlusion)     -- premultiplied the same way.
+// The stages build level 0 in floats (Grid3); the mip volumes the cones read keep every level in bfloat16
+// (PackedGrid3, 8 bytes a voxel): half the memory and memory traffic of floats, with a float's range (a
+// radiance has no upper bound) and 8 significant bits, a relative rounding error under 2^-8.
 #pragma once
 
 #include <cmath>
@@ -15,6 +18,9 @@
 #include <vector>
 
 #include <glm/glm.hpp>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "core/large_blocks.h"
 #include "core/parallel.h"
@@ -22,7 +28,7 @@
 
 namespace deltagi {
 
-// One level: n^3 voxels, x fastest. Move-only: volumes are large.
+// One level in floats: n^3 voxels, x fastest. Move-only: volumes are large.
 class Grid3 {
   public:
     Grid3() = default;
@@ -45,18 +51,101 @@ class Grid3 {
     const glm::vec4& at(int x, int y, int z) const { return voxels_[index(x, y, z)]; }
     glm::vec4& operator[](size_t i) { return voxels_[i]; }
     const glm::vec4& operator[](size_t i) const { return voxels_[i]; }
-    // Zero outside the grid (clamp-to-border).
-    glm::vec4 fetch(int x, int y, int z) const {
-        if (static_cast<unsigned>(x) >= static_cast<unsigned>(n_) ||
-            static_cast<unsigned>(y) >= static_cast<unsigned>(n_) ||
-            static_cast<unsigned>(z) >= static_cast<unsigned>(n_))
-            return glm::vec4(0.0f);
-        return voxels_[index(x, y, z)];
-    }
+    void set(size_t i, glm::vec4 v) { voxels_[i] = v; }
 
   private:
     int n_ = 0;
     std::vector<glm::vec4, LargeBlockAllocator<glm::vec4>> voxels_;
+};
+
+// bfloat16: a float's upper 16 bits (sign, 8-bit exponent, 7-bit mantissa), rounded to nearest even. (A
+// quiet NaN stays one; the volumes hold none.)
+inline uint16_t toBfloat16(float f) {
+    uint32_t bits;
+    std::memcpy(&bits, &f, sizeof(bits));
+    bits += 0x7FFFu + ((bits >> 16) & 1u);
+    return static_cast<uint16_t>(bits >> 16);
+}
+inline float fromBfloat16(uint16_t h) {
+    const uint32_t bits = static_cast<uint32_t>(h) << 16;
+    float f;
+    std::memcpy(&f, &bits, sizeof(f));
+    return f;
+}
+
+// 4 floats in one SIMD register (GCC/Clang vector extension: SSE on x86-64, NEON on Arm).
+using Float4 = float __attribute__((vector_size(16)));
+inline Float4 loadFloat4(const glm::vec4& v) {
+    Float4 r;
+    std::memcpy(&r, &v, sizeof(r));
+    return r;
+}
+inline glm::vec4 storeFloat4(Float4 v) {
+    glm::vec4 r;
+    std::memcpy(&r, &v, sizeof(r));
+    return r;
+}
+
+// A voxel of 4 bfloat16, the first value in the lowest bits: toBfloat16 of each.
+using PackedVoxel = uint64_t;
+inline PackedVoxel packVoxel(Float4 v) {
+#if defined(__SSE2__)
+    __m128i bits = _mm_castps_si128(reinterpret_cast<__m128>(v));
+    const __m128i odd = _mm_and_si128(_mm_srli_epi32(bits, 16), _mm_set1_epi32(1));
+    bits = _mm_add_epi32(bits, _mm_add_epi32(odd, _mm_set1_epi32(0x7FFF)));
+    // The upper halves, sign-extended, fit int16: the signed pack keeps them as they are.
+    bits = _mm_srai_epi32(bits, 16);
+    return static_cast<PackedVoxel>(_mm_cvtsi128_si64(_mm_packs_epi32(bits, bits)));
+#else
+    return static_cast<PackedVoxel>(toBfloat16(v[0])) | static_cast<PackedVoxel>(toBfloat16(v[1])) << 16 |
+           static_cast<PackedVoxel>(toBfloat16(v[2])) << 32 | static_cast<PackedVoxel>(toBfloat16(v[3])) << 48;
+#endif
+}
+inline PackedVoxel packVoxel(glm::vec4 v) { return packVoxel(loadFloat4(v)); }
+// Each value's 16 bits become the upper half of a float (on x86-64 one SSE2 interleave with zeros).
+inline Float4 unpackVoxel(const PackedVoxel& p) {
+#if defined(__SSE2__)
+    const __m128i bits = _mm_unpacklo_epi16(_mm_setzero_si128(), _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&p)));
+    return reinterpret_cast<Float4>(_mm_castsi128_ps(bits));
+#else
+    using UInt4 = uint32_t __attribute__((vector_size(16)));
+    const UInt4 bits = {static_cast<uint32_t>(p) << 16, static_cast<uint32_t>(p) & 0xFFFF0000u,
+                        static_cast<uint32_t>(p >> 32) << 16, static_cast<uint32_t>(p >> 32) & 0xFFFF0000u};
+    Float4 r;
+    std::memcpy(&r, &bits, sizeof(r));
+    return r;
+#endif
+}
+
+// One level of a mip volume: n^3 voxels of 4 bfloat16 (PackedVoxel), x fastest. Reads give floats; writes
+// round to nearest. Move-only.
+class PackedGrid3 {
+  public:
+    PackedGrid3() = default;
+    explicit PackedGrid3(int n) : n_(n), voxels_(static_cast<size_t>(n) * n * n, PackedVoxel(0)) {}
+    // `grid` rounded to bfloat16.
+    explicit PackedGrid3(const Grid3& grid);
+    PackedGrid3(PackedGrid3&&) noexcept = default;
+    PackedGrid3& operator=(PackedGrid3&&) noexcept = default;
+    PackedGrid3(const PackedGrid3&) = delete;
+    PackedGrid3& operator=(const PackedGrid3&) = delete;
+
+    int resolution() const { return n_; }
+    size_t size() const { return voxels_.size(); }
+    size_t bytes() const { return voxels_.size() * sizeof(PackedVoxel); }
+    size_t index(int x, int y, int z) const { return (static_cast<size_t>(z) * n_ + y) * n_ + x; }
+    glm::vec4 operator[](size_t i) const { return storeFloat4(unpackVoxel(voxels_[i])); }
+    glm::vec4 at(int x, int y, int z) const { return (*this)[index(x, y, z)]; }
+    Float4 load(size_t i) const { return unpackVoxel(voxels_[i]); }
+    void set(size_t i, glm::vec4 v) { voxels_[i] = packVoxel(v); }
+    void set(size_t i, Float4 v) { voxels_[i] = packVoxel(v); }
+    void set(int x, int y, int z, Float4 v) { set(index(x, y, z), v); }
+    void set(int x, int y, int z, glm::vec4 v) { set(index(x, y, z), v); }
+    PackedVoxel packed(size_t i) const { return voxels_[i]; }
+
+  private:
+    int n_ = 0;
+    std::vector<PackedVoxel, LargeBlockAllocator<PackedVoxel>> voxels_;
 };
 
 // A box of level-0 voxels [lo, hi) (hi exclusive); empty when hi <= lo on any axis. The frame-to-frame
@@ -81,19 +170,6 @@ struct VoxelBox {
     // The voxels of the next coarser mip level that hold these (resolution halved).
     VoxelBox parents() const { return empty() ? VoxelBox{} : VoxelBox{lo >> 1, (hi + 1) >> 1}; }
 };
-
-// 4 floats in one SIMD register (GCC/Clang vector extension: SSE on x86-64, NEON on Arm).
-using Float4 = float __attribute__((vector_size(16)));
-inline Float4 loadFloat4(const glm::vec4& v) {
-    Float4 r;
-    std::memcpy(&r, &v, sizeof(r));
-    return r;
-}
-inline glm::vec4 storeFloat4(Float4 v) {
-    glm::vec4 r;
-    std::memcpy(&r, &v, sizeof(r));
-    return r;
-}
 
 // The 8 voxels and weights of one trilinear lookup (corners outside the grid have weight 0).
 struct TrilinearCorners {
@@ -144,22 +220,30 @@ inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorn
 template <typename RowBody>
 void forEachRow(const VoxelBox& box, RowBody&& rowBody);
 
-// The box around every non-zero voxel of `grid` inside `within` (empty when there is none).
-VoxelBox nonZeroBounds(const Grid3& grid, const VoxelBox& within);
+// The box around every non-zero voxel of `grid` (a Grid3 or a PackedGrid3) inside `within` (empty when there
+// is none).
+template <typename Grid>
+VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within);
 
 // A level-0 grid and its mip chain over a region. Level l has resolution n / 2^l; its voxels are 2^l level-0
 // voxels wide.
 class MipVolume {
   public:
     MipVolume() = default;
-    MipVolume(VolumeRegion region, std::vector<Grid3> levels) : region_(region), levels_(std::move(levels)) {
+    MipVolume(VolumeRegion region, std::vector<PackedGrid3> levels) : region_(region), levels_(std::move(levels)) {
         findOccupiedBounds();
     }
 
     const VolumeRegion& region() const { return region_; }
     int levelCount() const { return static_cast<int>(levels_.size()); }
-    const Grid3& level(int l) const { return levels_[l]; }
+    const PackedGrid3& level(int l) const { return levels_[l]; }
     bool empty() const { return levels_.empty(); }
+    // Bytes of all the levels.
+    size_t bytes() const {
+        size_t sum = 0;
+        for (const PackedGrid3& g : levels_) sum += g.bytes();
+        return sum;
+    }
 
     // Prepares a quadrilinear lookup at `voxelPos` (level-0 voxel units, 0 at the region's corner) between
     // the two levels around the fractional `level`.
@@ -194,7 +278,7 @@ class MipVolume {
     // For updates in place (mipmap.h's updateMipChain): a level to write, and the occupied bounds to use
     // instead of scanning level 0 again. The caller keeps the levels a mip chain and the bounds a superset of
     // the non-zero voxels.
-    Grid3& levelForUpdate(int l) { return levels_[l]; }
+    PackedGrid3& levelForUpdate(int l) { return levels_[l]; }
     void setOccupiedBounds(const VoxelBox& box) {
         occupied_ = box;
         if (box.empty()) {
@@ -216,9 +300,9 @@ class MipVolume {
 
   private:
     Float4 gatherLevel(int l, const TrilinearCorners& c) const {
-        const Grid3& g = levels_[l];
+        const PackedGrid3& g = levels_[l];
         Float4 acc = {0.0f, 0.0f, 0.0f, 0.0f};
-        for (int k = 0; k < 8; ++k) acc += loadFloat4(g[c.index[k]]) * c.weight[k];
+        for (int k = 0; k < 8; ++k) acc += g.load(c.index[k]) * c.weight[k];
         return acc;
     }
     // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
@@ -228,7 +312,7 @@ class MipVolume {
     }
 
     VolumeRegion region_;
-    std::vector<Grid3> levels_;
+    std::vector<PackedGrid3> levels_;
     VoxelBox occupied_;
     glm::vec3 occupiedMin_{0.0f}, occupiedMax_{0.0f};  // occupied_ as floats, for mayReadNonZero
 };
@@ -242,7 +326,8 @@ void forEachRow(const VoxelBox& box, RowBody&& rowBody) {
     });
 }
 
-inline VoxelBox nonZeroBounds(const Grid3& grid, const VoxelBox& within) {
+template <typename Grid>
+VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within) {
     glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
     for (int z = within.lo.z; z < within.hi.z; ++z)
         for (int y = within.lo.y; y < within.hi.y; ++y) {
@@ -256,6 +341,11 @@ inline VoxelBox nonZeroBounds(const Grid3& grid, const VoxelBox& within) {
             hi = glm::max(hi, glm::ivec3(last + 1, y + 1, z + 1));
         }
     return lo.x <= hi.x ? VoxelBox{lo, hi} : VoxelBox{};
+}
+
+inline PackedGrid3::PackedGrid3(const Grid3& grid) : PackedGrid3(grid.resolution()) {
+    parallelFor(0, static_cast<int64_t>(voxels_.size()), 1 << 14,
+                [&](int64_t i) { voxels_[i] = packVoxel(grid[i]); });
 }
 
 }  // namespace deltagi

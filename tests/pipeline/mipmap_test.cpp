@@ -1,7 +1,8 @@
 #include "pipeline/mipmap.h"
 
 #include <cmath>
-#include <cstring>
+#include <algorithm>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -16,18 +17,21 @@ TEST(Mipmap, EachLevelKeepsTheMeanAndOcclusionBecomesTheFilledFraction) {
     for (int z = 0; z < n; ++z)
         for (int y = 0; y < n; ++y)
             for (int x = 4; x < n; ++x) g.at(x, y, z) = glm::vec4(0.0f, float(x + y + z), 0.0f, 1.0f);
-    auto mean = [](const Grid3& grid) {
+    auto mean = [](const PackedGrid3& grid) {
         glm::dvec4 sum(0.0);
         for (size_t i = 0; i < grid.size(); ++i) sum += glm::dvec4(grid[i]);
         return sum / double(grid.size());
     };
-    const glm::dvec4 m0 = mean(g);
     MipVolume mips = buildMipChain({glm::vec3(0), 1.0f, n}, std::move(g));
     ASSERT_EQ(mips.levelCount(), 4);
     EXPECT_EQ(mips.level(3).resolution(), 1);
+    // Each level is rounded to bfloat16 once more: a relative error under 2^-8 of the largest value (21) a
+    // level.
+    const glm::dvec4 m0 = mean(mips.level(0));
     for (int l = 1; l < 4; ++l) {
         const glm::dvec4 m = mean(mips.level(l));
-        for (int c = 0; c < 4; ++c) EXPECT_NEAR(m[c], m0[c], 1e-5) << "level " << l << " channel " << c;
+        for (int c = 0; c < 4; ++c)
+            EXPECT_NEAR(m[c], m0[c], l * std::ldexp(21.0, -8)) << "level " << l << " channel " << c;
     }
     EXPECT_FLOAT_EQ(mips.level(1).at(0, 0, 0).x, 0.125f);  // 1 of 8 sub-voxels filled
 }
@@ -66,15 +70,44 @@ TEST(Mipmap, UpdatingTheLevelsAboveAChangedBoxEqualsRebuildingTheChain) {
             for (int y = box.lo.y; y < box.hi.y; ++y)
                 for (int x = box.lo.x; x < box.hi.x; ++x) {
                     g.at(x, y, z) = value(x, y, z, 0.7f + float(box.lo.x));
-                    kept.levelForUpdate(0).at(x, y, z) = g.at(x, y, z);
+                    kept.levelForUpdate(0).set(x, y, z, g.at(x, y, z));
                 }
         updateMipChain(kept, box, VoxelBox::all(n));
         const MipVolume fresh = buildMipChain(region, g.clone());
         for (int l = 0; l < fresh.levelCount(); ++l)
             for (size_t i = 0; i < fresh.level(l).size(); ++i)
-                ASSERT_EQ(std::memcmp(&kept.level(l)[i], &fresh.level(l)[i], sizeof(glm::vec4)), 0)
-                    << "level " << l << ", voxel " << i;
+                ASSERT_EQ(kept.level(l).packed(i), fresh.level(l).packed(i)) << "level " << l << ", voxel " << i;
     }
+}
+
+// The mip volumes' voxels are 4 bfloat16: a float's upper half, rounded to nearest even.
+TEST(PackedGrid3, KeepsAFloatsRangeAndEightSignificantBits) {
+    EXPECT_EQ(fromBfloat16(toBfloat16(0.0f)), 0.0f);
+    EXPECT_EQ(fromBfloat16(toBfloat16(1.0f)), 1.0f);
+    EXPECT_EQ(fromBfloat16(toBfloat16(-255.0f)), -255.0f);  // integers to 256 are exact
+    EXPECT_EQ(fromBfloat16(toBfloat16(1.0f + std::ldexp(1.0f, -8))), 1.0f);  // a tie: to the even one
+    EXPECT_EQ(fromBfloat16(toBfloat16(1.0f + 3.0f * std::ldexp(1.0f, -8))), 1.0f + std::ldexp(1.0f, -6));
+    EXPECT_TRUE(std::isnan(fromBfloat16(toBfloat16(std::numeric_limits<float>::quiet_NaN()))));
+    EXPECT_NEAR(fromBfloat16(toBfloat16(1e30f)), 1e30f, 1e30f * std::ldexp(1.0f, -8));
+    EXPECT_GT(fromBfloat16(toBfloat16(1e-30f)), 0.0f);  // no flush to zero
+    float worst = 0.0f;
+    for (int k = 0; k < 100000; ++k) {
+        const float v = std::ldexp(1.0f + static_cast<float>(k) / 100000.0f, k % 40 - 20);
+        worst = std::max(worst, std::abs(fromBfloat16(toBfloat16(v)) - v) / v);
+    }
+    EXPECT_LE(worst, std::ldexp(1.0f, -8));
+    EXPECT_GT(worst, std::ldexp(1.0f, -9));
+
+    // A voxel's four values are packed as toBfloat16 packs each (SSE2 on x86-64).
+    Grid3 g(2);
+    g[3] = glm::vec4(0.1f, -2.5f, 1000.0f, 1e-3f);
+    g[5] = glm::vec4(1.0f + std::ldexp(1.0f, -8), -(1.0f + 3.0f * std::ldexp(1.0f, -8)), -1e30f, 3e38f);
+    const PackedGrid3 p(g);
+    for (int i : {3, 5})
+        for (int c = 0; c < 4; ++c) EXPECT_EQ(p[i][c], fromBfloat16(toBfloat16(g[i][c]))) << i << " " << c;
+    for (int c = 0; c < 4; ++c) EXPECT_NEAR(p[3][c], g[3][c], std::abs(g[3][c]) * std::ldexp(1.0f, -8));
+    EXPECT_EQ(p[2], glm::vec4(0.0f));
+    EXPECT_EQ(p.bytes(), 8u * 8u);
 }
 
 // The occupied bounds found by a scan, and a box's non-zero bounds.

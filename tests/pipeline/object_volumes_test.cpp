@@ -2,7 +2,6 @@
 // level of every volume must be the one computed from scratch, bit for bit, whatever the objects do.
 #include "pipeline/object_volumes.h"
 
-#include <cstring>
 
 #include <gtest/gtest.h>
 
@@ -41,10 +40,10 @@ void moveMesh(TriangleMesh& m, glm::vec3 offset) {
 void expectSameVolume(const MipVolume& kept, const MipVolume& scratch, const char* name) {
     ASSERT_EQ(kept.levelCount(), scratch.levelCount()) << name;
     for (int l = 0; l < kept.levelCount(); ++l) {
-        const Grid3 &a = kept.level(l), &b = scratch.level(l);
+        const PackedGrid3 &a = kept.level(l), &b = scratch.level(l);
         ASSERT_EQ(a.size(), b.size()) << name;
         for (size_t i = 0; i < a.size(); ++i)
-            ASSERT_EQ(std::memcmp(&a[i], &b[i], sizeof(glm::vec4)), 0)
+            ASSERT_EQ(a.packed(i), b.packed(i))
                 << name << ": level " << l << ", voxel " << i << ": (" << a[i].x << ", " << a[i].y << ", "
                 << a[i].z << ", " << a[i].w << ") instead of (" << b[i].x << ", " << b[i].y << ", " << b[i].z
                 << ", " << b[i].w << ")";
