@@ -171,8 +171,10 @@ std::vector<glm::vec3> gatherAtObjectVoxels(const VoxelGeometry& objects, const 
             const float coherence = glm::length(meanNormal);
             if (coherence < kMinCoherence) continue;
             const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+            // The voxel's index in the whole level seeds its jitter (the level is stored over a window).
+            const size_t index = (static_cast<size_t>(z) * coarse.resolution() + y) * coarse.resolution() + x;
             gathered[(static_cast<size_t>(z - lo.z) * size.y + (y - lo.y)) * size.x + (x - lo.x)] =
-                gather(coarse.index(x, y, z), centre, meanNormal / coherence, coarseSize);
+                gather(index, centre, meanNormal / coherence, coarseSize);
         }
     });
     return reflectAtObjectVoxels(objects, box, factor, lo, size, gathered);

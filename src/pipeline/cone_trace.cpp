@@ -264,7 +264,7 @@ float traceOneVolume(const Cone& cone, const MipVolume& volume, float backface, 
     float acc = 0.0f;
     marchCone(cone, volume, settings, [&](glm::vec3 position, float level, float levelScale) {
         if (sparse && !volume.mayReadNonZero(position, static_cast<int>(level))) return true;
-        const float local = stepOpacity(adaptedOcclusion(volume.gather(volume.lookup(position, level)),
+        const float local = stepOpacity(adaptedOcclusion(volume.sample(position, level),
                                                          cone.direction, levelScale, settings, backface),
                                         settings.stepScale);
         acc += local * (1.0f - acc);
@@ -297,7 +297,7 @@ bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibilit
     bool meets = false;
     marchCone(cone, objects, settings, [&](glm::vec3 position, float level, float levelScale) {
         if (!objects.mayReadNonZero(position, static_cast<int>(level))) return true;
-        const glm::vec4 v = objects.gather(objects.lookup(position, level));
+        const glm::vec4 v = objects.sample(position, level);
         meets = adaptedOcclusion(v, cone.direction, levelScale, settings, backface) > 0.0f;
         return !meets;
     });

@@ -9,15 +9,21 @@ namespace deltagi {
 namespace {
 
 // The mean of the 8 children of coarse voxel (x, y, z), summed in one fixed order: every path gives the same
-// bits.
+// bits (children outside a window are zero and add nothing).
 [[gnu::always_inline]] inline Float4 childMean(const PackedGrid3& fine, int x, int y, int z) {
     Float4 sum = {0.0f, 0.0f, 0.0f, 0.0f};
+    if (fine.whole()) {
+        for (int dz = 0; dz < 2; ++dz)
+            for (int dy = 0; dy < 2; ++dy) {
+                const size_t i = fine.index(2 * x, 2 * y + dy, 2 * z + dz);
+                sum += fine.load(i);
+                sum += fine.load(i + 1);
+            }
+        return sum * 0.125f;
+    }
     for (int dz = 0; dz < 2; ++dz)
-        for (int dy = 0; dy < 2; ++dy) {
-            const size_t i = fine.index(2 * x, 2 * y + dy, 2 * z + dz);
-            sum += fine.load(i);
-            sum += fine.load(i + 1);
-        }
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx) sum += loadFloat4(fine.at(2 * x + dx, 2 * y + dy, 2 * z + dz));
     return sum * 0.125f;
 }
 
@@ -26,10 +32,10 @@ namespace {
 PackedGrid3 downsample(const PackedGrid3& fine) {
     assert(fine.resolution() % 2 == 0);
     const int n = fine.resolution() / 2;
-    PackedGrid3 coarse(n);
-    parallelFor(0, static_cast<int64_t>(n) * n, 16, [&](int64_t zy) {
-        const int z = static_cast<int>(zy / n), y = static_cast<int>(zy % n);
-        for (int x = 0; x < n; ++x) coarse.set(x, y, z, childMean(fine, x, y, z));
+    PackedGrid3 coarse(n, fine.window().parents());
+    const VoxelBox& box = coarse.window();
+    forEachRow(box, [&](int y, int z) {
+        for (int x = box.lo.x; x < box.hi.x; ++x) coarse.set(x, y, z, childMean(fine, x, y, z));
     });
     return coarse;
 }
@@ -48,9 +54,9 @@ MipVolume buildMipChain(const VolumeRegion& region, const Grid3& level0) {
 void updateMipChain(MipVolume& volume, const VoxelBox& changed, const VoxelBox& occupied) {
     VoxelBox box = changed;
     for (int l = 1; l < volume.levelCount() && !box.empty(); ++l) {
-        box = box.parents();
         const PackedGrid3& fine = volume.level(l - 1);
         PackedGrid3& coarse = volume.levelForUpdate(l);
+        box = box.parents().intersection(coarse.window());
         forEachRow(box, [&](int y, int z) {
             for (int x = box.lo.x; x < box.hi.x; ++x) coarse.set(x, y, z, childMean(fine, x, y, z));
         });

@@ -12,6 +12,15 @@ namespace {
 // box's share of the texels would then cost more to gather than to scatter them all.
 constexpr size_t kFreshInjectionFraction = 4;  // 1/4
 
+// The window of the objects' own volumes: their box and this many voxels around it, so that an object that
+// moves a little stays inside.
+constexpr int kWindowMargin = 8;
+
+VoxelBox windowAround(const VoxelBox& bounds, int n) {
+    if (bounds.empty()) return {};
+    return VoxelBox{bounds.lo - kWindowMargin, bounds.hi + kWindowMargin}.intersection(VoxelBox::all(n));
+}
+
 bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
     return a.origin == b.origin && a.size == b.size && a.resolution == b.resolution;
 }
@@ -25,10 +34,17 @@ void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const Volume
         region_ = region;
         objects_ = deltagi::voxelize(objects, region, withEmission, withAlbedo);
         objectsChanged_ = VoxelBox::all(region.resolution);
+        window_ = windowAround(objects_.bounds, region.resolution);
         return;
     }
     objectsChanged_ = revoxelize(objects_, objects, region, withEmission);
     objectsChanged_.extend(objects_.bounds);
+    if (!window_.contains(objects_.bounds)) {
+        // The objects left the window: their volumes start afresh over a new one.
+        window_ = windowAround(objects_.bounds, region.resolution);
+        objectVisibility_ = MipVolume{};
+        objectLight_ = MipVolume{};
+    }
 }
 
 void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates) {
@@ -90,19 +106,21 @@ VoxelBox unionOf(VoxelBox a, const VoxelBox& b) {
 
 void ObjectVolumes::updateObjectLight(const VoxelBox& box) {
     const PackedGrid3& full = fullLight_.level(0);
-    if (objectLight_.empty()) {
-        PackedGrid3 level0(region_.resolution);
-        for (size_t i = 0; i < level0.size(); ++i)
-            if (objects_.visibility[i].x > 0.0f) level0.set(i, full[i]);
-        objectLight_ = buildMipChain(region_, std::move(level0));
-        return;
-    }
-    PackedGrid3& level0 = objectLight_.levelForUpdate(0);
-    forEachRow(box, [&](int y, int z) {
-        for (size_t i = full.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i)
-            level0.set(i, objects_.visibility[i].x > 0.0f ? full[i] : glm::vec4(0.0f));
+    const bool fresh = objectLight_.empty();
+    PackedGrid3 freshLevel0;
+    if (fresh) freshLevel0 = PackedGrid3(region_.resolution, window_);
+    PackedGrid3& level0 = fresh ? freshLevel0 : objectLight_.levelForUpdate(0);
+    const VoxelBox rewrite = fresh ? level0.window() : box.intersection(level0.window());
+    forEachRow(rewrite, [&](int y, int z) {
+        for (int x = rewrite.lo.x; x < rewrite.hi.x; ++x) {
+            const size_t i = objects_.visibility.index(x, y, z);
+            level0.set(x, y, z, objects_.visibility[i].x > 0.0f ? full[i] : glm::vec4(0.0f));
+        }
     });
-    updateMipChain(objectLight_, box, nonZeroBounds(level0, box));
+    if (fresh)
+        objectLight_ = buildMipChain(region_, std::move(freshLevel0));
+    else
+        updateMipChain(objectLight_, rewrite, nonZeroBounds(level0, rewrite));
 }
 
 void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* options, const RayScene* rays) {
@@ -136,14 +154,14 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
 
 void ObjectVolumes::buildLightMips() {
     if (objectVisibility_.empty()) {
-        objectVisibility_ = buildMipChain(region_, objects_.visibility);
+        objectVisibility_ = buildMipChain(region_, PackedGrid3(objects_.visibility, window_));
     } else {
-        // Level 0 is the objects' voxels again: copy the box that changed.
+        // Level 0 is the objects' voxels again: copy the box that changed (inside the window, which holds
+        // where they are and were).
         PackedGrid3& level0 = objectVisibility_.levelForUpdate(0);
-        const VoxelBox& box = objectsChanged_;
+        const VoxelBox box = objectsChanged_.intersection(level0.window());
         forEachRow(box, [&](int y, int z) {
-            for (size_t i = level0.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i)
-                level0.set(i, objects_.visibility[i]);
+            for (int x = box.lo.x; x < box.hi.x; ++x) level0.set(x, y, z, objects_.visibility.at(x, y, z));
         });
         updateMipChain(objectVisibility_, box, nonZeroBounds(level0, objects_.bounds));
     }

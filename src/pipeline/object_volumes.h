@@ -75,6 +75,9 @@ class ObjectVolumes {
     VolumeRegion region_;
     VoxelGeometry objects_;  // the objects' voxels (level 0 of objectVisibility_, copied there by mipmap())
     MipVolume objectVisibility_, fullLight_, deltaLight_, objectLight_;
+    // The box over which objectVisibility_ and objectLight_ are stored (zero outside it): the objects' and a
+    // margin, fitted anew when they leave it.
+    VoxelBox window_;
     VoxelBox objectsChanged_;  // level-0 voxels that this frame's voxelization changed
     VoxelBox lightDiffers_;    // outside it the full light volume is the scene's (the last injection)
     VoxelBox lightChanged_;  // level-0 voxels that this frame's injection rewrote (a new light: of the delta

@@ -10,6 +10,7 @@
 // radiance has no upper bound) and 8 significant bits, a relative rounding error under 2^-8.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -27,6 +28,40 @@
 #include "deltagi/renderer.h"
 
 namespace deltagi {
+
+// A box of level-0 voxels [lo, hi) (hi exclusive); empty when hi <= lo on any axis. The frame-to-frame
+// updates of stages 1, 3 and 4 redo only the voxels of such boxes.
+struct VoxelBox {
+    glm::ivec3 lo{0}, hi{0};
+
+    static VoxelBox all(int n) { return {glm::ivec3(0), glm::ivec3(n)}; }
+    static VoxelBox voxel(glm::ivec3 v) { return {v, v + 1}; }
+    bool empty() const { return hi.x <= lo.x || hi.y <= lo.y || hi.z <= lo.z; }
+    size_t count() const {
+        return empty() ? 0 : static_cast<size_t>(hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+    }
+    // The bounding box of both (an empty box adds nothing).
+    VoxelBox& extend(const VoxelBox& b) {
+        if (b.empty()) return *this;
+        if (empty()) return *this = b;
+        lo = glm::min(lo, b.lo);
+        hi = glm::max(hi, b.hi);
+        return *this;
+    }
+    // The voxels of the next coarser mip level that hold these (resolution halved).
+    VoxelBox parents() const { return empty() ? VoxelBox{} : VoxelBox{lo >> 1, (hi + 1) >> 1}; }
+    // The voxels in both (empty when none).
+    VoxelBox intersection(const VoxelBox& b) const {
+        const VoxelBox r{glm::max(lo, b.lo), glm::min(hi, b.hi)};
+        return r.empty() ? VoxelBox{} : r;
+    }
+    bool contains(const VoxelBox& b) const {
+        return b.empty() || (glm::all(glm::lessThanEqual(lo, b.lo)) && glm::all(glm::lessThanEqual(b.hi, hi)));
+    }
+    bool contains(int x, int y, int z) const {
+        return x >= lo.x && y >= lo.y && z >= lo.z && x < hi.x && y < hi.y && z < hi.z;
+    }
+};
 
 // One level in floats: n^3 voxels, x fastest. Move-only: volumes are large.
 class Grid3 {
@@ -117,25 +152,44 @@ inline Float4 unpackVoxel(const PackedVoxel& p) {
 #endif
 }
 
-// One level of a mip volume: n^3 voxels of 4 bfloat16 (PackedVoxel), x fastest. Reads give floats; writes
-// round to nearest. Move-only.
+// One level of a mip volume: n^3 voxels of 4 bfloat16 (PackedVoxel), of which those of a window (a box; all
+// of them by default) are stored, x fastest, and those outside it are zero. Reads give floats; writes round
+// to nearest. Move-only.
 class PackedGrid3 {
   public:
     PackedGrid3() = default;
-    explicit PackedGrid3(int n) : n_(n), voxels_(static_cast<size_t>(n) * n * n, PackedVoxel(0)) {}
-    // `grid` rounded to bfloat16.
-    explicit PackedGrid3(const Grid3& grid);
+    explicit PackedGrid3(int n) : PackedGrid3(n, VoxelBox::all(n)) {}
+    PackedGrid3(int n, const VoxelBox& window)
+        : n_(n),
+          window_(window.intersection(VoxelBox::all(n))),
+          extent_(window_.hi - window_.lo),
+          whole_(window_.count() == static_cast<size_t>(n) * n * n),
+          voxels_(window_.count(), PackedVoxel(0)) {}
+    // `grid` rounded to bfloat16, inside `window` (zero outside it is the caller's promise).
+    explicit PackedGrid3(const Grid3& grid) : PackedGrid3(grid, VoxelBox::all(grid.resolution())) {}
+    PackedGrid3(const Grid3& grid, const VoxelBox& window);
     PackedGrid3(PackedGrid3&&) noexcept = default;
     PackedGrid3& operator=(PackedGrid3&&) noexcept = default;
     PackedGrid3(const PackedGrid3&) = delete;
     PackedGrid3& operator=(const PackedGrid3&) = delete;
 
     int resolution() const { return n_; }
+    const VoxelBox& window() const { return window_; }
+    // Whether every voxel is stored: then index(x, y, z) is (z * n + y) * n + x.
+    bool whole() const { return whole_; }
+    // Voxels stored.
     size_t size() const { return voxels_.size(); }
     size_t bytes() const { return voxels_.size() * sizeof(PackedVoxel); }
-    size_t index(int x, int y, int z) const { return (static_cast<size_t>(z) * n_ + y) * n_ + x; }
+    // The place of voxel (x, y, z) of the window.
+    size_t index(int x, int y, int z) const {
+        return (static_cast<size_t>(z - window_.lo.z) * extent_.y + (y - window_.lo.y)) * extent_.x +
+               (x - window_.lo.x);
+    }
     glm::vec4 operator[](size_t i) const { return storeFloat4(unpackVoxel(voxels_[i])); }
-    glm::vec4 at(int x, int y, int z) const { return (*this)[index(x, y, z)]; }
+    // Zero outside the window.
+    glm::vec4 at(int x, int y, int z) const {
+        return window_.contains(x, y, z) ? (*this)[index(x, y, z)] : glm::vec4(0.0f);
+    }
     Float4 load(size_t i) const { return unpackVoxel(voxels_[i]); }
     void set(size_t i, glm::vec4 v) { voxels_[i] = packVoxel(v); }
     void set(size_t i, Float4 v) { voxels_[i] = packVoxel(v); }
@@ -145,30 +199,10 @@ class PackedGrid3 {
 
   private:
     int n_ = 0;
+    VoxelBox window_;
+    glm::ivec3 extent_{0};
+    bool whole_ = false;
     std::vector<PackedVoxel, LargeBlockAllocator<PackedVoxel>> voxels_;
-};
-
-// A box of level-0 voxels [lo, hi) (hi exclusive); empty when hi <= lo on any axis. The frame-to-frame
-// updates of stages 1, 3 and 4 redo only the voxels of such boxes.
-struct VoxelBox {
-    glm::ivec3 lo{0}, hi{0};
-
-    static VoxelBox all(int n) { return {glm::ivec3(0), glm::ivec3(n)}; }
-    static VoxelBox voxel(glm::ivec3 v) { return {v, v + 1}; }
-    bool empty() const { return hi.x <= lo.x || hi.y <= lo.y || hi.z <= lo.z; }
-    size_t count() const {
-        return empty() ? 0 : static_cast<size_t>(hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
-    }
-    // The bounding box of both (an empty box adds nothing).
-    VoxelBox& extend(const VoxelBox& b) {
-        if (b.empty()) return *this;
-        if (empty()) return *this = b;
-        lo = glm::min(lo, b.lo);
-        hi = glm::max(hi, b.hi);
-        return *this;
-    }
-    // The voxels of the next coarser mip level that hold these (resolution halved).
-    VoxelBox parents() const { return empty() ? VoxelBox{} : VoxelBox{lo >> 1, (hi + 1) >> 1}; }
 };
 
 // The 8 voxels and weights of one trilinear lookup (corners outside the grid have weight 0).
@@ -216,6 +250,23 @@ inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorn
     }
 }
 
+// The same for a level stored over a window (PackedGrid3::window): corners outside the window have weight 0
+// and the indices are the window's.
+inline void trilinearCornersIn(glm::vec3 voxelPos, int level, const PackedGrid3& grid, TrilinearCorners& c) {
+    const glm::vec3 q = voxelPos * (1.0f / static_cast<float>(1 << level)) - 0.5f;
+    const glm::vec3 base = glm::floor(q);
+    const glm::vec3 f = q - base;
+    const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
+    const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
+    const VoxelBox& window = grid.window();
+    for (int k = 0; k < 8; ++k) {
+        const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
+        const bool valid = window.contains(x + dx, y + dy, z + dz);
+        c.index[k] = valid ? static_cast<uint32_t>(grid.index(x + dx, y + dy, z + dz)) : 0u;
+        c.weight[k] = valid ? wx[dx] * wy[dy] * wz[dz] : 0.0f;
+    }
+}
+
 // Calls rowBody(y, z) for every row of voxels of `box` (x from box.lo.x to box.hi.x), rows in parallel.
 template <typename RowBody>
 void forEachRow(const VoxelBox& box, RowBody&& rowBody);
@@ -226,11 +277,14 @@ template <typename Grid>
 VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within);
 
 // A level-0 grid and its mip chain over a region. Level l has resolution n / 2^l; its voxels are 2^l level-0
-// voxels wide.
+// voxels wide. A volume whose levels are stored over windows (the objects' own volumes, zero outside the
+// objects' box) is read as one stored whole.
 class MipVolume {
   public:
     MipVolume() = default;
-    MipVolume(VolumeRegion region, std::vector<PackedGrid3> levels) : region_(region), levels_(std::move(levels)) {
+    MipVolume(VolumeRegion region, std::vector<PackedGrid3> levels)
+        : region_(region), levels_(std::move(levels)) {
+        whole_ = std::all_of(levels_.begin(), levels_.end(), [](const PackedGrid3& g) { return g.whole(); });
         findOccupiedBounds();
     }
 
@@ -248,11 +302,7 @@ class MipVolume {
     // Prepares a quadrilinear lookup at `voxelPos` (level-0 voxel units, 0 at the region's corner) between
     // the two levels around the fractional `level`.
     VolumeLookup lookup(glm::vec3 voxelPos, float level) const {
-        VolumeLookup l;
-        l.voxelPos = voxelPos;
-        level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
-        l.level0 = static_cast<int>(level);
-        l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
+        VolumeLookup l = levelsAround(voxelPos, level);
         trilinearCorners(voxelPos, l.level0, levels_[l.level0].resolution(), l.fine);
         if (l.blend > 0.0f)
             trilinearCorners(voxelPos, l.level0 + 1, levels_[l.level0 + 1].resolution(), l.coarse);
@@ -262,6 +312,7 @@ class MipVolume {
     // lookup's footprint cannot reach a non-zero voxel.
     glm::vec4 gather(const VolumeLookup& l) const {
         if (!mayReadNonZero(l.voxelPos, l.level0)) return glm::vec4(0.0f);
+        if (!whole_) return gatherWindowed(l);
         Float4 v = gatherLevel(l.level0, l.fine);
         if (l.blend > 0.0f) v += (gatherLevel(l.level0 + 1, l.coarse) - v) * l.blend;
         return storeFloat4(v);
@@ -292,11 +343,18 @@ class MipVolume {
     // Trilinear sample of level `l`.
     glm::vec4 sampleLevel(glm::vec3 voxelPos, int l) const {
         TrilinearCorners c;
-        trilinearCorners(voxelPos, l, levels_[l].resolution(), c);
+        if (levels_[l].whole())
+            trilinearCorners(voxelPos, l, levels_[l].resolution(), c);
+        else
+            trilinearCornersIn(voxelPos, l, levels_[l], c);
         return storeFloat4(gatherLevel(l, c));
     }
     // Quadrilinear sample: trilinear in the two levels around the fractional `level`, blended.
-    glm::vec4 sample(glm::vec3 voxelPos, float level) const { return gather(lookup(voxelPos, level)); }
+    glm::vec4 sample(glm::vec3 voxelPos, float level) const {
+        if (whole_) return gather(lookup(voxelPos, level));
+        const VolumeLookup l = levelsAround(voxelPos, level);  // without the whole grid's corners
+        return mayReadNonZero(l.voxelPos, l.level0) ? gatherWindowed(l) : glm::vec4(0.0f);
+    }
 
   private:
     Float4 gatherLevel(int l, const TrilinearCorners& c) const {
@@ -305,14 +363,29 @@ class MipVolume {
         for (int k = 0; k < 8; ++k) acc += g.load(c.index[k]) * c.weight[k];
         return acc;
     }
+    // A lookup's levels and blend, without its corners.
+    VolumeLookup levelsAround(glm::vec3 voxelPos, float level) const {
+        VolumeLookup l;
+        l.voxelPos = voxelPos;
+        level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
+        l.level0 = static_cast<int>(level);
+        l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
+        return l;
+    }
+    // gather() of a volume stored over windows: the lookup's corners are the whole grid's.
+    glm::vec4 gatherWindowed(const VolumeLookup& l) const {
+        Float4 v = loadFloat4(sampleLevel(l.voxelPos, l.level0));
+        if (l.blend > 0.0f) v += (loadFloat4(sampleLevel(l.voxelPos, l.level0 + 1)) - v) * l.blend;
+        return storeFloat4(v);
+    }
     // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
     void findOccupiedBounds() {
-        setOccupiedBounds(
-            levels_.empty() ? VoxelBox{} : nonZeroBounds(levels_[0], VoxelBox::all(levels_[0].resolution())));
+        setOccupiedBounds(levels_.empty() ? VoxelBox{} : nonZeroBounds(levels_[0], levels_[0].window()));
     }
 
     VolumeRegion region_;
     std::vector<PackedGrid3> levels_;
+    bool whole_ = true;
     VoxelBox occupied_;
     glm::vec3 occupiedMin_{0.0f}, occupiedMax_{0.0f};  // occupied_ as floats, for mayReadNonZero
 };
@@ -343,9 +416,16 @@ VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within) {
     return lo.x <= hi.x ? VoxelBox{lo, hi} : VoxelBox{};
 }
 
-inline PackedGrid3::PackedGrid3(const Grid3& grid) : PackedGrid3(grid.resolution()) {
-    parallelFor(0, static_cast<int64_t>(voxels_.size()), 1 << 14,
-                [&](int64_t i) { voxels_[i] = packVoxel(grid[i]); });
+inline PackedGrid3::PackedGrid3(const Grid3& grid, const VoxelBox& window)
+    : PackedGrid3(grid.resolution(), window) {
+    if (whole_) {
+        parallelFor(0, static_cast<int64_t>(voxels_.size()), 1 << 14,
+                    [&](int64_t i) { voxels_[i] = packVoxel(grid[i]); });
+        return;
+    }
+    forEachRow(window_, [&](int y, int z) {
+        for (int x = window_.lo.x; x < window_.hi.x; ++x) set(x, y, z, grid.at(x, y, z));
+    });
 }
 
 }  // namespace deltagi
