@@ -118,8 +118,9 @@ void printInfoTable(const Scene& scene, const SceneInfo& info) {
     fmt::print("{:<16} origin {}, size {:.4g}\n", "volume region", formatVec(region.origin), region.size);
     fmt::print("{:<16} {}^3, voxel size {:.4g}, {} mip levels\n", "resolution", region.resolution,
                region.voxelSize(), info.mipLevels);
-    fmt::print("{:<16} {} per volume, {} for all four\n", "memory", formatBytes(info.bytesPerVolume),
-               formatBytes(info.bytesAllVolumes));
+    fmt::print("{:<16} {} per volume, {} for all five (the objects' two over their box: {})\n", "memory",
+               formatBytes(info.bytesPerVolume), formatBytes(info.bytesAllVolumes),
+               formatBytes(info.bytesObjectVolumes));
     fmt::print(
         "{:<16} about {} at its peak (the memory guard's estimate: volumes, shadow maps, images, meshes)\n",
         "render memory", formatBytes(info.renderBytes));

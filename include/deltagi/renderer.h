@@ -100,6 +100,10 @@ class FrameRenderer {
         bool world = false, light = false, camera = false;
     };
     KeptWork lastFrameKept() const;
+    // Bytes of the voxel volumes with their mip chains that the last frame's cones read: the real scene's
+    // visibility, and the objects' visibility, the full, delta and objects' light volumes (the objects' own
+    // two over the objects' box only). 0 before the first frame.
+    size_t volumeBytes() const;
 
   private:
     struct State;

@@ -219,6 +219,7 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
         result.totals.push_back(out.totalMs);
         if (onFrame) onFrame(f - options.warmup, out.totalMs);
     }
+    result.volumeBytes = renderer.volumeBytes();
     if (sequence.empty()) placeObjects(0);
     scene.lights = light.lights;
     scene.environment = light.environment;
@@ -237,6 +238,7 @@ nlohmann::ordered_json benchToJson(const BenchResult& r) {
     json["sequence"] = r.sequence.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(r.sequence);
     json["world_kept_frames"] = r.worldKeptFrames;
     json["light_kept_frames"] = r.lightKeptFrames;
+    json["volume_bytes"] = r.volumeBytes;
     json["threads"] = r.threads;
     json["width"] = r.width;
     json["height"] = r.height;
@@ -256,6 +258,8 @@ std::string benchTable(const BenchResult& r) {
         "{}x{}, volumes {}^3, {} real + {} virtual triangles, {} threads, {} frames ({}{}{} warm-up)\n",
         r.width, r.height, r.volumeResolution, r.realTriangles, r.virtualTriangles, r.threads,
         r.options.frames, r.options.cold ? "cold, " : "", r.options.live ? "live, " : "", r.options.warmup);
+    out += fmt::format("volumes with their mip chains: {:.1f} MiB\n",
+                       static_cast<double>(r.volumeBytes) / (1024.0 * 1024.0));
     if (r.options.live)
         out += fmt::format(
             "the real light changing every frame; its shadow maps and injection kept in {} of {} frames\n",

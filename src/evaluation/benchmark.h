@@ -62,6 +62,7 @@ struct BenchResult {
     size_t realTriangles = 0, virtualTriangles = 0;
     int worldKeptFrames = 0;  // measured frames that kept the real scene's BVH and voxels
     int lightKeptFrames = 0;  // measured frames that kept the real scene's light (its RSMs and injection)
+    size_t volumeBytes = 0;   // of the volumes with their mip chains, at the last frame (FrameRenderer)
     std::string sequence;     // a tracked sequence's frames, "frames 0:8 of FILE" (empty: none)
     int sequenceFrames = 0;
 
@@ -78,7 +79,7 @@ BenchResult runBenchmark(Scene& scene, const BenchOptions& options,
                          const std::function<void(int, double)>& onFrame = {});
 
 // {"frames", "warmup", "cold", "live", "camera_motion_deg", "sequence" (null or "frames A:B of FILE"),
-// "world_kept_frames", "light_kept_frames",
+// "world_kept_frames", "light_kept_frames", "volume_bytes" (FrameRenderer::volumeBytes at the last frame),
 // "threads", "width", "height",
 // "volume_resolution", "triangles": {"real", "virtual"}, then one object {"median", "max", "paper"} per row
 // key ("voxelize_ms" ... "total_ms")}.

@@ -14,7 +14,7 @@ constexpr size_t kFreshInjectionFraction = 4;  // 1/4
 
 // The window of the objects' own volumes: their box and this many voxels around it, so that an object that
 // moves a little stays inside.
-constexpr int kWindowMargin = 8;
+constexpr int kWindowMargin = 4;
 
 VoxelBox windowAround(const VoxelBox& bounds, int n) {
     if (bounds.empty()) return {};

@@ -509,6 +509,15 @@ FrameRenderer::KeptWork FrameRenderer::lastFrameKept() const {
     return state_->cache.kept();
 }
 
+size_t FrameRenderer::volumeBytes() const {
+    const FrameCache& cache = state_->cache;
+    size_t bytes = cache.voxels.work.visibility ? cache.voxels.work.visibility->bytes() : 0;
+    if (const std::optional<ObjectVolumes>& objects = cache.objectVolumes.work.volumes; objects)
+        bytes += objects->objectVisibility().bytes() + objects->fullLight().bytes() +
+                 objects->deltaLight().bytes() + objects->objectLight().bytes();
+    return bytes;
+}
+
 RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onStage) {
     checkFrame(scene);
     FrameCache& cache = state_->cache;

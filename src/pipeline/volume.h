@@ -209,6 +209,7 @@ class PackedGrid3 {
 struct TrilinearCorners {
     uint32_t index[8];
     float weight[8];
+    glm::ivec3 first{0};  // the voxel of corner 0 (the others are +1 along x, y, z by the bits of k)
 };
 
 // Where one quadrilinear lookup reads. It depends only on the region and resolution, so the volumes that
@@ -227,6 +228,7 @@ inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorn
     const glm::vec3 f = q - base;
     const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
     const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
+    c.first = glm::ivec3(x, y, z);
     if (x >= 0 && y >= 0 && z >= 0 && x + 1 < n && y + 1 < n && z + 1 < n) {
         // All 8 corners inside: one base index and fixed offsets.
         const uint32_t base = static_cast<uint32_t>((static_cast<size_t>(z) * n + y) * n + x);
@@ -259,6 +261,19 @@ inline void trilinearCornersIn(glm::vec3 voxelPos, int level, const PackedGrid3&
     const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
     const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
     const VoxelBox& window = grid.window();
+    if (window.contains(x, y, z) && window.contains(x + 1, y + 1, z + 1)) {
+        // All 8 corners inside: one base index and fixed offsets.
+        const glm::ivec3 extent = window.hi - window.lo;
+        const uint32_t base = static_cast<uint32_t>(grid.index(x, y, z));
+        const uint32_t row = static_cast<uint32_t>(extent.x), slice = static_cast<uint32_t>(extent.y) * row;
+        const uint32_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
+        const float wxy[4] = {wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]};
+        for (int k = 0; k < 8; ++k) {
+            c.index[k] = base + offsets[k];
+            c.weight[k] = wxy[k & 3] * wz[k >> 2];
+        }
+        return;
+    }
     for (int k = 0; k < 8; ++k) {
         const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
         const bool valid = window.contains(x + dx, y + dy, z + dz);
@@ -353,7 +368,10 @@ class MipVolume {
     glm::vec4 sample(glm::vec3 voxelPos, float level) const {
         if (whole_) return gather(lookup(voxelPos, level));
         const VolumeLookup l = levelsAround(voxelPos, level);  // without the whole grid's corners
-        return mayReadNonZero(l.voxelPos, l.level0) ? gatherWindowed(l) : glm::vec4(0.0f);
+        if (!mayReadNonZero(l.voxelPos, l.level0)) return glm::vec4(0.0f);
+        Float4 v = loadFloat4(sampleLevel(l.voxelPos, l.level0));
+        if (l.blend > 0.0f) v += (loadFloat4(sampleLevel(l.voxelPos, l.level0 + 1)) - v) * l.blend;
+        return storeFloat4(v);
     }
 
   private:
@@ -372,11 +390,31 @@ class MipVolume {
         l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
         return l;
     }
-    // gather() of a volume stored over windows: the lookup's corners are the whole grid's.
+    // gather() of a volume stored over windows, from a lookup with the whole grid's corners: their voxels and
+    // weights, the window's indices.
     glm::vec4 gatherWindowed(const VolumeLookup& l) const {
-        Float4 v = loadFloat4(sampleLevel(l.voxelPos, l.level0));
-        if (l.blend > 0.0f) v += (loadFloat4(sampleLevel(l.voxelPos, l.level0 + 1)) - v) * l.blend;
+        Float4 v = gatherWindowedLevel(l.level0, l.fine);
+        if (l.blend > 0.0f) v += (gatherWindowedLevel(l.level0 + 1, l.coarse) - v) * l.blend;
         return storeFloat4(v);
+    }
+    Float4 gatherWindowedLevel(int l, const TrilinearCorners& c) const {
+        const PackedGrid3& g = levels_[l];
+        const VoxelBox& window = g.window();
+        const glm::ivec3 p = c.first;
+        Float4 acc = {0.0f, 0.0f, 0.0f, 0.0f};
+        if (window.contains(p.x, p.y, p.z) && window.contains(p.x + 1, p.y + 1, p.z + 1)) {
+            const size_t base = g.index(p.x, p.y, p.z);
+            const size_t row = static_cast<size_t>(window.hi.x - window.lo.x);
+            const size_t slice = static_cast<size_t>(window.hi.y - window.lo.y) * row;
+            const size_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
+            for (int k = 0; k < 8; ++k) acc += g.load(base + offsets[k]) * c.weight[k];
+            return acc;
+        }
+        for (int k = 0; k < 8; ++k) {
+            const glm::ivec3 q = p + glm::ivec3(k & 1, (k >> 1) & 1, k >> 2);
+            if (window.contains(q.x, q.y, q.z)) acc += g.load(g.index(q.x, q.y, q.z)) * c.weight[k];
+        }
+        return acc;
     }
     // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
     void findOccupiedBounds() {

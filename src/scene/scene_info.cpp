@@ -13,11 +13,15 @@
 namespace deltagi {
 namespace {
 
-// Each voxel of a volume holds 4 floats: RGB light + occlusion, or average normal + occlusion (§3.2).
-constexpr size_t kBytesPerVoxel = 4 * sizeof(float);
-// The four volumes of §3.2: visibility of the real scene and of the virtual objects, light for shading and
-// the delta light for relighting.
-constexpr size_t kVolumeCount = 4;
+// Each voxel of a volume holds 4 bfloat16: RGB light + occlusion, or average normal + occlusion (§3.2).
+constexpr size_t kBytesPerVoxel = 4 * sizeof(uint16_t);
+// The volumes stored whole: the real scene's visibility, the full light for shading and the delta light for
+// relighting (§3.2).
+constexpr size_t kWholeVolumeCount = 3;
+// The objects' visibility and their own light (the full light where they are) are stored over the objects'
+// box and this many voxels around it (ObjectVolumes, pipeline/object_volumes.cpp: kWindowMargin).
+constexpr size_t kObjectVolumeCount = 2;
+constexpr int kObjectWindowMargin = 4;
 
 Bounds3f boundsOf(std::span<const TriangleMesh> meshes) {
     Bounds3f bounds;
@@ -129,6 +133,19 @@ size_t volumeBytes(int resolution) {
     return voxels * kBytesPerVoxel;
 }
 
+size_t windowedVolumeBytes(int resolution, glm::ivec3 lo, glm::ivec3 hi) {
+    size_t voxels = 0;
+    for (int r = resolution; r >= 1; r /= 2) {
+        lo = glm::max(lo, glm::ivec3(0));
+        hi = glm::min(hi, glm::ivec3(r));
+        if (glm::any(glm::lessThanEqual(hi, lo))) return 0;
+        voxels += static_cast<size_t>(hi.x - lo.x) * (hi.y - lo.y) * (hi.z - lo.z);
+        lo >>= 1;
+        hi = (hi + 1) >> 1;
+    }
+    return voxels * kBytesPerVoxel;
+}
+
 SceneInfo sceneInfo(const Scene& scene) {
     SceneInfo info;
     info.realMeshes = scene.real.size();
@@ -141,7 +158,15 @@ SceneInfo sceneInfo(const Scene& scene) {
     info.region = volumeRegion(scene);
     info.mipLevels = mipLevelCount(info.region.resolution);
     info.bytesPerVolume = volumeBytes(info.region.resolution);
-    info.bytesAllVolumes = kVolumeCount * info.bytesPerVolume;
+    if (!scene.virtuals.empty()) {
+        const float voxel = info.region.voxelSize();
+        const glm::ivec3 lo =
+            glm::ivec3(glm::floor((info.virtualBounds.min - info.region.origin) / voxel)) - kObjectWindowMargin;
+        const glm::ivec3 hi = glm::ivec3(glm::floor((info.virtualBounds.max - info.region.origin) / voxel)) +
+                              1 + kObjectWindowMargin;
+        info.bytesObjectVolumes = kObjectVolumeCount * windowedVolumeBytes(info.region.resolution, lo, hi);
+    }
+    info.bytesAllVolumes = kWholeVolumeCount * info.bytesPerVolume + info.bytesObjectVolumes;
     const size_t directional =
         static_cast<size_t>(std::count_if(scene.lights.begin(), scene.lights.end(),
                                           [](const Light& l) { return l.type == Light::Type::Directional; }));
@@ -168,6 +193,7 @@ nlohmann::json toJson(const SceneInfo& info) {
           {"voxel_size", info.region.voxelSize()},
           {"mip_levels", info.mipLevels},
           {"bytes_per_volume", info.bytesPerVolume},
+          {"bytes_object_volumes", info.bytesObjectVolumes},
           {"bytes_all_volumes", info.bytesAllVolumes}}},
         {"render_memory_bytes", info.renderBytes},
     };

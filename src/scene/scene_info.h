@@ -19,9 +19,11 @@ struct SceneInfo {
     Bounds3f realBounds, virtualBounds;
     VolumeRegion region;
     int mipLevels = 0;
-    // Each of the four volumes (two visibility, two light) stores 4 floats per voxel over the whole mip
-    // chain.
+    // A volume stores 4 bfloat16 per voxel over the whole mip chain: bytesPerVolume for each of the three
+    // stored whole (the real scene's visibility, the full and the delta light), bytesObjectVolumes for the
+    // objects' visibility and light over the objects' box, bytesAllVolumes for the five.
     size_t bytesPerVolume = 0;
+    size_t bytesObjectVolumes = 0;
     size_t bytesAllVolumes = 0;
     // The memory guard's estimate of a render's peak (estimateRenderMemory, scene/json_reader.h).
     uint64_t renderBytes = 0;
@@ -41,7 +43,10 @@ std::vector<std::string> lightPlacementWarnings(const Scene& scene);
 // Clearance of a light without radius, as a fraction of the scene's largest extent.
 constexpr float kLightClearanceScale = 1e-4f;
 
-// Bytes of one volume of `resolution`^3 voxels with its full mip chain, 16 bytes per voxel.
+// Bytes of one volume of `resolution`^3 voxels with its full mip chain, 8 bytes per voxel.
 size_t volumeBytes(int resolution);
+// The same for a volume stored over the level-0 voxels [lo, hi) (clipped to the grid) and their parents at
+// each coarser level.
+size_t windowedVolumeBytes(int resolution, glm::ivec3 lo, glm::ivec3 hi);
 
 }  // namespace deltagi

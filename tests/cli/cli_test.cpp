@@ -187,7 +187,10 @@ TEST_F(CliTest, InfoJson) {
     EXPECT_EQ(info.at("volume").at("resolution"), 32);
     EXPECT_EQ(info.at("volume").at("mip_levels"), 6);
     EXPECT_EQ(info.at("volume").at("bytes_per_volume"), deltagi::volumeBytes(32));
-    EXPECT_EQ(info.at("volume").at("bytes_all_volumes"), 4 * deltagi::volumeBytes(32));
+    const size_t objects = info.at("volume").at("bytes_object_volumes");
+    EXPECT_GT(objects, 0u);
+    EXPECT_LT(objects, 2 * deltagi::volumeBytes(32));
+    EXPECT_EQ(info.at("volume").at("bytes_all_volumes"), 3 * deltagi::volumeBytes(32) + objects);
     EXPECT_EQ(info.at("options").at("volume").at("resolution"), 32);
     EXPECT_EQ(info.at("options").at("rsm").at("resolution"), 64);
 
@@ -587,11 +590,15 @@ TEST_F(CliTest, ConcurrentRendersLeaveOneWholeImage) {
     EXPECT_TRUE(temporaries().empty());
 }
 
-// 16 bytes per voxel over the mip chain r^3 + (r/2)^3 + ... + 1.
+// 8 bytes per voxel over the mip chain r^3 + (r/2)^3 + ... + 1.
 TEST(SceneInfo, VolumeBytesSumsTheMipChain) {
-    EXPECT_EQ(deltagi::volumeBytes(1), 16u);
-    EXPECT_EQ(deltagi::volumeBytes(4), 16u * (64 + 8 + 1));
-    EXPECT_EQ(deltagi::volumeBytes(128), 16u * (2396745u));  // (8^8 - 1) / 7 voxels
+    EXPECT_EQ(deltagi::volumeBytes(1), 8u);
+    EXPECT_EQ(deltagi::volumeBytes(4), 8u * (64 + 8 + 1));
+    EXPECT_EQ(deltagi::volumeBytes(128), 8u * (2396745u));  // (8^8 - 1) / 7 voxels
+    // A window of 3 x 2 x 1 voxels at (1, 1, 1) of 4^3: its parents are 2 x 2 x 1 at level 1, then 1.
+    EXPECT_EQ(deltagi::windowedVolumeBytes(4, {1, 1, 1}, {4, 3, 2}), 8u * (6 + 4 + 1));
+    EXPECT_EQ(deltagi::windowedVolumeBytes(4, {-5, 0, 0}, {9, 9, 9}), deltagi::volumeBytes(4));  // clipped
+    EXPECT_EQ(deltagi::windowedVolumeBytes(4, {2, 2, 2}, {2, 3, 3}), 0u);  // empty
 }
 
 // Numbers on the command line that are not finite are refused before any work, with one line naming the

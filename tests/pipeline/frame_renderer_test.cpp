@@ -59,6 +59,20 @@ TEST(FrameRenderer, MovingObjectFramesAreExactlyRendersFromScratch) {
     EXPECT_GT(change, 1.0);
 }
 
+// The volumes the cones read: three stored whole in bfloat16 (8 bytes a voxel over the mip chain), the
+// objects' own two over the ball's box.
+TEST(FrameRenderer, ReportsTheBytesOfItsVolumes) {
+    Scene s = ballOverFloor();
+    FrameRenderer frames;
+    EXPECT_EQ(frames.volumeBytes(), 0u);
+    frames.render(s);
+    const size_t n = static_cast<size_t>(s.options.volume.resolution);
+    size_t whole = 0;
+    for (size_t r = n; r >= 1; r /= 2) whole += r * r * r * 8;
+    EXPECT_GT(frames.volumeBytes(), 3 * whole);
+    EXPECT_LT(frames.volumeBytes(), 3 * whole + whole / 2);
+}
+
 // The objects' volumes are kept from frame to frame and redone only where the objects change them
 // (ObjectVolumes): whatever the objects do between frames, the images are render()'s.
 TEST(FrameRenderer, FramesOfObjectsThatMoveLeaveTheRegionAndChangeAreExactlyRendersFromScratch) {

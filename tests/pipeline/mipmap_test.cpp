@@ -110,6 +110,51 @@ TEST(PackedGrid3, KeepsAFloatsRangeAndEightSignificantBits) {
     EXPECT_EQ(p.bytes(), 8u * 8u);
 }
 
+// A volume stored over a window around its non-zero voxels reads as the one stored whole: at every level,
+// through its own lookups and through another volume's, and after an update in place.
+TEST(MipVolume, AWindowedVolumeReadsAsTheWholeOne) {
+    const int n = 16;
+    const VolumeRegion region{glm::vec3(0), 1.0f, n};
+    const VoxelBox filled{{5, 3, 7}, {9, 12, 10}}, window{{3, 2, 6}, {12, 14, 13}};
+    Grid3 g(n);
+    for (int z = filled.lo.z; z < filled.hi.z; ++z)
+        for (int y = filled.lo.y; y < filled.hi.y; ++y)
+            for (int x = filled.lo.x; x < filled.hi.x; ++x)
+                g.at(x, y, z) = glm::vec4(float(x) * 0.1f, float(y) - 3.0f, std::sin(float(z)), 1.0f);
+    MipVolume whole = buildMipChain(region, g);
+    MipVolume windowed = buildMipChain(region, PackedGrid3(g, window));
+    EXPECT_LT(windowed.bytes(), whole.bytes() / 4);
+    auto expectSame = [&](const MipVolume& a, const MipVolume& b) {
+        for (int k = 0; k < 2000; ++k) {
+            const glm::vec3 p(std::fmod(k * 0.737f, 18.0f) - 1.0f, std::fmod(k * 0.291f, 18.0f) - 1.0f,
+                              std::fmod(k * 0.533f, 18.0f) - 1.0f);
+            const float level = std::fmod(k * 0.173f, 4.5f);
+            const glm::vec4 u = a.sample(p, level), v = b.sample(p, level);
+            const glm::vec4 w = b.gather(a.lookup(p, level));  // another volume's lookup
+            for (int c = 0; c < 4; ++c) {
+                ASSERT_NEAR(u[c], v[c], 1e-5f) << k;
+                ASSERT_NEAR(u[c], w[c], 1e-5f) << k;
+            }
+        }
+    };
+    expectSame(whole, windowed);
+    // Level 0 rewritten inside a box that reaches beyond the window, the chain updated above it.
+    const VoxelBox changed{{6, 0, 8}, {16, 5, 9}};
+    for (int z = changed.lo.z; z < changed.hi.z; ++z)
+        for (int y = changed.lo.y; y < changed.hi.y; ++y)
+            for (int x = changed.lo.x; x < changed.hi.x; ++x)
+                if (window.contains(x, y, z)) g.at(x, y, z) = glm::vec4(2.0f);
+    for (MipVolume* v : {&whole, &windowed}) {
+        const VoxelBox box = changed.intersection(v->level(0).window());
+        for (int z = box.lo.z; z < box.hi.z; ++z)
+            for (int y = box.lo.y; y < box.hi.y; ++y)
+                for (int x = box.lo.x; x < box.hi.x; ++x) v->levelForUpdate(0).set(x, y, z, g.at(x, y, z));
+        updateMipChain(*v, box, nonZeroBounds(g, VoxelBox::all(n)));
+    }
+    expectSame(whole, windowed);
+    EXPECT_EQ(windowed.level(0).at(0, 0, 0), glm::vec4(0.0f));  // outside the window
+}
+
 // The occupied bounds found by a scan, and a box's non-zero bounds.
 TEST(MipVolume, OccupiedBoundsAreTheBoxOfTheNonZeroVoxels) {
     Grid3 g(8);
