@@ -293,10 +293,11 @@ glm::mat4 JsonNode::matrix4() const {
 
 namespace {
 
-// Per voxel of the volumes' finest level: the four volumes with their mip chains take 73 bytes (4 x 4 floats
-// x 8/7), but a render's peak holds about 290-320 (measured at 64^3-256^3: the voxelization's grids, the
-// injection's, the real scene's cached light beside the frame's), rounded up.
-constexpr double kBytesPerVoxel = 320.0;
+// Per voxel of the volumes' finest level: the three volumes stored whole with their mip chains take 27 bytes
+// (3 x 4 bfloat16 x 8/7), but a render's peak holds about 225-240 (measured at 128^3 and 256^3: the
+// voxelization's grids, the injection's, the real scene's cached light beside the frame's, all in floats),
+// rounded up.
+constexpr double kBytesPerVoxel = 256.0;
 constexpr double kRsmFaces = 6.0;              // a cube map per light (the worst case: point lights)
 // Per light, the map of the scene alone and the update of its texels that meet the objects (in the worst
 // case, all of them): about 155 MB per light at the default 512^2, as measured (issue 11).
