@@ -264,9 +264,9 @@ float traceOneVolume(const Cone& cone, const MipVolume& volume, float backface, 
     float acc = 0.0f;
     marchCone(cone, volume, settings, [&](glm::vec3 position, float level, float levelScale) {
         if (sparse && !volume.mayReadNonZero(position, static_cast<int>(level))) return true;
-        const float local = stepOpacity(adaptedOcclusion(volume.sample(position, level),
-                                                         cone.direction, levelScale, settings, backface),
-                                        settings.stepScale);
+        const float local = stepOpacity(
+            adaptedOcclusion(volume.sample(position, level), cone.direction, levelScale, settings, backface),
+            settings.stepScale);
         acc += local * (1.0f - acc);
         return acc < settings.maxOcclusion;
     });

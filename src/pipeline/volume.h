@@ -56,7 +56,8 @@ struct VoxelBox {
         return r.empty() ? VoxelBox{} : r;
     }
     bool contains(const VoxelBox& b) const {
-        return b.empty() || (glm::all(glm::lessThanEqual(lo, b.lo)) && glm::all(glm::lessThanEqual(b.hi, hi)));
+        return b.empty() ||
+               (glm::all(glm::lessThanEqual(lo, b.lo)) && glm::all(glm::lessThanEqual(b.hi, hi)));
     }
     bool contains(int x, int y, int z) const {
         return x >= lo.x && y >= lo.y && z >= lo.z && x < hi.x && y < hi.y && z < hi.z;
@@ -133,14 +134,18 @@ inline PackedVoxel packVoxel(Float4 v) {
     return static_cast<PackedVoxel>(_mm_cvtsi128_si64(_mm_packs_epi32(bits, bits)));
 #else
     return static_cast<PackedVoxel>(toBfloat16(v[0])) | static_cast<PackedVoxel>(toBfloat16(v[1])) << 16 |
-           static_cast<PackedVoxel>(toBfloat16(v[2])) << 32 | static_cast<PackedVoxel>(toBfloat16(v[3])) << 48;
+           static_cast<PackedVoxel>(toBfloat16(v[2])) << 32 |
+           static_cast<PackedVoxel>(toBfloat16(v[3])) << 48;
 #endif
 }
-inline PackedVoxel packVoxel(glm::vec4 v) { return packVoxel(loadFloat4(v)); }
+inline PackedVoxel packVoxel(glm::vec4 v) {
+    return packVoxel(loadFloat4(v));
+}
 // Each value's 16 bits become the upper half of a float (on x86-64 one SSE2 interleave with zeros).
 inline Float4 unpackVoxel(const PackedVoxel& p) {
 #if defined(__SSE2__)
-    const __m128i bits = _mm_unpacklo_epi16(_mm_setzero_si128(), _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&p)));
+    const __m128i bits =
+        _mm_unpacklo_epi16(_mm_setzero_si128(), _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&p)));
     return reinterpret_cast<Float4>(_mm_castsi128_ps(bits));
 #else
     using UInt4 = uint32_t __attribute__((vector_size(16)));

@@ -160,8 +160,8 @@ SceneInfo sceneInfo(const Scene& scene) {
     info.bytesPerVolume = volumeBytes(info.region.resolution);
     if (!scene.virtuals.empty()) {
         const float voxel = info.region.voxelSize();
-        const glm::ivec3 lo =
-            glm::ivec3(glm::floor((info.virtualBounds.min - info.region.origin) / voxel)) - kObjectWindowMargin;
+        const glm::ivec3 lo = glm::ivec3(glm::floor((info.virtualBounds.min - info.region.origin) / voxel)) -
+                              kObjectWindowMargin;
         const glm::ivec3 hi = glm::ivec3(glm::floor((info.virtualBounds.max - info.region.origin) / voxel)) +
                               1 + kObjectWindowMargin;
         info.bytesObjectVolumes = kObjectVolumeCount * windowedVolumeBytes(info.region.resolution, lo, hi);

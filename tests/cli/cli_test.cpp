@@ -598,7 +598,7 @@ TEST(SceneInfo, VolumeBytesSumsTheMipChain) {
     // A window of 3 x 2 x 1 voxels at (1, 1, 1) of 4^3: its parents are 2 x 2 x 1 at level 1, then 1.
     EXPECT_EQ(deltagi::windowedVolumeBytes(4, {1, 1, 1}, {4, 3, 2}), 8u * (6 + 4 + 1));
     EXPECT_EQ(deltagi::windowedVolumeBytes(4, {-5, 0, 0}, {9, 9, 9}), deltagi::volumeBytes(4));  // clipped
-    EXPECT_EQ(deltagi::windowedVolumeBytes(4, {2, 2, 2}, {2, 3, 3}), 0u);  // empty
+    EXPECT_EQ(deltagi::windowedVolumeBytes(4, {2, 2, 2}, {2, 3, 3}), 0u);                        // empty
 }
 
 // Numbers on the command line that are not finite are refused before any work, with one line naming the

@@ -1,7 +1,7 @@
 #include "pipeline/mipmap.h"
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -76,7 +76,8 @@ TEST(Mipmap, UpdatingTheLevelsAboveAChangedBoxEqualsRebuildingTheChain) {
         const MipVolume fresh = buildMipChain(region, g.clone());
         for (int l = 0; l < fresh.levelCount(); ++l)
             for (size_t i = 0; i < fresh.level(l).size(); ++i)
-                ASSERT_EQ(kept.level(l).packed(i), fresh.level(l).packed(i)) << "level " << l << ", voxel " << i;
+                ASSERT_EQ(kept.level(l).packed(i), fresh.level(l).packed(i))
+                    << "level " << l << ", voxel " << i;
     }
 }
 
@@ -84,7 +85,7 @@ TEST(Mipmap, UpdatingTheLevelsAboveAChangedBoxEqualsRebuildingTheChain) {
 TEST(PackedGrid3, KeepsAFloatsRangeAndEightSignificantBits) {
     EXPECT_EQ(fromBfloat16(toBfloat16(0.0f)), 0.0f);
     EXPECT_EQ(fromBfloat16(toBfloat16(1.0f)), 1.0f);
-    EXPECT_EQ(fromBfloat16(toBfloat16(-255.0f)), -255.0f);  // integers to 256 are exact
+    EXPECT_EQ(fromBfloat16(toBfloat16(-255.0f)), -255.0f);                   // integers to 256 are exact
     EXPECT_EQ(fromBfloat16(toBfloat16(1.0f + std::ldexp(1.0f, -8))), 1.0f);  // a tie: to the even one
     EXPECT_EQ(fromBfloat16(toBfloat16(1.0f + 3.0f * std::ldexp(1.0f, -8))), 1.0f + std::ldexp(1.0f, -6));
     EXPECT_TRUE(std::isnan(fromBfloat16(toBfloat16(std::numeric_limits<float>::quiet_NaN()))));

@@ -2,7 +2,6 @@
 // level of every volume must be the one computed from scratch, bit for bit, whatever the objects do.
 #include "pipeline/object_volumes.h"
 
-
 #include <gtest/gtest.h>
 
 #include "test_scenes.h"
@@ -48,9 +47,9 @@ void expectSameVolume(const MipVolume& kept, const MipVolume& scratch, const cha
                 for (int x = 0; x < n; ++x) {
                     const glm::vec4 u = a.at(x, y, z), v = b.at(x, y, z);
                     ASSERT_EQ(packVoxel(u), packVoxel(v))
-                        << name << ": level " << l << ", voxel (" << x << ", " << y << ", " << z << "): (" << u.x
-                        << ", " << u.y << ", " << u.z << ", " << u.w << ") instead of (" << v.x << ", " << v.y
-                        << ", " << v.z << ", " << v.w << ")";
+                        << name << ": level " << l << ", voxel (" << x << ", " << y << ", " << z << "): ("
+                        << u.x << ", " << u.y << ", " << u.z << ", " << u.w << ") instead of (" << v.x << ", "
+                        << v.y << ", " << v.z << ", " << v.w << ")";
                 }
     }
     // The occupied bounds may be larger than the scan's, never smaller.
