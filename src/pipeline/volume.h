@@ -226,50 +226,24 @@ struct VolumeLookup {
     TrilinearCorners fine, coarse;
 };
 
-// Trilinear corners at a level of resolution n, for a position in level-0 voxel units.
-inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorners& c) {
+// Trilinear corners at a level, for a position in level-0 voxel units, of a level stored over the voxels
+// [lo, hi) of that level, x fastest: corners outside have weight 0, the indices count from lo.
+inline void trilinearCornersOver(glm::vec3 voxelPos, int level, glm::ivec3 lo, glm::ivec3 hi,
+                                 TrilinearCorners& c) {
     const glm::vec3 q = voxelPos * (1.0f / static_cast<float>(1 << level)) - 0.5f;
     const glm::vec3 base = glm::floor(q);
     const glm::vec3 f = q - base;
     const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
     const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
     c.first = glm::ivec3(x, y, z);
-    if (x >= 0 && y >= 0 && z >= 0 && x + 1 < n && y + 1 < n && z + 1 < n) {
+    const glm::ivec3 extent = hi - lo;
+    auto index = [&](int cx, int cy, int cz) {
+        return static_cast<uint32_t>((static_cast<size_t>(cz - lo.z) * extent.y + (cy - lo.y)) * extent.x +
+                                     (cx - lo.x));
+    };
+    if (x >= lo.x && y >= lo.y && z >= lo.z && x + 1 < hi.x && y + 1 < hi.y && z + 1 < hi.z) {
         // All 8 corners inside: one base index and fixed offsets.
-        const uint32_t base = static_cast<uint32_t>((static_cast<size_t>(z) * n + y) * n + x);
-        const uint32_t row = static_cast<uint32_t>(n), slice = static_cast<uint32_t>(n) * row;
-        const uint32_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
-        const float wxy[4] = {wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]};
-        for (int k = 0; k < 8; ++k) {
-            c.index[k] = base + offsets[k];
-            c.weight[k] = wxy[k & 3] * wz[k >> 2];
-        }
-        return;
-    }
-    for (int k = 0; k < 8; ++k) {
-        const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
-        const int cx = x + dx, cy = y + dy, cz = z + dz;
-        const bool valid = static_cast<unsigned>(cx) < static_cast<unsigned>(n) &&
-                           static_cast<unsigned>(cy) < static_cast<unsigned>(n) &&
-                           static_cast<unsigned>(cz) < static_cast<unsigned>(n);
-        c.index[k] = valid ? static_cast<uint32_t>((static_cast<size_t>(cz) * n + cy) * n + cx) : 0u;
-        c.weight[k] = valid ? wx[dx] * wy[dy] * wz[dz] : 0.0f;
-    }
-}
-
-// The same for a level stored over a window (PackedGrid3::window): corners outside the window have weight 0
-// and the indices are the window's.
-inline void trilinearCornersIn(glm::vec3 voxelPos, int level, const PackedGrid3& grid, TrilinearCorners& c) {
-    const glm::vec3 q = voxelPos * (1.0f / static_cast<float>(1 << level)) - 0.5f;
-    const glm::vec3 base = glm::floor(q);
-    const glm::vec3 f = q - base;
-    const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
-    const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
-    const VoxelBox& window = grid.window();
-    if (window.contains(x, y, z) && window.contains(x + 1, y + 1, z + 1)) {
-        // All 8 corners inside: one base index and fixed offsets.
-        const glm::ivec3 extent = window.hi - window.lo;
-        const uint32_t base = static_cast<uint32_t>(grid.index(x, y, z));
+        const uint32_t base = index(x, y, z);
         const uint32_t row = static_cast<uint32_t>(extent.x), slice = static_cast<uint32_t>(extent.y) * row;
         const uint32_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
         const float wxy[4] = {wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]};
@@ -281,10 +255,21 @@ inline void trilinearCornersIn(glm::vec3 voxelPos, int level, const PackedGrid3&
     }
     for (int k = 0; k < 8; ++k) {
         const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
-        const bool valid = window.contains(x + dx, y + dy, z + dz);
-        c.index[k] = valid ? static_cast<uint32_t>(grid.index(x + dx, y + dy, z + dz)) : 0u;
+        const int cx = x + dx, cy = y + dy, cz = z + dz;
+        const bool valid = cx >= lo.x && cy >= lo.y && cz >= lo.z && cx < hi.x && cy < hi.y && cz < hi.z;
+        c.index[k] = valid ? index(cx, cy, cz) : 0u;
         c.weight[k] = valid ? wx[dx] * wy[dy] * wz[dz] : 0.0f;
     }
+}
+
+// Trilinear corners at a level of resolution n (stored whole).
+inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorners& c) {
+    trilinearCornersOver(voxelPos, level, glm::ivec3(0), glm::ivec3(n), c);
+}
+
+// The same for a level stored over a window (PackedGrid3::window): the indices are the window's.
+inline void trilinearCornersIn(glm::vec3 voxelPos, int level, const PackedGrid3& grid, TrilinearCorners& c) {
+    trilinearCornersOver(voxelPos, level, grid.window().lo, grid.window().hi, c);
 }
 
 // Calls rowBody(y, z) for every row of voxels of `box` (x from box.lo.x to box.hi.x), rows in parallel.
