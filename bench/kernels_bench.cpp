@@ -9,8 +9,8 @@
 #include <numbers>
 #include <string>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <tbb/task_arena.h>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include "core/parallel.h"
 #include "core/ray_scene.h"

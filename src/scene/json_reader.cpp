@@ -298,11 +298,11 @@ namespace {
 // voxelization's grids, the injection's, the real scene's cached light beside the frame's, all in floats),
 // rounded up.
 constexpr double kBytesPerVoxel = 256.0;
-constexpr double kRsmFaces = 6.0;              // a cube map per light (the worst case: point lights)
+constexpr double kRsmFaces = 6.0;  // a cube map per light (the worst case: point lights)
 // Per light, the map of the scene alone and the update of its texels that meet the objects (in the worst
 // case, all of them): about 155 MB per light at the default 512^2, as measured (issue 11).
 constexpr double kRsmMapsPerLight = 2.0;
-constexpr double kBytesPerRsmTexel = 48.0;       // position, normal, flux (3 floats each) and depth, padded
+constexpr double kBytesPerRsmTexel = 48.0;  // position, normal, flux (3 floats each) and depth, padded
 // The frame's images, measured as peaks of `deltagi render` (tests/cli/memory_guard_test.cpp): about 485
 // bytes per pixel at 1 sample per pixel, 26-33 more per further sample (the G-buffers of the scene with and
 // without the objects, the cone tracing's and the filters' images, the layers and the outputs), rounded up.
