@@ -226,50 +226,47 @@ struct VolumeLookup {
     TrilinearCorners fine, coarse;
 };
 
-// Trilinear corners at a level, for a position in level-0 voxel units, of a level stored over the voxels
-// [lo, hi) of that level, x fastest: corners outside have weight 0, the indices count from lo.
-inline void trilinearCornersOver(glm::vec3 voxelPos, int level, glm::ivec3 lo, glm::ivec3 hi,
-                                 TrilinearCorners& c) {
-    const glm::vec3 q = voxelPos * (1.0f / static_cast<float>(1 << level)) - 0.5f;
-    const glm::vec3 base = glm::floor(q);
-    const glm::vec3 f = q - base;
-    const int x = static_cast<int>(base.x), y = static_cast<int>(base.y), z = static_cast<int>(base.z);
-    const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
-    c.first = glm::ivec3(x, y, z);
-    const glm::ivec3 extent = hi - lo;
-    auto index = [&](int cx, int cy, int cz) {
-        return static_cast<uint32_t>((static_cast<size_t>(cz - lo.z) * extent.y + (cy - lo.y)) * extent.x +
-                                     (cx - lo.x));
+// The indices of the corners `c` (c.first and its neighbours at +1 along x, y, z by the bits of k) in a level
+// stored over its voxels [lo, hi), x fastest; a corner outside gets index 0 and weight 0.
+[[gnu::always_inline]] inline void placeCorners(glm::ivec3 lo, glm::ivec3 hi, TrilinearCorners& c) {
+    const glm::ivec3 p = c.first, extent = hi - lo;
+    auto index = [&](int x, int y, int z) {
+        return static_cast<uint32_t>((static_cast<size_t>(z - lo.z) * extent.y + (y - lo.y)) * extent.x +
+                                     (x - lo.x));
     };
-    if (x >= lo.x && y >= lo.y && z >= lo.z && x + 1 < hi.x && y + 1 < hi.y && z + 1 < hi.z) {
+    if (p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x + 1 < hi.x && p.y + 1 < hi.y && p.z + 1 < hi.z) {
         // All 8 corners inside: one base index and fixed offsets.
-        const uint32_t base = index(x, y, z);
+        const uint32_t base = index(p.x, p.y, p.z);
         const uint32_t row = static_cast<uint32_t>(extent.x), slice = static_cast<uint32_t>(extent.y) * row;
         const uint32_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
-        const float wxy[4] = {wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]};
-        for (int k = 0; k < 8; ++k) {
-            c.index[k] = base + offsets[k];
-            c.weight[k] = wxy[k & 3] * wz[k >> 2];
-        }
+        for (int k = 0; k < 8; ++k) c.index[k] = base + offsets[k];
         return;
     }
     for (int k = 0; k < 8; ++k) {
-        const int dx = k & 1, dy = (k >> 1) & 1, dz = k >> 2;
-        const int cx = x + dx, cy = y + dy, cz = z + dz;
-        const bool valid = cx >= lo.x && cy >= lo.y && cz >= lo.z && cx < hi.x && cy < hi.y && cz < hi.z;
-        c.index[k] = valid ? index(cx, cy, cz) : 0u;
-        c.weight[k] = valid ? wx[dx] * wy[dy] * wz[dz] : 0.0f;
+        const int x = p.x + (k & 1), y = p.y + ((k >> 1) & 1), z = p.z + (k >> 2);
+        const bool valid = x >= lo.x && y >= lo.y && z >= lo.z && x < hi.x && y < hi.y && z < hi.z;
+        c.index[k] = valid ? index(x, y, z) : 0u;
+        if (!valid) c.weight[k] = 0.0f;
     }
+}
+
+// Trilinear corners at a level, for a position in level-0 voxel units, of a level stored over its voxels
+// [lo, hi) (placeCorners).
+[[gnu::always_inline]] inline void trilinearCornersOver(glm::vec3 voxelPos, int level, glm::ivec3 lo,
+                                                        glm::ivec3 hi, TrilinearCorners& c) {
+    const glm::vec3 q = voxelPos * (1.0f / static_cast<float>(1 << level)) - 0.5f;
+    const glm::vec3 base = glm::floor(q);
+    const glm::vec3 f = q - base;
+    c.first = glm::ivec3(base);
+    const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
+    const float wxy[4] = {wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]};
+    for (int k = 0; k < 8; ++k) c.weight[k] = wxy[k & 3] * wz[k >> 2];
+    placeCorners(lo, hi, c);
 }
 
 // Trilinear corners at a level of resolution n (stored whole).
 inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorners& c) {
     trilinearCornersOver(voxelPos, level, glm::ivec3(0), glm::ivec3(n), c);
-}
-
-// The same for a level stored over a window (PackedGrid3::window): the indices are the window's.
-inline void trilinearCornersIn(glm::vec3 voxelPos, int level, const PackedGrid3& grid, TrilinearCorners& c) {
-    trilinearCornersOver(voxelPos, level, grid.window().lo, grid.window().hi, c);
 }
 
 // Calls rowBody(y, z) for every row of voxels of `box` (x from box.lo.x to box.hi.x), rows in parallel.
@@ -307,7 +304,11 @@ class MipVolume {
     // Prepares a quadrilinear lookup at `voxelPos` (level-0 voxel units, 0 at the region's corner) between
     // the two levels around the fractional `level`.
     VolumeLookup lookup(glm::vec3 voxelPos, float level) const {
-        VolumeLookup l = levelsAround(voxelPos, level);
+        VolumeLookup l;
+        l.voxelPos = voxelPos;
+        level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
+        l.level0 = static_cast<int>(level);
+        l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
         trilinearCorners(voxelPos, l.level0, levels_[l.level0].resolution(), l.fine);
         if (l.blend > 0.0f)
             trilinearCorners(voxelPos, l.level0 + 1, levels_[l.level0 + 1].resolution(), l.coarse);
@@ -348,21 +349,11 @@ class MipVolume {
     // Trilinear sample of level `l`.
     glm::vec4 sampleLevel(glm::vec3 voxelPos, int l) const {
         TrilinearCorners c;
-        if (levels_[l].whole())
-            trilinearCorners(voxelPos, l, levels_[l].resolution(), c);
-        else
-            trilinearCornersIn(voxelPos, l, levels_[l], c);
+        trilinearCornersOver(voxelPos, l, levels_[l].window().lo, levels_[l].window().hi, c);
         return storeFloat4(gatherLevel(l, c));
     }
     // Quadrilinear sample: trilinear in the two levels around the fractional `level`, blended.
-    glm::vec4 sample(glm::vec3 voxelPos, float level) const {
-        if (whole_) return gather(lookup(voxelPos, level));
-        const VolumeLookup l = levelsAround(voxelPos, level);  // without the whole grid's corners
-        if (!mayReadNonZero(l.voxelPos, l.level0)) return glm::vec4(0.0f);
-        Float4 v = loadFloat4(sampleLevel(l.voxelPos, l.level0));
-        if (l.blend > 0.0f) v += (loadFloat4(sampleLevel(l.voxelPos, l.level0 + 1)) - v) * l.blend;
-        return storeFloat4(v);
-    }
+    glm::vec4 sample(glm::vec3 voxelPos, float level) const { return gather(lookup(voxelPos, level)); }
 
   private:
     Float4 gatherLevel(int l, const TrilinearCorners& c) const {
@@ -371,40 +362,16 @@ class MipVolume {
         for (int k = 0; k < 8; ++k) acc += g.load(c.index[k]) * c.weight[k];
         return acc;
     }
-    // A lookup's levels and blend, without its corners.
-    VolumeLookup levelsAround(glm::vec3 voxelPos, float level) const {
-        VolumeLookup l;
-        l.voxelPos = voxelPos;
-        level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
-        l.level0 = static_cast<int>(level);
-        l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
-        return l;
-    }
     // gather() of a volume stored over windows, from a lookup with the whole grid's corners: their voxels and
-    // weights, the window's indices.
+    // weights, placed in each level's window.
     glm::vec4 gatherWindowed(const VolumeLookup& l) const {
         Float4 v = gatherWindowedLevel(l.level0, l.fine);
         if (l.blend > 0.0f) v += (gatherWindowedLevel(l.level0 + 1, l.coarse) - v) * l.blend;
         return storeFloat4(v);
     }
-    Float4 gatherWindowedLevel(int l, const TrilinearCorners& c) const {
-        const PackedGrid3& g = levels_[l];
-        const VoxelBox& window = g.window();
-        const glm::ivec3 p = c.first;
-        Float4 acc = {0.0f, 0.0f, 0.0f, 0.0f};
-        if (window.contains(p.x, p.y, p.z) && window.contains(p.x + 1, p.y + 1, p.z + 1)) {
-            const size_t base = g.index(p.x, p.y, p.z);
-            const size_t row = static_cast<size_t>(window.hi.x - window.lo.x);
-            const size_t slice = static_cast<size_t>(window.hi.y - window.lo.y) * row;
-            const size_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
-            for (int k = 0; k < 8; ++k) acc += g.load(base + offsets[k]) * c.weight[k];
-            return acc;
-        }
-        for (int k = 0; k < 8; ++k) {
-            const glm::ivec3 q = p + glm::ivec3(k & 1, (k >> 1) & 1, k >> 2);
-            if (window.contains(q.x, q.y, q.z)) acc += g.load(g.index(q.x, q.y, q.z)) * c.weight[k];
-        }
-        return acc;
+    Float4 gatherWindowedLevel(int l, TrilinearCorners c) const {
+        placeCorners(levels_[l].window().lo, levels_[l].window().hi, c);
+        return gatherLevel(l, c);
     }
     // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
     void findOccupiedBounds() {

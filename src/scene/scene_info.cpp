@@ -127,12 +127,6 @@ std::vector<std::string> lightPlacementWarnings(const Scene& scene) {
     return warnings;
 }
 
-size_t volumeBytes(int resolution) {
-    size_t voxels = 0;
-    for (size_t r = resolution > 0 ? static_cast<size_t>(resolution) : 0; r >= 1; r /= 2) voxels += r * r * r;
-    return voxels * kBytesPerVoxel;
-}
-
 size_t windowedVolumeBytes(int resolution, glm::ivec3 lo, glm::ivec3 hi) {
     size_t voxels = 0;
     for (int r = resolution; r >= 1; r /= 2) {
@@ -144,6 +138,10 @@ size_t windowedVolumeBytes(int resolution, glm::ivec3 lo, glm::ivec3 hi) {
         hi = (hi + 1) >> 1;
     }
     return voxels * kBytesPerVoxel;
+}
+
+size_t volumeBytes(int resolution) {
+    return windowedVolumeBytes(resolution, glm::ivec3(0), glm::ivec3(resolution));
 }
 
 SceneInfo sceneInfo(const Scene& scene) {
