@@ -2,12 +2,13 @@
 //
 // A frame allocates and frees a few hundred MiB of such arrays; fresh pages from the kernel must be faulted
 // in and zeroed by it every time, which was a seventh of a frame's time. Freed blocks are therefore kept (up
-// to kMaxKeptBytes) and handed out again for the next allocation of the same size; a new block's pages are
-// faulted in by one system call when it is mapped (a process's first render, `deltagi render
-// examples/cornell-buddha.json`: 236,000 page faults -> 92,000, 3.26 -> 2.65 s). Blocks are 2 MiB aligned,
-// so that the kernel may back them with transparent huge pages where its policy is "always". (Asking for huge
-// pages with madvise was tried: with the "madvise" defrag policy of this project's machines, the first touch
-// of new blocks then stalled in page compaction, doubling a single render's time in one run out of two.)
+// to kMaxKeptBytes) and handed out again for the next allocation of the same size. A new block is 2 MiB
+// aligned, asked for in transparent huge pages (madvise MADV_HUGEPAGE, which the kernel's default policy
+// "madvise" honours) and faulted in by one system call when it is mapped (MADV_POPULATE_WRITE). In the
+// virtual machines this project runs on, a fresh 4 KiB page costs about 10 us, nearly all of it the host
+// backing the page: 256 MiB took 710-825 ms to touch in 4 KiB pages, 500-570 ms populated in 4 KiB pages,
+// and 30-130 ms in huge pages. Where the kernel has no free huge page at hand it compacts memory first or
+// falls back to 4 KiB pages, so a process's first blocks vary in cost from run to run.
 // Small arrays go to the usual allocator.
 #pragma once
 
