@@ -8,6 +8,7 @@
 #include <span>
 #include <vector>
 
+#include "core/large_blocks.h"
 #include "core/ray_scene.h"
 #include "deltagi/renderer.h"
 
@@ -22,11 +23,14 @@ struct RsmTexel {
     uint32_t index = 0;  // face * resolution^2 + row * resolution + column: the texel's place in the map
 };
 
+// A map's texels: large blocks (core/large_blocks.h), recycled from map to map.
+using RsmTexels = std::vector<RsmTexel, LargeBlockAllocator<RsmTexel>>;
+
 struct ReflectiveShadowMap {
     int resolution = 0;  // texels per face side
     int faces = 0;       // 1 (a frustum fitted to the region, or orthographic) or 6 (light inside the region)
     float rayStart = 0.0f;         // directional lights: how far behind the region's centre the rays start
-    std::vector<RsmTexel> texels;  // the texels that hit a surface inside the region, in texel order
+    RsmTexels texels;              // the texels that hit a surface inside the region, in texel order
 };
 
 // The face resolution of each light's map (options.rsm.resolution): the given one for all, or "auto": the
@@ -62,7 +66,7 @@ struct RsmUpdate {
     // Increasing (one range per row of a face); every texel outside them is the base map's. One range over
     // every index when the map is rendered afresh.
     std::vector<TexelRange> retraced;
-    std::vector<RsmTexel> texels;  // the retraced texels that hit a surface inside the region, in texel order
+    RsmTexels texels;              // the retraced texels that hit a surface inside the region, in texel order
     float rayStart = 0.0f;         // the map's with the objects (ReflectiveShadowMap::rayStart)
 };
 
