@@ -85,12 +85,12 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
                   std::span<const VoxelGeometry* const> geometry) {
     const int n = region.resolution;
 
-    // Per voxel: the lights' summed radiance, and (w) 1 where any texel landed.
-    Grid3 reflected(n);
-    // One light at a time: its texels' (reflected flux, footprint area) per voxel, then their radiance.
-    Grid3 accum(n);
+    // Per voxel: the lights' summed radiance, and (w) 1 where any texel landed; then the light volume, in
+    // place.
+    Grid3 light(n);
     const TexelVoxels texelVoxel(region);
     const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
+    const size_t slabVoxels = static_cast<size_t>(kSlabThickness) * n * n;
     std::vector<uint32_t> voxels;
     for (const ReflectiveShadowMap& rsm : rsms) {
         voxels.resize(rsm.texels.size());
@@ -100,23 +100,28 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
             return std::pair{s, s};
         });
         parallelFor(0, slabCount, 1, [&](int64_t s) {
+            // One light's texels of the slab: (reflected flux, footprint area) per voxel, then their
+            // radiance. A thread's slab of sums, all zero between slabs.
+            thread_local std::vector<glm::vec4> accum;
+            if (accum.size() != slabVoxels) accum.assign(slabVoxels, glm::vec4(0.0f));
+            const size_t first = static_cast<size_t>(s) * slabVoxels;
             for (uint32_t t : bins.slab(s))
-                accum[voxels[t]] += glm::vec4(rsm.texels[t].flux, rsm.texels[t].area);
+                accum[voxels[t] - first] += glm::vec4(rsm.texels[t].flux, rsm.texels[t].area);
             // Each voxel of the slab once (at its first texel), in the slab's order.
             for (uint32_t t : bins.slab(s)) {
-                glm::vec4& sum = accum[voxels[t]];
-                if (!(sum.w > 0.0f)) continue;
-                reflected[voxels[t]] +=
-                    glm::vec4(lightRadiance(sum, geometryArea(geometry, voxels[t])), 0.0f);
-                reflected[voxels[t]].w = 1.0f;
+                glm::vec4& sum = accum[voxels[t] - first];
+                if (sum.w > 0.0f) {
+                    light[voxels[t]] +=
+                        glm::vec4(lightRadiance(sum, geometryArea(geometry, voxels[t])), 0.0f);
+                    light[voxels[t]].w = 1.0f;
+                }
                 sum = glm::vec4(0.0f);
             }
         });
     }
 
-    Grid3 light(n);
     parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) {
-        light[i] = voxelLight(glm::vec3(reflected[i]), reflected[i].w > 0.0f, geometry, i);
+        light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, i);
     });
     return light;
 }
@@ -184,15 +189,15 @@ RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone, std::spa
     auto byIndex = [](const RsmTexel& t, uint32_t index) { return t.index < index; };
     parallelFor(0, static_cast<int64_t>(pieces.size()), 1, [&](int64_t p) {
         Piece& piece = pieces[p];
-        const std::vector<RsmTexel>& before = sceneAlone[piece.light].texels;
-        const std::vector<RsmTexel>& after = updates[piece.light].texels;
+        const RsmTexels& before = sceneAlone[piece.light].texels;
+        const RsmTexels& after = updates[piece.light].texels;
         auto b = std::lower_bound(before.begin(), before.end(), piece.range.first, byIndex);
         auto a = std::lower_bound(after.begin(), after.end(), piece.range.first, byIndex);
-        auto removed = [&](std::vector<RsmTexel>::const_iterator t) {
+        auto removed = [&](RsmTexels::const_iterator t) {
             piece.removed.push_back(
                 {voxelIndex(*t), piece.light, &*t, static_cast<uint32_t>(t - before.begin())});
         };
-        auto added = [&](std::vector<RsmTexel>::const_iterator t) {
+        auto added = [&](RsmTexels::const_iterator t) {
             piece.added.push_back(
                 {voxelIndex(*t), piece.light, &*t, static_cast<uint32_t>(t - after.begin())});
         };
