@@ -1,5 +1,6 @@
 #include "core/large_blocks.h"
 
+#include <bit>
 #include <cstdint>
 #include <cstdlib>
 #include <map>
@@ -12,8 +13,17 @@ namespace deltagi {
 
 namespace {
 
+size_t roundedUp(size_t bytes, size_t step) {
+    return (bytes + step - 1) / step * step;
+}
+
+// A block's size class: whole 2 MiB up to 16 MiB, then eight classes per doubling (at most 1/8 more than
+// asked for), so that arrays whose size changes a little from frame to frame (a shadow map's texels, the
+// objects' windowed volumes) find a freed block of their class.
 size_t roundedSize(size_t bytes) {
-    return (bytes + kLargeBlockBytes - 1) / kLargeBlockBytes * kLargeBlockBytes;
+    const size_t size = roundedUp(bytes, kLargeBlockBytes);
+    if (size <= 8 * kLargeBlockBytes) return size;
+    return roundedUp(size, std::bit_floor(size) / 8);
 }
 
 // Freed blocks by rounded size. Never destroyed: blocks may be freed by static objects' destructors.

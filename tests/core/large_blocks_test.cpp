@@ -1,0 +1,47 @@
+// The large blocks of core/large_blocks.h: aligned, and recycled by size class.
+#include "core/large_blocks.h"
+
+#include <cstdint>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+namespace deltagi {
+namespace {
+
+constexpr size_t kMiB = size_t(1) << 20;
+
+TEST(LargeBlocks, AreAlignedToTwoMiBAndWritable) {
+    const size_t bytes = 3 * kMiB + 1;
+    void* block = allocateLargeBlock(bytes);
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(block) % kLargeBlockBytes, 0u);
+    std::memset(block, 0xab, bytes);
+    EXPECT_EQ(static_cast<unsigned char*>(block)[bytes - 1], 0xab);
+    freeLargeBlock(block, bytes);
+}
+
+// A freed block serves the next array of its size class: whole 2 MiB up to 16 MiB, then steps of 1/8 of
+// the power of two below (33 and 35 MiB are both 36; 37 MiB is 40).
+TEST(LargeBlocks, AFreedBlockServesTheNextArrayOfItsSizeClass) {
+    void* block = allocateLargeBlock(33 * kMiB);
+    freeLargeBlock(block, 33 * kMiB);
+    void* again = allocateLargeBlock(35 * kMiB);
+    EXPECT_EQ(again, block);
+    std::memset(again, 1, 35 * kMiB);  // the whole class is mapped
+    freeLargeBlock(again, 35 * kMiB);
+    void* larger = allocateLargeBlock(37 * kMiB);
+    EXPECT_NE(larger, block);
+    freeLargeBlock(larger, 37 * kMiB);
+
+    void* small = allocateLargeBlock(5 * kMiB);
+    freeLargeBlock(small, 5 * kMiB);
+    void* nextSmall = allocateLargeBlock(6 * kMiB - 1);
+    EXPECT_EQ(nextSmall, small);
+    freeLargeBlock(nextSmall, 6 * kMiB - 1);
+    void* otherSmall = allocateLargeBlock(6 * kMiB + 1);
+    EXPECT_NE(otherSmall, small);
+    freeLargeBlock(otherSmall, 6 * kMiB + 1);
+}
+
+}  // namespace
+}  // namespace deltagi
