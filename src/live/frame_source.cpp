@@ -3,11 +3,13 @@
 #include <filesystem>
 #include <mutex>
 
+#include <dlfcn.h>
+
 #include <fmt/format.h>
 
 extern "C" {
 #include <libavcodec/avcodec.h>
-#include <libavdevice/avdevice.h>
+#include <libavdevice/version.h>
 #include <libavformat/avformat.h>
 #include <libavutil/error.h>
 #include <libavutil/log.h>
@@ -101,17 +103,34 @@ class PatternSource final : public FrameSource {
 
 // ---- FFmpeg ---------------------------------------------------------------------------------------------
 
+// libavdevice, FFmpeg's cameras (V4L2), is loaded when a device is first opened, not linked: with its own
+// dependencies (SDL, PulseAudio, X11, ...) it would add some 80 shared libraries to every deltagi process's
+// start, about 80 ms. Registering its inputs makes av_find_input_format() find them.
+std::string devicesLibrary() {
+    return fmt::format("libavdevice.so.{}", LIBAVDEVICE_VERSION_MAJOR);
+}
+
+void registerDevices() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        void* library = dlopen(devicesLibrary().c_str(), RTLD_NOW | RTLD_GLOBAL);
+        if (!library) return;  // av_find_input_format() finds no V4L2 input, and the caller says so
+        if (auto registerAll = reinterpret_cast<void (*)()>(dlsym(library, "avdevice_register_all")))
+            registerAll();
+    });
+}
+
 class VideoSource final : public FrameSource {
   public:
     explicit VideoSource(std::string source) : name_(std::move(source)) {
         static std::once_flag once;
         std::call_once(once, [] {
             av_log_set_level(AV_LOG_QUIET);  // its errors come back as codes, which the messages name
-            avdevice_register_all();
         });
         const bool device = isDevice(name_);
+        if (device) registerDevices();
         const AVInputFormat* format = device ? av_find_input_format("video4linux2") : nullptr;
-        if (device && !format) fail("this FFmpeg has no V4L2 input (libavdevice)");
+        if (device && !format) fail("this FFmpeg has no V4L2 input (" + devicesLibrary() + ")");
         if (!device) {
             std::error_code ec;
             if (!fs::exists(name_, ec)) fail("file not found");

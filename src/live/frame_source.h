@@ -1,7 +1,7 @@
 // Camera frames from a video file, a capture device or numbered images: the scene camera and the light
 // camera of a live or recorded session (the paper's Fig. 2 inputs). Video files and V4L2 devices
-// (/dev/video0) are read through FFmpeg's libavformat and libavdevice, with one code path; numbered images
-// through readImage().
+// (/dev/video0) are read through FFmpeg's libavformat and libavdevice (loaded at the first device), with one
+// code path; numbered images through readImage().
 #pragma once
 
 #include <chrono>
