@@ -56,8 +56,8 @@ class MemoryOStream : public Imf::OStream {
     uint64_t position_ = 0;
 };
 
-// The order channels are given in, as OpenImageIO gave them before: by layer (the name up to the last dot),
-// then R, G, B, A, then the others by name (OpenEXR lists them by name only: B before G before R).
+// The order channels are given in: by layer (the name up to the last dot), then R, G, B, A, then the others
+// by name. OpenEXR lists them by name only (B before G before R); readers take an image's first three as RGB.
 std::tuple<std::string, int, std::string> channelOrder(const std::string& name) {
     const size_t dot = name.rfind('.');
     std::string layer = dot == std::string::npos ? std::string() : name.substr(0, dot);
