@@ -200,6 +200,30 @@ TEST_F(ImageIoTest, MissingAndUnwritableFilesAreErrors) {
     EXPECT_FALSE(fs::exists(dir_ / "no-such-folder"));
 }
 
+// Only PNG, JPEG, OpenEXR and Radiance HDR are read: another format is one error naming the file and those.
+TEST_F(ImageIoTest, OtherFormatsAreErrorsNamingTheFormatsRead) {
+    std::ofstream(dir_ / "photo.tif", std::ios::binary) << "II*";
+    const std::string message = inputErrorOf([&] { readImage(dir_ / "photo.tif"); });
+    expectContains(message, {"photo.tif", "unsupported image format '.tif'", "PNG, JPEG, OpenEXR"});
+    EXPECT_EQ(imageFileSize(dir_ / "photo.tif"), std::nullopt);
+}
+
+// A palette PNG is read as its colours, sRGB-decoded; alpha from tRNS is dropped.
+TEST_F(ImageIoTest, PalettePngIsReadAsItsColours) {
+    const uint8_t palette[] = {255, 0, 0, 0, 51, 255};
+    const uint8_t alphas[] = {128};
+    const uint8_t indices[] = {0, 1, 1, 0};
+    test::writePngPalette(dir_ / "palette.png", indices, 2, 2, palette, alphas);
+    const Image image = readImage(dir_ / "palette.png");
+    ASSERT_EQ(image.width(), 2);
+    ASSERT_EQ(image.height(), 2);
+    ASSERT_EQ(image.channels(), 3);
+    EXPECT_EQ(image.rgb(0, 0), glm::vec3(1.0f, 0.0f, 0.0f));
+    EXPECT_EQ(image.rgb(1, 0), glm::vec3(0.0f, srgbToLinearValue(51 / 255.0f), 1.0f));
+    EXPECT_EQ(image.rgb(0, 1), image.rgb(1, 0));
+    EXPECT_EQ(image.rgb(1, 1), image.rgb(0, 0));
+}
+
 TEST(ImageTest, RgbOfGreyAndColourImages) {
     Image grey(2, 1, 1, 0.25f);
     EXPECT_EQ(grey.rgb(1, 0), glm::vec3(0.25f));

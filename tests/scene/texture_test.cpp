@@ -454,6 +454,18 @@ TEST_F(TextureFileTest, EightBitFilesAreKeptAsEightBits) {
     EXPECT_FALSE(Texture::load(deep, TextureEncoding::Srgb, "")->eightBit());
 }
 
+// A palette PNG with transparency (tRNS) is an 8-bit RGBA texture: the entries' colours and alphas.
+TEST_F(TextureFileTest, PalettePngWithTransparencyKeepsItsAlpha) {
+    const uint8_t palette[] = {255, 0, 0, 0, 0, 255};
+    const uint8_t alphas[] = {51};
+    const uint8_t indices[] = {0, 1};
+    test::writePngPalette(dir_ / "palette.png", indices, 2, 1, palette, alphas);
+    const auto texture = Texture::load(dir_ / "palette.png", TextureEncoding::Linear, "");
+    EXPECT_TRUE(texture->eightBit());
+    expectEqual(texture->texel(0, 0, 0), glm::vec4(1.0f, 0.0f, 0.0f, 51 / 255.0f));
+    expectEqual(texture->texel(0, 1, 0), glm::vec4(0.0f, 0.0f, 1.0f, 1.0f));
+}
+
 TEST(TextureErrors, EightBitConstructorRejectsBadSizes) {
     expectContains(
         inputErrorOf([] { Texture(2, 2, std::vector<uint8_t>(15), TextureEncoding::Srgb, "a.png"); }),
