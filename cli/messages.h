@@ -11,14 +11,12 @@
 #include <fmt/core.h>
 
 #include "deltagi/scene.h"
-#include "io/quiet_stderr.h"
 
 namespace deltagi::cli {
 
 // Progress and errors go to stderr; stdout holds only what `info` was asked for.
 template <typename... Args>
 void note(fmt::format_string<Args...> format, Args&&... args) {
-    const std::lock_guard lock(stderrMutex());  // not while another thread has stderr swapped
     fmt::print(stderr, format, std::forward<Args>(args)...);
     std::fflush(stderr);
 }

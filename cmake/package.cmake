@@ -1,6 +1,7 @@
 # The installed package (issue 14): `cmake --install build [--prefix P]` puts in place
-#   P/lib/libdeltagi.so.0.1          the library (the pipeline, with Embree, TBB, Assimp, OpenImageIO, fmt, FFmpeg and AprilTag
-#                                    as its own private dependencies: a consumer does not find or link them)
+#   P/lib/libdeltagi.so.0.1          the library (the pipeline, with Embree, TBB, Assimp, OpenEXR, libpng,
+#                                    TurboJPEG, fmt, FFmpeg and AprilTag as its own private dependencies: a
+#                                    consumer does not find or link them)
 #   P/include/deltagi/*.h            the public API, which includes only the C++ library, GLM and nlohmann-json
 #   P/lib/cmake/deltagi/             deltagiConfig.cmake: find_package(deltagi CONFIG) -> deltagi::deltagi
 #   P/bin/deltagi                    the command line

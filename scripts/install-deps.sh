@@ -15,7 +15,7 @@ fi
 # The library and the command line (the web server of `deltagi serve` and the MP4 output included).
 packages=(
   cmake ninja-build g++ pkg-config ccache
-  libembree-dev libtbb-dev libassimp-dev libopenimageio-dev
+  libembree-dev libtbb-dev libassimp-dev libopenexr-dev libpng-dev libturbojpeg0-dev libstb-dev
   nlohmann-json3-dev libcli11-dev libfmt-dev libglm-dev libxxhash-dev
   libavcodec-dev libavformat-dev libavutil-dev libswscale-dev libavdevice-dev libapriltag-dev
   libboost-dev

@@ -53,13 +53,14 @@ class Texture {
     // constructor above for a bad size or a byte count that does not match.
     Texture(int width, int height, std::vector<uint8_t> rgba8, TextureEncoding encoding, std::string name);
 
-    // Reads an image file (PNG, JPEG, EXR, HDR, TGA, BMP, ... whatever OpenImageIO reads). Grey files repeat
-    // their channel to RGB, files without alpha get alpha 1. Throws InputError(where, ...) naming the file
-    // when it is missing, unreadable, of zero size or of a format nobody reads.
+    // Reads an image file: PNG (8 or 16 bit), JPEG, OpenEXR or Radiance HDR, by its extension. Grey files
+    // repeat their channel to RGB, files without alpha get alpha 1. Throws InputError(where, ...) naming the
+    // file when it is missing, unreadable, of zero size or of another format.
     static std::shared_ptr<const Texture> load(const std::filesystem::path& file, TextureEncoding encoding,
                                                const std::string& where);
     // The same for an image held in memory (a texture embedded in a GLB file): `formatHint` is the file
-    // extension or MIME type the container gives ("png", "image/jpeg"), may be empty.
+    // extension or MIME type the container gives ("png", "image/jpeg"), may be empty; the bytes' signature
+    // wins over it.
     static std::shared_ptr<const Texture> decode(std::span<const std::byte> encoded,
                                                  std::string_view formatHint, TextureEncoding encoding,
                                                  const std::string& where);

@@ -1,5 +1,5 @@
-// Image pixels and image files (OpenImageIO). Files hold sRGB-encoded 8/16-bit or linear float pixels; in
-// memory every image is linear float.
+// Image pixels and image files (PNG, JPEG, OpenEXR, Radiance HDR: io/image_codecs.h). Files hold sRGB-encoded
+// 8/16-bit or linear float pixels; in memory every image is linear float.
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -10,18 +10,15 @@
 
 #include <unistd.h>
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include "deltagi/error.h"
 #include "deltagi/image.h"
 #include "io/atomic_file.h"
 #include "io/file_names.h"
+#include "io/image_codecs.h"
 #include "io/image_encode.h"
-#include "io/image_input.h"
 #include "io/image_output.h"
-#include "io/quiet_stderr.h"
 
 namespace deltagi {
 
@@ -60,11 +57,6 @@ const std::array<float, 256>& srgb8ToLinearTable() {
     return table;
 }
 
-bool isFloatFormat(OIIO::TypeDesc format) {
-    return format.basetype == OIIO::TypeDesc::FLOAT || format.basetype == OIIO::TypeDesc::HALF ||
-           format.basetype == OIIO::TypeDesc::DOUBLE;
-}
-
 // Copies `channels` interleaved channels to 3, expanding grey (1 or 2 channels: grey + alpha) and dropping
 // alpha and any further channels.
 Image toRgb(std::span<const float> pixels, int width, int height, int channels) {
@@ -77,28 +69,30 @@ Image toRgb(std::span<const float> pixels, int width, int height, int channels) 
     return image;
 }
 
+// The decoder of `path`, its header read; InputError naming the file when it cannot be opened.
+std::unique_ptr<ImageDecoder> openImage(const std::filesystem::path& path) {
+    try {
+        return openImageFile(path.string());
+    } catch (const ImageCodecError& e) {
+        throw InputError(path.string(), std::string("cannot read image: ") + e.what());
+    }
+}
+
 }  // namespace
 
 std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& path) {
-    QuietStderr quiet;
-    std::string error;
-    auto input = openImageInput(path.string(), nullptr, error);
-    if (!input) return std::nullopt;
-    const OIIO::ImageSpec& spec = input->spec();  // the display window, as readImage() gives it
-    return std::pair{spec.full_width > 0 ? spec.full_width : spec.width,
-                     spec.full_height > 0 ? spec.full_height : spec.height};
+    try {
+        const ImageHeader header = openImageFile(path.string())->header();  // the display window, as read
+        return std::pair{header.fullWidth, header.fullHeight};
+    } catch (const ImageCodecError&) {
+        return std::nullopt;
+    }
 }
 
 ImageFile readImageFile(const std::filesystem::path& path) {
-    QuietStderr quiet;
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha",
-                     1);  // keep colours as stored: alpha is dropped, not multiplied
-    std::string error;
-    auto input = openImageInput(path.string(), &config, error);
-    if (!input) throw InputError(path.string(), "cannot read image: " + error);
-    const OIIO::ImageSpec& spec = input->spec();
-    int width = spec.width, height = spec.height, channels = spec.nchannels;
+    std::unique_ptr<ImageDecoder> input = openImage(path);
+    const ImageHeader& spec = input->header();
+    int width = spec.width, height = spec.height, channels = spec.channels;
     if (width <= 0 || height <= 0 || channels <= 0)
         throw InputError(path.string(), fmt::format("cannot read image: it is {}x{} with {} channels", width,
                                                     height, channels));
@@ -115,27 +109,28 @@ ImageFile readImageFile(const std::filesystem::path& path) {
     size_t count = static_cast<size_t>(width) * height * channels;
     std::vector<float> pixels(count);
     // Integer pixels are sRGB-encoded (PNG, JPEG); float pixels are linear (EXR, HDR).
-    if (spec.format == OIIO::TypeDesc::UINT8) {
-        std::vector<uint8_t> bytes(count);
-        if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, bytes.data()))
-            throw InputError(path.string(), "cannot read image: " + input->geterror());
-        const auto& table = srgb8ToLinearTable();
-        for (size_t i = 0; i < count; ++i) pixels[i] = table[bytes[i]];
-    } else {
-        if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
-            throw InputError(path.string(), "cannot read image: " + input->geterror());
-        if (!isFloatFormat(spec.format))
-            for (float& v : pixels) v = srgbToLinear(v);
+    try {
+        if (spec.bits == 8) {
+            std::vector<uint8_t> bytes(count);
+            input->readUInt8(bytes);
+            const auto& table = srgb8ToLinearTable();
+            for (size_t i = 0; i < count; ++i) pixels[i] = table[bytes[i]];
+        } else {
+            input->readFloat(pixels);
+            if (!spec.isFloat())
+                for (float& v : pixels) v = srgbToLinear(v);
+        }
+    } catch (const ImageCodecError& e) {
+        throw InputError(path.string(), std::string("cannot read image: ") + e.what());
     }
-    input->close();
+    input.reset();
     Image rgb = toRgb(pixels, width, height, channels);
     // The display window is the image (an EXR's data window may be offset within it, or smaller: pixels
     // outside it are 0); the common case, both the same, is returned as read.
-    const int fullWidth = spec.full_width > 0 ? spec.full_width : width;
-    const int fullHeight = spec.full_height > 0 ? spec.full_height : height;
-    const int dx = spec.x - spec.full_x, dy = spec.y - spec.full_y;
-    if (dx == 0 && dy == 0 && fullWidth == width && fullHeight == height)
-        return {std::move(rgb), isFloatFormat(spec.format)};
+    const int fullWidth = spec.fullWidth, fullHeight = spec.fullHeight;
+    const int dx = spec.dataX, dy = spec.dataY;
+    const bool isFloat = spec.isFloat();
+    if (dx == 0 && dy == 0 && fullWidth == width && fullHeight == height) return {std::move(rgb), isFloat};
     const double fullBytes = static_cast<double>(fullWidth) * fullHeight * 12.0;
     if (fullWidth <= 0 || fullHeight <= 0 || (memory > 0.0 && fullBytes > memory / 2.0))
         throw InputError(path.string(), fmt::format("cannot read image: its display window is {}x{}",
@@ -144,7 +139,7 @@ ImageFile readImageFile(const std::filesystem::path& path) {
     for (int y = std::max(0, -dy); y < height && y + dy < fullHeight; ++y)
         for (int x = std::max(0, -dx); x < width && x + dx < fullWidth; ++x)
             for (int c = 0; c < 3; ++c) full.at(x + dx, y + dy, c) = rgb.at(x, y, c);
-    return {std::move(full), isFloatFormat(spec.format)};
+    return {std::move(full), isFloat};
 }
 
 Image readImage(const std::filesystem::path& path) {
@@ -166,10 +161,13 @@ float finiteOrZero(float v) {
     return std::isfinite(v) ? v : 0.0f;
 }
 
-// OpenImageIO's OpenEXR writer stamps the file with the time of writing (its "capDate") unless the spec
-// carries a date: an empty one keeps the files of identical pixels identical, byte for byte.
-void withoutDate(OIIO::ImageSpec& spec) {
-    spec.attribute("DateTime", "");
+// OpenEXR's names for an image's channels: Y (grey), or R, G, B, A, then "channel4" on.
+std::vector<std::string> exrChannelNames(int channels) {
+    if (channels == 1) return {"Y"};
+    static const char* const kNames[] = {"R", "G", "B", "A"};
+    std::vector<std::string> names;
+    for (int c = 0; c < channels; ++c) names.emplace_back(c < 4 ? kNames[c] : fmt::format("channel{}", c));
+    return names;
 }
 
 }  // namespace
@@ -219,19 +217,11 @@ void checkOutputFolder(const std::filesystem::path& path) {
 }  // namespace
 
 std::string encodePngBytes(const Image& image, const std::string& where) {
-    OIIO::ImageSpec spec(image.width(), image.height(), image.channels(), OIIO::TypeDesc::UINT8);
-    if (image.channels() == 1) spec.channelnames = {"Y"};
-    if (image.channels() == 4) spec.alpha_channel = 3;
-    const std::vector<uint8_t> pixels = encodeSrgb8(image);
-    std::vector<unsigned char> bytes;
-    OIIO::Filesystem::IOVecOutput proxy(bytes);
-    auto output = OIIO::ImageOutput::create("png");
-    if (!output) throw InputError(where, "cannot write image: no PNG encoder: " + OIIO::geterror());
-    output->set_ioproxy(&proxy);
-    const bool ok = output->open("image.png", spec) &&
-                    output->write_image(OIIO::TypeDesc::UINT8, pixels.data()) && output->close();
-    if (!ok) throw InputError(where, "cannot write image: " + output->geterror());
-    return std::string(bytes.begin(), bytes.end());
+    try {
+        return encodePng8(encodeSrgb8(image), image.width(), image.height(), image.channels());
+    } catch (const ImageCodecError& e) {
+        throw InputError(where, std::string("cannot write image: ") + e.what());
+    }
 }
 
 void writeImage(const Image& image, const std::filesystem::path& path) {
@@ -254,32 +244,22 @@ void writeImage(const Image& image, AtomicFile& file) {
         rgbForHdr = toRgb(image.data(), image.width(), image.height(), image.channels());
         source = &rgbForHdr;
     }
-    // A PNG is encoded in memory and written by AtomicFile, which checks every write: OpenImageIO's PNG
-    // writer does not see a full disk, and would leave an empty file.
+    // Encoded in memory and written by AtomicFile, which checks every write (a full disk is an error, not
+    // an empty file).
     if (ext == ".png") {
         file.write(encodePngBytes(*source, path.string()));
         file.close();
         return;
     }
-    int channels = source->channels();
-    OIIO::ImageSpec spec(source->width(), source->height(), channels, OIIO::TypeDesc::FLOAT);
-    if (channels == 1) spec.channelnames = {"Y"};
-    if (channels == 4) spec.alpha_channel = 3;
-    withoutDate(spec);
-
-    // OpenImageIO writes by name, to the temporary that keeps the extension (it picks the format by it).
-    const std::string temporary = file.temporaryPath().string();
-    auto output = OIIO::ImageOutput::create(temporary);
-    if (!output || !output->open(temporary, spec))
-        throw InputError(path.string(),
-                         "cannot write image: " + (output ? output->geterror() : OIIO::geterror()));
     std::vector<float> pixels(source->data().begin(), source->data().end());
     for (float& v : pixels) v = finiteOrZero(v);
-    if (ext == ".hdr")
-        for (float& v : pixels) v = std::max(v, 0.0f);  // RGBE has no sign
-    bool ok = output->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
-    ok = output->close() && ok;
-    if (!ok) throw InputError(path.string(), "cannot write image: " + output->geterror());
+    try {
+        file.write(ext == ".hdr" ? encodeHdr(pixels, source->width(), source->height())
+                                 : encodeExr(pixels, source->width(), source->height(),
+                                             exrChannelNames(source->channels())));
+    } catch (const ImageCodecError& e) {
+        throw InputError(path.string(), std::string("cannot write image: ") + e.what());
+    }
     file.close();
 }
 
@@ -310,10 +290,6 @@ void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file) {
         for (const std::string& channel : layer.channels) names.push_back(layer.name + "." + channel);
     }
     const int channels = static_cast<int>(names.size());
-    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::FLOAT);
-    spec.channelnames = names;
-    spec.attribute("compression", "zip");
-    withoutDate(spec);
     // Interleaved, layer after layer within each pixel.
     std::vector<float> pixels(static_cast<size_t>(width) * height * channels);
     for (size_t p = 0, c0 = 0; p < static_cast<size_t>(width) * height; ++p) {
@@ -326,36 +302,33 @@ void writeLayers(std::span<const ImageLayer> layers, AtomicFile& file) {
             }
         }
     }
-    const std::string temporary = file.temporaryPath().string();
-    auto output = OIIO::ImageOutput::create(temporary);
-    if (!output || !output->open(temporary, spec))
-        throw InputError(path.string(),
-                         "cannot write layers: " + (output ? output->geterror() : OIIO::geterror()));
-    bool ok = output->write_image(OIIO::TypeDesc::FLOAT, pixels.data());
-    ok = output->close() && ok;
-    if (!ok) throw InputError(path.string(), "cannot write layers: " + output->geterror());
+    try {
+        file.write(encodeExr(pixels, width, height, names));
+    } catch (const ImageCodecError& e) {
+        throw InputError(path.string(), std::string("cannot write layers: ") + e.what());
+    }
     file.close();
 }
 
 std::vector<NamedImage> readLayers(const std::filesystem::path& path) {
-    QuietStderr quiet;
-    std::string error;
-    auto input = openImageInput(path.string(), nullptr, error);
-    if (!input) throw InputError(path.string(), "cannot read image: " + error);
-    const OIIO::ImageSpec spec = input->spec();
-    const int width = spec.width, height = spec.height, channels = spec.nchannels;
+    std::unique_ptr<ImageDecoder> input = openImage(path);
+    const ImageHeader spec = input->header();
+    const int width = spec.width, height = spec.height, channels = spec.channels;
     if (width <= 0 || height <= 0 || channels <= 0)
         throw InputError(path.string(), "cannot read image: it has no pixels");
     std::vector<float> pixels(static_cast<size_t>(width) * height * channels);
-    if (!input->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, pixels.data()))
-        throw InputError(path.string(), "cannot read image: " + input->geterror());
-    input->close();
+    try {
+        input->readFloat(pixels);
+    } catch (const ImageCodecError& e) {
+        throw InputError(path.string(), std::string("cannot read image: ") + e.what());
+    }
+    input.reset();
     // Channel c's layer and name.
     std::vector<NamedImage> layers;
     std::vector<std::pair<size_t, int>> where(channels);  // (layer, channel within it)
     for (int c = 0; c < channels; ++c) {
         const std::string full =
-            c < static_cast<int>(spec.channelnames.size()) ? spec.channelnames[c] : fmt::format("{}", c);
+            c < static_cast<int>(spec.channelNames.size()) ? spec.channelNames[c] : fmt::format("{}", c);
         const size_t dot = full.rfind('.');
         const std::string layer = dot == std::string::npos ? full : full.substr(0, dot);
         const std::string channel = dot == std::string::npos ? full : full.substr(dot + 1);

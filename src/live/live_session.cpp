@@ -8,8 +8,6 @@
 #include <limits>
 #include <utility>
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -17,8 +15,8 @@
 #include "deltagi/error.h"
 #include "deltagi/scene_io.h"
 #include "deltagi/transforms.h"
+#include "io/image_codecs.h"
 #include "io/image_encode.h"
-#include "io/quiet_stderr.h"
 #include "scene/json_reader.h"
 #include "scene/option_table.h"
 
@@ -592,76 +590,47 @@ std::vector<uint8_t> viewPixels(const RenderOutput& output, View view) {
     return rgb;
 }
 
-namespace {
-
-std::string encode(const char* format, const OIIO::ImageSpec& spec, const void* pixels) {
-    std::vector<unsigned char> bytes;
-    OIIO::Filesystem::IOVecOutput proxy(bytes);
-    auto output = OIIO::ImageOutput::create(format);
-    if (!output) throw InputError("live session", fmt::format("no {} encoder: {}", format, OIIO::geterror()));
-    output->set_ioproxy(&proxy);
-    const bool ok = output->open(fmt::format("frame.{}", format), spec) &&
-                    output->write_image(OIIO::TypeDesc::UINT8, pixels) && output->close();
-    if (!ok)
-        throw InputError("live session", fmt::format("cannot encode {}: {}", format, output->geterror()));
-    return std::string(bytes.begin(), bytes.end());
-}
-
-}  // namespace
-
 std::string encodeJpeg(const std::vector<uint8_t>& rgb, int width, int height, int quality) {
-    if (rgb.size() != static_cast<size_t>(width) * height * 3)
+    if (width <= 0 || height <= 0 || rgb.size() != static_cast<size_t>(width) * height * 3)
         throw InputError("live session", "bad frame size");
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("Compression", fmt::format("jpeg:{}", std::clamp(quality, 1, 100)));
-    return encode("jpg", spec, rgb.data());
+    try {
+        return encodeJpeg8(rgb, width, height, quality);
+    } catch (const ImageCodecError& e) {
+        throw InputError("live session", e.what());
+    }
 }
-
-namespace {
-
-// The first line of a decoder's message (libjpeg's may run to several).
-std::string firstLine(std::string text) {
-    text = text.substr(0, text.find('\n'));
-    while (!text.empty() && (text.back() == '\r' || text.back() == ' ')) text.pop_back();
-    return text;
-}
-
-}  // namespace
 
 Image decodeCameraFrame(std::string_view jpeg, int width, int height) {
     const std::string where = "camera frame";
     if (jpeg.size() < 3 || static_cast<unsigned char>(jpeg[0]) != 0xFF ||
         static_cast<unsigned char>(jpeg[1]) != 0xD8 || static_cast<unsigned char>(jpeg[2]) != 0xFF)
         throw InputError(where, fmt::format("{} bytes that are not a JPEG image", jpeg.size()));
-    QuietStderr quiet;
-    OIIO::Filesystem::IOMemReader memory(const_cast<char*>(jpeg.data()), jpeg.size());
-    OIIO::Filesystem::IOProxy* proxy = &memory;
-    OIIO::ImageSpec config;
-    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-    auto input = OIIO::ImageInput::create("jpg", false, &config, proxy);
-    OIIO::ImageSpec spec;
-    if (!input || !input->open("frame.jpg", spec, config)) {
-        const std::string reason = firstLine(input ? input->geterror() : OIIO::geterror());
-        throw InputError(where,
-                         fmt::format("cannot decode the JPEG image{}", reason.empty() ? "" : ": " + reason));
+    std::unique_ptr<ImageDecoder> input;
+    try {
+        input = openImageBytes(std::as_bytes(std::span(jpeg.data(), jpeg.size())), ImageFormat::Jpeg);
+    } catch (const ImageCodecError& e) {
+        throw InputError(where, fmt::format("cannot decode the JPEG image: {}", e.what()));
     }
+    const ImageHeader& spec = input->header();
     // The header's size is checked before any pixel is decoded.
     if (spec.width != width || spec.height != height)
         throw InputError(where, fmt::format("{}x{}, the scene camera is {}x{}: send frames of its size",
                                             spec.width, spec.height, width, height));
-    if (spec.nchannels != 1 && spec.nchannels != 3)
-        throw InputError(where, fmt::format("{} channels: expected RGB or grey", spec.nchannels));
-    std::vector<uint8_t> pixels(static_cast<size_t>(width) * height * spec.nchannels);
-    if (!input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::UINT8, pixels.data()))
-        throw InputError(where,
-                         fmt::format("cannot decode the JPEG image: {}", firstLine(input->geterror())));
+    if (spec.channels != 1 && spec.channels != 3)
+        throw InputError(where, fmt::format("{} channels: expected RGB or grey", spec.channels));
+    std::vector<uint8_t> pixels(static_cast<size_t>(width) * height * spec.channels);
+    try {
+        input->readUInt8(pixels);
+    } catch (const ImageCodecError& e) {
+        throw InputError(where, fmt::format("cannot decode the JPEG image: {}", e.what()));
+    }
     const std::array<float, 256>& linear = srgb8ToLinearValues();
     Image image(width, height, 3);
     std::span<float> out = image.data();
     const size_t count = static_cast<size_t>(width) * height;
     for (size_t i = 0; i < count; ++i)
         for (int c = 0; c < 3; ++c)
-            out[i * 3 + c] = linear[pixels[i * spec.nchannels + (spec.nchannels == 3 ? c : 0)]];
+            out[i * 3 + c] = linear[pixels[i * spec.channels + (spec.channels == 3 ? c : 0)]];
     return image;
 }
 

@@ -1,5 +1,5 @@
-// Textures of materials: validation, the mip chain, decoding files and embedded images (OpenImageIO), and
-// the filtered lookup with glTF 2.0's sampler state (wrap modes, filters).
+// Textures of materials: validation, the mip chain, decoding files and embedded images (io/image_codecs.h),
+// and the filtered lookup with glTF 2.0's sampler state (wrap modes, filters).
 #include "deltagi/texture.h"
 
 #include <algorithm>
@@ -15,14 +15,11 @@
 #include <emmintrin.h>
 #endif
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
 #include "deltagi/error.h"
+#include "io/image_codecs.h"
 #include "io/image_encode.h"
-#include "io/image_input.h"
-#include "io/quiet_stderr.h"
 
 namespace deltagi {
 
@@ -216,62 +213,47 @@ bool startsWith(std::span<const std::byte> bytes, std::string_view magic, size_t
     return true;
 }
 
-// The format of an image in memory by its signature (magic bytes), as an extension OpenImageIO knows; empty
-// when unknown (TGA has none).
-std::string sniffFormat(std::span<const std::byte> bytes) {
+// The format of an image in memory by its signature (magic bytes); nothing when unknown.
+std::optional<ImageFormat> sniffFormat(std::span<const std::byte> bytes) {
     using namespace std::string_view_literals;
-    if (startsWith(bytes, "\x89PNG\r\n\x1a\n"sv)) return "png";
-    if (startsWith(bytes, "\xff\xd8\xff"sv)) return "jpg";
-    if (startsWith(bytes, "GIF87a"sv) || startsWith(bytes, "GIF89a"sv)) return "gif";
-    if (startsWith(bytes, "RIFF"sv) && startsWith(bytes, "WEBP"sv, 8)) return "webp";
-    if (startsWith(bytes, "\x76\x2f\x31\x01"sv)) return "exr";
-    if (startsWith(bytes, "#?RADIANCE"sv) || startsWith(bytes, "#?RGBE"sv)) return "hdr";
-    if (startsWith(bytes, "II*\0"sv) || startsWith(bytes, "MM\0*"sv)) return "tif";
-    if (startsWith(bytes, "BM"sv) && bytes.size() > 26) return "bmp";
-    return {};
+    if (startsWith(bytes, "\x89PNG\r\n\x1a\n"sv)) return ImageFormat::Png;
+    if (startsWith(bytes, "\xff\xd8\xff"sv)) return ImageFormat::Jpeg;
+    if (startsWith(bytes, "\x76\x2f\x31\x01"sv)) return ImageFormat::Exr;
+    if (startsWith(bytes, "#?RADIANCE"sv) || startsWith(bytes, "#?RGBE"sv)) return ImageFormat::Hdr;
+    return std::nullopt;
 }
 
-// The extension OpenImageIO knows for a container's format hint: a file extension (with or without the
-// dot) or a MIME type; empty when it names no format read here.
-std::string formatFromHint(std::string_view hint) {
+// The format a container's hint names: a file extension (with or without the dot) or a MIME type; nothing
+// when it names no format read here.
+std::optional<ImageFormat> formatFromHint(std::string_view hint) {
     std::string h = lowercase(hint);
     if (!h.empty() && h.front() == '.') h.erase(0, 1);
-    static constexpr std::pair<std::string_view, std::string_view> kMimeTypes[] = {
-        {"image/png", "png"},   {"image/jpeg", "jpg"},    {"image/jpg", "jpg"},
-        {"image/webp", "webp"}, {"image/gif", "gif"},     {"image/bmp", "bmp"},
-        {"image/tiff", "tif"},  {"image/x-exr", "exr"},   {"image/vnd.radiance", "hdr"},
-        {"image/x-tga", "tga"}, {"image/x-targa", "tga"},
+    static constexpr std::pair<std::string_view, ImageFormat> kMimeTypes[] = {
+        {"image/png", ImageFormat::Png},          {"image/jpeg", ImageFormat::Jpeg},
+        {"image/jpg", ImageFormat::Jpeg},         {"image/x-exr", ImageFormat::Exr},
+        {"image/vnd.radiance", ImageFormat::Hdr},
     };
-    for (auto [mime, ext] : kMimeTypes)
-        if (h == mime) return std::string(ext);
-    static constexpr std::string_view kExtensions[] = {"png", "jpg", "jpeg", "jpe", "webp", "gif",
-                                                       "bmp", "tif", "tiff", "exr", "hdr",  "tga"};
-    for (std::string_view ext : kExtensions)
-        if (h == ext) return h;
-    return {};
-}
-
-bool isFloatFormat(OIIO::TypeDesc format) {
-    return format.basetype == OIIO::TypeDesc::FLOAT || format.basetype == OIIO::TypeDesc::HALF ||
-           format.basetype == OIIO::TypeDesc::DOUBLE;
+    for (auto [mime, format] : kMimeTypes)
+        if (h == mime) return format;
+    return imageFormatOfExtension("." + h);
 }
 
 // Reads the first image of an opened file as linear RGBA texels: 8/16-bit colour channels sRGB-decoded for
 // TextureEncoding::Srgb, alpha always linear; float files as they are. Grey repeats to RGB (grey + alpha
 // keeps its alpha), missing alpha is 1, channels past the fourth are ignored. Throws InputError(where, ...),
 // the message starting with `what`.
-std::shared_ptr<const Texture> readTexels(OIIO::ImageInput& input, TextureEncoding encoding,
+std::shared_ptr<const Texture> readTexels(ImageDecoder& input, TextureEncoding encoding,
                                           const std::string& where, const std::string& what,
                                           const std::string& name) {
-    const OIIO::ImageSpec& spec = input.spec();
+    const ImageHeader& spec = input.header();
     int width = spec.width, height = spec.height;
     if (std::string problem = sizeProblem(width, height); !problem.empty())
         throw InputError(where, what + problem);
-    if (spec.depth > 1) throw InputError(where, what + "a volume image, not a 2D texture");
-    if (spec.nchannels <= 0) throw InputError(where, what + "the image has no channels");
-    int channels = std::min(spec.nchannels, 4);
+    if (spec.channels <= 0) throw InputError(where, what + "the image has no channels");
+    const int fileChannels = spec.channels;
+    int channels = std::min(fileChannels, 4);
     int alpha = channels == 2 ? 1 : channels == 4 ? 3 : -1;
-    bool floatFile = isFloatFormat(spec.format);
+    bool floatFile = spec.isFloat();
     bool srgb = encoding == TextureEncoding::Srgb && !floatFile;
     size_t texelCount = static_cast<size_t>(width) * height;
     auto make = [&](auto&&... texels) {
@@ -282,13 +264,12 @@ std::shared_ptr<const Texture> readTexels(OIIO::ImageInput& input, TextureEncodi
         }
     };
     try {
-        if (spec.format == OIIO::TypeDesc::UINT8) {  // kept as 8 bits (RGBA)
-            std::vector<uint8_t> bytes(texelCount * channels);
-            if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::UINT8, bytes.data()))
-                throw InputError(where, what + "cannot read the pixels: " + input.geterror());
+        if (spec.bits == 8) {  // kept as 8 bits (RGBA)
+            std::vector<uint8_t> bytes(texelCount * fileChannels);
+            input.readUInt8(bytes);
             std::vector<uint8_t> rgba(texelCount * 4);
             for (size_t p = 0; p < texelCount; ++p) {
-                const uint8_t* v = &bytes[p * channels];
+                const uint8_t* v = &bytes[p * fileChannels];
                 uint8_t* out = &rgba[p * 4];
                 out[0] = v[0];
                 out[1] = channels >= 3 ? v[1] : v[0];
@@ -298,21 +279,21 @@ std::shared_ptr<const Texture> readTexels(OIIO::ImageInput& input, TextureEncodi
             bytes = {};
             return make(std::move(rgba), srgb ? TextureEncoding::Srgb : TextureEncoding::Linear);
         }
-        std::vector<float> values(texelCount * channels);
-        // OpenImageIO scales integer pixels to [0, 1] when it converts them to float.
-        if (!input.read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, values.data()))
-            throw InputError(where, what + "cannot read the pixels: " + input.geterror());
+        std::vector<float> values(texelCount * fileChannels);
+        input.readFloat(values);  // 16-bit samples scaled to [0, 1]
         if (srgb)
             for (size_t i = 0; i < values.size(); ++i)
-                if (static_cast<int>(i % channels) != alpha) values[i] = srgbToLinearValue(values[i]);
+                if (static_cast<int>(i % fileChannels) != alpha) values[i] = srgbToLinearValue(values[i]);
         std::vector<glm::vec4> texels(texelCount);
         for (size_t p = 0; p < texelCount; ++p) {
-            const float* v = &values[p * channels];
+            const float* v = &values[p * fileChannels];
             glm::vec3 rgb = channels >= 3 ? glm::vec3(v[0], v[1], v[2]) : glm::vec3(v[0]);
             texels[p] = glm::vec4(rgb, alpha >= 0 ? v[alpha] : 1.0f);
         }
         values = {};
         return make(std::move(texels));
+    } catch (const ImageCodecError& e) {
+        throw InputError(where, what + "cannot read the pixels: " + e.what());
     } catch (const std::bad_alloc&) {
         throw InputError(
             where, what + fmt::format("a texture of {}x{} texels does not fit in memory", width, height));
@@ -403,12 +384,12 @@ std::shared_ptr<const Texture> Texture::load(const std::filesystem::path& file, 
         throw InputError(location, what + "not a regular file");
     if (std::filesystem::file_size(file, error) == 0 || error)
         throw InputError(location, what + "the file is empty");
-    QuietStderr quiet;
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);  // colours as stored, not multiplied by alpha
-    std::string message;
-    auto input = openImageInput(path, &config, message);
-    if (!input) throw InputError(location, what + "cannot read image: " + message);
+    std::unique_ptr<ImageDecoder> input;
+    try {
+        input = openImageFile(path);
+    } catch (const ImageCodecError& e) {
+        throw InputError(location, what + "cannot read image: " + e.what());
+    }
     return readTexels(*input, encoding, location, what, path);
 }
 
@@ -419,29 +400,22 @@ std::shared_ptr<const Texture> Texture::decode(std::span<const std::byte> encode
     std::string what = where.empty() ? "" : "embedded texture: ";
     if (encoded.empty()) throw InputError(location, what + "no image data (0 bytes)");
     // The bytes' signature wins over the hint: containers mislabel images (a JPEG declared image/png).
-    std::string format = sniffFormat(encoded);
-    if (format.empty()) format = formatFromHint(formatHint);
-    if (format.empty())
+    std::optional<ImageFormat> format = sniffFormat(encoded);
+    if (!format) format = formatFromHint(formatHint);
+    if (!format)
         throw InputError(
-            location, what + (formatHint.empty() ? std::string("not an image format this program reads")
-                                                 : fmt::format("unsupported image format '{}'", formatHint)));
-    if (std::optional<std::string> chunks = pngChunkError(encoded, encoded.size()))
-        throw InputError(location, what + "cannot decode the png image: " + *chunks);
-    QuietStderr quiet;
-    OIIO::Filesystem::IOMemReader memory(encoded.data(), encoded.size());
-    OIIO::Filesystem::IOProxy* proxy = &memory;
-    OIIO::ImageSpec config;
-    config.attribute("oiio:UnassociatedAlpha", 1);
-    config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
-    auto input = OIIO::ImageInput::create(format, false, &config, proxy);
-    if (!input || !input->supports("ioproxy")) {
-        OIIO::geterror();  // cleared, not to show up in a later message
-        throw InputError(location, what + fmt::format("cannot decode {} images from memory", format));
+            location,
+            what + (formatHint.empty()
+                        ? fmt::format("not an image format this program reads ({})", kReadableImageFormats)
+                        : fmt::format("unsupported image format '{}'; deltagi reads {}", formatHint,
+                                      kReadableImageFormats)));
+    const std::string name = lowercase(imageFormatName(*format));
+    std::unique_ptr<ImageDecoder> input;
+    try {
+        input = openImageBytes(encoded, *format);
+    } catch (const ImageCodecError& e) {
+        throw InputError(location, what + fmt::format("cannot decode the {} image: {}", name, e.what()));
     }
-    OIIO::ImageSpec spec;
-    if (!input->open("embedded." + format, spec, config))
-        throw InputError(location,
-                         what + fmt::format("cannot decode the {} image: {}", format, input->geterror()));
     return readTexels(*input, encoding, location, what, location);
 }
 

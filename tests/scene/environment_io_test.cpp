@@ -15,6 +15,7 @@
 #include "deltagi/error.h"
 #include "deltagi/renderer.h"
 #include "deltagi/scene_io.h"
+#include "io/image_codecs.h"
 #include "test_errors.h"
 
 namespace deltagi {
@@ -105,16 +106,14 @@ TEST_F(EnvironmentIoTest, LdrImagesAndBadPixelsLoadWithAWarning) {
     ASSERT_EQ(ldr.warnings.size(), 1u);
     expectContains(ldr.warnings[0], {"scene.json: environment.file", "sky.png", "low-dynamic-range"});
 
-    // A PFM written by hand: writeImage never writes NaN. Rows of 8 pixels, 4 rows.
+    // An EXR encoded here: writeImage never writes NaN. Rows of 8 pixels, 4 rows.
     std::vector<float> pixels(8 * 4 * 3, 0.25f);
     pixels[0] = NAN;
     pixels[4] = INFINITY;
     pixels[8] = -3.0f;
-    std::ofstream out(dir_ / "bad.pfm", std::ios::binary);
-    out << "PF\n8 4\n-1.0\n";
-    out.write(reinterpret_cast<const char*>(pixels.data()), static_cast<std::streamsize>(pixels.size() * 4));
-    out.close();
-    const Scene bad = load({{"file", "bad.pfm"}});
+    const std::string names[] = {"R", "G", "B"};
+    std::ofstream(dir_ / "bad.exr", std::ios::binary) << encodeExr(pixels, 8, 4, names);
+    const Scene bad = load({{"file", "bad.exr"}});
     ASSERT_EQ(bad.warnings.size(), 1u);
     expectContains(bad.warnings[0], {"environment.file", "3 of 32 pixels", "NaN, infinite or negative"});
     for (float v : bad.environment->radiance.data()) ASSERT_TRUE(std::isfinite(v) && v >= 0.0f);

@@ -10,14 +10,16 @@
 #include <iterator>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
-#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include "deltagi/error.h"
 #include "deltagi/texture.h"
+#include "io/image_codecs.h"
 #include "test_errors.h"
+#include "test_image_files.h"
 
 namespace deltagi {
 namespace {
@@ -48,17 +50,24 @@ void expectEqual(glm::vec4 actual, glm::vec4 expected, const std::string& what =
     for (int c = 0; c < 4; ++c) EXPECT_EQ(actual[c], expected[c]) << what << ", channel " << c;
 }
 
-// Writes `values` (width * height * channels, interleaved) as an image file of the given pixel type.
+// Writes `values` (width * height * channels, interleaved) as an image file: 8-bit samples as a PNG or a
+// JPEG (by the extension), 16-bit ones as a PNG, floats as an OpenEXR file.
 template <typename T>
-void writeImage(const fs::path& path, int width, int height, int channels, OIIO::TypeDesc type,
-                const std::vector<T>& values) {
-    auto output = OIIO::ImageOutput::create(path.string());
-    ASSERT_TRUE(output) << OIIO::geterror();
-    OIIO::ImageSpec spec(width, height, channels, type);
-    spec.attribute("oiio:UnassociatedAlpha", 1);  // the bytes as given, not un-premultiplied
-    ASSERT_TRUE(output->open(path.string(), spec)) << output->geterror();
-    ASSERT_TRUE(output->write_image(type, values.data())) << output->geterror();
-    ASSERT_TRUE(output->close());
+void writeImage(const fs::path& path, int width, int height, int channels, const std::vector<T>& values) {
+    if constexpr (std::is_same_v<T, uint16_t>) {
+        test::writePng16(path, values, width, height, channels);
+        return;
+    }
+    std::string bytes;
+    if constexpr (std::is_same_v<T, uint8_t>)
+        bytes = path.extension() == ".jpg" ? encodeJpeg8(values, width, height, 90)
+                                           : encodePng8(values, width, height, channels);
+    if constexpr (std::is_same_v<T, float>) {
+        std::vector<std::string> names = {"R", "G", "B", "A"};
+        names.resize(channels);
+        bytes = encodeExr(values, width, height, names);
+    }
+    std::ofstream(path, std::ios::binary) << bytes;
 }
 
 std::vector<std::byte> readBytes(const fs::path& path) {
@@ -92,7 +101,7 @@ const std::vector<uint8_t> kRgba8 = {0, 128, 255, 64, 10, 200, 40, 255};
 
 TEST_F(TextureFileTest, SrgbPngIsDecodedAndAlphaStaysLinear) {
     fs::path file = dir_ / "colour.png";
-    writeImage(file, 2, 1, 4, OIIO::TypeDesc::UINT8, kRgba8);
+    writeImage(file, 2, 1, 4, kRgba8);
     auto texture = Texture::load(file, TextureEncoding::Srgb, "");
     ASSERT_EQ(texture->width(), 2);
     ASSERT_EQ(texture->height(), 1);
@@ -109,7 +118,7 @@ TEST_F(TextureFileTest, SrgbPngIsDecodedAndAlphaStaysLinear) {
 
 TEST_F(TextureFileTest, LinearDataTexturesAreNotDecoded) {
     fs::path file = dir_ / "data.png";
-    writeImage(file, 2, 1, 4, OIIO::TypeDesc::UINT8, kRgba8);
+    writeImage(file, 2, 1, 4, kRgba8);
     auto texture = Texture::load(file, TextureEncoding::Linear, "");
     for (int x = 0; x < 2; ++x) {
         const uint8_t* v = &kRgba8[x * 4];
@@ -120,7 +129,7 @@ TEST_F(TextureFileTest, LinearDataTexturesAreNotDecoded) {
 
 TEST_F(TextureFileTest, SixteenBitPngIsDecodedToo) {
     fs::path file = dir_ / "deep.png";
-    writeImage(file, 1, 1, 3, OIIO::TypeDesc::UINT16, std::vector<uint16_t>{0, 32768, 65535});
+    writeImage(file, 1, 1, 3, std::vector<uint16_t>{0, 32768, 65535});
     glm::vec4 srgb = Texture::load(file, TextureEncoding::Srgb, "")->texel(0, 0, 0);
     expectNear(srgb, glm::vec4(0.0f, decodeSrgb(32768.0 / 65535.0), 1.0f, 1.0f), 1e-6f);
     glm::vec4 linear = Texture::load(file, TextureEncoding::Linear, "")->texel(0, 0, 0);
@@ -129,16 +138,16 @@ TEST_F(TextureFileTest, SixteenBitPngIsDecodedToo) {
 
 TEST_F(TextureFileTest, FloatFilesAreLinearWhateverTheEncoding) {
     fs::path file = dir_ / "radiance.exr";
-    writeImage(file, 1, 1, 3, OIIO::TypeDesc::FLOAT, std::vector<float>{0.5f, 2.0f, 0.25f});
+    writeImage(file, 1, 1, 3, std::vector<float>{0.5f, 2.0f, 0.25f});
     glm::vec4 texel = Texture::load(file, TextureEncoding::Srgb, "")->texel(0, 0, 0);
     expectEqual(texel, glm::vec4(0.5f, 2.0f, 0.25f, 1.0f));
 }
 
 TEST_F(TextureFileTest, GreyAndMissingAlphaAreExpanded) {
     fs::path grey = dir_ / "grey.png", greyAlpha = dir_ / "grey_alpha.png", rgb = dir_ / "rgb.png";
-    writeImage(grey, 1, 1, 1, OIIO::TypeDesc::UINT8, std::vector<uint8_t>{51});
-    writeImage(greyAlpha, 1, 1, 2, OIIO::TypeDesc::UINT8, std::vector<uint8_t>{51, 102});
-    writeImage(rgb, 1, 1, 3, OIIO::TypeDesc::UINT8, std::vector<uint8_t>{51, 102, 153});
+    writeImage(grey, 1, 1, 1, std::vector<uint8_t>{51});
+    writeImage(greyAlpha, 1, 1, 2, std::vector<uint8_t>{51, 102});
+    writeImage(rgb, 1, 1, 3, std::vector<uint8_t>{51, 102, 153});
     float g = 51 / 255.0f;
     expectNear(Texture::load(grey, TextureEncoding::Linear, "")->texel(0, 0, 0), {g, g, g, 1.0f}, 1e-7f,
                "grey");
@@ -163,11 +172,11 @@ TEST_F(TextureFileTest, DecodingFromMemoryEqualsLoadingTheFile) {
     std::vector<uint8_t> pixels;
     for (int i = 0; i < 5 * 3 * 4; ++i) pixels.push_back(static_cast<uint8_t>(i * 37 % 256));
     fs::path png = dir_ / "image.png", jpeg = dir_ / "image.jpg";
-    writeImage(png, 5, 3, 4, OIIO::TypeDesc::UINT8, pixels);
+    writeImage(png, 5, 3, 4, pixels);
     std::vector<uint8_t> rgb;
     for (size_t i = 0; i < pixels.size(); ++i)
         if (i % 4 != 3) rgb.push_back(pixels[i]);
-    writeImage(jpeg, 5, 3, 3, OIIO::TypeDesc::UINT8, rgb);
+    writeImage(jpeg, 5, 3, 3, rgb);
 
     auto fromFile = Texture::load(png, TextureEncoding::Srgb, "");
     std::vector<std::byte> bytes = readBytes(png);
@@ -438,11 +447,23 @@ TEST(TextureEightBit, LevelZeroIsExactAndMipsWithinHalfAStep) {
 
 TEST_F(TextureFileTest, EightBitFilesAreKeptAsEightBits) {
     fs::path file = dir_ / "colour.png";
-    writeImage(file, 2, 1, 4, OIIO::TypeDesc::UINT8, kRgba8);
+    writeImage(file, 2, 1, 4, kRgba8);
     EXPECT_TRUE(Texture::load(file, TextureEncoding::Srgb, "")->eightBit());
     fs::path deep = dir_ / "deep.png";
-    writeImage(deep, 1, 1, 3, OIIO::TypeDesc::UINT16, std::vector<uint16_t>{0, 32768, 65535});
+    writeImage(deep, 1, 1, 3, std::vector<uint16_t>{0, 32768, 65535});
     EXPECT_FALSE(Texture::load(deep, TextureEncoding::Srgb, "")->eightBit());
+}
+
+// A palette PNG with transparency (tRNS) is an 8-bit RGBA texture: the entries' colours and alphas.
+TEST_F(TextureFileTest, PalettePngWithTransparencyKeepsItsAlpha) {
+    const uint8_t palette[] = {255, 0, 0, 0, 0, 255};
+    const uint8_t alphas[] = {51};
+    const uint8_t indices[] = {0, 1};
+    test::writePngPalette(dir_ / "palette.png", indices, 2, 1, palette, alphas);
+    const auto texture = Texture::load(dir_ / "palette.png", TextureEncoding::Linear, "");
+    EXPECT_TRUE(texture->eightBit());
+    expectEqual(texture->texel(0, 0, 0), glm::vec4(1.0f, 0.0f, 0.0f, 51 / 255.0f));
+    expectEqual(texture->texel(0, 1, 0), glm::vec4(0.0f, 0.0f, 1.0f, 1.0f));
 }
 
 TEST(TextureErrors, EightBitConstructorRejectsBadSizes) {
@@ -498,7 +519,7 @@ TEST_F(TextureFileTest, TruncatedImagesAreErrors) {
     std::vector<uint8_t> pixels(64 * 64 * 3);
     for (size_t i = 0; i < pixels.size(); ++i) pixels[i] = static_cast<uint8_t>(i * 31 % 256);
     fs::path png = dir_ / "whole.png", cut = dir_ / "cut.png";
-    writeImage(png, 64, 64, 3, OIIO::TypeDesc::UINT8, pixels);
+    writeImage(png, 64, 64, 3, pixels);
     std::vector<std::byte> bytes = readBytes(png);
     bytes.resize(bytes.size() / 2);
     writeBytes(cut, bytes);
