@@ -91,7 +91,7 @@ std::optional<std::pair<int, int>> imageFileSize(const std::filesystem::path& pa
 
 ImageFile readImageFile(const std::filesystem::path& path) {
     std::unique_ptr<ImageDecoder> input = openImage(path);
-    const ImageHeader& spec = input->header();
+    const ImageHeader spec = input->header();  // a copy: the decoder is closed before the window is read
     int width = spec.width, height = spec.height, channels = spec.channels;
     if (width <= 0 || height <= 0 || channels <= 0)
         throw InputError(path.string(), fmt::format("cannot read image: it is {}x{} with {} channels", width,
