@@ -207,30 +207,22 @@ std::optional<RsmTexel> retraceTexel(const RayScene& scene, const MapLayout& lay
     return texelFromHit(hit, ray, regionBounds, texelIndex(res, face, i, j), viewpoint);
 }
 
-// Renders every face row by row, rows in parallel. `rowTexels(face, j, out)` writes row j's texels in column
-// order to `out` (room for a row's every texel) and returns how many it wrote. Each row writes into its own
-// slot of the map's texels, which are then closed up in order: no row allocates, and the map is one block.
+// Renders every face row by row, rows in parallel. `rowTexels(face, j, out)` appends row j's texels in column
+// order to `out`. The rows are then joined into one block of exactly their size: only the texels that hit a
+// surface in the region take memory (a map whose rays mostly miss it, an environment light's, stays small).
 template <typename RowTexels>
 ReflectiveShadowMap renderRows(const MapLayout& layout, int res, RowTexels&& rowTexels) {
     ReflectiveShadowMap rsm;
     rsm.resolution = res;
     rsm.faces = layout.faceCount();
     rsm.rayStart = layout.rayStart();
-    const size_t rows = static_cast<size_t>(rsm.faces) * res;
-    rsm.texels.resize(rows * res);
-    std::vector<int> counts(rows);
-    parallelFor(0, static_cast<int64_t>(rows), 4, [&](int64_t r) {
-        counts[r] =
-            rowTexels(static_cast<int>(r / res), static_cast<int>(r % res), rsm.texels.data() + r * res);
-    });
-    size_t kept = 0;
-    for (size_t r = 0; r < rows; ++r) {
-        const auto row = rsm.texels.begin() + static_cast<ptrdiff_t>(r * res);
-        if (kept != r * res)
-            std::copy(row, row + counts[r], rsm.texels.begin() + static_cast<ptrdiff_t>(kept));
-        kept += counts[r];
-    }
-    rsm.texels.resize(kept);
+    std::vector<std::vector<RsmTexel>> rows(static_cast<size_t>(rsm.faces) * res);
+    parallelFor(0, static_cast<int64_t>(rows.size()), 4,
+                [&](int64_t r) { rowTexels(static_cast<int>(r / res), static_cast<int>(r % res), rows[r]); });
+    size_t total = 0;
+    for (const auto& row : rows) total += row.size();
+    rsm.texels.reserve(total);
+    for (const auto& row : rows) rsm.texels.insert(rsm.texels.end(), row.begin(), row.end());
     return rsm;
 }
 
@@ -256,7 +248,7 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
     // A row's rays are traced in packets: a point or spot light's all leave its position, a directional
     // light's are parallel.
     const bool directional = light.type == Light::Type::Directional;
-    return renderRows(layout, resolution, [&](int face, int j, RsmTexel* row) {
+    return renderRows(layout, resolution, [&](int face, int j, std::vector<RsmTexel>& row) {
         // A thread's row buffers, kept from row to row.
         thread_local std::vector<TexelRay> rays;
         thread_local std::vector<int> columns;
@@ -276,12 +268,10 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
         }
         hits.assign(rays.size(), RayHit{});
         scene.intersectCoherent(origins, directions, hits, false, true);
-        int count = 0;
         for (size_t k = 0; k < rays.size(); ++k)
             if (auto t = texelFromHit(hits[k], rays[k], regionBounds,
                                       texelIndex(resolution, face, columns[k], j), viewpoint))
-                row[count++] = *t;
-        return count;
+                row.push_back(*t);
     });
 }
 
