@@ -7,8 +7,10 @@
 // "madvise" honours) and faulted in by one system call when it is mapped (MADV_POPULATE_WRITE). In the
 // virtual machines this project runs on, a fresh 4 KiB page costs about 10 us, nearly all of it the host
 // backing the page: 256 MiB took 710-825 ms to touch in 4 KiB pages, 500-570 ms populated in 4 KiB pages,
-// and 30-130 ms in huge pages. Where the kernel has no free huge page at hand it compacts memory first or
-// falls back to 4 KiB pages, so a process's first blocks vary in cost from run to run.
+// 30-60 ms in huge pages right after another process freed memory, and 210-740 ms in huge pages after a
+// pause of 6 s (the machine gives freed memory back to its host). Where the kernel has no free huge page at
+// hand it compacts memory first or falls back to 4 KiB pages, so a process's first blocks vary in cost from
+// run to run (docs/performance.md, "Single renders").
 // Small arrays go to the usual allocator.
 #pragma once
 
