@@ -35,7 +35,8 @@ std::vector<bool> markerCells(int id) {
 
 // ---- detection ------------------------------------------------------------------------------------------
 
-// Frames at least this wide are searched for the markers' squares at half resolution (MarkerDetector::detect).
+// Frames at least this wide are searched for the markers' squares at half resolution
+// (MarkerDetector::detect).
 constexpr int kHalfResolutionWidth = 640;
 
 struct MarkerDetector::Impl {
