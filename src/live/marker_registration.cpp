@@ -36,13 +36,16 @@ std::vector<bool> markerCells(int id) {
 // ---- detection ------------------------------------------------------------------------------------------
 
 // Frames at least this wide are searched for the markers' squares at half resolution
-// (MarkerDetector::detect).
+// (MarkerDetector::detect), except every kFullResolutionEvery-th frame.
 constexpr int kHalfResolutionWidth = 640;
+constexpr uint64_t kFullResolutionEvery = 8;
 
 struct MarkerDetector::Impl {
     apriltag_family_t* family = nullptr;
     apriltag_detector_t* detector = nullptr;
     std::vector<int> markerOfId;  // tag id -> index into the markers, -1 where none
+    int lastKnown = 0;            // how many of the scene's markers the last frame showed (detect())
+    uint64_t frames = 0;          // the frames searched
 };
 
 MarkerDetector::MarkerDetector(std::span<const Marker> markers) : impl_(std::make_unique<Impl>()) {
@@ -166,7 +169,7 @@ void refineCorners(const GreyImage& grey, std::array<glm::dvec2, 4>& corners) {
 
 }  // namespace
 
-MarkerDetector::Result MarkerDetector::detect(const Image& frame) const {
+MarkerDetector::Result MarkerDetector::detect(const Image& frame) {
     Result result;
     if (frame.empty()) return result;
     // The detector finds and decodes the squares in sRGB-encoded grey levels (what cameras give and it is
@@ -182,26 +185,33 @@ MarkerDetector::Result MarkerDetector::detect(const Image& frame) const {
             grey->buf[static_cast<size_t>(y) * grey->stride + x] =
                 static_cast<uint8_t>(std::lround(255.0f * linearToSrgbValue(v)));
         }
-    // Frames kHalfResolutionWidth wide or more are searched for squares at half resolution (the decoding and
-    // the corners' refinement use the full frame): a third of the time, and a 12 cm marker 1 m away is still
-    // 40 pixels wide there, as in a 320x240 frame at full resolution. When that finds none of the scene's
-    // markers, the full resolution is searched too (a small or distant marker).
+    // Squares are searched for at half resolution in frames kHalfResolutionWidth wide or more (a third of the
+    // time; the decoding and the corners' refinement use the full frame; a 12 cm marker 1 m away is still 40
+    // pixels wide there, as in a 320x240 frame at full resolution). When that finds fewer of the scene's
+    // markers than the last frame showed, or none, the full resolution is searched too; and every
+    // kFullResolutionEvery-th frame, so that a small marker that comes into view beside a larger one is
+    // found.
     auto knownMarkers = [&](const zarray_t* found) {
+        int known = 0;
         for (int i = 0; i < zarray_size(found); ++i) {
             apriltag_detection_t* d = nullptr;
             zarray_get(found, i, &d);
-            if (d->id >= 0 && static_cast<size_t>(d->id) < impl_->markerOfId.size() &&
-                impl_->markerOfId[d->id] >= 0)
-                return true;
+            known += d->id >= 0 && static_cast<size_t>(d->id) < impl_->markerOfId.size() &&
+                     impl_->markerOfId[d->id] >= 0;
         }
-        return false;
+        return known;
     };
-    impl_->detector->quad_decimate = frame.width() >= kHalfResolutionWidth ? 2.0f : 1.0f;
+    const bool halfResolution =
+        frame.width() >= kHalfResolutionWidth && impl_->frames++ % kFullResolutionEvery != 0;
+    impl_->detector->quad_decimate = halfResolution ? 2.0f : 1.0f;
     zarray_t* detections = apriltag_detector_detect(impl_->detector, grey);
-    if (impl_->detector->quad_decimate > 1.0f && !knownMarkers(detections)) {
-        apriltag_detections_destroy(detections);
-        impl_->detector->quad_decimate = 1.0f;
-        detections = apriltag_detector_detect(impl_->detector, grey);
+    if (halfResolution) {
+        const int known = knownMarkers(detections);
+        if (known == 0 || known < impl_->lastKnown) {
+            apriltag_detections_destroy(detections);
+            impl_->detector->quad_decimate = 1.0f;
+            detections = apriltag_detector_detect(impl_->detector, grey);
+        }
     }
     for (int i = 0; i < zarray_size(detections); ++i) {
         apriltag_detection_t* d = nullptr;
@@ -230,6 +240,7 @@ MarkerDetector::Result MarkerDetector::detect(const Image& frame) const {
         refineCorners(linear, s.corners);
         result.sightings.push_back(s);
     }
+    impl_->lastKnown = static_cast<int>(result.sightings.size()) + result.tooSmall;
     apriltag_detections_destroy(detections);
     image_u8_destroy(grey);
     // In the scene's order, so that the pose does not depend on the detector's.

@@ -59,7 +59,9 @@ class MarkerDetector {
         int unknown = 0;                        // tag36h11 tags that are not in the scene
         int tooSmall = 0;                       // the scene's markers seen under kMinMarkerSidePx
     };
-    Result detect(const Image& frame) const;
+    // The scene's markers in a frame. Large frames of a stream are searched at half resolution, at full
+    // resolution too when that finds fewer markers than the frame before: one detector per stream.
+    Result detect(const Image& frame);
 
   private:
     struct Impl;
