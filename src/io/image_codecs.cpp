@@ -337,6 +337,45 @@ std::vector<std::byte> readWholeFile(const std::string& path) {
 
 // --- Radiance HDR (stb_image) ---------------------------------------------------------------------------
 
+// What in a Radiance HDR file's run-length encoded scanlines (from `file`, the whole file) stb_image would
+// loop on for ever: its decoder reads zeros past the end, and a dump of length 0 never ends a scanline. The
+// scanlines are walked as stb_image decodes them; the problem in words, or nothing (a flat file, and any
+// other fault stb_image reports itself).
+std::optional<std::string> hdrScanlineError(std::span<const uint8_t> file, int width, int height) {
+    // The header ends with an empty line, then the resolution line.
+    const std::string_view text(reinterpret_cast<const char*>(file.data()), file.size());
+    const size_t blank = text.find("\n\n");
+    if (blank == std::string_view::npos) return std::nullopt;
+    const size_t resolutionEnd = text.find('\n', blank + 2);
+    if (resolutionEnd == std::string_view::npos) return std::nullopt;
+    if (width < 8 || width >= 32768) return std::nullopt;  // stored flat
+    size_t at = resolutionEnd + 1;
+    auto ended = [&](int row) { return fmt::format("the data end in row {} of {}", row + 1, height); };
+    for (int row = 0; row < height; ++row) {
+        if (file.size() - at < 4) return ended(row);
+        if (file[at] != 2 || file[at + 1] != 2 || (file[at + 2] & 0x80))
+            return std::nullopt;  // flat from here
+        if (((file[at + 2] << 8) | file[at + 3]) != width) return std::nullopt;
+        at += 4;
+        for (int component = 0; component < 4; ++component)
+            for (int filled = 0; filled < width;) {
+                if (at >= file.size()) return ended(row);
+                int count = file[at++];
+                if (count > 128) {
+                    count -= 128;
+                    ++at;  // the run's value
+                } else {
+                    if (count == 0) return fmt::format("row {} holds a run of length 0", row + 1);
+                    at += static_cast<size_t>(count);
+                }
+                if (at > file.size()) return ended(row);
+                if (count > width - filled) return std::nullopt;
+                filled += count;
+            }
+    }
+    return std::nullopt;
+}
+
 class HdrDecoder : public ImageDecoder {
   public:
     // From `path` or, without one, from `bytes`.
@@ -358,9 +397,28 @@ class HdrDecoder : public ImageDecoder {
     void readFloat(std::span<float> pixels) override {
         if (pixels.size() != static_cast<size_t>(header_.width) * header_.height * 3)
             throw ImageCodecError("the pixels' buffer is not the image's size");
+        // The file's bytes, checked before stb_image decodes them (hdrScanlineError).
+        std::vector<std::byte> fileBytes;
+        std::span<const std::byte> bytes = bytes_;
+        if (!path_.empty()) {
+            std::ifstream in(path_, std::ios::binary | std::ios::ate);
+            const std::streamoff length = in.tellg();
+            if (!in || length < 0) throw ImageCodecError("cannot read the file");
+            fileBytes.resize(static_cast<size_t>(length));
+            in.seekg(0);
+            if (!in.read(reinterpret_cast<char*>(fileBytes.data()), length))
+                throw ImageCodecError("cannot read the file");
+            bytes = fileBytes;
+        }
+        if (const auto error =
+                hdrScanlineError(std::span(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size()),
+                                 header_.width, header_.height))
+            throw ImageCodecError(fmt::format("invalid Radiance HDR file: {}", *error));
+        if (bytes.size() > static_cast<size_t>(INT32_MAX))
+            throw ImageCodecError("a Radiance HDR image of more than 2 GiB");
         int width = 0, height = 0, channels = 0;
-        float* rgb = path_.empty() ? stbi_loadf_from_memory(data(), size(), &width, &height, &channels, 3)
-                                   : stbi_loadf(path_.c_str(), &width, &height, &channels, 3);
+        float* rgb = stbi_loadf_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
+                                            static_cast<int>(bytes.size()), &width, &height, &channels, 3);
         if (rgb == nullptr)
             throw ImageCodecError(fmt::format("invalid Radiance HDR file: {}", stbi_failure_reason()));
         const std::unique_ptr<float, void (*)(void*)> owned(rgb, stbi_image_free);
