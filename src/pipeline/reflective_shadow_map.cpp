@@ -207,6 +207,14 @@ std::optional<RsmTexel> retraceTexel(const RayScene& scene, const MapLayout& lay
     return texelFromHit(hit, ray, regionBounds, texelIndex(res, face, i, j), viewpoint);
 }
 
+// Appends `rows` in order to `texels`, grown once to their total.
+void appendRows(const std::vector<std::vector<RsmTexel>>& rows, RsmTexels& texels) {
+    size_t total = texels.size();
+    for (const auto& row : rows) total += row.size();
+    texels.reserve(total);
+    for (const auto& row : rows) texels.insert(texels.end(), row.begin(), row.end());
+}
+
 // Renders every face row by row, rows in parallel. `rowTexels(face, j, out)` appends row j's texels in column
 // order to `out`. The rows are then joined into one block of exactly their size: only the texels that hit a
 // surface in the region take memory (a map whose rays mostly miss it, an environment light's, stays small).
@@ -219,10 +227,7 @@ ReflectiveShadowMap renderRows(const MapLayout& layout, int res, RowTexels&& row
     std::vector<std::vector<RsmTexel>> rows(static_cast<size_t>(rsm.faces) * res);
     parallelFor(0, static_cast<int64_t>(rows.size()), 4,
                 [&](int64_t r) { rowTexels(static_cast<int>(r / res), static_cast<int>(r % res), rows[r]); });
-    size_t total = 0;
-    for (const auto& row : rows) total += row.size();
-    rsm.texels.reserve(total);
-    for (const auto& row : rows) rsm.texels.insert(rsm.texels.end(), row.begin(), row.end());
+    appendRows(rows, rsm.texels);
     return rsm;
 }
 
@@ -311,15 +316,11 @@ RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene,
                 traced[r].push_back(*t);
         }
     });
-    size_t total = 0;
-    for (const auto& row : traced) total += row.size();
-    update.texels.reserve(total);
+    appendRows(traced, update.texels);
     update.retraced.reserve(rows.size());
-    for (size_t r = 0; r < rows.size(); ++r) {
-        update.retraced.push_back({texelIndex(res, rows[r].face, rows[r].i0, rows[r].j),
-                                   texelIndex(res, rows[r].face, rows[r].i1, rows[r].j) + 1});
-        update.texels.insert(update.texels.end(), traced[r].begin(), traced[r].end());
-    }
+    for (const Row& row : rows)
+        update.retraced.push_back(
+            {texelIndex(res, row.face, row.i0, row.j), texelIndex(res, row.face, row.i1, row.j) + 1});
     return update;
 }
 

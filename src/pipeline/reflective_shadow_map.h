@@ -29,8 +29,8 @@ using RsmTexels = std::vector<RsmTexel, LargeBlockAllocator<RsmTexel>>;
 struct ReflectiveShadowMap {
     int resolution = 0;  // texels per face side
     int faces = 0;       // 1 (a frustum fitted to the region, or orthographic) or 6 (light inside the region)
-    float rayStart = 0.0f;         // directional lights: how far behind the region's centre the rays start
-    RsmTexels texels;              // the texels that hit a surface inside the region, in texel order
+    float rayStart = 0.0f;  // directional lights: how far behind the region's centre the rays start
+    RsmTexels texels;       // the texels that hit a surface inside the region, in texel order
 };
 
 // The face resolution of each light's map (options.rsm.resolution): the given one for all, or "auto": the
@@ -66,8 +66,8 @@ struct RsmUpdate {
     // Increasing (one range per row of a face); every texel outside them is the base map's. One range over
     // every index when the map is rendered afresh.
     std::vector<TexelRange> retraced;
-    RsmTexels texels;              // the retraced texels that hit a surface inside the region, in texel order
-    float rayStart = 0.0f;         // the map's with the objects (ReflectiveShadowMap::rayStart)
+    RsmTexels texels;       // the retraced texels that hit a surface inside the region, in texel order
+    float rayStart = 0.0f;  // the map's with the objects (ReflectiveShadowMap::rayStart)
 };
 
 // The update of `base` for `scene` = the scene `base` was rendered over (same light, region and resolution)
