@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <stdexcept>
 
 #include <fmt/format.h>
 
@@ -233,12 +234,39 @@ std::optional<size_t> overstatingPoint(std::span<const int> samples, std::span<c
     return std::nullopt;
 }
 
-double equalErrorSamples(double c, double error, int referenceSpp) {
+double equalErrorSamples(double c, double error, double referenceNoise) {
     if (!std::isfinite(c) || !(c > 0.0) || !std::isfinite(error)) return kNaN;
-    const double referenceNoise = c * c / std::max(referenceSpp, 1);
-    const double ownSquare = error * error - referenceNoise;
+    const double ownSquare = error * error - (std::isfinite(referenceNoise) ? referenceNoise * referenceNoise : 0.0);
     if (!(ownSquare > 0.0)) return std::numeric_limits<double>::infinity();
     return c * c / ownSquare;
+}
+
+double referenceNoiseOf(double apart) {
+    return 0.5 * apart;
+}
+
+ReferenceOutput meanOfReferences(const ReferenceOutput& a, const ReferenceOutput& b) {
+    // with and without are not kept in the cache (cachedReference()): empty unless both have them.
+    const auto mean = [](const Image& x, const Image& y) {
+        if (x.empty() || y.empty()) return Image();
+        if (x.width() != y.width() || x.height() != y.height() || x.channels() != y.channels())
+            throw std::invalid_argument("meanOfReferences: the references' images differ in size");
+        Image out = x;
+        std::span<float> o = out.data();
+        std::span<const float> other = y.data();
+        for (size_t i = 0; i < o.size(); ++i) o[i] = 0.5f * (o[i] + other[i]);
+        return out;
+    };
+    ReferenceOutput out;
+    out.composite = mean(a.composite, b.composite);
+    out.with = mean(a.with, b.with);
+    out.without = mean(a.without, b.without);
+    out.background = mean(a.background, b.background);
+    out.objectMask = mean(a.objectMask, b.objectMask);
+    out.delta = mean(a.delta, b.delta);
+    out.samplesPerPixel = a.samplesPerPixel + b.samplesPerPixel;
+    out.totalMs = a.totalMs + b.totalMs;
+    return out;
 }
 
 SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& entry,
@@ -252,15 +280,16 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     q.warnings = scene.warnings;
     q.key = referenceContentKey(entry.file, q.overrides);
     const fs::path cache = options.cacheFolder / q.key;
-    const uint64_t seed = options.seed.value_or(suite.seed);
+    const uint64_t suiteSeed = options.seed.value_or(suite.seed);
     q.referenceSpp = options.samplesPerPixel.value_or(entry.samplesPerPixel);
     q.directSpp = options.samplesPerPixel || entry.directSamplesPerPixel == 0
                       ? std::max(q.referenceSpp / kDirectSamplesDivisor, 1)
                       : std::min(entry.directSamplesPerPixel, q.referenceSpp);
 
     // `snapshots`: sample counts of the same kind whose references this one's first samples give (the fit's).
-    auto reference = [&](const char* kind, int samples, int maxBounces,
-                         const std::vector<int>& snapshots = {}) {
+    auto reference = [&](const char* kind, int samples, int maxBounces, const std::vector<int>& snapshots = {},
+                         uint64_t seedOffset = 0) {
+        const uint64_t seed = suiteSeed + seedOffset;
         ReferenceOptions settings;
         settings.samplesPerPixel = samples;
         settings.seed = seed;
@@ -291,8 +320,11 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
         return std::move(r.output);
     };
 
-    // The full reference, DGI and its baselines (evaluate()).
-    const Evaluation e = evaluate(scene, reference("full", q.referenceSpp, 0, suite.fitSamples));
+    // The full reference: the mean of two renders from independent random sequences (seeds s and s + 1),
+    // whose difference measures its noise below. DGI and its baselines against it (evaluate()).
+    const ReferenceOutput first = reference("full", q.referenceSpp, 0, suite.fitSamples);
+    const ReferenceOutput second = reference("full", q.referenceSpp, 0, {}, 1);
+    const Evaluation e = evaluate(scene, meanOfReferences(first, second));
     q.dgi = e.dgi;
     q.shadowOnly = e.shadowOnly;
     q.noRelight = e.noRelight;
@@ -301,9 +333,10 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     log(options, fmt::format("  {}: DGI {:.0f} ms, delta_rel_error {:.4f}, object_rel_rmse {:.4f}", q.name,
                              q.dgiMs, q.dgi.deltaRelError, q.dgi.objectRelRmse));
 
-    // Direct light only (the first vertex of the same paths, the first directSpp of them): the object's
-    // shadow in the reference.
-    const DeltaSplit split = splitDeltaError(e, reference("direct", q.directSpp, 1));
+    // Direct light only (the first vertex of the same paths, the first directSpp of each render's): the
+    // object's shadow in the reference.
+    const DeltaSplit split = splitDeltaError(
+        e, meanOfReferences(reference("direct", q.directSpp, 1), reference("direct", q.directSpp, 1, {}, 1)));
     q.shadowPart = split.shadowPart;
     q.indirectPart = split.indirectPart;
     q.referenceShadowShare = split.referenceShadowShare;
@@ -323,12 +356,18 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
         q.fitDeltaErrors.push_back(f.deltaRelError);
         q.fitObjectErrors.push_back(f.objectRelRmse);
     }
-    q.noiseConstant = noiseConstantOf(q.fitSamples, q.fitDeltaErrors, q.referenceSpp);
-    q.objectNoiseConstant = noiseConstantOf(q.fitSamples, q.fitObjectErrors, q.referenceSpp);
-    q.referenceNoise = q.noiseConstant / std::sqrt(q.referenceSpp);
-    q.objectReferenceNoise = q.objectNoiseConstant / std::sqrt(q.referenceSpp);
-    q.equalErrorSpp = equalErrorSamples(q.noiseConstant, q.dgi.deltaRelError, q.referenceSpp);
-    q.timedSpp = timedFit > 0 ? timedFit : q.referenceSpp;
+    // The fit's references are the first's first samples: against the mean of 2 spp samples, as against a
+    // reference of 2 spp samples of which they are the first (noiseConstantOf()).
+    const int meanSpp = 2 * q.referenceSpp;
+    q.noiseConstant = noiseConstantOf(q.fitSamples, q.fitDeltaErrors, meanSpp);
+    q.objectNoiseConstant = noiseConstantOf(q.fitSamples, q.fitObjectErrors, meanSpp);
+    // The mean's own noise, from the two renders' difference (referenceNoiseOf()).
+    const DeltaFigures apart = deltaFigures(onBackground(first, second.background), second.composite,
+                                            second.background, e.classes);
+    q.referenceNoise = referenceNoiseOf(apart.deltaRelError);
+    q.objectReferenceNoise = referenceNoiseOf(apart.objectRelRmse);
+    q.equalErrorSpp = equalErrorSamples(q.noiseConstant, q.dgi.deltaRelError, q.referenceNoise);
+    q.timedSpp = timedFit > 0 ? timedFit : meanSpp;
     q.pathTracerMsPerSpp = (timedFit > 0 ? timedFitMs : q.referenceMs) / q.timedSpp;
     q.equalErrorMs = q.equalErrorSpp * q.pathTracerMsPerSpp;
 
@@ -346,12 +385,12 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
                         "scene's spp ({})",
                         entry.file.string(), q.referenceSpp));
     // Points that disagree: the noise of a few samples is not the reference's (noiseConstantOf()).
-    if (const auto i = overstatingPoint(q.fitSamples, q.fitDeltaErrors, q.referenceSpp))
+    if (const auto i = overstatingPoint(q.fitSamples, q.fitDeltaErrors, meanSpp))
         q.warnings.push_back(fmt::format(
             "{}: the path tracer's error falls faster than 1/sqrt(spp) (c {:.2f} from {} spp, {:.2f} from "
             "the largest fit_spp): rare bright paths (caustics) dominate the figures of few samples, so the "
             "noise and the equal-error figures come from the largest",
-            entry.file.string(), pointNoiseConstants(q.fitSamples, q.fitDeltaErrors, q.referenceSpp)[*i],
+            entry.file.string(), pointNoiseConstants(q.fitSamples, q.fitDeltaErrors, meanSpp)[*i],
             q.fitSamples[*i], q.noiseConstant));
     checkNoise("delta_rel_error", q.referenceNoise, q.dgi.deltaRelError);
     checkNoise("object_rel_rmse", q.objectReferenceNoise, q.dgi.objectRelRmse);
@@ -380,9 +419,10 @@ nlohmann::ordered_json sceneJson(const SceneQuality& q) {
                        {"delta_rel_error", q.fitDeltaErrors[i]},
                        {"object_rel_rmse", q.fitObjectErrors[i]}});
     j["reference"] = {{"spp", q.referenceSpp},
+                      {"renders", 2},
                       {"direct_spp", q.directSpp},
                       {"ms", q.referenceMs},
-                      {"ms_per_spp", q.referenceMs / q.referenceSpp},
+                      {"ms_per_spp", q.referenceMs / (2.0 * q.referenceSpp)},
                       {"noise_constant", q.noiseConstant},
                       {"object_noise_constant", q.objectNoiseConstant},
                       {"noise", q.referenceNoise},
@@ -445,7 +485,7 @@ std::string suiteMarkdown(std::span<const SceneQuality> scenes, const std::strin
                           cell(q.shadowOnly.deltaRelError), cell(q.noRelight.deltaRelError),
                           cell(q.shadowPart), cell(q.indirectPart), q.dgiMs, count(q.equalErrorSpp),
                           count(q.equalErrorMs), q.dgiMs > 0.0 ? count(q.equalErrorMs / q.dgiMs) : "n/a",
-                          q.referenceSpp, cell(q.referenceNoise),
+                          fmt::format("2 × {}", q.referenceSpp), cell(q.referenceNoise),
                           cell(100.0 * q.referenceNoise / q.dgi.deltaRelError, "{:.1f} %"));
     md +=
         "\n## The references\n\n"
@@ -460,7 +500,8 @@ std::string suiteMarkdown(std::span<const SceneQuality> scenes, const std::strin
                 fmt::format("{}{} → {}", fit.empty() ? "" : ", ", q.fitSamples[i], cell(q.fitDeltaErrors[i]));
         md += fmt::format(
             "| {} | {} | {:.0f} | {:.0f} | {:.0f} ({}) | {} | {} | {} | {} | {} ({}) | {} | `{}` |\n", q.name,
-            q.referenceSpp, q.referenceMs, q.referenceMs / q.referenceSpp, q.pathTracerMsPerSpp, q.timedSpp,
+            fmt::format("2 × {}", q.referenceSpp), q.referenceMs, q.referenceMs / (2.0 * q.referenceSpp),
+            q.pathTracerMsPerSpp, q.timedSpp,
             cell(q.referenceShadowShare), cell(q.referenceIndirectShare), cell(q.noiseConstant),
             cell(q.objectNoiseConstant), cell(q.objectReferenceNoise),
             cell(100.0 * q.objectReferenceNoise / q.dgi.objectRelRmse, "{:.1f} %"),

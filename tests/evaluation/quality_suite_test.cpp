@@ -76,12 +76,12 @@ TEST(EqualErrorFit, LeavesOutPointsAtOrAboveTheReferenceAndBadErrors) {
 
 TEST(EqualErrorFit, EqualErrorSamplesTakeTheReferenceNoiseOut) {
     // c = 1: an error of 0.1 is what 100 samples give against the truth.
-    EXPECT_NEAR(equalErrorSamples(1.0, 0.1, 1 << 20), 100.0, 0.01);
-    // Measured against a 400-sample reference the error holds its noise (0.05) as well: sqrt(0.1² + 0.05²).
-    EXPECT_NEAR(equalErrorSamples(1.0, std::sqrt(0.01 + 0.0025), 400), 100.0, 1e-6);
+    EXPECT_NEAR(equalErrorSamples(1.0, 0.1, 0.0), 100.0, 1e-9);
+    // Measured against a reference whose noise is 0.05, the error holds that as well: sqrt(0.1² + 0.05²).
+    EXPECT_NEAR(equalErrorSamples(1.0, std::sqrt(0.01 + 0.0025), 0.05), 100.0, 1e-6);
     // Within the reference's noise: DGI is as good as any number of samples can tell.
-    EXPECT_TRUE(std::isinf(equalErrorSamples(1.0, 0.04, 400)));
-    EXPECT_TRUE(std::isnan(equalErrorSamples(std::nan(""), 0.1, 400)));
+    EXPECT_TRUE(std::isinf(equalErrorSamples(1.0, 0.04, 0.05)));
+    EXPECT_TRUE(std::isnan(equalErrorSamples(std::nan(""), 0.1, 0.05)));
 }
 
 // ---- The split of the delta error, on images whose answer is known ----
@@ -138,6 +138,43 @@ TEST(DeltaSplit, AReferenceMovesOntoAnotherBackgroundByItsRealShare) {
 // The tiny test scene at 32x24 with a grey box of `boxAlbedo`.
 json tinyScene(double boxAlbedo) {
     return test::tinySceneJson(32, 24, {boxAlbedo, boxAlbedo, boxAlbedo});
+}
+
+// ||a - b|| over every value of two images of one size.
+double distance(const Image& a, const Image& b) {
+    double sum = 0.0;
+    for (size_t i = 0; i < a.data().size(); ++i) sum += std::pow(double(a.data()[i]) - b.data()[i], 2);
+    return std::sqrt(sum);
+}
+
+// The mean of two renders from independent random sequences is as far from the truth (a render of 32 times
+// their samples) as referenceNoiseOf() says from their distance to each other (0.93-1.02 times over eight
+// sets of seeds at 96x72). One render alone is sqrt(2) times further: a wrong factor fails.
+TEST(ReferenceNoise, TwoIndependentRendersMeasureTheirMeansNoise) {
+    const fs::path dir = fs::temp_directory_path() / ("deltagi_noise_test_" + std::to_string(getpid()));
+    fs::create_directories(dir);
+    std::ofstream(dir / "scene.json") << test::tinySceneJson(96, 72, {0.5, 0.5, 0.5}).dump();
+    const Scene scene = loadScene(dir / "scene.json");
+    fs::remove_all(dir);
+    ReferenceOptions options;
+    options.samplesPerPixel = 8;
+    const ReferenceOutput first = renderReference(scene, options);
+    options.seed = 1;
+    const ReferenceOutput second = renderReference(scene, options);
+    options.seed = 2;
+    options.samplesPerPixel = 256;
+    const ReferenceOutput truth = renderReference(scene, options);
+
+    const ReferenceOutput mean = meanOfReferences(first, second);
+    EXPECT_EQ(mean.samplesPerPixel, 16);
+    EXPECT_NEAR(mean.delta.at(5, 7, 1), 0.5f * (first.delta.at(5, 7, 1) + second.delta.at(5, 7, 1)), 1e-6f);
+    const double norm = distance(truth.delta, Image(96, 72, 3));
+    ASSERT_GT(norm, 0.0);
+    const double predicted = referenceNoiseOf(distance(first.delta, second.delta) / norm);
+    const double actual = distance(mean.delta, truth.delta) / norm;
+    ASSERT_GT(actual, 0.0);
+    EXPECT_GT(predicted / actual, 0.8) << predicted << " against " << actual;
+    EXPECT_LT(predicted / actual, 1.2) << predicted << " against " << actual;
 }
 
 using test::readText;
@@ -235,13 +272,16 @@ TEST_F(QualitySuiteTest, BadSuitesNameTheFileAndKey) {
 TEST_F(QualitySuiteTest, TheCacheIsReusedUntilTheSceneChanges) {
     const QualitySuite suite = loadSuite(writeSuite());
     const SuiteScene& grey = suite.scenes[0];
-    // full 4 spp, direct 4 spp, full 1 and 2 spp: the last two stored from the first samples of the first.
+    // full and direct 4 spp, each from seeds 3 and 4, full 1 and 2 spp: the last two stored from the first
+    // samples of the first.
     const SceneQuality first = evaluateSuiteScene(suite, grey, runOptions());
     EXPECT_EQ(first.cacheHits, 2u);
-    EXPECT_EQ(first.cacheMisses, 2u);
+    EXPECT_EQ(first.cacheMisses, 4u);
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "refs" / first.key / "full-4spp-seed4" / "reference.json"));
+    EXPECT_GT(first.referenceNoise, 0.0);
 
     const SceneQuality again = evaluateSuiteScene(suite, grey, runOptions());
-    EXPECT_EQ(again.cacheHits, 4u);
+    EXPECT_EQ(again.cacheHits, 6u);
     EXPECT_EQ(again.cacheMisses, 0u);
     EXPECT_EQ(again.key, first.key);
     EXPECT_EQ(again.dgi.deltaRelError, first.dgi.deltaRelError);  // the same images, read back exactly
@@ -261,13 +301,13 @@ TEST_F(QualitySuiteTest, TheCacheIsReusedUntilTheSceneChanges) {
     const SceneQuality changed = evaluateSuiteScene(suite, grey, runOptions());
     EXPECT_NE(changed.key, first.key);
     EXPECT_EQ(changed.cacheHits, 2u);
-    EXPECT_EQ(changed.cacheMisses, 2u);
+    EXPECT_EQ(changed.cacheMisses, 4u);
 
     // More samples: only the full and direct references are rendered again, the fit's are kept.
     SuiteRunOptions moreSamples = runOptions();
     moreSamples.samplesPerPixel = 8;
     const SceneQuality more = evaluateSuiteScene(suite, grey, moreSamples);
-    EXPECT_EQ(more.cacheMisses, 2u);
+    EXPECT_EQ(more.cacheMisses, 4u);
     EXPECT_EQ(more.cacheHits, 2u);
     EXPECT_EQ(more.referenceSpp, 8);
     // The path tracer's time per sample is the largest fit reference's (2 samples, kept), whatever the full
