@@ -236,7 +236,8 @@ std::optional<size_t> overstatingPoint(std::span<const int> samples, std::span<c
 
 double equalErrorSamples(double c, double error, double referenceNoise) {
     if (!std::isfinite(c) || !(c > 0.0) || !std::isfinite(error)) return kNaN;
-    const double ownSquare = error * error - (std::isfinite(referenceNoise) ? referenceNoise * referenceNoise : 0.0);
+    const double ownSquare =
+        error * error - (std::isfinite(referenceNoise) ? referenceNoise * referenceNoise : 0.0);
     if (!(ownSquare > 0.0)) return std::numeric_limits<double>::infinity();
     return c * c / ownSquare;
 }
@@ -287,8 +288,8 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
                       : std::min(entry.directSamplesPerPixel, q.referenceSpp);
 
     // `snapshots`: sample counts of the same kind whose references this one's first samples give (the fit's).
-    auto reference = [&](const char* kind, int samples, int maxBounces, const std::vector<int>& snapshots = {},
-                         uint64_t seedOffset = 0) {
+    auto reference = [&](const char* kind, int samples, int maxBounces,
+                         const std::vector<int>& snapshots = {}, uint64_t seedOffset = 0) {
         const uint64_t seed = suiteSeed + seedOffset;
         ReferenceOptions settings;
         settings.samplesPerPixel = samples;
@@ -362,8 +363,8 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     q.noiseConstant = noiseConstantOf(q.fitSamples, q.fitDeltaErrors, meanSpp);
     q.objectNoiseConstant = noiseConstantOf(q.fitSamples, q.fitObjectErrors, meanSpp);
     // The mean's own noise, from the two renders' difference (referenceNoiseOf()).
-    const DeltaFigures apart = deltaFigures(onBackground(first, second.background), second.composite,
-                                            second.background, e.classes);
+    const DeltaFigures apart =
+        deltaFigures(onBackground(first, second.background), second.composite, second.background, e.classes);
     q.referenceNoise = referenceNoiseOf(apart.deltaRelError);
     q.objectReferenceNoise = referenceNoiseOf(apart.objectRelRmse);
     q.equalErrorSpp = equalErrorSamples(q.noiseConstant, q.dgi.deltaRelError, q.referenceNoise);
@@ -501,9 +502,8 @@ std::string suiteMarkdown(std::span<const SceneQuality> scenes, const std::strin
         md += fmt::format(
             "| {} | {} | {:.0f} | {:.0f} | {:.0f} ({}) | {} | {} | {} | {} | {} ({}) | {} | `{}` |\n", q.name,
             fmt::format("2 × {}", q.referenceSpp), q.referenceMs, q.referenceMs / (2.0 * q.referenceSpp),
-            q.pathTracerMsPerSpp, q.timedSpp,
-            cell(q.referenceShadowShare), cell(q.referenceIndirectShare), cell(q.noiseConstant),
-            cell(q.objectNoiseConstant), cell(q.objectReferenceNoise),
+            q.pathTracerMsPerSpp, q.timedSpp, cell(q.referenceShadowShare), cell(q.referenceIndirectShare),
+            cell(q.noiseConstant), cell(q.objectNoiseConstant), cell(q.objectReferenceNoise),
             cell(100.0 * q.objectReferenceNoise / q.dgi.objectRelRmse, "{:.1f} %"),
             fit.empty() ? "none" : fit, q.key);
     }

@@ -27,9 +27,9 @@ namespace deltagi {
 constexpr int kDefaultSuiteSamples = 256;
 
 struct SuiteScene {
-    std::string name;                            // "name"; default: the scene file's stem
-    std::filesystem::path file;                  // "scene", relative to the suite file's folder
-    std::vector<std::string> overrides;          // "set": ["KEY=VALUE", ...], applied like --set
+    std::string name;                    // "name"; default: the scene file's stem
+    std::filesystem::path file;          // "scene", relative to the suite file's folder
+    std::vector<std::string> overrides;  // "set": ["KEY=VALUE", ...], applied like --set
     // "spp": samples per pixel of each of the two full references (referenceNoiseOf()).
     int samplesPerPixel = kDefaultSuiteSamples;
     // "direct_spp": samples of the direct-light-only reference that splits the error (at most spp); 0: spp /
@@ -174,8 +174,8 @@ struct SceneQuality {
     int referenceSpp = 0, directSpp = 0;  // of each of the two full references, and of the direct one
     double referenceMs = 0.0;  // when the references were rendered (both renders of each), from the cache
     std::vector<int> fitSamples;
-    std::vector<double> fitDeltaErrors, fitObjectErrors;      // of the low-sample references
-    double noiseConstant = 0.0, objectNoiseConstant = 0.0;    // c (noiseConstantOf), for Δ and the object
+    std::vector<double> fitDeltaErrors, fitObjectErrors;    // of the low-sample references
+    double noiseConstant = 0.0, objectNoiseConstant = 0.0;  // c (noiseConstantOf), for Δ and the object
     // The mean reference's noise in delta_rel_error and object_rel_rmse (referenceNoiseOf()).
     double referenceNoise = 0.0, objectReferenceNoise = 0.0;
     double equalErrorSpp = 0.0, equalErrorMs = 0.0;
