@@ -456,6 +456,7 @@ Options interactiveOptions(const Options& full, int width, int height, size_t li
     sparser(o.diffuse.pixelStride, kAutoDiffuseStride);
     sparser(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride);
     sparser(o.specular.relightPixelStride, kAutoRelightSpecularStride);
+    sparser(o.diffuse.objectRayPixelStride, kAutoObjectRayStride);
     sparser(o.shadow.pixelStride, kAutoShadowStride);
     // Half the reflective shadow maps' side: a quarter of the texels to trace again and inject. "auto" gives
     // each of several lights its own share, which one number cannot; it is halved for a single light only.

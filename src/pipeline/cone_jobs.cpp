@@ -203,8 +203,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         if (job.objectBounceByRays(o))
             addInto(results[j].diffuse,
                     traceSparse<glm::vec3>(
-                        job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-                        job.filter(o, job.areaLightStride(o, scene.camera)),
+                        job.points, job.bounds, scene.camera, job.objectRayStride(o, scene.camera), 1,
+                        job.filter(o, job.objectRayStride(o, scene.camera)),
                         [&](std::span<const uint32_t> pixels) {
                             return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels,
                                                          {job.fullLight, job.light});

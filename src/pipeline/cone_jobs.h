@@ -91,6 +91,9 @@ struct ConeJob {
         if (mode == ShadowMode::Shaded) return o.diffuse.objectApertureDeg;
         return std::nullopt;
     }
+    int objectRayStride(const Options& o, const Camera& c) const {
+        return pixelStrideFor(o.diffuse.objectRayPixelStride, kAutoObjectRayStride, c.width, c.height);
+    }
     int specularStride(const Options& o, const Camera& c) const {
         return pixelStrideFor(o.specular.relightPixelStride, kAutoRelightSpecularStride, c.width, c.height);
     }

@@ -40,11 +40,6 @@ glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, con
     return radianceOf(a.gather(where)) - radianceOf(b.gather(where));
 }
 
-int objectRaySide(int side, float oneMinusCosMax) {
-    const float share = std::sqrt(std::max(oneMinusCosMax, 0.0f) / kFullRaysOneMinusCos);
-    return std::clamp(static_cast<int>(std::lround(static_cast<float>(side) * share)), 1, side);
-}
-
 std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> points,
                                              const MipVolume& objectLight, const ShadowRayScenes& rays,
                                              const Options& options, std::span<const uint32_t> pixels,
@@ -55,8 +50,9 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
     const glm::vec3 centre = rays.objectBounds.center();
     const float radius = rays.boundingRadius();
     // At least one ray a point, also with object_rays 0: the relit cones leave the objects to these rays.
-    const int count = squareSampleCount(options.diffuse.objectRays);
-    const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<float>(count)))));
+    const int side = std::max(1, static_cast<int>(std::lround(std::sqrt(
+                                     static_cast<float>(squareSampleCount(options.diffuse.objectRays))))));
+    const int count = side * side;
     constexpr float kPi = std::numbers::pi_v<float>;
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
@@ -73,11 +69,9 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
             inside ? 0.0f : std::sqrt(std::max(0.0f, 1.0f - (radius * radius) / (distance * distance)));
         const glm::mat3 frame = frameAround(inside ? p.normal : toCentre / distance);
         const float jitterU = hashToUnit(i, kBounceStream), jitterV = hashToUnit(i, kBounceStream + 1);
-        const int pointSide = objectRaySide(side, inside ? 1.0f : 1.0f - cosMax);
-        const int pointCount = pointSide * pointSide;
         glm::vec3 sum(0.0f);
-        for (int k = 0; k < pointCount; ++k) {
-            const auto [u1, u2] = jitteredGridPoint(k, pointSide, jitterU, jitterV);
+        for (int k = 0; k < count; ++k) {
+            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
             glm::vec3 wi;
             float weight;  // cos / (pi pdf)
             if (inside) {
@@ -105,7 +99,7 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
             }
             sum += radiance * weight;
         }
-        out[i] = sum / static_cast<float>(pointCount);
+        out[i] = sum / static_cast<float>(count);
     });
     return out;
 }

@@ -30,7 +30,7 @@ namespace deltagi {
 // For every point listed in `pixels` (all when empty): the change the objects make to the light reaching it
 // along the directions where they are, as the diffuse cones' result (the cosine-weighted mean radiance over
 // the hemisphere, E / pi), from options.diffuse.object_rays rays spread uniformly over the cone of directions
-// of the objects' bounding sphere (fewer where it looks small: objectRaySide): the objects' light
+// of the objects' bounding sphere, as many from afar as from nearby: the objects' light
 // (`objectLight`, their share of the full light volume, ObjectVolumes::objectLight) minus, with `realLight`,
 // the real scene's light they hide. `realLight`: the full and the delta light volume, whose difference is the
 // real scene's light without the objects; null: the objects' light only. Zero where the objects are behind
@@ -43,15 +43,6 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
                                              const MipVolume& objectLight, const ShadowRayScenes& rays,
                                              const Options& options, std::span<const uint32_t> pixels = {},
                                              RealLight realLight = {});
-
-// The side of the jittered grid of rays (side x side at most; side >= 1) of a point that sees the objects'
-// bounding sphere within a cone of 1 - cos(half-angle) = `oneMinusCosMax`: the full side from a cone of 90
-// degrees (kFullRaysOneMinusCos) up, less below, in proportion to the cone's solid angle (the rays' count,
-// the square of the side; at least one ray). The light from a narrower cone is as much smaller, and so is
-// the error of fewer rays over it: on the quality suite, delta_rel_error within 0.001 of all the rays
-// everywhere (the field photo 0.2600 -> 0.2611) at 0.44 of the rays (Cornell box + Happy Buddha).
-inline constexpr float kFullRaysOneMinusCos = 0.29289f;  // 1 - cos(45 degrees)
-int objectRaySide(int side, float oneMinusCosMax);
 
 // The radiance of `light`'s level-0 voxels where a ray meets a surface, half a voxel out on the ray's side of
 // it (the volume's values over their occupancy); zero where no voxel there is occupied.

@@ -308,6 +308,12 @@ OptionGroup diffuseGroup() {
                 "standing on the floor they start below the floor, and the object's underside got none of "
                 "the floor's light (tested: a box on a lit floor gets albedo × the floor's radiance "
                 "underneath by rays, under half of it by cones). 0: cones"),
+            option("object_ray_pixel_stride", &D::objectRayPixelStride, integers(kStrides), "pixels",
+                   "with `options.render.relight_object_light` `\"rays\"`: cast the relit points' rays "
+                   "towards the objects at every `object_ray_pixel_stride`-th pixel of every such row and "
+                   "interpolate the others like the diffuse cones' "
+                   "([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))")
+                .withDefaultNote(autoStrideNote(kAutoObjectRayStride)),
         });
 }
 
@@ -483,19 +489,19 @@ OptionGroup renderGroup() {
             option(
                 "relight_object_light", &R::relightObjectLight, names(kRelightObjectLightNames), "",
                 "with `\"differential\"` relit cones, how the objects' own light, and the real light they "
-                "hide, reach the real surfaces. `\"cones\"`: all of it through the cones, where a coarse "
-                "voxel that holds an object and the floor under it hides the object from afar and spreads it "
-                "wide nearby. `\"rays\"`: `options.diffuse.object_rays` rays per relit point (at the area "
-                "lights' relit stride; fewer where the objects look small, in proportion to their bounding "
-                "sphere's solid angle below a cone of 90°) towards the objects' bounding sphere; where one "
-                "meets an object it brings the objects' voxel radiance there and takes away the real scene's "
-                "light it met before (the full minus the delta volume where the ray, continued through the "
-                "objects, meets a real surface; `src/pipeline/object_bounce_rays.*`, tested against a bright "
-                "sphere's solid angle and a sphere hiding a bright ceiling); the cones then carry only the "
-                "change of the real surfaces' own light (the objects' shadows on them) through the real "
-                "scene's visibility. Closer to the path tracer on every scene of the suite, but it about "
-                "doubles the benchmark frame ([design.md](design.md#departures-from-the-paper)). The field "
-                "example sets `\"rays\"`: the cones spread the bunny's light far over the open ground"),
+                "hide, reach the real surfaces. `\"rays\"`: `options.diffuse.object_rays` rays from every "
+                "`options.diffuse.object_ray_pixel_stride`-th relit pixel towards the objects' bounding "
+                "sphere; where one meets an object it brings the objects' voxel radiance there and takes "
+                "away "
+                "the real scene's light it met before (the full minus the delta volume where the ray, "
+                "continued through the objects, meets a real surface; `src/pipeline/object_bounce_rays.*`, "
+                "tested against a bright sphere's solid angle and a sphere hiding a bright ceiling); the "
+                "cones then carry only the change of the real surfaces' own light (the objects' shadows on "
+                "them) through the real scene's visibility. `\"cones\"`: all of it through the cones, where "
+                "a coarse voxel that holds an object and the floor under it hides the object from afar and "
+                "spreads it wide nearby: under a bare bulb near the ceiling, the bright ceiling's light that "
+                "a ball hides from the floor beneath it comes out at a third, and the ball's glow on the far "
+                "walls and ceiling with the wrong sign ([design.md](design.md#departures-from-the-paper))"),
         });
 }
 

@@ -313,6 +313,7 @@ TEST(LiveSessionImages, InteractiveOptionsTakeOneSamplePerPixelAndSparserCones) 
     EXPECT_EQ(fast.shadow.pixelStride, 2 * kAutoShadowStride);
     EXPECT_EQ(fast.rsm.resolution, 256);  // "auto" is 512 at 128^3
     EXPECT_EQ(fast.diffuse.objectRays, 4);
+    EXPECT_EQ(fast.diffuse.objectRayPixelStride, 2 * kAutoObjectRayStride);
     EXPECT_EQ(interactiveOptions(full, 320, 240, 1).diffuse.pixelStride,
               kAutoDiffuseStride);                                       // auto is 4 there
     EXPECT_EQ(interactiveOptions(full, 640, 480, 3).rsm.resolution, 0);  // several lights keep "auto"
@@ -328,6 +329,7 @@ TEST(LiveSessionImages, InteractiveOptionsTakeOneSamplePerPixelAndSparserCones) 
     fast.shadow.relightPixelStride = full.shadow.relightPixelStride;
     fast.rsm.resolution = full.rsm.resolution;
     fast.diffuse.objectRays = full.diffuse.objectRays;
+    fast.diffuse.objectRayPixelStride = full.diffuse.objectRayPixelStride;
     EXPECT_EQ(optionsToJson(fast), optionsToJson(full));
 }
 

@@ -20,8 +20,7 @@ namespace deltagi {
 namespace {
 
 // Each floor point (x = 0.5 + dx, z = 0.5) kCopies times over: the copies' rays are jittered apart (by the
-// point's index), and a point far off the sphere's side takes fewer rays (objectRaySide), so their mean is
-// what is checked (meanOfCopies: the red channel's).
+// point's index), so their mean is what is checked (meanOfCopies: the red channel's).
 constexpr int kCopies = 16;
 std::vector<SurfacePoint> floorPointCopies(std::initializer_list<float> dxs, const Material& floor) {
     std::vector<SurfacePoint> points;
@@ -184,15 +183,36 @@ TEST(ObjectBounceRays, ARadianceDifferenceIsTheDifferenceOfTheTwoLookups) {
     EXPECT_GT(bothNonZero, 10);  // the comparison covers points where both volumes have light
 }
 
-// A point that sees the objects' bounding sphere small takes fewer rays, in proportion to its solid angle;
-// at least one; all of them from a cone of 90 degrees or wider (and from inside the sphere).
-TEST(ObjectBounceRays, APointTakesRaysInProportionToTheSphereItSees) {
-    EXPECT_EQ(objectRaySide(4, 1.0f), 4);
-    EXPECT_EQ(objectRaySide(4, kFullRaysOneMinusCos), 4);
-    EXPECT_EQ(objectRaySide(4, kFullRaysOneMinusCos / 4.0f), 2);  // a quarter of the solid angle: 4 rays
-    EXPECT_EQ(objectRaySide(16, kFullRaysOneMinusCos / 16.0f), 4);
-    EXPECT_EQ(objectRaySide(4, 1e-6f), 1);
-    EXPECT_EQ(objectRaySide(4, 0.0f), 1);
+// A point far from the objects casts all its rays into their bounding sphere's narrow cone, as a near one
+// does: the few pixels that cast rays (options.diffuse.object_ray_pixel_stride) each need them, or the filter
+// spreads one ray's hit or miss into blotches over the walls. Here the sphere fills a third of its bounding
+// sphere's cone (the bounding sphere is its box's), so one ray would hit or miss it: the point's copies,
+// jittered apart, would spread by more than their mean.
+TEST(ObjectBounceRays, AFarPointCastsEveryRayIntoTheObjectsSmallCone) {
+    const float radius = 0.2f, height = 0.5f, radiance = 2.0f;
+    Scene s;
+    s.real.push_back(
+        test::placed(makeQuad({5.0f, 5.0f}), {0.5f, 0.0f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    s.virtuals.push_back(
+        test::placed(makeSphere(radius, 64), {0.5f, height, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    const VolumeRegion region{glm::vec3(0.0f, -0.25f, 0.0f), 1.0f, 64};
+    const VoxelGeometry sphere = voxelize(s.virtuals, region);
+    Grid3 light(region.resolution);
+    for (size_t i = 0; i < light.size(); ++i) {
+        const float occupancy = sphere.visibility[i].x;
+        light[i] = glm::vec4(glm::vec3(radiance * occupancy), occupancy);
+    }
+    const MipVolume objectLight = buildMipChain(region, std::move(light));
+    const SphereRays traced(s, radius, height);
+    const Options options;  // 16 rays
+    const std::vector<SurfacePoint> points = floorPointCopies({1.8f}, s.real[0].material);
+    const std::vector<glm::vec3> got = traceObjectBounceRays(points, objectLight, traced.rays, options);
+    const float expected = radiance * sphereSolidAngle(points[0].position, radius, height);
+    double mean = 0.0, square = 0.0;
+    for (const glm::vec3& v : got) mean += v.x / got.size();
+    for (const glm::vec3& v : got) square += (v.x - mean) * (v.x - mean) / got.size();
+    EXPECT_NEAR(mean, expected, 0.15 * expected);
+    EXPECT_LT(std::sqrt(square), 0.35 * mean);
 }
 
 }  // namespace

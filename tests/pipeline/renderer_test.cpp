@@ -239,6 +239,9 @@ TEST(Render, TheObjectsConesHaveTheirOwnAperture) {
                 if (out.objectMask.at(x, y, 0) > 0.0f) change.setRgb(x, y, glm::vec3(0.0f));
         return change;
     };
+    // The relit cones carry the box's light on the floor (with "rays" only the floor's own change, which a
+    // plane does not see).
+    s.options.render.relightObjectLight = RelightObjectLight::Cones;
     s.options.diffuse.objectApertureDeg = 20.0f;
     const RenderOutput narrow = render(s);
     s.options.diffuse.objectApertureDeg = 70.0f;

@@ -43,7 +43,8 @@ Options everyOptionChanged() {
                  .objectApertureDeg = 0.0f,
                  .pixelStride = 2,
                  .relightPixelStride = 32,
-                 .objectRays = 0};
+                 .objectRays = 0,
+                 .objectRayPixelStride = 4};
     o.specular = {.minApertureDeg = 10.0f, .maxApertureDeg = 45.0f, .relightPixelStride = 1};
     o.shadow = {.method = ShadowMethod::Cones,
                 .raySamples = 9,
@@ -64,7 +65,7 @@ Options everyOptionChanged() {
                 .relightIndirect = false,
                 .temporalFrames = 1,
                 .relightCones = RelightCones::DeltaVolume,
-                .relightObjectLight = RelightObjectLight::Rays,
+                .relightObjectLight = RelightObjectLight::Cones,
                 .layers = true,
                 .lightBounces = 8,
                 .denoiseRadius = 0};
@@ -104,7 +105,7 @@ TEST(OptionTable, EachOptionIsDescribedOnce) {
             ++count;
         }
     }
-    EXPECT_EQ(count, 43u);  // the fields of the 8 structs of options.h
+    EXPECT_EQ(count, 44u);  // the fields of the 8 structs of options.h
 }
 
 // Each name of `names` reads back as its value and is written as itself, and each value of the enum (in

@@ -496,7 +496,7 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
     EXPECT_EQ(written["render"]["relight_object_light"], "rays");
     EXPECT_EQ(written["diffuse"]["object_rays"], 4);
     const Options defaults;
-    EXPECT_EQ(defaults.render.relightObjectLight, RelightObjectLight::Cones);
+    EXPECT_EQ(defaults.render.relightObjectLight, RelightObjectLight::Rays);
     EXPECT_EQ(defaults.diffuse.objectRays, 16);
     EXPECT_EQ(defaults.shadow.method, ShadowMethod::Rays);
     EXPECT_EQ(defaults.render.relightCones, RelightCones::Differential);
