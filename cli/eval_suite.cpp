@@ -99,13 +99,17 @@ int runSuite(const CLI::App& eval, const SuiteArgs& args) {
     command += " --json " + shellWord(json.string()) + " --markdown " + shellWord(args.markdown.string());
 
     std::vector<SceneQuality> results;
-    for (const SuiteScene& entry : suite.scenes) {
-        if (!quiet) note(fmt::format("deltagi: {} ({})", entry.name, entry.file.string()));
-        results.push_back(evaluateSuiteScene(suite, entry, options));
-        for (const std::string& warning : results.back().warnings) note("deltagi: warning: " + warning);
-        // Written after every scene, so that an interrupted suite keeps what it measured.
+    // Written after every scene and every frame of a sequence, so that an interrupted suite keeps what it
+    // measured.
+    options.onScene = [&](const SceneQuality& q) {
+        results.push_back(q);
+        for (const std::string& warning : q.warnings) note("deltagi: warning: " + warning);
         writeFile(json, suiteToJson(results, command).dump(2) + "\n");
         writeFile(args.markdown, suiteMarkdown(results, command));
+    };
+    for (const SuiteScene& entry : suite.scenes) {
+        if (!quiet) note(fmt::format("deltagi: {} ({})", entry.name, entry.file.string()));
+        evaluateSuiteEntry(suite, entry, options);
     }
     if (!quiet)
         note(fmt::format("deltagi: wrote {} and {} ({} scenes; references cached in {})", json.string(),

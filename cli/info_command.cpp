@@ -91,6 +91,7 @@ nlohmann::json sequenceJson(const Scene& scene) {
             {"lens", lenses},
             {"sizes_vary", sizeVaries},
             {"camera_path", path},
+            {"photos", !frames.front().photo.empty()},
             {"keyframed_objects", scene.animations.size()}};
 }
 
@@ -100,9 +101,11 @@ void printInfoTable(const Scene& scene, const SceneInfo& info) {
     fmt::print("{:<16} {}x{}, lens {}{}\n", "camera", scene.camera.width, scene.camera.height,
                lensText(scene.camera.distortion), scene.sequence.empty() ? "" : " (the first frame's)");
     if (const nlohmann::json sequence = sequenceJson(scene); !sequence.is_null()) {
-        fmt::print("{:<16} {} frames {} of {}, {:.4g} fps{}\n", "sequence", sequence["frames"].get<size_t>(),
-                   sequence["range"].get<std::string>(), sequence["transforms"].get<std::string>(),
-                   scene.frameRate, sequence["sizes_vary"].get<bool>() ? ", frames of several sizes" : "");
+        fmt::print("{:<16} {} frames {} of {}, {:.4g} fps{}{}\n", "sequence",
+                   sequence["frames"].get<size_t>(), sequence["range"].get<std::string>(),
+                   sequence["transforms"].get<std::string>(), scene.frameRate,
+                   sequence["sizes_vary"].get<bool>() ? ", frames of several sizes" : "",
+                   sequence["photos"].get<bool>() ? "" : ", no photos (the real scene is rendered)");
         const auto lenses = sequence["lens"].get<std::vector<std::string>>();
         fmt::print("{:<16} the camera's path {:.4g} long, {} keyframed{}\n", "",
                    sequence["camera_path"].get<double>(),

@@ -63,7 +63,8 @@ std::vector<RunInput> sceneInputs(const Scene& scene) {
     // A sequence: the transforms file and every frame's photo, not only the first frame's.
     if (!scene.sequence.empty()) inputs.push_back({scene.sequenceFile, "the sequence's transforms file"});
     for (const SequenceFrame& frame : scene.sequence)
-        inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
+        if (!frame.photo.empty())
+            inputs.push_back({frame.photo, fmt::format("the photo of frame {}", frame.index)});
     return inputs;
 }
 

@@ -83,7 +83,8 @@ std::optional<double> transformsFrameRate(const std::filesystem::path& file);
 Image readFramePhoto(const SequenceFrame& frame, const std::filesystem::path& transformsFile);
 
 // The scene as frame `frame` of its sequence: the frame's camera, its photo (read now: InputError as
-// readFramePhoto) and the keyframed objects' poses (poseObjects).
+// readFramePhoto; none for a frame without one, whose real scene is rendered) and the keyframed objects'
+// poses (poseObjects).
 void showFrame(Scene& scene, const SequenceFrame& frame);
 
 // The scene's camera and photo as they are, to put back after a loop of showFrame(); restoring also poses

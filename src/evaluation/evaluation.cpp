@@ -193,7 +193,10 @@ SequenceEvaluation evaluateSequence(Scene& scene, const ReferenceOptions& refere
             continue;
         }
         const ReferenceOutput reference = renderReference(scene, referenceOptions);
-        const RenderOutput dgi = renderer.render(scene);  // over the photo, which is the reference's too
+        // Over the photo, which is the reference's too; a frame without one over the reference's real scene,
+        // as evaluate() renders a scene without a photo.
+        if (!scene.background) scene.background = reference.background;
+        const RenderOutput dgi = renderer.render(scene);
         const PixelClasses classes = classifyPixels(scene, dgi.objectMask, reference.objectMask);
         out.frames.push_back({frame.index,
                               deltaFigures(dgi.composite, reference.composite, *scene.background, classes),

@@ -270,16 +270,26 @@ ReferenceOutput meanOfReferences(const ReferenceOutput& a, const ReferenceOutput
     return out;
 }
 
-SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& entry,
-                                const SuiteRunOptions& options) {
+namespace {
+
+// The overrides of a suite entry: its own, then the run's.
+std::vector<std::string> entryOverrides(const SuiteScene& entry, const SuiteRunOptions& options) {
+    std::vector<std::string> overrides = entry.overrides;
+    overrides.insert(overrides.end(), options.overrides.begin(), options.overrides.end());
+    return overrides;
+}
+
+// evaluateSuiteScene for the scene as it is shown (a sequence's frame: `frame`), named `name`, its references
+// cached under `key`.
+SceneQuality evaluateShownScene(const QualitySuite& suite, const SuiteScene& entry,
+                                const SuiteRunOptions& options, const Scene& scene, std::string name,
+                                std::string key) {
     SceneQuality q;
-    q.name = entry.name;
+    q.name = std::move(name);
     q.file = entry.file;
-    q.overrides = entry.overrides;
-    q.overrides.insert(q.overrides.end(), options.overrides.begin(), options.overrides.end());
-    const Scene scene = loadScene(entry.file, q.overrides);
+    q.overrides = entryOverrides(entry, options);
     q.warnings = scene.warnings;
-    q.key = referenceContentKey(entry.file, q.overrides);
+    q.key = std::move(key);
     const fs::path cache = options.cacheFolder / q.key;
     const uint64_t suiteSeed = options.seed.value_or(suite.seed);
     q.referenceSpp = options.samplesPerPixel.value_or(entry.samplesPerPixel);
@@ -396,6 +406,38 @@ SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& ent
     checkNoise("delta_rel_error", q.referenceNoise, q.dgi.deltaRelError);
     checkNoise("object_rel_rmse", q.objectReferenceNoise, q.dgi.objectRelRmse);
     return q;
+}
+
+}  // namespace
+
+SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& entry,
+                                const SuiteRunOptions& options) {
+    const std::vector<std::string> overrides = entryOverrides(entry, options);
+    const Scene scene = loadScene(entry.file, overrides);
+    return evaluateShownScene(suite, entry, options, scene, entry.name,
+                              referenceContentKey(entry.file, overrides));
+}
+
+std::vector<SceneQuality> evaluateSuiteEntry(const QualitySuite& suite, const SuiteScene& entry,
+                                             const SuiteRunOptions& options) {
+    const std::vector<std::string> overrides = entryOverrides(entry, options);
+    Scene scene = loadScene(entry.file, overrides);
+    const std::string key = referenceContentKey(entry.file, overrides);
+    if (scene.sequence.empty()) {
+        SceneQuality q = evaluateShownScene(suite, entry, options, scene, entry.name, key);
+        if (options.onScene) options.onScene(q);
+        return {std::move(q)};
+    }
+    std::vector<SceneQuality> frames;
+    const std::vector<SequenceFrame> sequence = scene.sequence;
+    for (const SequenceFrame& frame : sequence) {
+        showFrame(scene, frame);
+        frames.push_back(evaluateShownScene(suite, entry, options, scene,
+                                            fmt::format("{} frame {}", entry.name, frame.index),
+                                            fmt::format("{}-frame{}", key, frame.index)));
+        if (options.onScene) options.onScene(frames.back());
+    }
+    return frames;
 }
 
 namespace {

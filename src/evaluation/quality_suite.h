@@ -142,6 +142,8 @@ ReferenceOutput meanOfReferences(const ReferenceOutput& a, const ReferenceOutput
 // The suite's references keep a checkpoint this often (minutes of rendering).
 constexpr double kDefaultCheckpointMinutes = 10.0;
 
+struct SceneQuality;
+
 struct SuiteRunOptions {
     std::filesystem::path cacheFolder = "out/quality/refs";
     std::vector<std::string> overrides;           // applied to every scene after its own "set"
@@ -152,6 +154,8 @@ struct SuiteRunOptions {
     // Minutes of rendering between a reference's checkpoints (cachedReference's), 0 = none: an interrupted
     // suite goes on from the last one.
     double checkpointMinutes = kDefaultCheckpointMinutes;
+    // After each scene, and each frame of a sequence, that evaluateSuiteEntry evaluates, with its figures.
+    std::function<void(const SceneQuality&)> onScene;
 };
 
 // The share of a figure above which the reference noise makes the suite warn: under 10 % a change of a fifth
@@ -190,9 +194,17 @@ struct SceneQuality {
 };
 
 // Evaluates one scene of the suite: its references from the cache (or rendered and stored), DGI and its
-// baselines against them, the split and the equal-error figures.
+// baselines against them, the split and the equal-error figures. A scene with a sequence is evaluated as its
+// first frame.
 SceneQuality evaluateSuiteScene(const QualitySuite& suite, const SuiteScene& entry,
                                 const SuiteRunOptions& options);
+// evaluateSuiteScene, and for a scene with a sequence ("sequence", its "frames" range) one figure per frame:
+// each frame shown (its camera, photo or none, and keyframed objects) and evaluated as a still scene, named
+// "NAME frame N", its references cached under the scene's key and "-frameN" (a still render of each pose:
+// the temporal reuse of `deltagi render` over the sequence is not in them). options.onScene after each scene
+// or frame.
+std::vector<SceneQuality> evaluateSuiteEntry(const QualitySuite& suite, const SuiteScene& entry,
+                                             const SuiteRunOptions& options);
 
 // The table: one object per scene (keys in docs/ground-truth.md), and `command`, how it was made.
 nlohmann::ordered_json suiteToJson(std::span<const SceneQuality> scenes, const std::string& command);

@@ -514,9 +514,10 @@ void readSequence(const JsonNode& node, const fs::path& sceneFolder, Scene& scen
         scene.frameRate = n->number({0.0, kMaxFrameRate, true, false});
     else if (auto fps = transformsFrameRate(scene.sequenceFile))
         scene.frameRate = *fps;
-    scene.camera = scene.sequence.front().camera;
-    scene.backgroundFile = scene.sequence.front().photo;
-    scene.background = readFramePhoto(scene.sequence.front(), scene.sequenceFile);
+    const SequenceFrame& first = scene.sequence.front();
+    scene.camera = first.camera;
+    scene.backgroundFile = first.photo;
+    if (!first.photo.empty()) scene.background = readFramePhoto(first, scene.sequenceFile);
 }
 
 bool holdsEntries(const JsonNode& root, std::string_view key) {
@@ -583,7 +584,9 @@ void checkCoordinates(const Scene& scene, const std::string& file) {
     if (farOut(scene.camera.position())) fail("camera", scene.camera.position());
     for (const SequenceFrame& frame : scene.sequence)
         if (farOut(frame.camera.position()))
-            fail(fmt::format("sequence: frame {} ({})", frame.index, frame.photo.filename().string()),
+            fail(frame.photo.empty()
+                     ? fmt::format("sequence: frame {}", frame.index)
+                     : fmt::format("sequence: frame {} ({})", frame.index, frame.photo.filename().string()),
                  frame.camera.position());
     for (size_t i = 0; i < scene.lights.size(); ++i)
         if (scene.lights[i].type != Light::Type::Directional && farOut(scene.lights[i].position))

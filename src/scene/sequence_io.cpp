@@ -83,9 +83,12 @@ Camera readFrameCamera(const JsonNode& frame, const JsonNode& root) {
     return camera;
 }
 
-// The frame's photo: file_path relative to the transforms file; without an extension, .png or .jpg.
+// The frame's photo: file_path relative to the transforms file; without an extension, .png or .jpg. Empty
+// for a frame without file_path: a camera path over the real scene rendered as it is.
 fs::path framePhoto(const JsonNode& frame, const fs::path& folder) {
-    const JsonNode pathNode = frame.child("file_path");
+    const auto found = frame.find("file_path");
+    if (!found) return {};
+    const JsonNode& pathNode = *found;
     const fs::path given = folder / pathNode.string();
     if (fs::is_regular_file(given)) return given;
     if (!given.has_extension())
@@ -146,6 +149,22 @@ std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range
     if (range.first >= count || last > count)
         frames.fail(fmt::format("the frame range {}:{} is outside the file's {} frames (0:{})", range.first,
                                 range.last < 0 ? std::string() : std::to_string(range.last), count, count));
+    // Photos for every frame, or for none (a camera path over the rendered real scene): a frame without one
+    // among frames with one is a mistake, not a frame to render differently.
+    const auto hasPhoto = [&](size_t i) {
+        const nlohmann::json& frame = frames.element(i).value();
+        return frame.is_object() && frame.contains("file_path");
+    };
+    size_t withPhoto = 0;
+    for (size_t i = 0; i < frames.size(); ++i) withPhoto += hasPhoto(i) ? 1 : 0;
+    if (withPhoto > 0 && withPhoto < frames.size())
+        for (size_t i = 0; i < frames.size(); ++i)
+            if (!hasPhoto(i))
+                frames.element(i).fail(
+                    fmt::format("no \"file_path\", while {} of the {} frames have a photo: give every frame "
+                                "its photo, or "
+                                "none (a camera path over the rendered real scene)",
+                                withPhoto, frames.size()));
     std::vector<SequenceFrame> out;
     for (int i = range.first; i < last; ++i) {
         const JsonNode frame = frames.element(static_cast<size_t>(i));
@@ -153,7 +172,7 @@ std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range
         out.push_back({i, readFrameCamera(frame, root), framePhoto(frame, file.parent_path())});
         // A photo of the wrong size fails now, from its header, not after the frames before it are rendered.
         const Camera& camera = out.back().camera;
-        if (const auto size = imageFileSize(out.back().photo);
+        if (const auto size = out.back().photo.empty() ? std::nullopt : imageFileSize(out.back().photo);
             size && (size->first != camera.width || size->second != camera.height))
             frame.child("file_path")
                 .fail(fmt::format("expected a photo of the camera's size {}x{}, got {}x{} ('{}')",
@@ -196,7 +215,8 @@ Image readFramePhoto(const SequenceFrame& frame, const fs::path& transformsFile)
 
 void showFrame(Scene& scene, const SequenceFrame& frame) {
     scene.camera = frame.camera;
-    scene.background = readFramePhoto(frame, scene.sequenceFile);
+    scene.background =
+        frame.photo.empty() ? std::nullopt : std::optional<Image>(readFramePhoto(frame, scene.sequenceFile));
     scene.backgroundFile = frame.photo;
     poseObjects(scene, frame.index);
 }

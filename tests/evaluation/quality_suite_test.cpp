@@ -456,6 +456,37 @@ TEST_F(QualitySuiteTest, ABlackObjectOnAFloorChangesOnlyTheDirectLight) {
     EXPECT_NEAR(q.shadowPart, q.shadowOnly.deltaRelError, 1e-5);
 }
 
+// A scene with a sequence is scored frame by frame: each frame's camera, its references cached apart.
+TEST_F(QualitySuiteTest, ASequenceIsScoredFrameByFrame) {
+    json frames = json::array();
+    for (int i = 0; i < 2; ++i)
+        frames.push_back(
+            {{"transform_matrix", {{1, 0, 0, 0.1 * i}, {0, 1, 0, 0.8}, {0, 0, 1, 2}, {0, 0, 0, 1}}}});
+    write("transforms.json",
+          json{{"fl_x", 30.0}, {"fl_y", 30.0}, {"w", 32}, {"h", 24}, {"frames", frames}}.dump());
+    json scene = tinyScene(0.5);
+    scene.erase("camera");
+    scene["sequence"] = {{"transforms", "transforms.json"}};
+    write("path.json", scene.dump());
+    const QualitySuite suite =
+        loadSuite(write("suite.json", R"({"fit_spp": [1], "scenes": [{"scene": "path.json", "spp": 2}]})"));
+    SuiteRunOptions options = runOptions();
+    std::vector<std::string> reported;
+    options.onScene = [&](const SceneQuality& q) { reported.push_back(q.name); };
+    const std::vector<SceneQuality> got = evaluateSuiteEntry(suite, suite.scenes[0], options);
+    ASSERT_EQ(got.size(), 2u);
+    EXPECT_EQ(reported, (std::vector<std::string>{"path frame 0", "path frame 1"}));
+    EXPECT_EQ(got[1].key, referenceContentKey(dir_ / "path.json", {}) + "-frame1");
+    EXPECT_TRUE(fs::is_regular_file(dir_ / "refs" / got[1].key / "full-2spp-seed1" / "reference.json"));
+    EXPECT_NE(got[0].dgi.compositeRmse, got[1].dgi.compositeRmse);  // two cameras, two images
+    // A still scene is one row, reported too.
+    write("grey.json", tinyScene(0.5).dump());
+    const QualitySuite still =
+        loadSuite(write("still.json", R"({"fit_spp": [1], "scenes": [{"scene": "grey.json", "spp": 2}]})"));
+    EXPECT_EQ(evaluateSuiteEntry(still, still.scenes[0], options).size(), 1u);
+    EXPECT_EQ(reported.back(), "grey");
+}
+
 TEST_F(QualitySuiteTest, TheTableHasARowPerScene) {
     const QualitySuite suite = loadSuite(writeSuite());
     std::vector<SceneQuality> results;

@@ -3,6 +3,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -122,7 +123,7 @@ TEST_F(SequenceTest, BadTransformsNameTheFileAndTheFrame) {
     expectContains(errorOf(doc), {"transforms.json: frames", "no frames"});
     doc = transforms(2);
     doc["frames"][1].erase("file_path");
-    expectContains(errorOf(doc), {"frames[1]", "file_path"});
+    expectContains(errorOf(doc), {"frames[1]", "file_path", "1 of the 2 frames have a photo"});
     doc = transforms(2);
     doc["frames"][0]["file_path"] = "images/missing.png";
     expectContains(errorOf(doc), {"frames[0].file_path", "photo not found"});
@@ -210,6 +211,33 @@ TEST_F(SequenceTest, RenderingInChunksGivesTheSameFrames) {
     // Without a frame number in the output's name: one clear error.
     EXPECT_EQ(run("-o " + (dir_ / "one.png").string()), 1);
     EXPECT_NE(test::readText(dir_ / "err.txt").find("frame_####.png"), std::string::npos);
+}
+
+// A transforms file whose frames have no file_path is a camera path: each frame renders the real scene from
+// its camera, as a scene without a photo does.
+TEST_F(SequenceTest, FramesWithoutPhotosRenderTheRealScene) {
+    json doc = transforms(2);
+    for (json& frame : doc["frames"]) frame.erase("file_path");
+    write(doc);
+    const fs::path sceneFile = writeSequenceScene(test::tinySceneJson(32, 24, {0.8, 0.2, 0.1}));
+    Scene scene = loadScene(sceneFile);
+    ASSERT_EQ(scene.sequence.size(), 2u);
+    EXPECT_TRUE(scene.sequence[1].photo.empty());
+    EXPECT_FALSE(scene.background.has_value());
+    showFrame(scene, scene.sequence[1]);
+    EXPECT_FALSE(scene.background.has_value());
+    EXPECT_FLOAT_EQ(scene.camera.position().x, 0.1f);
+    ASSERT_EQ(runCli("render " + sceneFile.string() + " -q -o " + (dir_ / "frame_#.exr").string()), 0)
+        << test::readText(dir_ / "err.txt");
+    // The frames differ where the camera moved, and neither is a photo: the real scene is rendered.
+    const Image first = readImage(dir_ / "frame_0.exr"), second = readImage(dir_ / "frame_1.exr");
+    ASSERT_EQ(first.data().size(), second.data().size());
+    EXPECT_FALSE(std::equal(first.data().begin(), first.data().end(), second.data().begin()));
+    // A frame without a photo among frames with one is a mistake, named.
+    doc["frames"][0]["file_path"] = "images/frame_0.png";
+    write(doc);
+    expectContains(inputErrorOf([&] { loadScene(sceneFile); }),
+                   {"transforms.json: frames[1]", "no \"file_path\"", "1 of the 2 frames"});
 }
 
 // A chunk (--frames A:B) reads and checks the photos of its own frames and of those rendered before it for
