@@ -64,23 +64,42 @@ float sphereSolidAngle(glm::vec3 p, float radius, float height) {
     return (radius / d) * (radius / d) * (toCentre.y / d);
 }
 
-TEST(ObjectBounceRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
-    const float radius = 0.2f, height = 0.5f, radiance = 2.0f;
-    Scene s;
-    s.real.push_back(
-        test::placed(makeQuad({2.0f, 2.0f}), {0.5f, 0.0f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
-    s.virtuals.push_back(
-        test::placed(makeSphere(radius, 64), {0.5f, height, 0.5f}, test::diffuse(glm::vec3(0.5f))));
-    const VolumeRegion region{glm::vec3(0.0f, -0.25f, 0.0f), 1.0f, 64};
-    const VoxelGeometry sphere = voxelize(s.virtuals, region);
-    Grid3 light(region.resolution);
-    for (size_t i = 0; i < light.size(); ++i) {
-        const float occupancy = sphere.visibility[i].x;
-        light[i] = glm::vec4(glm::vec3(radiance * occupancy), occupancy);
+// A sphere of uniform radiance kRadiance (its voxels in the objects' light volume) over a grey floor of
+// `floorSize`, and the ray scenes.
+struct BrightSphere {
+    static constexpr float kRadius = 0.2f, kHeight = 0.5f, kRadiance = 2.0f;
+    explicit BrightSphere(float floorSize)
+        : scene(makeScene(floorSize)), objectLight(light(scene)), traced(scene, kRadius, kHeight) {}
+    static Scene makeScene(float floorSize) {
+        Scene s;
+        s.real.push_back(test::placed(makeQuad({floorSize, floorSize}), {0.5f, 0.0f, 0.5f},
+                                      test::diffuse(glm::vec3(0.5f))));
+        s.virtuals.push_back(
+            test::placed(makeSphere(kRadius, 64), {0.5f, kHeight, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+        return s;
     }
-    const MipVolume objectLight = buildMipChain(region, std::move(light));
-    const SphereRays traced(s, radius, height);
-    const ShadowRayScenes& rays = traced.rays;
+    static MipVolume light(const Scene& s) {
+        const VolumeRegion region{glm::vec3(0.0f, -0.25f, 0.0f), 1.0f, 64};
+        const VoxelGeometry sphere = voxelize(s.virtuals, region);
+        Grid3 grid(region.resolution);
+        for (size_t i = 0; i < grid.size(); ++i) {
+            const float occupancy = sphere.visibility[i].x;
+            grid[i] = glm::vec4(glm::vec3(kRadiance * occupancy), occupancy);
+        }
+        return buildMipChain(region, std::move(grid));
+    }
+    Scene scene;
+    MipVolume objectLight;
+    SphereRays traced;
+};
+
+TEST(ObjectBounceRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
+    const BrightSphere bright(2.0f);
+    const float radius = BrightSphere::kRadius, height = BrightSphere::kHeight,
+                radiance = BrightSphere::kRadiance;
+    const Scene& s = bright.scene;
+    const MipVolume& objectLight = bright.objectLight;
+    const ShadowRayScenes& rays = bright.traced.rays;
     const Options options = manyRays();
     const Material& floor = s.real[0].material;
     const std::vector<SurfacePoint> points = floorPointCopies({0.0f, 0.3f, 0.45f}, floor);
@@ -189,25 +208,13 @@ TEST(ObjectBounceRays, ARadianceDifferenceIsTheDifferenceOfTheTwoLookups) {
 // sphere's cone (the bounding sphere is its box's), so one ray would hit or miss it: the point's copies,
 // jittered apart, would spread by more than their mean.
 TEST(ObjectBounceRays, AFarPointCastsEveryRayIntoTheObjectsSmallCone) {
-    const float radius = 0.2f, height = 0.5f, radiance = 2.0f;
-    Scene s;
-    s.real.push_back(
-        test::placed(makeQuad({5.0f, 5.0f}), {0.5f, 0.0f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
-    s.virtuals.push_back(
-        test::placed(makeSphere(radius, 64), {0.5f, height, 0.5f}, test::diffuse(glm::vec3(0.5f))));
-    const VolumeRegion region{glm::vec3(0.0f, -0.25f, 0.0f), 1.0f, 64};
-    const VoxelGeometry sphere = voxelize(s.virtuals, region);
-    Grid3 light(region.resolution);
-    for (size_t i = 0; i < light.size(); ++i) {
-        const float occupancy = sphere.visibility[i].x;
-        light[i] = glm::vec4(glm::vec3(radiance * occupancy), occupancy);
-    }
-    const MipVolume objectLight = buildMipChain(region, std::move(light));
-    const SphereRays traced(s, radius, height);
+    const BrightSphere bright(5.0f);
     const Options options;  // 16 rays
-    const std::vector<SurfacePoint> points = floorPointCopies({1.8f}, s.real[0].material);
-    const std::vector<glm::vec3> got = traceObjectBounceRays(points, objectLight, traced.rays, options);
-    const float expected = radiance * sphereSolidAngle(points[0].position, radius, height);
+    const std::vector<SurfacePoint> points = floorPointCopies({1.8f}, bright.scene.real[0].material);
+    const std::vector<glm::vec3> got =
+        traceObjectBounceRays(points, bright.objectLight, bright.traced.rays, options);
+    const float expected = BrightSphere::kRadiance *
+                           sphereSolidAngle(points[0].position, BrightSphere::kRadius, BrightSphere::kHeight);
     double mean = 0.0, square = 0.0;
     for (const glm::vec3& v : got) mean += v.x / got.size();
     for (const glm::vec3& v : got) square += (v.x - mean) * (v.x - mean) / got.size();
