@@ -247,15 +247,19 @@ double referenceNoiseOf(double apart) {
 }
 
 ReferenceOutput meanOfReferences(const ReferenceOutput& a, const ReferenceOutput& b) {
-    // with and without are not kept in the cache (cachedReference()): empty unless both have them.
+    // with and without are not kept in the cache (cachedReference()): empty unless both have them. A cached
+    // image is read with the channels of its file (a mask as RGB): the mean keeps the fewer, channel by
+    // channel.
     const auto mean = [](const Image& x, const Image& y) {
         if (x.empty() || y.empty()) return Image();
-        if (x.width() != y.width() || x.height() != y.height() || x.channels() != y.channels())
+        if (x.width() != y.width() || x.height() != y.height())
             throw std::invalid_argument("meanOfReferences: the references' images differ in size");
-        Image out = x;
-        std::span<float> o = out.data();
-        std::span<const float> other = y.data();
-        for (size_t i = 0; i < o.size(); ++i) o[i] = 0.5f * (o[i] + other[i]);
+        const int channels = std::min(x.channels(), y.channels());
+        Image out(x.width(), x.height(), channels);
+        for (int py = 0; py < x.height(); ++py)
+            for (int px = 0; px < x.width(); ++px)
+                for (int c = 0; c < channels; ++c)
+                    out.at(px, py, c) = 0.5f * (x.at(px, py, c) + y.at(px, py, c));
         return out;
     };
     ReferenceOutput out;
