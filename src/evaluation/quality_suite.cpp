@@ -283,7 +283,7 @@ std::vector<std::string> entryOverrides(const SuiteScene& entry, const SuiteRunO
     return overrides;
 }
 
-// evaluateSuiteScene for the scene as it is shown (a sequence's frame: `frame`), named `name`, its references
+// evaluateSuiteScene for `scene` as it is shown (a sequence at one of its frames), named `name`, its references
 // cached under `key`.
 SceneQuality evaluateShownScene(const QualitySuite& suite, const SuiteScene& entry,
                                 const SuiteRunOptions& options, const Scene& scene, std::string name,
