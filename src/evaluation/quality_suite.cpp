@@ -283,8 +283,8 @@ std::vector<std::string> entryOverrides(const SuiteScene& entry, const SuiteRunO
     return overrides;
 }
 
-// evaluateSuiteScene for `scene` as it is shown (a sequence at one of its frames), named `name`, its references
-// cached under `key`.
+// evaluateSuiteScene for `scene` as it is shown (a sequence at one of its frames), named `name`, its
+// references cached under `key`.
 SceneQuality evaluateShownScene(const QualitySuite& suite, const SuiteScene& entry,
                                 const SuiteRunOptions& options, const Scene& scene, std::string name,
                                 std::string key) {
