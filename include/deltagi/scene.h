@@ -193,8 +193,8 @@ struct Light {
 struct SequenceFrame {
     int index = 0;  // its place in the transforms file's "frames" (output files are numbered by it)
     Camera camera;
-    std::filesystem::path
-        photo;  // empty for a frame without one (a camera path over the rendered real scene)
+    // Empty for a frame without one (a camera path over the rendered real scene).
+    std::filesystem::path photo;
 };
 
 // A virtual object that moves over a sequence (its "keyframes" in the scene file; deltagi/keyframes.h): each

@@ -401,13 +401,7 @@ class HdrDecoder : public ImageDecoder {
         std::vector<std::byte> fileBytes;
         std::span<const std::byte> bytes = bytes_;
         if (!path_.empty()) {
-            std::ifstream in(path_, std::ios::binary | std::ios::ate);
-            const std::streamoff length = in.tellg();
-            if (!in || length < 0) throw ImageCodecError("cannot read the file");
-            fileBytes.resize(static_cast<size_t>(length));
-            in.seekg(0);
-            if (!in.read(reinterpret_cast<char*>(fileBytes.data()), length))
-                throw ImageCodecError("cannot read the file");
+            fileBytes = readWholeFile(path_);
             bytes = fileBytes;
         }
         if (const auto error =

@@ -514,10 +514,8 @@ void readSequence(const JsonNode& node, const fs::path& sceneFolder, Scene& scen
         scene.frameRate = n->number({0.0, kMaxFrameRate, true, false});
     else if (auto fps = transformsFrameRate(scene.sequenceFile))
         scene.frameRate = *fps;
-    const SequenceFrame& first = scene.sequence.front();
-    scene.camera = first.camera;
-    scene.backgroundFile = first.photo;
-    if (!first.photo.empty()) scene.background = readFramePhoto(first, scene.sequenceFile);
+    // The first frame's camera and photo (the keyframed objects are posed once they are read).
+    showFrame(scene, scene.sequence.front());
 }
 
 bool holdsEntries(const JsonNode& root, std::string_view key) {

@@ -151,20 +151,20 @@ std::vector<SequenceFrame> readTransforms(const fs::path& file, FrameRange range
                                 range.last < 0 ? std::string() : std::to_string(range.last), count, count));
     // Photos for every frame, or for none (a camera path over the rendered real scene): a frame without one
     // among frames with one is a mistake, not a frame to render differently.
-    const auto hasPhoto = [&](size_t i) {
+    size_t withPhoto = 0, firstWithout = frames.size();
+    for (size_t i = 0; i < frames.size(); ++i) {
         const nlohmann::json& frame = frames.element(i).value();
-        return frame.is_object() && frame.contains("file_path");
-    };
-    size_t withPhoto = 0;
-    for (size_t i = 0; i < frames.size(); ++i) withPhoto += hasPhoto(i) ? 1 : 0;
-    if (withPhoto > 0 && withPhoto < frames.size())
-        for (size_t i = 0; i < frames.size(); ++i)
-            if (!hasPhoto(i))
-                frames.element(i).fail(
-                    fmt::format("no \"file_path\", while {} of the {} frames have a photo: give every frame "
-                                "its photo, or "
-                                "none (a camera path over the rendered real scene)",
-                                withPhoto, frames.size()));
+        if (frame.is_object() && frame.contains("file_path"))
+            ++withPhoto;
+        else if (firstWithout == frames.size())
+            firstWithout = i;
+    }
+    if (withPhoto > 0 && firstWithout < frames.size())
+        frames.element(firstWithout)
+            .fail(
+                fmt::format("no \"file_path\", while {} of the {} frames have a photo: give every frame its "
+                            "photo, or none (a camera path over the rendered real scene)",
+                            withPhoto, frames.size()));
     std::vector<SequenceFrame> out;
     for (int i = range.first; i < last; ++i) {
         const JsonNode frame = frames.element(static_cast<size_t>(i));

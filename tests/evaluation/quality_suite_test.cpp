@@ -282,8 +282,8 @@ TEST_F(QualitySuiteTest, TheCacheIsReusedUntilTheSceneChanges) {
 
     const SceneQuality again = evaluateSuiteScene(suite, grey, runOptions());
     EXPECT_EQ(again.cacheHits, 6u);
-    // A cache that holds the first render only (from before the suite rendered two): the second is rendered
-    // and the mean made of a read and a rendered reference, whose mask has other channels.
+    // A cache that holds the first render only: the second is rendered and the mean made of a read and a
+    // rendered reference, whose mask has other channels.
     fs::remove_all(dir_ / "refs" / first.key / "full-4spp-seed4");
     const SceneQuality mixed = evaluateSuiteScene(suite, grey, runOptions());
     EXPECT_EQ(mixed.cacheMisses, 1u);
