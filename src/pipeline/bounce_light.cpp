@@ -16,11 +16,17 @@ namespace {
 // A mean normal shorter than this (surfaces facing several ways in one voxel) gathers nothing: its
 // hemisphere is not defined.
 constexpr float kMinCoherence = 0.2f;
-// The mip level whose voxels gather: 2, each for 4 x 4 x 4 level-0 voxels. Level 1 gathered 4 times as many
-// (the live frame's bounce_ms 98 -> 35 at 128^3, `deltagi bench --live`) for the same quality-suite figures
-// (delta_rel_error within 0.0001, object_rel_rmse 0.001 better) and a background as far from the path
-// tracer's; level 3 costs another 0.0009 of delta_rel_error for 15 ms.
-constexpr int kGatherLevel = 2;
+// The mip level whose voxels gather: the one of kGatherResolution^3 voxels (level 3 at 128^3, each gathering
+// for 8 x 8 x 8 level-0 voxels), or level 0 in smaller volumes. At 128^3 level 2 gathered 8 times as many
+// (the live frame's bounce_ms 42 -> 22, `deltagi bench --live`) for the same quality-suite figures (every
+// delta_rel_error 0.0003-0.0012 better, object_rel_rmse within 0.001 or better), and level 1 64 times as many
+// (bounce_ms 98 -> 35 to level 2, delta_rel_error within 0.0001).
+constexpr int kGatherResolution = 16;
+int gatherLevel(const MipVolume& visibility) {
+    int level = 0;
+    while ((visibility.region().resolution >> (level + 1)) >= kGatherResolution) ++level;
+    return level;
+}
 constexpr uint32_t kBounceStream = 9000;  // hashToUnit streams of the cones' jitter
 
 // Surfaces are two-sided and the winding of a reconstruction is not reliable: the side of a voxel that
@@ -55,9 +61,10 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
                   const Options& options, int bounces, glm::vec3 viewpoint) {
     const int n = direct.resolution();
     Grid3 indirect(n);
-    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= kGatherLevel) return indirect;
+    const int level = gatherLevel(visibility);
+    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= level) return indirect;
     const VolumeRegion& region = visibility.region();
-    const PackedGrid3& coarse = visibility.level(kGatherLevel);
+    const PackedGrid3& coarse = visibility.level(level);
     const int m = coarse.resolution();
     const int factor = n / m;  // level-0 voxels per coarse voxel along each axis
     const float coarseSize = region.voxelSize() * static_cast<float>(factor);
@@ -104,9 +111,10 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
 }
 
 std::vector<bool> bounceViewSides(const MipVolume& visibility, glm::vec3 viewpoint) {
-    if (visibility.levelCount() <= kGatherLevel) return {};
+    const int level = gatherLevel(visibility);
+    if (visibility.levelCount() <= level) return {};
     const VolumeRegion& region = visibility.region();
-    const PackedGrid3& coarse = visibility.level(kGatherLevel);
+    const PackedGrid3& coarse = visibility.level(level);
     const int m = coarse.resolution();
     const float coarseSize = region.voxelSize() * static_cast<float>(region.resolution / m);
     std::vector<bool> sides(coarse.size(), false);

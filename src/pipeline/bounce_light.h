@@ -22,16 +22,17 @@ namespace deltagi {
 // The light `bounces` further bounces add to `direct` (level 0 of the real scene's light volume: radiance
 // times occupancy, occupancy) as a grid of the same form with zero occupancy, to be added to it. `geometry`
 // is the scene's voxelization with albedo (voxelize's `withAlbedo`), `visibility` its visibility mip chain.
-// The light is gathered at the voxels of mip level 2 (each gathers for its 64 level-0 voxels, whose albedos
-// reflect it), with the diffuse cones of `options` around the voxel's mean normal, turned to face `viewpoint`
-// (the camera, which stands in the room it sees: surfaces are two-sided, and a reconstruction's winding does
-// not say which side is the room's). Deterministic for any thread count; zero for bounces <= 0.
+// The light is gathered at the voxels of the mip level that has 16^3 (level 3 at 128^3: each gathers for its
+// 512 level-0 voxels, whose albedos reflect it), with the diffuse cones of `options` around the voxel's mean
+// normal, turned to face `viewpoint` (the camera, which stands in the room it sees: surfaces are two-sided,
+// and a reconstruction's winding does not say which side is the room's). Deterministic for any thread count;
+// zero for bounces <= 0.
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
                   const Options& options, int bounces, glm::vec3 viewpoint);
 
-// Which side of each gathering voxel faces `viewpoint` (per voxel of `visibility`'s level 2: true where it is
-// the side against the voxel's mean normal): bounceLight's result for two viewpoints is the same where these
-// are (FrameRenderer keeps it while the camera moves).
+// Which side of each gathering voxel faces `viewpoint` (per voxel of bounceLight's gathering level: true
+// where it is the side against the voxel's mean normal): bounceLight's result for two viewpoints is the same
+// where these are (FrameRenderer keeps it while the camera moves).
 std::vector<bool> bounceViewSides(const MipVolume& visibility, glm::vec3 viewpoint);
 
 // The virtual objects' own reflection of the light they receive (their further bounce): the light volume

@@ -472,8 +472,8 @@ OptionGroup renderGroup() {
                 "light_bounces", &R::lightBounces, integers(1, 8), "bounces",
                 "bounces of indirect light the light volumes carry. 1 is the paper: the reflective shadow "
                 "maps inject the directly lit surfaces and the cones gather one bounce. Each more gathers "
-                "the volume at every surface voxel of the real scene (at half the volume's resolution, with "
-                "the diffuse cones, on the side facing the camera) and adds what it reflects, once while the "
+                "the volume at every surface voxel of the real scene (over 16^3 voxels, with the diffuse "
+                "cones, on the side facing the camera) and adds what it reflects, once while the "
                 "real side stays the same (`src/pipeline/bounce_light.*`); the objects get the room's "
                 "bounced light, and their own voxels gather the full volume every frame (at a quarter of the "
                 "volume's resolution) and add what they reflect "
