@@ -11,15 +11,38 @@
 
 namespace deltagi {
 
+// A light's falloff over directions from it: spot cone, Lambertian emitter or none, with the cone's cosines
+// computed once for many directions.
+class SpotCone {
+  public:
+    explicit SpotCone(const Light& light)
+        : direction_(light.direction),
+          lambertian_(light.lambertian),
+          spot_(light.type == Light::Type::Spot),
+          cosOuter_(std::cos(glm::radians(light.outerAngleDeg))),
+          cosInner_(std::cos(glm::radians(light.innerAngleDeg))) {}
+
+    // 1 inside the inner half-angle, 0 outside the outer one, smooth in between (Lambertian emitters: the
+    // cosine to the axis; other lights: 1).
+    float falloff(glm::vec3 directionFromLight) const {
+        if (lambertian_) return std::max(glm::dot(directionFromLight, direction_), 0.0f);
+        if (!spot_) return 1.0f;
+        const float cosTheta = glm::dot(directionFromLight, direction_);
+        if (cosInner_ - cosOuter_ <= 1e-6f) return cosTheta >= cosOuter_ ? 1.0f : 0.0f;
+        return glm::smoothstep(cosOuter_, cosInner_, cosTheta);
+    }
+
+  private:
+    glm::vec3 direction_;
+    bool lambertian_, spot_;
+    float cosOuter_, cosInner_;
+};
+
 // Spot cone: 1 inside the inner half-angle, 0 outside the outer one, smooth in between.
 inline float spotFalloff(const Light& light, glm::vec3 directionFromLight) {
     if (light.lambertian) return std::max(glm::dot(directionFromLight, light.direction), 0.0f);
     if (light.type != Light::Type::Spot) return 1.0f;
-    const float cosTheta = glm::dot(directionFromLight, light.direction);
-    const float cosOuter = std::cos(glm::radians(light.outerAngleDeg));
-    const float cosInner = std::cos(glm::radians(light.innerAngleDeg));
-    if (cosInner - cosOuter <= 1e-6f) return cosTheta >= cosOuter ? 1.0f : 0.0f;
-    return glm::smoothstep(cosOuter, cosInner, cosTheta);
+    return SpotCone(light).falloff(directionFromLight);
 }
 
 struct LightSample {

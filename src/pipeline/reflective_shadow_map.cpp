@@ -41,7 +41,7 @@ constexpr float kMinCos = 1e-3f;  // grazing texels: cap the footprint area
 class MapLayout {
   public:
     MapLayout(const RayScene& scene, const Light& light, const VolumeRegion& region, int resolution)
-        : light_(light), res_(resolution) {
+        : light_(light), cone_(light), res_(resolution) {
         const Bounds3f regionBounds = region.bounds();
         center_ = regionBounds.center();
         const float radius = 0.5f * std::sqrt(3.0f) * region.size;
@@ -70,6 +70,18 @@ class MapLayout {
     }
 
     int faceCount() const { return static_cast<int>(faces_.size()); }
+
+    // False when no texel of `face` can carry light: all its directions lie outside a spot light's outer cone
+    // (or behind a Lambertian emitter) by a margin, as the cube-map face above a spot light pointing down.
+    bool faceMayCarryLight(int face) const {
+        const bool spot = light_.type == Light::Type::Spot && !light_.lambertian;
+        if (light_.type == Light::Type::Directional || !(spot || light_.lambertian)) return true;
+        const Face& f = faces_[face];
+        const float toAxis = std::acos(std::clamp(glm::dot(f.forward, light_.direction), -1.0f, 1.0f));
+        const float faceRadius = std::atan(f.halfTan * std::numbers::sqrt2_v<float>);  // to its corners
+        const float limit = glm::radians(spot ? light_.outerAngleDeg : 90.0f);
+        return toAxis - faceRadius < limit + glm::radians(1.0f);
+    }
     float rayStart() const { return back_; }
 
     TexelRay ray(int face, int i, int j) const {
@@ -87,7 +99,7 @@ class MapLayout {
         // Solid angle of the texel on the plane at distance 1 (exact to first order).
         const float solidAngle = texelSide * texelSide / (r2 * std::sqrt(r2));
         const glm::vec3 dir = glm::normalize(d);
-        const glm::vec3 fluxIn = light_.power() * (spotFalloff(light_, dir) * solidAngle);
+        const glm::vec3 fluxIn = light_.power() * (cone_.falloff(dir) * solidAngle);
         return {light_.position, dir, fluxIn, 0.0f, solidAngle};
     }
 
@@ -149,6 +161,7 @@ class MapLayout {
 
   private:
     const Light& light_;
+    SpotCone cone_;
     int res_;
     glm::vec3 center_{0.0f};
     float back_ = 0.0f;
@@ -254,6 +267,7 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
     // light's are parallel.
     const bool directional = light.type == Light::Type::Directional;
     return renderRows(layout, resolution, [&](int face, int j, std::vector<RsmTexel>& row) {
+        if (!layout.faceMayCarryLight(face)) return;
         // A thread's row buffers, kept from row to row.
         thread_local std::vector<TexelRay> rays;
         thread_local std::vector<int> columns;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -94,6 +95,32 @@ TEST(Inject, TwoLightsAddTheirRadiance) {
 // above), a directional light's 512 (its orthographic map spreads over the whole region); among several
 // lights each takes the square root of its share of the brightest one's irradiance (1/4 and 1/16 of it: a
 // half and a quarter of the side), at least a quarter. A given resolution is every light's.
+// A spot light inside a closed white box (a 6-face map): the map holds the light of its whole cone, I times
+// the integral of its falloff over the sphere, 2 pi ((1 - cos inner) + (cos inner - cos outer) / 2) for the
+// smoothstep between the two cosines. A wide cone, turned off the axes, reaches five of the six faces: the
+// face behind it is passed over, and none the cone reaches may be.
+TEST(ReflectiveShadowMap, ASpotLightsMapHoldsTheLightOfItsWholeCone) {
+    Scene s;
+    s.real.push_back(test::placed(makeBox({1.8f, 1.8f, 1.8f}), {0, 0, 0}, test::diffuse(glm::vec3(1.0f))));
+    RayScene rays(s, SceneContent::RealOnly);
+    for (const float outer : {30.0f, 85.0f, 120.0f}) {
+        Light spot = test::pointLight({0.1f, 0.05f, -0.1f}, 2.0f);
+        spot.type = Light::Type::Spot;
+        spot.direction = glm::normalize(glm::vec3(0.4f, -1.0f, 0.3f));
+        spot.outerAngleDeg = outer;
+        spot.innerAngleDeg = outer - 20.0f;
+        const ReflectiveShadowMap rsm = renderReflectiveShadowMap(rays, spot, kRegion, 128);
+        ASSERT_EQ(rsm.faces, 6);
+        double flux = 0.0;
+        for (const RsmTexel& t : rsm.texels) flux += t.flux.x;
+        const double cosOuter = std::cos(glm::radians(static_cast<double>(outer)));
+        const double cosInner = std::cos(glm::radians(static_cast<double>(outer) - 20.0));
+        const double expected =
+            2.0 * 2.0 * std::numbers::pi * ((1.0 - cosInner) + 0.5 * (cosInner - cosOuter));
+        EXPECT_NEAR(flux, expected, 0.01 * expected) << outer;
+    }
+}
+
 TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
     Options options;
     options.volume.resolution = 32;
