@@ -594,6 +594,7 @@ int main(int argc, char** argv) {
         "an output that cannot be written, 2 usage error, 130 or 143 interrupted by SIGINT or SIGTERM (the "
         "previous outputs left as they were).");
     cli::installInterruptHandlers();
+    retainFreedMemory();
 
     RenderArgs renderArgs;
     CLI::App* renderCommand = app.add_subcommand("render", "Render a scene file to an image");

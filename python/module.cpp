@@ -100,6 +100,8 @@ struct PyFrameRenderer {
 }  // namespace deltagi::python
 
 PYBIND11_MODULE(deltagi, m) {
+    // Frames allocate and free per-pixel arrays: keep the freed memory for the next (deltagi/renderer.h).
+    deltagi::retainFreedMemory();
     using namespace deltagi;
     using namespace deltagi::python;
     m.doc() = "Delta Global Illumination: virtual objects rendered into real camera images (see README.md).";

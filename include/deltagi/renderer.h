@@ -110,6 +110,14 @@ class FrameRenderer {
     std::unique_ptr<State> state_;
 };
 
+// Tells the C library's allocator (glibc's) to keep the memory the process frees for its next allocations
+// instead of giving it back to the system, so that the per-pixel arrays a frame allocates and frees (a few
+// MiB each, dozens a frame) are not faulted in afresh every frame: a 1280x960 frame took 2-2.5 times as long
+// without it on the project's machine (docs/performance.md). Process-wide, and the memory is never returned:
+// the command line and the Python module call it once at start; call it before rendering frames in a process
+// of your own. No effect with another C library or under a sanitizer's allocator.
+void retainFreedMemory();
+
 // The cubic region covered by the volumes: the explicit options.volume region, or extent_scale times the
 // virtual objects' bounding box (§3.4) grown up to reach_scale times it to take in the real scene around
 // them; the real scene's bounds when there are no virtual objects.

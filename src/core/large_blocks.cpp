@@ -1,13 +1,20 @@
 #include "core/large_blocks.h"
 
+#include "deltagi/renderer.h"
+
 #include <bit>
 #include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <mutex>
 #include <new>
 
 #include <sys/mman.h>
+
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 namespace deltagi {
 
@@ -84,6 +91,16 @@ void freeLargeBlock(void* block, size_t bytes) {
         }
     }
     munmap(block, size);
+}
+
+void retainFreedMemory() {
+#if defined(__GLIBC__)
+    // Blocks under 32 MiB (glibc's largest mmap threshold) come from the heap, whose freed memory is never
+    // given back: without this, glibc maps a block of a few MiB afresh every time once its dynamic threshold
+    // and the heap's trimming disagree, as a 1280x960 frame's per-pixel arrays did.
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);
+    mallopt(M_TRIM_THRESHOLD, std::numeric_limits<int>::max());
+#endif
 }
 
 }  // namespace deltagi

@@ -11,7 +11,8 @@
 // pause of 6 s (the machine gives freed memory back to its host). Where the kernel has no free huge page at
 // hand it compacts memory first or falls back to 4 KiB pages, so a process's first blocks vary in cost from
 // run to run (docs/performance.md, "Single renders").
-// Small arrays go to the usual allocator.
+// Smaller arrays go to the usual allocator, which retainFreedMemory() (deltagi/renderer.h, defined here)
+// tells to keep what is freed.
 #pragma once
 
 #include <cstddef>

@@ -2,9 +2,16 @@
 #include "core/large_blocks.h"
 
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 
 #include <gtest/gtest.h>
+
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
+
+#include "deltagi/renderer.h"
 
 namespace deltagi {
 namespace {
@@ -42,6 +49,25 @@ TEST(LargeBlocks, AFreedBlockServesTheNextArrayOfItsSizeClass) {
     EXPECT_NE(otherSmall, small);
     freeLargeBlock(otherSmall, 6 * kMiB + 1);
 }
+
+#if defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__) && !defined(__SANITIZE_THREAD__)
+// After retainFreedMemory() an array of 24 MiB comes from the heap, not a mapping of its own, and the heap
+// keeps it when it is freed: the next one of that size touches no fresh page. (glibc's own settings map it,
+// and give a freed heap top back beyond 128 KiB, until a freed mapping of that size raises its thresholds.)
+TEST(RetainFreedMemory, KeepsAFreedArrayInTheHeapForTheNext) {
+    retainFreedMemory();
+    const size_t bytes = 24 * kMiB;
+    const struct mallinfo2 before = mallinfo2();
+    void* block = std::malloc(bytes);
+    ASSERT_NE(block, nullptr);
+    std::memset(block, 1, bytes);
+    const struct mallinfo2 holding = mallinfo2();
+    EXPECT_EQ(holding.hblkhd, before.hblkhd);  // no mapping of its own
+    EXPECT_GE(holding.arena, before.arena + bytes - 1 * kMiB);
+    std::free(block);
+    EXPECT_GE(mallinfo2().arena, holding.arena);  // not trimmed
+}
+#endif
 
 }  // namespace
 }  // namespace deltagi
