@@ -23,6 +23,8 @@ constexpr double kKernelSupport = 10.0;
 // The widest level covers a hemisphere-wide cone (90 degrees half-angle).
 constexpr double kWidestHalfAngle = 0.5 * kPi;
 constexpr int64_t kPointGrain = 256;
+// exp(x) is 0 in doubles below this (the smallest denormal is exp(-744.44)).
+constexpr double kExpIsZero = -746.0;
 
 // Halves a map (odd sizes round up), each new pixel the solid-angle-weighted mean of the pixels it covers.
 Image reduce(const Image& in) {
@@ -92,7 +94,11 @@ Image convolve(const Image& in, double halfAngle, std::span<const ExtractedLight
                 for (int k = first; k <= last; ++k) {
                     const double weight = weights[k - first];
                     if (weight == 0.0) continue;
-                    const int sx = (x + k + w) % w;
+                    int sx = x + k;  // wrapped round the map (|k| <= w / 2)
+                    if (sx < 0)
+                        sx += w;
+                    else if (sx >= w)
+                        sx -= w;
                     acc +=
                         weight * glm::dvec3(rowPixels[3 * sx], rowPixels[3 * sx + 1], rowPixels[3 * sx + 2]);
                 }
@@ -103,9 +109,12 @@ Image convolve(const Image& in, double halfAngle, std::span<const ExtractedLight
             const glm::dvec3 a(equirectDirection((static_cast<float>(x) + 0.5f) / static_cast<float>(w),
                                                  (static_cast<float>(y) + 0.5f) / static_cast<float>(h)));
             glm::dvec3 sum = sums[x];
-            for (const ExtractedLight& light : lights)
-                sum -= std::exp(kappa * (glm::dot(a, glm::dvec3(light.direction)) - 1.0)) *
-                       glm::dvec3(light.irradiance);
+            for (const ExtractedLight& light : lights) {
+                // exp() of an exponent this low is 0 (its slow underflow path: most lights are far away).
+                const double exponent = kappa * (glm::dot(a, glm::dvec3(light.direction)) - 1.0);
+                if (exponent < kExpIsZero) continue;
+                sum -= std::exp(exponent) * glm::dvec3(light.irradiance);
+            }
             out.setRgb(x, y, weightSum > 0.0 ? glm::vec3(sum / weightSum) : glm::vec3(0.0f));
         }
     });
