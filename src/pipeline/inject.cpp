@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cstring>
+#include <limits>
 #include <numbers>
 #include <tuple>
 
@@ -94,7 +95,8 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     std::vector<uint32_t> voxels;
     for (const ReflectiveShadowMap& rsm : rsms) {
         voxels.resize(rsm.texels.size());
-        for (size_t t = 0; t < rsm.texels.size(); ++t) voxels[t] = texelVoxel.index(rsm.texels[t].position);
+        parallelFor(0, static_cast<int64_t>(voxels.size()), 1 << 14,
+                    [&](int64_t t) { voxels[t] = texelVoxel.index(rsm.texels[t].position); });
         const SlabBins bins = binBySlab(voxels.size(), slabCount, [&](size_t t) {
             const int s = static_cast<int>(voxels[t] / (static_cast<size_t>(n) * n)) / kSlabThickness;
             return std::pair{s, s};
@@ -133,35 +135,43 @@ Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {
     return delta;
 }
 
-TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region) {
+TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
+                    const std::optional<VoxelBox>& box) {
     const int n = region.resolution;
     TexelBins bins;
     bins.resolution = n;
+    bins.box = box ? *box : VoxelBox::all(n);
+    const glm::ivec3 lo = bins.box.lo, hi = bins.box.hi;
     // A counting sort by row, which keeps injectLight's order inside each row, then each row by x.
     const TexelVoxels texelVoxel(region);
     size_t texels = 0;
     for (const ReflectiveShadowMap& rsm : rsms) texels += rsm.texels.size();
-    // Each texel's voxel, found in parallel: the row (z * n + y) and x.
+    // Each texel's voxel, found in parallel: the row (z * n + y) and x; kOutside for a voxel outside the box.
+    constexpr uint32_t kOutside = std::numeric_limits<uint32_t>::max();
     std::vector<uint32_t> rowOf(texels);
     std::vector<uint16_t> xOf(texels);
     size_t first = 0;
     for (const ReflectiveShadowMap& rsm : rsms) {
         parallelFor(0, static_cast<int64_t>(rsm.texels.size()), 1 << 14, [&](int64_t t) {
             const glm::ivec3 v = texelVoxel(rsm.texels[t].position);
-            rowOf[first + t] = static_cast<uint32_t>(v.z * n + v.y);
+            const bool inside = glm::all(glm::greaterThanEqual(v, lo)) && glm::all(glm::lessThan(v, hi));
+            rowOf[first + t] = inside ? static_cast<uint32_t>(v.z * n + v.y) : kOutside;
             xOf[first + t] = static_cast<uint16_t>(v.x);
         });
         first += rsm.texels.size();
     }
     bins.rowStart.assign(static_cast<size_t>(n) * n + 1, 0);
-    for (uint32_t row : rowOf) ++bins.rowStart[row + 1];
+    for (uint32_t row : rowOf)
+        if (row != kOutside) ++bins.rowStart[row + 1];
     for (size_t r = 0; r + 1 < bins.rowStart.size(); ++r) bins.rowStart[r + 1] += bins.rowStart[r];
-    bins.entries.resize(texels);
+    bins.entries.resize(bins.rowStart.back());
     std::vector<uint32_t> cursor(bins.rowStart.begin(), bins.rowStart.end() - 1);
     size_t k = 0;
     for (size_t l = 0; l < rsms.size(); ++l)
         for (size_t t = 0; t < rsms[l].texels.size(); ++t, ++k)
-            bins.entries[cursor[rowOf[k]]++] = {xOf[k], static_cast<uint16_t>(l), static_cast<uint32_t>(t)};
+            if (rowOf[k] != kOutside)
+                bins.entries[cursor[rowOf[k]]++] = {xOf[k], static_cast<uint16_t>(l),
+                                                    static_cast<uint32_t>(t)};
     parallelFor(0, static_cast<int64_t>(n) * n, 64, [&](int64_t r) {
         std::stable_sort(bins.entries.begin() + bins.rowStart[r], bins.entries.begin() + bins.rowStart[r + 1],
                          [](const TexelBins::Entry& a, const TexelBins::Entry& b) { return a.x < b.x; });

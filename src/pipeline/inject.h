@@ -4,6 +4,7 @@
 // light that reached real surfaces, positive on the lit virtual objects.
 #pragma once
 
+#include <optional>
 #include <span>
 
 #include "pipeline/reflective_shadow_map.h"
@@ -54,17 +55,21 @@ class TexelVoxels {
 // the voxels are injectLight's bit for bit (no differences of sums, which would round differently).
 
 // The texels of the real scene's RSMs, binned by row of voxels (built once, kept while the maps are): the
-// texels of any voxel are found without going through the maps.
+// texels of any voxel of `box` are found without going through the maps.
 struct TexelBins {
     struct Entry {
         uint16_t x, light;  // the voxel's x, the map
         uint32_t texel;     // position in the map's texels
     };
     int resolution = 0;
+    VoxelBox box;                    // the voxels whose texels are binned
     std::vector<uint32_t> rowStart;  // resolution^2 + 1 offsets into entries; row (y, z) is z * n + y
     std::vector<Entry> entries;      // each row's texels by x, then in injectLight's order (map, texel)
 };
-TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region);
+// The texels landing in `box` (every voxel of the region by default): where the maps change every frame (a
+// live light), only those that frame re-injects.
+TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
+                    const std::optional<VoxelBox>& box = std::nullopt);
 
 // Where the maps with the objects differ from the real scene's own: the scene's texels that are gone or
 // changed, and the texels that are new or changed.

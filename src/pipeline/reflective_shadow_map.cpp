@@ -285,8 +285,9 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
             if (directional || origins.empty()) origins.push_back(ray.origin);
             directions.push_back(ray.dir);
         }
-        hits.assign(rays.size(), RayHit{});
+        hits.resize(rays.size());  // each written in full by intersectCoherent
         scene.intersectCoherent(origins, directions, hits, false, true);
+        row.reserve(rays.size());
         for (size_t k = 0; k < rays.size(); ++k)
             if (auto t = texelFromHit(hits[k], rays[k], regionBounds,
                                       texelIndex(resolution, face, columns[k], j), viewpoint))
