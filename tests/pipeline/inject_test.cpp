@@ -91,10 +91,31 @@ TEST(Inject, TwoLightsAddTheirRadiance) {
             EXPECT_NEAR(light.at(x, 8, z).x, expected, 0.03f * expected) << x << "," << z;
 }
 
-// options.rsm.resolution "auto": a point light's map has 4 texels per voxel (128 at 32^3, 512 at 128^3 and
-// above), a directional light's 512 (its orthographic map spreads over the whole region); among several
-// lights each takes the square root of its share of the brightest one's irradiance (1/4 and 1/16 of it: a
-// half and a quarter of the side), at least a quarter. A given resolution is every light's.
+// options.rsm.resolution "auto": a point light's map has 3 texels per voxel (96 at 32^3, 384 at 128^3, 512 at
+// 256^3 and above), a directional light's 512 (its orthographic map spreads over the whole region); among
+// several lights each takes the square root of its share of the brightest one's irradiance (1/4 and 1/16 of
+// it: a half and a quarter of the side), at least a quarter. A given resolution is every light's.
+TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
+    Options options;
+    options.volume.resolution = 32;
+    const Light bright = test::pointLight({0.0f, 0.9f, 0.0f}, 1.0f);
+    Light quarter = bright, sixteenth = bright, dim = bright;
+    quarter.intensity = 0.25f;
+    sixteenth.intensity = 1.0f / 16.0f;
+    dim.intensity = 1e-4f;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, quarter, sixteenth, dim}, kRegion),
+              (std::vector<int>{96, 48, 24, 24}));
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion),
+              std::vector<int>{512});
+    options.volume.resolution = 128;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright}, kRegion), std::vector<int>{384});
+    options.volume.resolution = 256;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright}, kRegion), std::vector<int>{512});
+    options.rsm.resolution = 200;
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, dim}, kRegion),
+              (std::vector<int>{200, 200}));
+}
+
 // A spot light inside a closed white box (a 6-face map): the map holds the light of its whole cone, I times
 // the integral of its falloff over the sphere, 2 pi ((1 - cos inner) + (cos inner - cos outer) / 2) for the
 // smoothstep between the two cosines. A wide cone, turned off the axes, reaches five of the six faces: the
@@ -119,25 +140,6 @@ TEST(ReflectiveShadowMap, ASpotLightsMapHoldsTheLightOfItsWholeCone) {
             2.0 * 2.0 * std::numbers::pi * ((1.0 - cosInner) + 0.5 * (cosInner - cosOuter));
         EXPECT_NEAR(flux, expected, 0.01 * expected) << outer;
     }
-}
-
-TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
-    Options options;
-    options.volume.resolution = 32;
-    const Light bright = test::pointLight({0.0f, 0.9f, 0.0f}, 1.0f);
-    Light quarter = bright, sixteenth = bright, dim = bright;
-    quarter.intensity = 0.25f;
-    sixteenth.intensity = 1.0f / 16.0f;
-    dim.intensity = 1e-4f;
-    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, quarter, sixteenth, dim}, kRegion),
-              (std::vector<int>{128, 64, 32, 32}));
-    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion),
-              std::vector<int>{512});
-    options.volume.resolution = 256;
-    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright}, kRegion), std::vector<int>{512});
-    options.rsm.resolution = 200;
-    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, dim}, kRegion),
-              (std::vector<int>{200, 200}));
 }
 
 // Lights whose maps differ in resolution still add their radiance: each light's texels are turned into

@@ -90,21 +90,21 @@ TEST(ParseJsonTest, OverrideValuesThatAreNotStrictJsonAreStrings) {
 TEST(RenderMemoryTest, EachLightCountsItsTwoMaps) {
     Options options;
     Camera camera;
-    // The scene's map and the update with the objects: 2 x 6 faces x 512^2 texels x 48 bytes = 151 MB.
+    // The scene's map and the update with the objects: 2 x 6 faces x 384^2 texels x 48 bytes = 85 MB.
     const uint64_t perLight =
         estimateRenderMemory(options, camera, 2) - estimateRenderMemory(options, camera, 1);
-    EXPECT_EQ(perLight, uint64_t{2} * 6 * 512 * 512 * 48);
+    EXPECT_EQ(perLight, uint64_t{2} * 6 * 384 * 384 * 48);
 }
 
-// options.rsm.resolution "auto" sizes a point light's maps by the volume (128^2 at 32^3) and a directional
-// light's at 512^2: the maps of forty lights in a room at 32^3 count 0.38 GB, not 6 GB.
+// options.rsm.resolution "auto" sizes a point light's maps by the volume (96^2 at 32^3) and a directional
+// light's at 512^2: the maps of forty lights in a room at 32^3 count 0.21 GB, not 6 GB.
 TEST(RenderMemoryTest, AutoResolutionCountsEachLightsOwnMaps) {
     Options options;
     options.volume.resolution = 32;
     Camera camera;
     const uint64_t point =
         estimateRenderMemory(options, camera, 2) - estimateRenderMemory(options, camera, 1);
-    EXPECT_EQ(point, uint64_t{2} * 6 * 128 * 128 * 48);
+    EXPECT_EQ(point, uint64_t{2} * 6 * 96 * 96 * 48);
     const uint64_t directional =
         estimateRenderMemory(options, camera, 1, 1) - estimateRenderMemory(options, camera, 1, 0);
     EXPECT_EQ(directional, uint64_t{2} * 6 * 512 * 512 * 48);
