@@ -311,7 +311,7 @@ TEST(LiveSessionImages, InteractiveOptionsTakeOneSamplePerPixelAndSparserCones) 
     EXPECT_EQ(fast.specular.relightPixelStride, 2 * kAutoRelightSpecularStride);
     EXPECT_EQ(fast.shadow.relightPixelStride, 2 * kAutoRelightShadowStride);
     EXPECT_EQ(fast.shadow.pixelStride, 2 * kAutoShadowStride);
-    EXPECT_EQ(fast.rsm.resolution, 256);  // "auto" is 512 at 128^3
+    EXPECT_EQ(fast.rsm.resolution, 192);  // "auto" is 384 at 128^3
     EXPECT_EQ(fast.diffuse.objectRays, 4);
     EXPECT_EQ(fast.diffuse.objectRayPixelStride, 2 * kAutoObjectRayStride);
     EXPECT_EQ(interactiveOptions(full, 320, 240, 1).diffuse.pixelStride,
