@@ -57,11 +57,13 @@ EnvironmentSampler::EnvironmentSampler(const Environment& environment)
         guideOf(&columnCdfs_[static_cast<size_t>(y) * (width_ + 1)], width_,
                 &columnGuides_[static_cast<size_t>(y) * width_]);
     rowCentres_.resize(height_);
+    rowElevations_.resize(height_);
     for (int y = 0; y < height_; ++y) {
         const double elevation =
             0.5 * (equirectRowElevation(y, height_) + equirectRowElevation(y + 1, height_));
         rowCentres_[y] = {static_cast<float>(std::cos(elevation)), static_cast<float>(std::sin(elevation)),
                           0.0f};
+        rowElevations_[y] = static_cast<float>(elevation);
     }
     columnCentres_.resize(width_);
     for (int x = 0; x < width_; ++x) {
@@ -78,6 +80,15 @@ glm::ivec2 EnvironmentSampler::pixelOf(float u1, float u2) const {
     const int x = findInterval(&columnCdfs_[static_cast<size_t>(y) * (width_ + 1)],
                                &columnGuides_[static_cast<size_t>(y) * width_], width_, u2);
     return {x, y};
+}
+
+float EnvironmentSampler::rowCentreElevation(float u1) const {
+    return rowElevations_[findInterval(rowCdf_.data(), rowGuide_.data(), height_, u1)];
+}
+
+float EnvironmentSampler::elevationOf(glm::vec3 worldDirection) const {
+    const glm::vec3 d = glm::normalize(environment_.environmentFromWorld() * worldDirection);
+    return std::asin(std::clamp(d.y, -1.0f, 1.0f));
 }
 
 glm::vec3 EnvironmentSampler::pixelCentre(float u1, float u2) const {

@@ -38,6 +38,12 @@ class EnvironmentSampler {
     // pixelRadius() (radians) of the sample's direction. For culling samples before drawing them.
     glm::vec3 pixelCentre(float u1, float u2) const;
     float pixelRadius() const { return pixelRadius_; }
+    // Cheaper still, from u1 alone: the elevation (radians, in the environment's frame) of the centre of the
+    // row that sample(u1, u2) falls in. Its pixel centre is at least |that - elevationOf(d)| from a direction
+    // d, whatever u2: samples can be culled by row before the column is looked up.
+    float rowCentreElevation(float u1) const;
+    // The elevation of a world direction in the environment's frame.
+    float elevationOf(glm::vec3 worldDirection) const;
 
   private:
     glm::ivec2 pixelOf(glm::vec3 worldDirection) const;
@@ -53,6 +59,7 @@ class EnvironmentSampler {
     // n = width), so that a sample scans a step or two instead of searching the whole cdf.
     std::vector<int> rowGuide_, columnGuides_;
     std::vector<glm::vec3> rowCentres_;     // per row: (cos, sin, 0) of the elevation of its centre
+    std::vector<float> rowElevations_;      // per row: the elevation of its centre
     std::vector<glm::vec2> columnCentres_;  // per column: (sin, -cos) of the longitude of its centre
     float pixelRadius_ = 0.0f;
 };

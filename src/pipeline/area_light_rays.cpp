@@ -15,6 +15,10 @@ namespace {
 constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kAreaLightStream = 7000;  // hashToUnit streams of the sample grid's offsets
 constexpr uint32_t kEnvironmentStream = 7100;
+// Radians beyond a relit point's cull limit before a whole row of the map is passed over: far more than the
+// floats' error in the pixel centres (about 1e-6), so that the row test never culls a sample the pixel test
+// keeps (bit for bit the same samples).
+constexpr float kRowCullMargin = 0.01f;
 
 // What both kinds of rays need: the objects' layer (if any), the origins' offset, the objects' bounding
 // sphere, and the sample grid of options.shadow.area_ray_samples.
@@ -182,8 +186,11 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
         // Relit: a map sample counts only if its ray may meet the objects' sphere (coneMayMeetSphere below).
         // Most do not; those whose pixel lies farther from the sphere's direction than the sphere's angular
         // radius plus the pixel's own are passed over before they are drawn (the same samples count).
+        // A sample whose pixel's row lies farther in elevation from the sphere's direction than that, by a
+        // margin for the floats, is passed over before its column is looked up (the same samples count).
         float cullCos = -2.0f;  // no culling
         glm::vec3 cullAxis(0.0f);
+        float cullElevation = 0.0f, cullRowLimit = 0.0f;
         if (mode == ShadowMode::DeltaShadow) {
             const glm::vec3 toCentre = objectCentre - origin;
             const float distance = glm::length(toCentre);
@@ -193,11 +200,15 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
             if (limit < std::numbers::pi_v<float>) {
                 cullAxis = toCentre / distance;
                 cullCos = std::cos(limit);
+                cullElevation = sampler.elevationOf(cullAxis);
+                cullRowLimit = limit + kRowCullMargin;
             }
         }
         for (int k = 0; k < count; ++k) {
             const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
-            if (cullCos > -2.0f && glm::dot(sampler.pixelCentre(u1, u2), cullAxis) < cullCos) continue;
+            if (cullCos > -2.0f && (std::abs(sampler.rowCentreElevation(u1) - cullElevation) > cullRowLimit ||
+                                    glm::dot(sampler.pixelCentre(u1, u2), cullAxis) < cullCos))
+                continue;
             const EnvironmentSampler::Sample s = sampler.sample(u1, u2);
             const float cosSurface = glm::dot(s.wi, p.normal);
             if (!(s.pdf > 0.0f) || cosSurface <= 0.0f || s.radiance == glm::vec3(0.0f)) continue;

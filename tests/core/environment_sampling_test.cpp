@@ -81,6 +81,33 @@ TEST(EnvironmentSamplingTest, LandsWhereTheCdfsSayWithTheMapsPdfAndRadiance) {
     }
 }
 
+// The row of a sample bounds its pixel centre's angle to any direction from below by the difference of their
+// elevations in the map's frame (what the relit shadow rays cull whole rows by before looking up the column):
+// the row's elevation is its pixel centres' own, and no centre is nearer a direction than that difference.
+TEST(EnvironmentSamplingTest, ARowsElevationBoundsItsPixelCentresAngleToADirection) {
+    const Environment map = numberedMap(64, 32);
+    const EnvironmentSampler sampler(map);
+    std::vector<glm::vec3> directions;
+    for (int k = 0; k < 40; ++k) {
+        const float z = 1.0f - 2.0f * (static_cast<float>(k) + 0.5f) / 40.0f, phi = 2.3999632f * k;
+        const float r = std::sqrt(1.0f - z * z);
+        directions.push_back({r * std::cos(phi), z, r * std::sin(phi)});
+    }
+    constexpr int kSide = 32;
+    for (int i = 0; i < kSide; ++i)
+        for (int j = 0; j < kSide; ++j) {
+            const float u1 = (static_cast<float>(i) + 0.37f) / kSide,
+                        u2 = (static_cast<float>(j) + 0.61f) / kSide;
+            const glm::vec3 centre = sampler.pixelCentre(u1, u2);
+            const float row = sampler.rowCentreElevation(u1);
+            ASSERT_NEAR(sampler.elevationOf(centre), row, 1e-5f) << u1 << " " << u2;
+            for (const glm::vec3& d : directions) {
+                const float angle = std::acos(std::clamp(glm::dot(centre, d), -1.0f, 1.0f));
+                EXPECT_GE(angle, std::abs(row - sampler.elevationOf(d)) - 1e-4f);
+            }
+        }
+}
+
 // A map too dark to sample gives no sample, and a pdf of 0 everywhere.
 TEST(EnvironmentSamplingTest, ABlackMapGivesNoSample) {
     Environment black;
