@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 
 #include <glm/glm.hpp>
 
@@ -11,16 +12,20 @@
 
 namespace deltagi {
 
-// A light's falloff over directions from it: spot cone, Lambertian emitter or none, with the cone's cosines
+// A light's falloff over directions from it: spot cone, Lambertian emitter or none, with a spot's cosines
 // computed once for many directions.
 class SpotCone {
   public:
     explicit SpotCone(const Light& light)
         : direction_(light.direction),
           lambertian_(light.lambertian),
-          spot_(light.type == Light::Type::Spot),
-          cosOuter_(std::cos(glm::radians(light.outerAngleDeg))),
-          cosInner_(std::cos(glm::radians(light.innerAngleDeg))) {}
+          spot_(!light.lambertian && light.type == Light::Type::Spot) {
+        if (lambertian_) reach_ = 0.5f * std::numbers::pi_v<float>;
+        if (!spot_) return;
+        cosOuter_ = std::cos(glm::radians(light.outerAngleDeg));
+        cosInner_ = std::cos(glm::radians(light.innerAngleDeg));
+        reach_ = glm::radians(light.outerAngleDeg);
+    }
 
     // 1 inside the inner half-angle, 0 outside the outer one, smooth in between (Lambertian emitters: the
     // cosine to the axis; other lights: 1).
@@ -31,17 +36,17 @@ class SpotCone {
         if (cosInner_ - cosOuter_ <= 1e-6f) return cosTheta >= cosOuter_ ? 1.0f : 0.0f;
         return glm::smoothstep(cosOuter_, cosInner_, cosTheta);
     }
+    // The largest angle (radians) from the axis at which the falloff is not 0: pi for a light without one.
+    float reach() const { return reach_; }
 
   private:
     glm::vec3 direction_;
     bool lambertian_, spot_;
-    float cosOuter_, cosInner_;
+    float cosOuter_ = -1.0f, cosInner_ = -1.0f, reach_ = std::numbers::pi_v<float>;
 };
 
 // Spot cone: 1 inside the inner half-angle, 0 outside the outer one, smooth in between.
 inline float spotFalloff(const Light& light, glm::vec3 directionFromLight) {
-    if (light.lambertian) return std::max(glm::dot(directionFromLight, light.direction), 0.0f);
-    if (light.type != Light::Type::Spot) return 1.0f;
     return SpotCone(light).falloff(directionFromLight);
 }
 

@@ -136,12 +136,11 @@ Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {
 }
 
 TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
-                    const std::optional<VoxelBox>& box) {
+                    const VoxelBox& box) {
     const int n = region.resolution;
     TexelBins bins;
     bins.resolution = n;
-    bins.box = box ? *box : VoxelBox::all(n);
-    const glm::ivec3 lo = bins.box.lo, hi = bins.box.hi;
+    bins.box = box;
     // A counting sort by row, which keeps injectLight's order inside each row, then each row by x.
     const TexelVoxels texelVoxel(region);
     size_t texels = 0;
@@ -154,8 +153,7 @@ TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegio
     for (const ReflectiveShadowMap& rsm : rsms) {
         parallelFor(0, static_cast<int64_t>(rsm.texels.size()), 1 << 14, [&](int64_t t) {
             const glm::ivec3 v = texelVoxel(rsm.texels[t].position);
-            const bool inside = glm::all(glm::greaterThanEqual(v, lo)) && glm::all(glm::lessThan(v, hi));
-            rowOf[first + t] = inside ? static_cast<uint32_t>(v.z * n + v.y) : kOutside;
+            rowOf[first + t] = box.contains(v.x, v.y, v.z) ? static_cast<uint32_t>(v.z * n + v.y) : kOutside;
             xOf[first + t] = static_cast<uint16_t>(v.x);
         });
         first += rsm.texels.size();

@@ -4,7 +4,6 @@
 // light that reached real surfaces, positive on the lit virtual objects.
 #pragma once
 
-#include <optional>
 #include <span>
 
 #include "pipeline/reflective_shadow_map.h"
@@ -66,10 +65,10 @@ struct TexelBins {
     std::vector<uint32_t> rowStart;  // resolution^2 + 1 offsets into entries; row (y, z) is z * n + y
     std::vector<Entry> entries;      // each row's texels by x, then in injectLight's order (map, texel)
 };
-// The texels landing in `box` (every voxel of the region by default): where the maps change every frame (a
-// live light), only those that frame re-injects.
+// The texels landing in `box` (VoxelBox::all for every voxel of the region): where the maps change every
+// frame (a live light), only those that frame re-injects.
 TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
-                    const std::optional<VoxelBox>& box = std::nullopt);
+                    const VoxelBox& box);
 
 // Where the maps with the objects differ from the real scene's own: the scene's texels that are gone or
 // changed, and the texels that are new or changed.

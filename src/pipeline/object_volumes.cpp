@@ -80,7 +80,7 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     // A new light bins the texels of the box it re-injects only (a live light is new every frame); a box
     // beyond the binned one under the same light bins them all.
     if (!sceneTexels_ || !sceneTexels_->box.contains(changed))
-        sceneTexels_ = binTexels(real.rsms, region_, newLight ? std::optional(changed) : std::nullopt);
+        sceneTexels_ = binTexels(real.rsms, region_, newLight ? changed : all);
     if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, all);
     if (newLight) {
         // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).

@@ -71,16 +71,15 @@ class MapLayout {
 
     int faceCount() const { return static_cast<int>(faces_.size()); }
 
-    // False when no texel of `face` can carry light: all its directions lie outside a spot light's outer cone
-    // (or behind a Lambertian emitter) by a margin, as the cube-map face above a spot light pointing down.
+    // False when no texel of `face` can carry light: all its directions lie outside the light's reach (a
+    // spot's outer cone, a Lambertian emitter's front) by a margin, as the cube-map face above a spot light
+    // pointing down.
     bool faceMayCarryLight(int face) const {
-        const bool spot = light_.type == Light::Type::Spot && !light_.lambertian;
-        if (light_.type == Light::Type::Directional || !(spot || light_.lambertian)) return true;
+        if (light_.type == Light::Type::Directional) return true;
         const Face& f = faces_[face];
         const float toAxis = std::acos(std::clamp(glm::dot(f.forward, light_.direction), -1.0f, 1.0f));
         const float faceRadius = std::atan(f.halfTan * std::numbers::sqrt2_v<float>);  // to its corners
-        const float limit = glm::radians(spot ? light_.outerAngleDeg : 90.0f);
-        return toAxis - faceRadius < limit + glm::radians(1.0f);
+        return toAxis - faceRadius < cone_.reach() + glm::radians(1.0f);
     }
     float rayStart() const { return back_; }
 
@@ -266,8 +265,11 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
     // A row's rays are traced in packets: a point or spot light's all leave its position, a directional
     // light's are parallel.
     const bool directional = light.type == Light::Type::Directional;
+    std::vector<char> faceLit(static_cast<size_t>(layout.faceCount()));
+    for (int f = 0; f < layout.faceCount(); ++f)
+        faceLit[static_cast<size_t>(f)] = layout.faceMayCarryLight(f);
     return renderRows(layout, resolution, [&](int face, int j, std::vector<RsmTexel>& row) {
-        if (!layout.faceMayCarryLight(face)) return;
+        if (!faceLit[static_cast<size_t>(face)]) return;
         // A thread's row buffers, kept from row to row.
         thread_local std::vector<TexelRay> rays;
         thread_local std::vector<int> columns;
