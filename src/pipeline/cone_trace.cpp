@@ -66,18 +66,24 @@ constexpr float kIsotropicCoverage = 0.5f;
 // A back face counts fully as one once cos(back) >= 1/kBackfaceRamp: the neighbours of a point on a convex
 // surface face a grazing cone slightly from behind.
 constexpr float kBackfaceRamp = 16.0f;
-inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float levelScale, const ConeTraceSettings& s,
+inline float adaptedOcclusion(Float4 v, Float4 dir, float levelScale, const ConeTraceSettings& s,
                               float backfaceWeight) {
-    const float occupancy = v.x;
+    const float occupancy = v[0];
     if (occupancy <= 1e-6f) return 0.0f;
-    const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / occupancy;
-    const float coherence = std::min(glm::length(meanNormal), 1.0f);
-    const float facing = coherence > 1e-6f ? glm::dot(meanNormal, dir) / coherence : 0.0f;  // cos; > 0: back
+    const Float4 n = v / occupancy;  // lanes 1-3: the mean normal
+    const Float4 squares = n * n, cosines = n * dir;
+    const float coherence = std::min(std::sqrt(squares[1] + squares[2] + squares[3]), 1.0f);
+    const float facing =
+        coherence > 1e-6f ? (cosines[1] + cosines[2] + cosines[3]) / coherence : 0.0f;  // cos; > 0: back
     const float directional =
         facing > 0.0f ? 1.0f - backfaceWeight * std::min(1.0f, kBackfaceRamp * facing) : 1.0f;
     const float adapted = (1.0f - coherence) * kIsotropicCoverage + coherence * directional;
     const float weight = (1.0f - s.normalWeight) * kIsotropicCoverage + s.normalWeight * adapted;
     return std::clamp(occupancy * levelScale * weight, 0.0f, 1.0f);
+}
+inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float levelScale, const ConeTraceSettings& s,
+                              float backfaceWeight) {
+    return adaptedOcclusion(loadFloat4(v), Float4{0.0f, dir.x, dir.y, dir.z}, levelScale, s, backfaceWeight);
 }
 
 // log2 of x >= 1 to within 3e-5 (the exponent, and a quintic in the mantissa m - 1, a least-squares fit over
@@ -140,63 +146,69 @@ std::pair<float, float> backfaceWeights(const VisibilityVolumes& v, const ConeTr
 
 glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const VisibilityVolumes& visibility,
                          const ConeTraceSettings& settings, int64_t* steps) {
-    glm::vec3 lightAcc(0.0f);
+    Float4 lightAcc = {0.0f, 0.0f, 0.0f, 0.0f};
     float occlusionAcc = 0.0f;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
+    const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
+    int64_t count = 0;
     marchCone(cone, light, settings, [&](glm::vec3 position, float level, float levelScale) {
         // One set of corners for all the volumes of the region.
         const VolumeLookup at = light.lookup(position, level);
-        if (steps) ++*steps;
+        ++count;
         float transmittance = 1.0f;
         if (visibility.scene)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
+            transmittance *= 1.0f - adaptedOcclusion(visibility.scene->gatherFloat4(at), dir, levelScale,
                                                      settings, sceneBackface);
         if (visibility.object)
-            transmittance *= 1.0f - adaptedOcclusion(visibility.object->gather(at), cone.direction,
-                                                     levelScale, settings, objectBackface);
+            transmittance *= 1.0f - adaptedOcclusion(visibility.object->gatherFloat4(at), dir, levelScale,
+                                                     settings, objectBackface);
         const float occlusionLocal = stepOpacity(1.0f - transmittance, settings.stepScale);
         if (occlusionLocal > 0.0f) {
-            const glm::vec4 l = light.gather(at);
-            const glm::vec3 lightLocal = l.w > 1e-6f ? glm::vec3(l) / l.w : glm::vec3(0.0f);
+            const Float4 l = light.gatherFloat4(at);
+            const Float4 lightLocal = l[3] > 1e-6f ? l / l[3] : Float4{0.0f, 0.0f, 0.0f, 0.0f};
             // §3.1: light_acc = light_acc*occ_acc + light_local*occ_local*(1 - occ_acc) (as printed), or the
             // usual front-to-back compositing light_acc += light_local*occ_local*(1 - occ_acc).
-            const glm::vec3 contribution = lightLocal * (occlusionLocal * (1.0f - occlusionAcc));
+            const Float4 contribution = lightLocal * (occlusionLocal * (1.0f - occlusionAcc));
             lightAcc =
                 settings.paperAccumulation ? lightAcc * occlusionAcc + contribution : lightAcc + contribution;
             occlusionAcc += occlusionLocal * (1.0f - occlusionAcc);
         }
         return occlusionAcc < settings.maxOcclusion;
     });
-    return lightAcc;
+    if (steps) *steps += count;
+    return {lightAcc[0], lightAcc[1], lightAcc[2]};
 }
 
 glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, const MipVolume& deltaLight,
                                const VisibilityVolumes& visibility, const ConeTraceSettings& settings,
                                const MipVolume* objectLight) {
     // With the objects (a) and without them (b).
-    glm::vec3 lightA(0.0f), lightB(0.0f);
+    Float4 lightA = {0.0f, 0.0f, 0.0f, 0.0f}, lightB = lightA;
     float occlusionA = 0.0f, occlusionB = 0.0f;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
+    const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
+    const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
+    // A volume's radiance: rgb over its occupancy (w).
+    auto radiance = [&](Float4 v) { return v[3] > 1e-6f ? v / v[3] : zero; };
     // `emitted`: the step's light times its opacity.
-    auto composite = [&](glm::vec3& light, float& occlusion, glm::vec3 emitted, float opacity) {
-        const glm::vec3 contribution = emitted * (1.0f - occlusion);
+    auto composite = [&](Float4& light, float& occlusion, Float4 emitted, float opacity) {
+        const Float4 contribution = emitted * (1.0f - occlusion);
         light = settings.paperAccumulation ? light * occlusion + contribution : light + contribution;
         occlusion += opacity * (1.0f - occlusion);
     };
     marchCone(cone, fullLight, settings, [&](glm::vec3 position, float level, float levelScale) {
         const VolumeLookup at = fullLight.lookup(position, level);
-        const glm::vec4 sceneVisibility = visibility.scene ? visibility.scene->gather(at) : glm::vec4(0.0f);
-        const float scene =
-            adaptedOcclusion(sceneVisibility, cone.direction, levelScale, settings, sceneBackface);
-        const float object = visibility.object
-                                 ? adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
-                                                    settings, objectBackface)
-                                 : 0.0f;
+        const Float4 sceneVisibility = visibility.scene ? visibility.scene->gatherFloat4(at) : zero;
+        const float scene = adaptedOcclusion(sceneVisibility, dir, levelScale, settings, sceneBackface);
+        const float object =
+            visibility.object ? adaptedOcclusion(visibility.object->gatherFloat4(at), dir, levelScale,
+                                                 settings, objectBackface)
+                              : 0.0f;
         const float opacityA = stepOpacity(scene + object - scene * object, settings.stepScale);
         const float opacityB = stepOpacity(scene, settings.stepScale);
         if (opacityA > 0.0f) {
-            const glm::vec4 full = fullLight.gather(at);
-            const glm::vec4 delta = deltaLight.gather(at);
+            const Float4 full = fullLight.gatherFloat4(at);
+            const Float4 delta = deltaLight.gatherFloat4(at);
             // The volumes hold radiance times occupancy (inject.cpp): the full volume's by the occupancy of
             // both visibility volumes, the scene's alone (full - delta) by the scene's. Dividing the scene's
             // light by the objects' occupancy too would dim it in every coarse voxel the objects share, while
@@ -204,27 +216,23 @@ glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, con
             if (objectLight) {
                 // The scene's surfaces (with the objects' effect on them) through the scene's opacity, the
                 // objects' own light through the opacity they add.
-                const glm::vec4 objects = objectLight->gather(at);
-                const glm::vec4 sceneWith = full - objects;
-                const glm::vec3 sceneRadiance =
-                    sceneWith.w > 1e-6f ? glm::vec3(sceneWith) / sceneWith.w : glm::vec3(0.0f);
-                const glm::vec3 objectRadiance =
-                    objects.w > 1e-6f ? glm::vec3(objects) / objects.w : glm::vec3(0.0f);
+                const Float4 objects = objectLight->gatherFloat4(at);
+                const Float4 sceneRadiance = radiance(full - objects);
                 if (settings.objectLightByRays)  // the rays bring the objects' light and what they hide
                     composite(lightA, occlusionA, sceneRadiance * opacityB, opacityB);
                 else
                     composite(lightA, occlusionA,
-                              sceneRadiance * opacityB + objectRadiance * (opacityA - opacityB), opacityA);
-            } else if (full.w > 1e-6f) {
-                composite(lightA, occlusionA, glm::vec3(full) / full.w * opacityA, opacityA);
+                              sceneRadiance * opacityB + radiance(objects) * (opacityA - opacityB), opacityA);
+            } else if (full[3] > 1e-6f) {
+                composite(lightA, occlusionA, full / full[3] * opacityA, opacityA);
             }
-            if (opacityB > 0.0f && sceneVisibility.x > 1e-6f)
-                composite(lightB, occlusionB, glm::vec3(full - delta) / sceneVisibility.x * opacityB,
-                          opacityB);
+            if (opacityB > 0.0f && sceneVisibility[0] > 1e-6f)
+                composite(lightB, occlusionB, (full - delta) / sceneVisibility[0] * opacityB, opacityB);
         }
         return occlusionA < settings.maxOcclusion || occlusionB < settings.maxOcclusion;
     });
-    return lightA - lightB;
+    const Float4 change = lightA - lightB;
+    return {change[0], change[1], change[2]};
 }
 
 ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visibility,
@@ -233,16 +241,18 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
     if (!visibility.scene && !visibility.object) return acc;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
     const MipVolume& reference = referenceOf(visibility.scene, visibility.object);
+    const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
+    int64_t count = 0;
     marchCone(cone, reference, settings, [&](glm::vec3 position, float level, float levelScale) {
         const VolumeLookup at = reference.lookup(position, level);
-        if (steps) ++*steps;
+        ++count;
         float scene = 0.0f, object = 0.0f;
         if (visibility.scene)
-            scene = stepOpacity(adaptedOcclusion(visibility.scene->gather(at), cone.direction, levelScale,
-                                                 settings, sceneBackface),
-                                settings.stepScale);
+            scene = stepOpacity(
+                adaptedOcclusion(visibility.scene->gatherFloat4(at), dir, levelScale, settings, sceneBackface),
+                settings.stepScale);
         if (visibility.object)
-            object = stepOpacity(adaptedOcclusion(visibility.object->gather(at), cone.direction, levelScale,
+            object = stepOpacity(adaptedOcclusion(visibility.object->gatherFloat4(at), dir, levelScale,
                                                   settings, objectBackface),
                                  settings.stepScale);
         const float combined = scene + object - scene * object;  // exactly `scene` without objects
@@ -252,6 +262,7 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
         // Stop once nothing more can change: the combined and the scene-only occlusion are both saturated.
         return acc.combined < settings.maxOcclusion || acc.scene < settings.maxOcclusion;
     });
+    if (steps) *steps += count;
     return acc;
 }
 
@@ -262,10 +273,12 @@ namespace {
 float traceOneVolume(const Cone& cone, const MipVolume& volume, float backface, bool sparse,
                      const ConeTraceSettings& settings) {
     float acc = 0.0f;
+    const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
     marchCone(cone, volume, settings, [&](glm::vec3 position, float level, float levelScale) {
         if (sparse && !volume.mayReadNonZero(position, static_cast<int>(level))) return true;
         const float local = stepOpacity(
-            adaptedOcclusion(volume.sample(position, level), cone.direction, levelScale, settings, backface),
+            adaptedOcclusion(volume.gatherFloat4(volume.lookup(position, level)), dir, levelScale, settings,
+                             backface),
             settings.stepScale);
         acc += local * (1.0f - acc);
         return acc < settings.maxOcclusion;

@@ -169,7 +169,8 @@ class PackedGrid3 {
           window_(window.intersection(VoxelBox::all(n))),
           extent_(window_.hi - window_.lo),
           whole_(window_.count() == static_cast<size_t>(n) * n * n),
-          voxels_(window_.count(), PackedVoxel(0)) {}
+          count_(window_.count()),
+          voxels_(count_ + 1, PackedVoxel(0)) {}
     // `grid` rounded to bfloat16, inside `window` (zero outside it is the caller's promise).
     explicit PackedGrid3(const Grid3& grid) : PackedGrid3(grid, VoxelBox::all(grid.resolution())) {}
     PackedGrid3(const Grid3& grid, const VoxelBox& window);
@@ -183,8 +184,11 @@ class PackedGrid3 {
     // Whether every voxel is stored: then index(x, y, z) is (z * n + y) * n + x.
     bool whole() const { return whole_; }
     // Voxels stored.
-    size_t size() const { return voxels_.size(); }
+    size_t size() const { return count_; }
     size_t bytes() const { return voxels_.size() * sizeof(PackedVoxel); }
+    // The stored voxels, and one more, always zero: a read of two x-neighbours (VolumeLookup) may start at
+    // the last.
+    const PackedVoxel* data() const { return voxels_.data(); }
     // The place of voxel (x, y, z) of the window.
     size_t index(int x, int y, int z) const {
         return (static_cast<size_t>(z - window_.lo.z) * extent_.y + (y - window_.lo.y)) * extent_.x +
@@ -207,14 +211,15 @@ class PackedGrid3 {
     VoxelBox window_;
     glm::ivec3 extent_{0};
     bool whole_ = false;
+    size_t count_ = 0;
     std::vector<PackedVoxel, LargeBlockAllocator<PackedVoxel>> voxels_;
 };
 
-// The 8 voxels and weights of one trilinear lookup (corners outside the grid have weight 0).
+// The 8 voxels and weights of one trilinear lookup, as the 4 rows (along y and z) of two x-neighbours each,
+// so that a row is one 16-byte read: voxel pair[r] and the one after it.
 struct TrilinearCorners {
-    uint32_t index[8];
-    float weight[8];
-    glm::ivec3 first{0};  // the voxel of corner 0 (the others are +1 along x, y, z by the bits of k)
+    uint32_t pair[4];
+    Float4 weight[8];  // voxel k's weight in all four lanes: row k / 2, first (k even) or second voxel
 };
 
 // Where one quadrilinear lookup reads. It depends only on the region and resolution, so the volumes that
@@ -223,50 +228,96 @@ struct VolumeLookup {
     glm::vec3 voxelPos{0.0f};  // level-0 voxel units
     int level0 = 0;            // the finer of the two levels
     float blend = 0.0f;        // weight of level0 + 1
-    TrilinearCorners fine, coarse;
+    TrilinearCorners fine, coarse;  // their weights times 1 - blend and blend
 };
 
-// The indices of the corners `c` (c.first and its neighbours at +1 along x, y, z by the bits of k) in a level
-// stored over its voxels [lo, hi), x fastest; a corner outside gets index 0 and weight 0.
-[[gnu::always_inline]] inline void placeCorners(glm::ivec3 lo, glm::ivec3 hi, TrilinearCorners& c) {
-    const glm::ivec3 p = c.first, extent = hi - lo;
-    auto index = [&](int x, int y, int z) {
-        return static_cast<uint32_t>((static_cast<size_t>(z - lo.z) * extent.y + (y - lo.y)) * extent.x +
-                                     (x - lo.x));
-    };
-    if (p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x + 1 < hi.x && p.y + 1 < hi.y && p.z + 1 < hi.z) {
-        // All 8 corners inside: one base index and fixed offsets.
-        const uint32_t base = index(p.x, p.y, p.z);
-        const uint32_t row = static_cast<uint32_t>(extent.x), slice = static_cast<uint32_t>(extent.y) * row;
-        const uint32_t offsets[8] = {0, 1, row, row + 1, slice, slice + 1, slice + row, slice + row + 1};
-        for (int k = 0; k < 8; ++k) c.index[k] = base + offsets[k];
-        return;
-    }
-    for (int k = 0; k < 8; ++k) {
-        const int x = p.x + (k & 1), y = p.y + ((k >> 1) & 1), z = p.z + (k >> 2);
-        const bool valid = x >= lo.x && y >= lo.y && z >= lo.z && x < hi.x && y < hi.y && z < hi.z;
-        c.index[k] = valid ? index(x, y, z) : 0u;
-        if (!valid) c.weight[k] = 0.0f;
-    }
+// 2^-level, exactly (a float's exponent field).
+inline float inversePowerOfTwo(int level) {
+    const uint32_t bits = static_cast<uint32_t>(127 - level) << 23;
+    float f;
+    std::memcpy(&f, &bits, sizeof(f));
+    return f;
+}
+
+// floor() of each lane, exact for |x| < 2^31 (SSE2 has no rounding instruction: truncate, then step down
+// where truncation rounded up).
+inline Float4 floor4(Float4 x) {
+    using Int4 = int32_t __attribute__((vector_size(16)));
+    const Float4 truncated = __builtin_convertvector(__builtin_convertvector(x, Int4), Float4);
+    return truncated - (truncated > x ? Float4{1.0f, 1.0f, 1.0f, 1.0f} : Float4{0.0f, 0.0f, 0.0f, 0.0f});
 }
 
 // Trilinear corners at a level, for a position in level-0 voxel units, of a level stored over its voxels
-// [lo, hi) (placeCorners).
+// [lo, hi), every weight times `scale` (a quadrilinear lookup's share of the level). Without branches: a
+// corner outside [lo, hi) gets weight 0, and its row the nearest stored voxels.
 [[gnu::always_inline]] inline void trilinearCornersOver(glm::vec3 voxelPos, int level, glm::ivec3 lo,
-                                                        glm::ivec3 hi, TrilinearCorners& c) {
-    const glm::vec3 q = voxelPos * (1.0f / static_cast<float>(1 << level)) - 0.5f;
-    const glm::vec3 base = glm::floor(q);
-    const glm::vec3 f = q - base;
-    c.first = glm::ivec3(base);
-    const float wx[2] = {1.0f - f.x, f.x}, wy[2] = {1.0f - f.y, f.y}, wz[2] = {1.0f - f.z, f.z};
-    const float wxy[4] = {wx[0] * wy[0], wx[1] * wy[0], wx[0] * wy[1], wx[1] * wy[1]};
-    for (int k = 0; k < 8; ++k) c.weight[k] = wxy[k & 3] * wz[k >> 2];
-    placeCorners(lo, hi, c);
+                                                        glm::ivec3 hi, TrilinearCorners& c,
+                                                        float scale = 1.0f) {
+    using Int4 = int32_t __attribute__((vector_size(16)));
+    const Float4 q = Float4{voxelPos.x, voxelPos.y, voxelPos.z, 0.0f} * inversePowerOfTwo(level) - 0.5f;
+    const Float4 base = floor4(q);
+    const Float4 f = q - base;
+    const Int4 p0 = __builtin_convertvector(base, Int4), p1 = p0 + 1;
+    const Int4 lo4 = {lo.x, lo.y, lo.z, 0}, last4 = {hi.x - 1, hi.y - 1, hi.z - 1, 0};
+    const uint32_t ex = static_cast<uint32_t>(hi.x - lo.x), ey = static_cast<uint32_t>(hi.y - lo.y);
+    if (p0[0] >= lo.x && p0[1] >= lo.y && p0[2] >= lo.z && p1[0] <= last4[0] && p1[1] <= last4[1] &&
+        p1[2] <= last4[2]) {
+        // All eight inside (most lookups): one first voxel, rows a row or a slice apart.
+        const Float4 g = 1.0f - f;
+        const Float4 w = Float4{g[1], f[1], g[1], f[1]} * Float4{g[2], g[2], f[2], f[2]} * scale;
+        for (int r = 0; r < 4; ++r) {
+            const Float4 wr = {w[r], w[r], w[r], w[r]};
+            c.weight[2 * r] = wr * g[0];
+            c.weight[2 * r + 1] = wr * f[0];
+        }
+        const Int4 rel = p0 - lo4;
+        const uint32_t first = (static_cast<uint32_t>(rel[2]) * ey + static_cast<uint32_t>(rel[1])) * ex +
+                               static_cast<uint32_t>(rel[0]);
+        c.pair[0] = first;
+        c.pair[1] = first + ex;
+        c.pair[2] = first + ex * ey;
+        c.pair[3] = first + ex * ey + ex;
+        return;
+    }
+    const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
+    const auto in0 = p0 >= lo4 && p0 <= last4, in1 = p1 >= lo4 && p1 <= last4;
+    // Along each axis the weights of the first and the second voxel read, and the first's place in the
+    // stored box: p0 and p1 where p0 is inside, else p1 alone (first) or nothing.
+    const Float4 a0 = in0 ? 1.0f - f : (in1 ? f : zero);
+    const Float4 a1 = (in0 && in1) ? f : zero;
+    const Int4 c0 = (p0 < lo4 ? lo4 : (p0 > last4 ? last4 : p0)) - lo4;
+    // y and z read the second voxel's own row: p1 clamped.
+    const Int4 c1 = (p1 < lo4 ? lo4 : (p1 > last4 ? last4 : p1)) - lo4;
+    const Float4 w = Float4{a0[1], a1[1], a0[1], a1[1]} * Float4{a0[2], a0[2], a1[2], a1[2]} * scale;
+    for (int r = 0; r < 4; ++r) {
+        const Float4 wr = {w[r], w[r], w[r], w[r]};
+        c.weight[2 * r] = wr * a0[0];
+        c.weight[2 * r + 1] = wr * a1[0];
+    }
+    const uint32_t x0 = static_cast<uint32_t>(c0[0]);
+    const uint32_t y0 = static_cast<uint32_t>(c0[1]), y1 = static_cast<uint32_t>(c1[1]);
+    const uint32_t z0 = static_cast<uint32_t>(c0[2]) * ey, z1 = static_cast<uint32_t>(c1[2]) * ey;
+    c.pair[0] = (z0 + y0) * ex + x0;
+    c.pair[1] = (z0 + y1) * ex + x0;
+    c.pair[2] = (z1 + y0) * ex + x0;
+    c.pair[3] = (z1 + y1) * ex + x0;
 }
 
-// Trilinear corners at a level of resolution n (stored whole).
-inline void trilinearCorners(glm::vec3 voxelPos, int level, int n, TrilinearCorners& c) {
-    trilinearCornersOver(voxelPos, level, glm::ivec3(0), glm::ivec3(n), c);
+// The weighted sum of a trilinear lookup's voxels in a level: a 16-byte read per row, four partial sums.
+[[gnu::always_inline]] inline Float4 gatherCorners(const PackedVoxel* voxels, const TrilinearCorners& c) {
+    Float4 row[4];
+    for (int r = 0; r < 4; ++r) {
+#if defined(__SSE2__)
+        const __m128i two = _mm_loadu_si128(reinterpret_cast<const __m128i*>(voxels + c.pair[r]));
+        const __m128i zero = _mm_setzero_si128();
+        const Float4 first = reinterpret_cast<Float4>(_mm_castsi128_ps(_mm_unpacklo_epi16(zero, two)));
+        const Float4 second = reinterpret_cast<Float4>(_mm_castsi128_ps(_mm_unpackhi_epi16(zero, two)));
+#else
+        const Float4 first = unpackVoxel(voxels[c.pair[r]]), second = unpackVoxel(voxels[c.pair[r] + 1]);
+#endif
+        row[r] = first * c.weight[2 * r] + second * c.weight[2 * r + 1];
+    }
+    return (row[0] + row[1]) + (row[2] + row[3]);
 }
 
 // Calls rowBody(y, z) for every row of voxels of `box` (x from box.lo.x to box.hi.x), rows in parallel.
@@ -309,19 +360,24 @@ class MipVolume {
         level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
         l.level0 = static_cast<int>(level);
         l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
-        trilinearCorners(voxelPos, l.level0, levels_[l.level0].resolution(), l.fine);
+        // Each level's weights times its share, so that a gather adds the two.
+        const int n0 = levels_[l.level0].resolution();
+        trilinearCornersOver(voxelPos, l.level0, glm::ivec3(0), glm::ivec3(n0), l.fine, 1.0f - l.blend);
         if (l.blend > 0.0f)
-            trilinearCorners(voxelPos, l.level0 + 1, levels_[l.level0 + 1].resolution(), l.coarse);
+            trilinearCornersOver(voxelPos, l.level0 + 1, glm::ivec3(0), glm::ivec3(n0 >> 1), l.coarse,
+                                 l.blend);
         return l;
     }
     // Reads a lookup prepared by any volume of the same region and resolution. Returns 0 at once where the
     // lookup's footprint cannot reach a non-zero voxel.
-    glm::vec4 gather(const VolumeLookup& l) const {
-        if (!mayReadNonZero(l.voxelPos, l.level0)) return glm::vec4(0.0f);
+    glm::vec4 gather(const VolumeLookup& l) const { return storeFloat4(gatherFloat4(l)); }
+    // gather() in one SIMD register.
+    [[gnu::always_inline]] Float4 gatherFloat4(const VolumeLookup& l) const {
+        if (!mayReadNonZero(l.voxelPos, l.level0)) return Float4{0.0f, 0.0f, 0.0f, 0.0f};
         if (!whole_) return gatherWindowed(l);
         Float4 v = gatherLevel(l.level0, l.fine);
-        if (l.blend > 0.0f) v += (gatherLevel(l.level0 + 1, l.coarse) - v) * l.blend;
-        return storeFloat4(v);
+        if (l.blend > 0.0f) v += gatherLevel(l.level0 + 1, l.coarse);
+        return v;
     }
     // False where a lookup at `voxelPos` between levels level0 and level0 + 1 cannot reach a non-zero voxel.
     bool mayReadNonZero(glm::vec3 voxelPos, int level0) const {
@@ -350,27 +406,24 @@ class MipVolume {
     glm::vec4 sampleLevel(glm::vec3 voxelPos, int l) const {
         TrilinearCorners c;
         trilinearCornersOver(voxelPos, l, levels_[l].window().lo, levels_[l].window().hi, c);
-        return storeFloat4(gatherLevel(l, c));
+        return storeFloat4(gatherCorners(levels_[l].data(), c));
     }
     // Quadrilinear sample: trilinear in the two levels around the fractional `level`, blended.
     glm::vec4 sample(glm::vec3 voxelPos, float level) const { return gather(lookup(voxelPos, level)); }
 
   private:
-    Float4 gatherLevel(int l, const TrilinearCorners& c) const {
-        const PackedGrid3& g = levels_[l];
-        Float4 acc = {0.0f, 0.0f, 0.0f, 0.0f};
-        for (int k = 0; k < 8; ++k) acc += g.load(c.index[k]) * c.weight[k];
-        return acc;
+    [[gnu::always_inline]] Float4 gatherLevel(int l, const TrilinearCorners& c) const {
+        return gatherCorners(levels_[l].data(), c);
     }
-    // gather() of a volume stored over windows, from a lookup with the whole grid's corners: their voxels and
-    // weights, placed in each level's window.
-    glm::vec4 gatherWindowed(const VolumeLookup& l) const {
-        Float4 v = gatherWindowedLevel(l.level0, l.fine);
-        if (l.blend > 0.0f) v += (gatherWindowedLevel(l.level0 + 1, l.coarse) - v) * l.blend;
-        return storeFloat4(v);
+    // gather() of a volume stored over windows: the lookup's corners again, placed in each level's window.
+    [[gnu::noinline]] Float4 gatherWindowed(const VolumeLookup& l) const {
+        Float4 v = gatherWindowedLevel(l.voxelPos, l.level0, 1.0f - l.blend);
+        if (l.blend > 0.0f) v += gatherWindowedLevel(l.voxelPos, l.level0 + 1, l.blend);
+        return v;
     }
-    Float4 gatherWindowedLevel(int l, TrilinearCorners c) const {
-        placeCorners(levels_[l].window().lo, levels_[l].window().hi, c);
+    Float4 gatherWindowedLevel(glm::vec3 voxelPos, int l, float share) const {
+        TrilinearCorners c;
+        trilinearCornersOver(voxelPos, l, levels_[l].window().lo, levels_[l].window().hi, c, share);
         return gatherLevel(l, c);
     }
     // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
@@ -414,7 +467,7 @@ VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within) {
 inline PackedGrid3::PackedGrid3(const Grid3& grid, const VoxelBox& window)
     : PackedGrid3(grid.resolution(), window) {
     if (whole_) {
-        parallelFor(0, static_cast<int64_t>(voxels_.size()), 1 << 14,
+        parallelFor(0, static_cast<int64_t>(count_), 1 << 14,
                     [&](int64_t i) { voxels_[i] = packVoxel(grid[i]); });
         return;
     }

@@ -108,7 +108,47 @@ TEST(PackedGrid3, KeepsAFloatsRangeAndEightSignificantBits) {
         for (int c = 0; c < 4; ++c) EXPECT_EQ(p[i][c], fromBfloat16(toBfloat16(g[i][c]))) << i << " " << c;
     for (int c = 0; c < 4; ++c) EXPECT_NEAR(p[3][c], g[3][c], std::abs(g[3][c]) * std::ldexp(1.0f, -8));
     EXPECT_EQ(p[2], glm::vec4(0.0f));
-    EXPECT_EQ(p.bytes(), 8u * 8u);
+    EXPECT_EQ(p.bytes(), 8u * (8u + 1u));  // and the one zero voxel after the last (PackedGrid3::data)
+    EXPECT_EQ(p.data()[8], PackedVoxel(0));
+}
+
+// Every lookup, near the borders and beyond them too, at every level and between levels, is the plain
+// quadrilinear interpolation of the stored voxels with zero outside the grid (a reference read voxel by
+// voxel): the lookup's branch-free corners and its two-voxel reads change nothing.
+TEST(MipVolume, ALookupIsTheQuadrilinearInterpolationWithZeroOutside) {
+    const int n = 8;
+    Grid3 g(n);
+    for (size_t i = 0; i < g.size(); ++i)
+        g[i] = glm::vec4(std::sin(0.7f * float(i)), std::cos(1.3f * float(i)), float(i % 5), 1.0f + (i % 3));
+    const MipVolume v = buildMipChain({glm::vec3(0), 1.0f, n}, std::move(g));
+    auto trilinear = [&](glm::vec3 p, int l) {
+        const PackedGrid3& level = v.level(l);
+        const glm::vec3 q = p / float(1 << l) - 0.5f, base = glm::floor(q), f = q - base;
+        glm::vec4 sum(0.0f);
+        for (int k = 0; k < 8; ++k) {
+            const glm::ivec3 c = glm::ivec3(base) + glm::ivec3(k & 1, (k >> 1) & 1, k >> 2);
+            const bool inside = glm::all(glm::greaterThanEqual(c, glm::ivec3(0))) &&
+                                glm::all(glm::lessThan(c, glm::ivec3(level.resolution())));
+            const float w = (k & 1 ? f.x : 1 - f.x) * ((k >> 1) & 1 ? f.y : 1 - f.y) * (k >> 2 ? f.z : 1 - f.z);
+            if (inside) sum += w * level.at(c.x, c.y, c.z);
+        }
+        return sum;
+    };
+    for (int k = 0; k < 4000; ++k) {
+        const glm::vec3 p(std::fmod(k * 0.737f, 14.0f) - 3.0f, std::fmod(k * 0.291f, 14.0f) - 3.0f,
+                          std::fmod(k * 0.533f, 14.0f) - 3.0f);
+        const float level = std::fmod(k * 0.173f, 3.999f);
+        const int l0 = static_cast<int>(level);
+        const float blend = l0 < 3 ? level - float(l0) : 0.0f;  // none above the coarsest level
+        const glm::vec4 expected =
+            (1 - blend) * trilinear(p, l0) + (blend > 0 ? blend * trilinear(p, l0 + 1) : glm::vec4(0.0f));
+        const glm::vec4 got = v.sample(p, level), one = v.sampleLevel(p, l0);
+        const glm::vec4 expectedOne = trilinear(p, l0);
+        for (int c = 0; c < 4; ++c) {
+            ASSERT_NEAR(got[c], expected[c], 1e-5f) << k << " " << c;
+            ASSERT_NEAR(one[c], expectedOne[c], 1e-5f) << k << " " << c;
+        }
+    }
 }
 
 // A volume stored over a window around its non-zero voxels reads as the one stored whole: at every level,
