@@ -200,10 +200,9 @@ glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, con
         const VolumeLookup at = fullLight.lookup(position, level);
         const Float4 sceneVisibility = visibility.scene ? visibility.scene->gatherFloat4(at) : zero;
         const float scene = adaptedOcclusion(sceneVisibility, dir, levelScale, settings, sceneBackface);
-        const float object =
-            visibility.object ? adaptedOcclusion(visibility.object->gatherFloat4(at), dir, levelScale,
-                                                 settings, objectBackface)
-                              : 0.0f;
+        const float object = visibility.object ? adaptedOcclusion(visibility.object->gatherFloat4(at), dir,
+                                                                  levelScale, settings, objectBackface)
+                                               : 0.0f;
         const float opacityA = stepOpacity(scene + object - scene * object, settings.stepScale);
         const float opacityB = stepOpacity(scene, settings.stepScale);
         if (opacityA > 0.0f) {
@@ -248,9 +247,9 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
         ++count;
         float scene = 0.0f, object = 0.0f;
         if (visibility.scene)
-            scene = stepOpacity(
-                adaptedOcclusion(visibility.scene->gatherFloat4(at), dir, levelScale, settings, sceneBackface),
-                settings.stepScale);
+            scene = stepOpacity(adaptedOcclusion(visibility.scene->gatherFloat4(at), dir, levelScale,
+                                                 settings, sceneBackface),
+                                settings.stepScale);
         if (visibility.object)
             object = stepOpacity(adaptedOcclusion(visibility.object->gatherFloat4(at), dir, levelScale,
                                                   settings, objectBackface),
@@ -276,10 +275,9 @@ float traceOneVolume(const Cone& cone, const MipVolume& volume, float backface, 
     const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
     marchCone(cone, volume, settings, [&](glm::vec3 position, float level, float levelScale) {
         if (sparse && !volume.mayReadNonZero(position, static_cast<int>(level))) return true;
-        const float local = stepOpacity(
-            adaptedOcclusion(volume.gatherFloat4(volume.lookup(position, level)), dir, levelScale, settings,
-                             backface),
-            settings.stepScale);
+        const float local = stepOpacity(adaptedOcclusion(volume.gatherFloat4(volume.lookup(position, level)),
+                                                         dir, levelScale, settings, backface),
+                                        settings.stepScale);
         acc += local * (1.0f - acc);
         return acc < settings.maxOcclusion;
     });

@@ -170,7 +170,7 @@ class PackedGrid3 {
           extent_(window_.hi - window_.lo),
           whole_(window_.count() == static_cast<size_t>(n) * n * n),
           count_(window_.count()),
-          voxels_(count_ + 1, PackedVoxel(0)) {}
+          voxels_(count_ + (extent_.x == 1 ? 1 : 0), PackedVoxel(0)) {}
     // `grid` rounded to bfloat16, inside `window` (zero outside it is the caller's promise).
     explicit PackedGrid3(const Grid3& grid) : PackedGrid3(grid, VoxelBox::all(grid.resolution())) {}
     PackedGrid3(const Grid3& grid, const VoxelBox& window);
@@ -186,8 +186,9 @@ class PackedGrid3 {
     // Voxels stored.
     size_t size() const { return count_; }
     size_t bytes() const { return voxels_.size() * sizeof(PackedVoxel); }
-    // The stored voxels, and one more, always zero: a read of two x-neighbours (VolumeLookup) may start at
-    // the last.
+    // The stored voxels. A lookup reads two x-neighbours at once (TrilinearCorners), both in one row where
+    // rows are two or more voxels long; a level one voxel wide keeps one more voxel, always zero, after its
+    // last.
     const PackedVoxel* data() const { return voxels_.data(); }
     // The place of voxel (x, y, z) of the window.
     size_t index(int x, int y, int z) const {
@@ -225,9 +226,9 @@ struct TrilinearCorners {
 // Where one quadrilinear lookup reads. It depends only on the region and resolution, so the volumes that
 // share them (all four of the method) are read with one lookup.
 struct VolumeLookup {
-    glm::vec3 voxelPos{0.0f};  // level-0 voxel units
-    int level0 = 0;            // the finer of the two levels
-    float blend = 0.0f;        // weight of level0 + 1
+    glm::vec3 voxelPos{0.0f};       // level-0 voxel units
+    int level0 = 0;                 // the finer of the two levels
+    float blend = 0.0f;             // weight of level0 + 1
     TrilinearCorners fine, coarse;  // their weights times 1 - blend and blend
 };
 
@@ -281,20 +282,27 @@ inline Float4 floor4(Float4 x) {
     }
     const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
     const auto in0 = p0 >= lo4 && p0 <= last4, in1 = p1 >= lo4 && p1 <= last4;
-    // Along each axis the weights of the first and the second voxel read, and the first's place in the
-    // stored box: p0 and p1 where p0 is inside, else p1 alone (first) or nothing.
+    // Along y and z the weights of the first and the second row read, and the first's place in the stored
+    // box: p0 and p1 where p0 is inside, else p1 alone (first) or nothing.
     const Float4 a0 = in0 ? 1.0f - f : (in1 ? f : zero);
     const Float4 a1 = (in0 && in1) ? f : zero;
     const Int4 c0 = (p0 < lo4 ? lo4 : (p0 > last4 ? last4 : p0)) - lo4;
     // y and z read the second voxel's own row: p1 clamped.
     const Int4 c1 = (p1 < lo4 ? lo4 : (p1 > last4 ? last4 : p1)) - lo4;
+    // Along x the two voxels read stay in their row where it is two or more wide: the first at most the
+    // row's last but one, each weighed by which of p0, p1 it is.
+    const int px = p0[0], bx = std::clamp(px, lo.x, std::max(hi.x - 2, lo.x));
+    auto weightX = [&](int x) {
+        return x > last4[0] ? 0.0f : (x == px ? 1.0f - f[0] : (x == px + 1 ? f[0] : 0.0f));
+    };
+    const float wx0 = weightX(bx), wx1 = weightX(bx + 1);
     const Float4 w = Float4{a0[1], a1[1], a0[1], a1[1]} * Float4{a0[2], a0[2], a1[2], a1[2]} * scale;
     for (int r = 0; r < 4; ++r) {
         const Float4 wr = {w[r], w[r], w[r], w[r]};
-        c.weight[2 * r] = wr * a0[0];
-        c.weight[2 * r + 1] = wr * a1[0];
+        c.weight[2 * r] = wr * wx0;
+        c.weight[2 * r + 1] = wr * wx1;
     }
-    const uint32_t x0 = static_cast<uint32_t>(c0[0]);
+    const uint32_t x0 = static_cast<uint32_t>(bx - lo.x);
     const uint32_t y0 = static_cast<uint32_t>(c0[1]), y1 = static_cast<uint32_t>(c1[1]);
     const uint32_t z0 = static_cast<uint32_t>(c0[2]) * ey, z1 = static_cast<uint32_t>(c1[2]) * ey;
     c.pair[0] = (z0 + y0) * ex + x0;

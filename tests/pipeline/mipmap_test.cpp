@@ -108,8 +108,10 @@ TEST(PackedGrid3, KeepsAFloatsRangeAndEightSignificantBits) {
         for (int c = 0; c < 4; ++c) EXPECT_EQ(p[i][c], fromBfloat16(toBfloat16(g[i][c]))) << i << " " << c;
     for (int c = 0; c < 4; ++c) EXPECT_NEAR(p[3][c], g[3][c], std::abs(g[3][c]) * std::ldexp(1.0f, -8));
     EXPECT_EQ(p[2], glm::vec4(0.0f));
-    EXPECT_EQ(p.bytes(), 8u * (8u + 1u));  // and the one zero voxel after the last (PackedGrid3::data)
-    EXPECT_EQ(p.data()[8], PackedVoxel(0));
+    EXPECT_EQ(p.bytes(), 8u * 8u);
+    const PackedGrid3 narrow(4, VoxelBox{{2, 0, 0}, {3, 4, 4}});  // one voxel wide: one zero voxel more
+    EXPECT_EQ(narrow.bytes(), 8u * (16u + 1u));
+    EXPECT_EQ(narrow.data()[16], PackedVoxel(0));
 }
 
 // Every lookup, near the borders and beyond them too, at every level and between levels, is the plain
@@ -117,36 +119,53 @@ TEST(PackedGrid3, KeepsAFloatsRangeAndEightSignificantBits) {
 // voxel): the lookup's branch-free corners and its two-voxel reads change nothing.
 TEST(MipVolume, ALookupIsTheQuadrilinearInterpolationWithZeroOutside) {
     const int n = 8;
-    Grid3 g(n);
-    for (size_t i = 0; i < g.size(); ++i)
-        g[i] = glm::vec4(std::sin(0.7f * float(i)), std::cos(1.3f * float(i)), float(i % 5), 1.0f + (i % 3));
-    const MipVolume v = buildMipChain({glm::vec3(0), 1.0f, n}, std::move(g));
-    auto trilinear = [&](glm::vec3 p, int l) {
-        const PackedGrid3& level = v.level(l);
-        const glm::vec3 q = p / float(1 << l) - 0.5f, base = glm::floor(q), f = q - base;
-        glm::vec4 sum(0.0f);
-        for (int k = 0; k < 8; ++k) {
-            const glm::ivec3 c = glm::ivec3(base) + glm::ivec3(k & 1, (k >> 1) & 1, k >> 2);
-            const bool inside = glm::all(glm::greaterThanEqual(c, glm::ivec3(0))) &&
-                                glm::all(glm::lessThan(c, glm::ivec3(level.resolution())));
-            const float w = (k & 1 ? f.x : 1 - f.x) * ((k >> 1) & 1 ? f.y : 1 - f.y) * (k >> 2 ? f.z : 1 - f.z);
-            if (inside) sum += w * level.at(c.x, c.y, c.z);
-        }
-        return sum;
+    auto filled = [&](const VoxelBox& box) {
+        Grid3 g(n);
+        for (int z = box.lo.z; z < box.hi.z; ++z)
+            for (int y = box.lo.y; y < box.hi.y; ++y)
+                for (int x = box.lo.x; x < box.hi.x; ++x) {
+                    const float i = float(g.index(x, y, z));
+                    g.at(x, y, z) =
+                        glm::vec4(std::sin(0.7f * i), std::cos(1.3f * i), std::fmod(i, 5.0f), 1.0f);
+                }
+        return g;
     };
-    for (int k = 0; k < 4000; ++k) {
-        const glm::vec3 p(std::fmod(k * 0.737f, 14.0f) - 3.0f, std::fmod(k * 0.291f, 14.0f) - 3.0f,
-                          std::fmod(k * 0.533f, 14.0f) - 3.0f);
-        const float level = std::fmod(k * 0.173f, 3.999f);
-        const int l0 = static_cast<int>(level);
-        const float blend = l0 < 3 ? level - float(l0) : 0.0f;  // none above the coarsest level
-        const glm::vec4 expected =
-            (1 - blend) * trilinear(p, l0) + (blend > 0 ? blend * trilinear(p, l0 + 1) : glm::vec4(0.0f));
-        const glm::vec4 got = v.sample(p, level), one = v.sampleLevel(p, l0);
-        const glm::vec4 expectedOne = trilinear(p, l0);
-        for (int c = 0; c < 4; ++c) {
-            ASSERT_NEAR(got[c], expected[c], 1e-5f) << k << " " << c;
-            ASSERT_NEAR(one[c], expectedOne[c], 1e-5f) << k << " " << c;
+    const VolumeRegion region{glm::vec3(0), 1.0f, n};
+    // Stored whole; over a window one voxel wide; over one two voxels wide at the grid's far side.
+    const VoxelBox narrow{{3, 1, 2}, {4, 7, 8}}, edge{{6, 0, 1}, {8, 8, 5}};
+    std::vector<MipVolume> volumes;
+    volumes.push_back(buildMipChain(region, filled(VoxelBox::all(n))));
+    volumes.push_back(buildMipChain(region, PackedGrid3(filled(narrow), narrow)));
+    volumes.push_back(buildMipChain(region, PackedGrid3(filled(edge), edge)));
+    for (const MipVolume& v : volumes) {
+        auto trilinear = [&](glm::vec3 p, int l) {
+            const PackedGrid3& level = v.level(l);
+            const glm::vec3 q = p / float(1 << l) - 0.5f, base = glm::floor(q), f = q - base;
+            glm::vec4 sum(0.0f);
+            for (int k = 0; k < 8; ++k) {
+                const glm::ivec3 c = glm::ivec3(base) + glm::ivec3(k & 1, (k >> 1) & 1, k >> 2);
+                const bool inside = glm::all(glm::greaterThanEqual(c, glm::ivec3(0))) &&
+                                    glm::all(glm::lessThan(c, glm::ivec3(level.resolution())));
+                const float w =
+                    (k & 1 ? f.x : 1 - f.x) * ((k >> 1) & 1 ? f.y : 1 - f.y) * (k >> 2 ? f.z : 1 - f.z);
+                if (inside) sum += w * level.at(c.x, c.y, c.z);  // zero outside a window
+            }
+            return sum;
+        };
+        for (int k = 0; k < 4000; ++k) {
+            const glm::vec3 p(std::fmod(k * 0.737f, 14.0f) - 3.0f, std::fmod(k * 0.291f, 14.0f) - 3.0f,
+                              std::fmod(k * 0.533f, 14.0f) - 3.0f);
+            const float level = std::fmod(k * 0.173f, 3.999f);
+            const int l0 = static_cast<int>(level);
+            const float blend = l0 < 3 ? level - float(l0) : 0.0f;  // none above the coarsest level
+            const glm::vec4 expected =
+                (1 - blend) * trilinear(p, l0) + (blend > 0 ? blend * trilinear(p, l0 + 1) : glm::vec4(0.0f));
+            const glm::vec4 got = v.sample(p, level), one = v.sampleLevel(p, l0);
+            const glm::vec4 expectedOne = trilinear(p, l0);
+            for (int c = 0; c < 4; ++c) {
+                ASSERT_NEAR(got[c], expected[c], 1e-5f) << k << " " << c;
+                ASSERT_NEAR(one[c], expectedOne[c], 1e-5f) << k << " " << c;
+            }
         }
     }
 }
