@@ -200,9 +200,14 @@ glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, con
         const VolumeLookup at = fullLight.lookup(position, level);
         const Float4 sceneVisibility = visibility.scene ? visibility.scene->gatherFloat4(at) : zero;
         const float scene = adaptedOcclusion(sceneVisibility, dir, levelScale, settings, sceneBackface);
-        const float object = visibility.object ? adaptedOcclusion(visibility.object->gatherFloat4(at), dir,
-                                                                  levelScale, settings, objectBackface)
-                                               : 0.0f;
+        // Near the objects, a lookup of their own: their volumes (visibility, light) are stored over the same
+        // windows around them, which it is placed in once for both.
+        const bool nearObjects = visibility.object && visibility.object->mayReadNonZero(position, at.level0);
+        VolumeLookup objectAt;
+        if (nearObjects) objectAt = visibility.object->lookup(position, level);
+        const float object = nearObjects ? adaptedOcclusion(visibility.object->gatherFloat4(objectAt), dir,
+                                                            levelScale, settings, objectBackface)
+                                         : 0.0f;
         const float opacityA = stepOpacity(scene + object - scene * object, settings.stepScale);
         const float opacityB = stepOpacity(scene, settings.stepScale);
         if (opacityA > 0.0f) {
@@ -215,7 +220,7 @@ glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, con
             if (objectLight) {
                 // The scene's surfaces (with the objects' effect on them) through the scene's opacity, the
                 // objects' own light through the opacity they add.
-                const Float4 objects = objectLight->gatherFloat4(at);
+                const Float4 objects = objectLight->gatherFloat4(nearObjects ? objectAt : at);
                 const Float4 sceneRadiance = radiance(full - objects);
                 if (settings.objectLightByRays)  // the rays bring the objects' light and what they hide
                     composite(lightA, occlusionA, sceneRadiance * opacityB, opacityB);

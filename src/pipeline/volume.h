@@ -59,6 +59,7 @@ struct VoxelBox {
         return b.empty() ||
                (glm::all(glm::lessThanEqual(lo, b.lo)) && glm::all(glm::lessThanEqual(b.hi, hi)));
     }
+    bool operator==(const VoxelBox&) const = default;
     bool contains(int x, int y, int z) const {
         return x >= lo.x && y >= lo.y && z >= lo.z && x < hi.x && y < hi.y && z < hi.z;
     }
@@ -230,6 +231,9 @@ struct VolumeLookup {
     int level0 = 0;                 // the finer of the two levels
     float blend = 0.0f;             // weight of level0 + 1
     TrilinearCorners fine, coarse;  // their weights times 1 - blend and blend
+    // Placed in whole levels, or in these windows (a volume stored over windows prepared it).
+    bool whole = true;
+    VoxelBox fineWindow, coarseWindow;
 };
 
 // 2^-level, exactly (a float's exponent field).
@@ -368,21 +372,30 @@ class MipVolume {
         level = glm::clamp(level, 0.0f, static_cast<float>(levelCount() - 1));
         l.level0 = static_cast<int>(level);
         l.blend = l.level0 + 1 < levelCount() ? level - static_cast<float>(l.level0) : 0.0f;
-        // Each level's weights times its share, so that a gather adds the two.
-        const int n0 = levels_[l.level0].resolution();
-        trilinearCornersOver(voxelPos, l.level0, glm::ivec3(0), glm::ivec3(n0), l.fine, 1.0f - l.blend);
-        if (l.blend > 0.0f)
-            trilinearCornersOver(voxelPos, l.level0 + 1, glm::ivec3(0), glm::ivec3(n0 >> 1), l.coarse,
+        // Each level's weights times its share, so that a gather adds the two; placed in this volume's
+        // windows (the whole levels for a volume stored whole).
+        l.whole = whole_;
+        if (!whole_) {
+            l.fineWindow = levels_[l.level0].window();
+            if (l.blend > 0.0f) l.coarseWindow = levels_[l.level0 + 1].window();
+        }
+        const PackedGrid3& fine = levels_[l.level0];
+        trilinearCornersOver(voxelPos, l.level0, fine.window().lo, fine.window().hi, l.fine, 1.0f - l.blend);
+        if (l.blend > 0.0f) {
+            const PackedGrid3& coarse = levels_[l.level0 + 1];
+            trilinearCornersOver(voxelPos, l.level0 + 1, coarse.window().lo, coarse.window().hi, l.coarse,
                                  l.blend);
+        }
         return l;
     }
-    // Reads a lookup prepared by any volume of the same region and resolution. Returns 0 at once where the
+    // Reads a lookup prepared by any volume of the same region and resolution (at once where it was placed in
+    // levels stored as this volume's are: whole, or over the same windows). Returns 0 at once where the
     // lookup's footprint cannot reach a non-zero voxel.
     glm::vec4 gather(const VolumeLookup& l) const { return storeFloat4(gatherFloat4(l)); }
     // gather() in one SIMD register.
     [[gnu::always_inline]] Float4 gatherFloat4(const VolumeLookup& l) const {
         if (!mayReadNonZero(l.voxelPos, l.level0)) return Float4{0.0f, 0.0f, 0.0f, 0.0f};
-        if (!whole_) return gatherWindowed(l);
+        if (whole_ ? !l.whole : !placedInOwnWindows(l)) return gatherWindowed(l);
         Float4 v = gatherLevel(l.level0, l.fine);
         if (l.blend > 0.0f) v += gatherLevel(l.level0 + 1, l.coarse);
         return v;
@@ -420,10 +433,14 @@ class MipVolume {
     glm::vec4 sample(glm::vec3 voxelPos, float level) const { return gather(lookup(voxelPos, level)); }
 
   private:
+    bool placedInOwnWindows(const VolumeLookup& l) const {
+        return !l.whole && l.fineWindow == levels_[l.level0].window() &&
+               (!(l.blend > 0.0f) || l.coarseWindow == levels_[l.level0 + 1].window());
+    }
     [[gnu::always_inline]] Float4 gatherLevel(int l, const TrilinearCorners& c) const {
         return gatherCorners(levels_[l].data(), c);
     }
-    // gather() of a volume stored over windows: the lookup's corners again, placed in each level's window.
+    // gather() of a lookup placed otherwise: its corners again, placed in each level's window.
     [[gnu::noinline]] Float4 gatherWindowed(const VolumeLookup& l) const {
         Float4 v = gatherWindowedLevel(l.voxelPos, l.level0, 1.0f - l.blend);
         if (l.blend > 0.0f) v += gatherWindowedLevel(l.voxelPos, l.level0 + 1, l.blend);
