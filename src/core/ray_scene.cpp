@@ -196,6 +196,34 @@ RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float 
     return result;
 }
 
+RayLanding RayScene::land(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    RayLanding landing = landTopLayer(origin, direction, tMin, tMax);
+    if (base_) {
+        const RayLanding below = base_->land(origin, direction, tMin, landing.hit() ? landing.t : tMax);
+        if (below.hit()) landing = below;
+    }
+    return landing;
+}
+
+RayLanding RayScene::landTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
+    RayLanding landing;
+    if (meshes_.empty()) return landing;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    initRay(rh.ray, origin, direction, tMin, tMax);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return landing;
+    glm::vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+    if (glm::dot(ng, direction) > 0.0f) ng = -ng;  // two-sided: facing the side the ray came from
+    landing.t = rh.ray.tfar;
+    landing.position = origin + rh.ray.tfar * direction;
+    landing.geometricNormal = glm::normalize(ng);
+    return landing;
+}
+
 void RayScene::intersectCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
                                  std::span<RayHit> hits, bool topLayerOnly, bool texturesLater) const {
     intersectCoherent(std::span(&origin, 1), directions, hits, topLayerOnly, texturesLater);

@@ -42,6 +42,15 @@ struct RayHit {
     bool hit() const { return material != nullptr; }
 };
 
+// Where a ray lands, and no more: for rays that only read a volume there (no normals interpolated, no
+// materials, no textures).
+struct RayLanding {
+    float t = std::numeric_limits<float>::infinity();
+    glm::vec3 position{0.0f};         // origin + t * direction
+    glm::vec3 geometricNormal{0.0f};  // the triangle's plane normal, unit, facing the ray's origin
+    bool hit() const { return t < std::numeric_limits<float>::infinity(); }
+};
+
 // Looks up the material of a hit again for a lookup `footprint` world units wide (a camera pixel's), so
 // that textures are filtered over it (their mip level); sets `hit.surface` and, for normal-mapped
 // materials, `hit.normal`. Nothing changes for materials without textures.
@@ -80,6 +89,11 @@ class RayScene {
     RayHit intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
                              float tMax = std::numeric_limits<float>::infinity(),
                              bool texturesLater = false) const;
+    // intersect() and intersectTopLayer() for rays that need only where they land.
+    RayLanding land(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
+                    float tMax = std::numeric_limits<float>::infinity()) const;
+    RayLanding landTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
+                            float tMax = std::numeric_limits<float>::infinity()) const;
     // intersect() (or intersectTopLayer()) for many rays from one origin (camera rays), traced in packets:
     // hits[i] for directions[i] (unit length), t in (0, infinity). The same hits as one ray at a time: each
     // is computed again from its triangle (an edge shared by two triangles may be found on either, at the

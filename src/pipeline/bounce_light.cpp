@@ -217,9 +217,8 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
         objects, objectVisibility, box, level,
         [&](size_t index, glm::vec3 centre, glm::vec3 normal, float size) {
             // The objects' outer surface in the voxel: the first one met coming in along the normal. Its hits
-            // and the gathering rays' need only where they land (volumeRadianceAt): no texture lookups.
-            const RayHit surface =
-                scene.intersectTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size, true);
+            // and the gathering rays' need only where they land (volumeRadianceAt).
+            const RayLanding surface = scene.landTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
             if (!surface.hit())
                 return gatherAtVoxel(centre, normal, size, index, light, occluders, cones, settings);
             const glm::vec3 origin = surface.position + offset * normal;
@@ -230,7 +229,7 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
             for (int k = 0; k < count; ++k) {
                 const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
                 const glm::vec3 wi = frame * sampleCosineHemisphere(u1, u2);
-                const RayHit hit = scene.intersect(origin, wi, offset, INFINITY, true);
+                const RayLanding hit = scene.land(origin, wi, offset);
                 if (!hit.hit()) continue;
                 sum += volumeRadianceAt(light, hit);
             }

@@ -16,7 +16,7 @@ constexpr uint32_t kBounceStream = 7200;
 
 // Where volumeRadianceAt reads `volume` (and any volume of its region) for `hit`: level 0, half a voxel off
 // the surface on the ray's side.
-VolumeLookup lookupOffSurface(const MipVolume& volume, const RayHit& hit) {
+VolumeLookup lookupOffSurface(const MipVolume& volume, const RayLanding& hit) {
     const VolumeRegion& region = volume.region();
     const float invVoxel = 1.0f / region.voxelSize();
     return volume.lookup(
@@ -29,11 +29,11 @@ glm::vec3 radianceOf(glm::vec4 l) {
 
 }  // namespace
 
-glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit) {
+glm::vec3 volumeRadianceAt(const MipVolume& light, const RayLanding& hit) {
     return radianceOf(light.gather(lookupOffSurface(light, hit)));
 }
 
-glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayHit& hit) {
+glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayLanding& hit) {
     assert(a.region().origin == b.region().origin && a.region().size == b.region().size &&
            a.region().resolution == b.region().resolution && a.levelCount() == b.levelCount());
     const VolumeLookup where = lookupOffSurface(a, hit);  // b's too: they share their region
@@ -86,14 +86,14 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
                 if (cosSurface <= 0.0f) continue;
                 weight = cosSurface * 2.0f * (1.0f - cosMax);  // cos / (pi * 1 / (2 pi (1 - cosMax)))
             }
-            // Only where it lands counts (volumeRadianceAt): no texture lookups.
-            const RayHit hit = rays.objects->intersectTopLayer(origin, wi, 0.0f, INFINITY, true);
+            // Only where it lands counts (volumeRadianceAt).
+            const RayLanding hit = rays.objects->landTopLayer(origin, wi);
             if (!hit.hit()) continue;
             if (rays.scene->occluded(origin, wi, 0.0f, hit.t)) continue;
             glm::vec3 radiance = volumeRadianceAt(objectLight, hit);
             if (realLight.full && realLight.delta) {
                 // The real surface the ray met before the objects were there, and its light then.
-                const RayHit hidden = rays.scene->intersect(origin, wi, hit.t, INFINITY, true);
+                const RayLanding hidden = rays.scene->land(origin, wi, hit.t);
                 if (hidden.hit())
                     radiance -= volumeRadianceDifferenceAt(*realLight.full, *realLight.delta, hidden);
             }

@@ -46,9 +46,9 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
 
 // The radiance of `light`'s level-0 voxels where a ray meets a surface, half a voxel out on the ray's side of
 // it (the volume's values over their occupancy); zero where no voxel there is occupied.
-glm::vec3 volumeRadianceAt(const MipVolume& light, const RayHit& hit);
+glm::vec3 volumeRadianceAt(const MipVolume& light, const RayLanding& hit);
 // volumeRadianceAt(a, hit) - volumeRadianceAt(b, hit) for two volumes of one region, whose lookup is worked
 // out once (the same values).
-glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayHit& hit);
+glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayLanding& hit);
 
 }  // namespace deltagi

@@ -184,7 +184,7 @@ TEST(ObjectBounceRays, ARadianceDifferenceIsTheDifferenceOfTheTwoLookups) {
     const MipVolume b = buildMipChain(region, std::move(narrow));
     int compared = 0, bothNonZero = 0;
     for (int k = 0; k < 400; ++k) {
-        RayHit hit;
+        RayLanding hit;
         hit.position =
             glm::vec3(static_cast<float>(k % 20) / 19.0f, static_cast<float>((k / 20) % 20) / 19.0f,
                       0.45f + 0.01f * static_cast<float>(k % 7));
