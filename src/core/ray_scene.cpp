@@ -37,6 +37,18 @@ void initRay(RTCRay& ray, glm::vec3 origin, glm::vec3 direction, float tMin, flo
     ray.flags = 0;
 }
 
+// The closest hit of one ray in `scene` into `rh`; false when it meets nothing.
+bool closestHit(RTCScene scene, glm::vec3 origin, glm::vec3 direction, float tMin, float tMax,
+                RTCRayHit& rh) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    initRay(rh.ray, origin, direction, tMin, tMax);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene, &context, &rh);
+    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+}
+
 // The hit of a ray on the triangle Embree found, computed again from the mesh's vertices (Moller-Trumbore in
 // double precision): the same bits whichever BVH found it, built afresh or refit. Embree's own figures
 // depend, in the last bits, on how its leaves store the triangle.
@@ -182,15 +194,8 @@ RayHit RayScene::intersect(glm::vec3 origin, glm::vec3 direction, float tMin, fl
 RayHit RayScene::intersectTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax,
                                    bool texturesLater) const {
     RayHit result;
-    if (meshes_.empty()) return result;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
     RTCRayHit rh;
-    initRay(rh.ray, origin, direction, tMin, tMax);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->scene, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return result;
+    if (meshes_.empty() || !closestHit(impl_->scene, origin, direction, tMin, tMax, rh)) return result;
     hitOn(rh.hit.geomID, rh.hit.primID, {rh.hit.u, rh.hit.v, rh.ray.tfar},
           {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}, origin, direction, !texturesLater, result);
     return result;
@@ -207,15 +212,8 @@ RayLanding RayScene::land(glm::vec3 origin, glm::vec3 direction, float tMin, flo
 
 RayLanding RayScene::landTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin, float tMax) const {
     RayLanding landing;
-    if (meshes_.empty()) return landing;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
     RTCRayHit rh;
-    initRay(rh.ray, origin, direction, tMin, tMax);
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(impl_->scene, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return landing;
+    if (meshes_.empty() || !closestHit(impl_->scene, origin, direction, tMin, tMax, rh)) return landing;
     glm::vec3 ng(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
     if (glm::dot(ng, direction) > 0.0f) ng = -ng;  // two-sided: facing the side the ray came from
     landing.t = rh.ray.tfar;
