@@ -66,6 +66,11 @@ constexpr float kIsotropicCoverage = 0.5f;
 // A back face counts fully as one once cos(back) >= 1/kBackfaceRamp: the neighbours of a point on a convex
 // surface face a grazing cone slightly from behind.
 constexpr float kBackfaceRamp = 16.0f;
+// A cone's axis in lanes 1-3, lined up with a visibility voxel's mean normal (adaptedOcclusion's `dir`).
+inline Float4 axisOf(const Cone& cone) {
+    return Float4{0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
+}
+
 inline float adaptedOcclusion(Float4 v, Float4 dir, float levelScale, const ConeTraceSettings& s,
                               float backfaceWeight) {
     const float occupancy = v[0];
@@ -80,10 +85,6 @@ inline float adaptedOcclusion(Float4 v, Float4 dir, float levelScale, const Cone
     const float adapted = (1.0f - coherence) * kIsotropicCoverage + coherence * directional;
     const float weight = (1.0f - s.normalWeight) * kIsotropicCoverage + s.normalWeight * adapted;
     return std::clamp(occupancy * levelScale * weight, 0.0f, 1.0f);
-}
-inline float adaptedOcclusion(glm::vec4 v, glm::vec3 dir, float levelScale, const ConeTraceSettings& s,
-                              float backfaceWeight) {
-    return adaptedOcclusion(loadFloat4(v), Float4{0.0f, dir.x, dir.y, dir.z}, levelScale, s, backfaceWeight);
 }
 
 // log2 of x >= 1 to within 3e-5 (the exponent, and a quintic in the mantissa m - 1, a least-squares fit over
@@ -149,7 +150,7 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
     Float4 lightAcc = {0.0f, 0.0f, 0.0f, 0.0f};
     float occlusionAcc = 0.0f;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
-    const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
+    const Float4 dir = axisOf(cone);
     int64_t count = 0;
     marchCone(cone, light, settings, [&](glm::vec3 position, float level, float levelScale) {
         // One set of corners for all the volumes of the region.
@@ -186,7 +187,7 @@ glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, con
     Float4 lightA = {0.0f, 0.0f, 0.0f, 0.0f}, lightB = lightA;
     float occlusionA = 0.0f, occlusionB = 0.0f;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
-    const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
+    const Float4 dir = axisOf(cone);
     const Float4 zero = {0.0f, 0.0f, 0.0f, 0.0f};
     // A volume's radiance: rgb over its occupancy (w).
     auto radiance = [&](Float4 v) { return v[3] > 1e-6f ? v / v[3] : zero; };
@@ -245,7 +246,7 @@ ShadowOcclusion traceShadowCone(const Cone& cone, const VisibilityVolumes& visib
     if (!visibility.scene && !visibility.object) return acc;
     const auto [sceneBackface, objectBackface] = backfaceWeights(visibility, settings);
     const MipVolume& reference = referenceOf(visibility.scene, visibility.object);
-    const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
+    const Float4 dir = axisOf(cone);
     int64_t count = 0;
     marchCone(cone, reference, settings, [&](glm::vec3 position, float level, float levelScale) {
         const VolumeLookup at = reference.lookup(position, level);
@@ -277,7 +278,7 @@ namespace {
 float traceOneVolume(const Cone& cone, const MipVolume& volume, float backface, bool sparse,
                      const ConeTraceSettings& settings) {
     float acc = 0.0f;
-    const Float4 dir = {0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
+    const Float4 dir = axisOf(cone);
     marchCone(cone, volume, settings, [&](glm::vec3 position, float level, float levelScale) {
         if (sparse && !volume.mayReadNonZero(position, static_cast<int>(level))) return true;
         const float local = stepOpacity(adaptedOcclusion(volume.gatherFloat4(volume.lookup(position, level)),
@@ -313,8 +314,8 @@ bool shadowConeMeetsObjects(const Cone& cone, const VisibilityVolumes& visibilit
     bool meets = false;
     marchCone(cone, objects, settings, [&](glm::vec3 position, float level, float levelScale) {
         if (!objects.mayReadNonZero(position, static_cast<int>(level))) return true;
-        const glm::vec4 v = objects.sample(position, level);
-        meets = adaptedOcclusion(v, cone.direction, levelScale, settings, backface) > 0.0f;
+        const Float4 v = objects.gatherFloat4(objects.lookup(position, level));
+        meets = adaptedOcclusion(v, axisOf(cone), levelScale, settings, backface) > 0.0f;
         return !meets;
     });
     return meets;

@@ -252,6 +252,16 @@ inline Float4 floor4(Float4 x) {
     return truncated - (truncated > x ? Float4{1.0f, 1.0f, 1.0f, 1.0f} : Float4{0.0f, 0.0f, 0.0f, 0.0f});
 }
 
+// A trilinear lookup's weights: row r's weight (along y and z, times the level's share) w[r], times the
+// weights wx0 and wx1 of its two voxels along x, each in all four lanes.
+[[gnu::always_inline]] inline void setRowWeights(TrilinearCorners& c, Float4 w, float wx0, float wx1) {
+    for (int r = 0; r < 4; ++r) {
+        const Float4 wr = {w[r], w[r], w[r], w[r]};
+        c.weight[2 * r] = wr * wx0;
+        c.weight[2 * r + 1] = wr * wx1;
+    }
+}
+
 // Trilinear corners at a level, for a position in level-0 voxel units, of a level stored over its voxels
 // [lo, hi), every weight times `scale` (a quadrilinear lookup's share of the level). Without branches: a
 // corner outside [lo, hi) gets weight 0, and its row the nearest stored voxels.
@@ -269,12 +279,7 @@ inline Float4 floor4(Float4 x) {
         p1[2] <= last4[2]) {
         // All eight inside (most lookups): one first voxel, rows a row or a slice apart.
         const Float4 g = 1.0f - f;
-        const Float4 w = Float4{g[1], f[1], g[1], f[1]} * Float4{g[2], g[2], f[2], f[2]} * scale;
-        for (int r = 0; r < 4; ++r) {
-            const Float4 wr = {w[r], w[r], w[r], w[r]};
-            c.weight[2 * r] = wr * g[0];
-            c.weight[2 * r + 1] = wr * f[0];
-        }
+        setRowWeights(c, Float4{g[1], f[1], g[1], f[1]} * Float4{g[2], g[2], f[2], f[2]} * scale, g[0], f[0]);
         const Int4 rel = p0 - lo4;
         const uint32_t first = (static_cast<uint32_t>(rel[2]) * ey + static_cast<uint32_t>(rel[1])) * ex +
                                static_cast<uint32_t>(rel[0]);
@@ -300,12 +305,8 @@ inline Float4 floor4(Float4 x) {
         return x > last4[0] ? 0.0f : (x == px ? 1.0f - f[0] : (x == px + 1 ? f[0] : 0.0f));
     };
     const float wx0 = weightX(bx), wx1 = weightX(bx + 1);
-    const Float4 w = Float4{a0[1], a1[1], a0[1], a1[1]} * Float4{a0[2], a0[2], a1[2], a1[2]} * scale;
-    for (int r = 0; r < 4; ++r) {
-        const Float4 wr = {w[r], w[r], w[r], w[r]};
-        c.weight[2 * r] = wr * wx0;
-        c.weight[2 * r + 1] = wr * wx1;
-    }
+    setRowWeights(c, Float4{a0[1], a1[1], a0[1], a1[1]} * Float4{a0[2], a0[2], a1[2], a1[2]} * scale, wx0,
+                  wx1);
     const uint32_t x0 = static_cast<uint32_t>(bx - lo.x);
     const uint32_t y0 = static_cast<uint32_t>(c0[1]), y1 = static_cast<uint32_t>(c1[1]);
     const uint32_t z0 = static_cast<uint32_t>(c0[2]) * ey, z1 = static_cast<uint32_t>(c1[2]) * ey;
@@ -379,13 +380,8 @@ class MipVolume {
             l.fineWindow = levels_[l.level0].window();
             if (l.blend > 0.0f) l.coarseWindow = levels_[l.level0 + 1].window();
         }
-        const PackedGrid3& fine = levels_[l.level0];
-        trilinearCornersOver(voxelPos, l.level0, fine.window().lo, fine.window().hi, l.fine, 1.0f - l.blend);
-        if (l.blend > 0.0f) {
-            const PackedGrid3& coarse = levels_[l.level0 + 1];
-            trilinearCornersOver(voxelPos, l.level0 + 1, coarse.window().lo, coarse.window().hi, l.coarse,
-                                 l.blend);
-        }
+        placeIn(l.level0, voxelPos, 1.0f - l.blend, l.fine);
+        if (l.blend > 0.0f) placeIn(l.level0 + 1, voxelPos, l.blend, l.coarse);
         return l;
     }
     // Reads a lookup prepared by any volume of the same region and resolution (at once where it was placed in
@@ -426,8 +422,8 @@ class MipVolume {
     // Trilinear sample of level `l`.
     glm::vec4 sampleLevel(glm::vec3 voxelPos, int l) const {
         TrilinearCorners c;
-        trilinearCornersOver(voxelPos, l, levels_[l].window().lo, levels_[l].window().hi, c);
-        return storeFloat4(gatherCorners(levels_[l].data(), c));
+        placeIn(l, voxelPos, 1.0f, c);
+        return storeFloat4(gatherLevel(l, c));
     }
     // Quadrilinear sample: trilinear in the two levels around the fractional `level`, blended.
     glm::vec4 sample(glm::vec3 voxelPos, float level) const { return gather(lookup(voxelPos, level)); }
@@ -436,6 +432,10 @@ class MipVolume {
     bool placedInOwnWindows(const VolumeLookup& l) const {
         return !l.whole && l.fineWindow == levels_[l.level0].window() &&
                (!(l.blend > 0.0f) || l.coarseWindow == levels_[l.level0 + 1].window());
+    }
+    // Level l's trilinear corners at `voxelPos`, placed in its window, the weights times `share`.
+    [[gnu::always_inline]] void placeIn(int l, glm::vec3 voxelPos, float share, TrilinearCorners& c) const {
+        trilinearCornersOver(voxelPos, l, levels_[l].window().lo, levels_[l].window().hi, c, share);
     }
     [[gnu::always_inline]] Float4 gatherLevel(int l, const TrilinearCorners& c) const {
         return gatherCorners(levels_[l].data(), c);
@@ -448,7 +448,7 @@ class MipVolume {
     }
     Float4 gatherWindowedLevel(glm::vec3 voxelPos, int l, float share) const {
         TrilinearCorners c;
-        trilinearCornersOver(voxelPos, l, levels_[l].window().lo, levels_[l].window().hi, c, share);
+        placeIn(l, voxelPos, share, c);
         return gatherLevel(l, c);
     }
     // The level-0 voxel-space box around every non-zero voxel (inverted when there is none).
