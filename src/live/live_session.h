@@ -1,4 +1,4 @@
-// The state of a live session (`deltagi serve`, cli/serve_command.cpp) and the handler of its clients'
+// The state of a live session (`deltagi serve`, cli/serve_server.h) and the handler of its clients'
 // messages, kept apart from the web server so that it can be tested and fuzzed without sockets.
 //
 // A session holds the scene document (the scene file's JSON, with the command line's overrides) and the Scene
@@ -70,7 +70,7 @@ class Session {
     // wherever it is saved).
     nlohmann::json document() const;
 
-    // The pose of the registered scene camera (a live camera's frames, cli/serve_command.cpp): drags pick the
+    // The pose of the registered scene camera (a live camera's frames, cli/serve_render.cpp): drags pick the
     // surface under the cursor as this camera sees it, and the state's anchors are its pixels. Not a change
     // (no version): the document keeps the file's camera.
     void setCameraPose(const glm::mat4& worldFromCamera);
