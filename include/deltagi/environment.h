@@ -36,7 +36,7 @@ struct Environment {
     std::filesystem::path file;  // for messages
     Image radiance;              // equirectangular, linear RGB radiance, times the intensity, finite and >= 0
     glm::mat3 worldFromEnvironment{1.0f};  // a rotation
-    SkyPyramid sky;                        // empty when options.environment.sky is false
+    SkyPyramid sky;  // empty unless options.environment.sky and options.shadow.method "cones"
 
     glm::mat3 environmentFromWorld() const { return glm::transpose(worldFromEnvironment); }
 };
@@ -44,7 +44,8 @@ struct Environment {
 struct Scene;
 // Lights `scene` with `environment` (its radiance and rotation set) according to scene.options.environment:
 // extracts the directional lights (replacing any extracted before; the scene file's own lights stay),
-// prefilters the sky, and stores the environment in the scene. The scene loader calls it for "environment".
+// prefilters the sky for the cones (sky_light.h; only with options.shadow.method "cones"), and stores the
+// environment in the scene. The scene loader calls it for "environment".
 void setEnvironment(Scene& scene, Environment environment);
 
 }  // namespace deltagi

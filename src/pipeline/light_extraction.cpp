@@ -231,7 +231,9 @@ void setEnvironment(Scene& scene, Environment environment) {
     const EnvironmentOptions& o = scene.options.environment;
     const std::vector<ExtractedLight> extracted =
         extractLights(environment.radiance, o.lightCount, o.extraction);
-    environment.sky = o.sky ? prefilterSky(environment.radiance, extracted) : SkyPyramid{};
+    // The sky term is gathered by the cones only: with the map's light traced by rays it is not needed.
+    const bool skyByCones = o.sky && scene.options.shadow.method == ShadowMethod::Cones;
+    environment.sky = skyByCones ? prefilterSky(environment.radiance, extracted) : SkyPyramid{};
     std::erase_if(scene.lights, [](const Light& l) { return l.fromEnvironment; });
     // A light's shadow cone is as wide as its region of sky, but never narrower than other lights' cones.
     const float minHalfAngle = 0.5f * glm::radians(scene.options.shadow.apertureDeg);

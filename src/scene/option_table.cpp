@@ -520,9 +520,10 @@ OptionGroup environmentGroup() {
                    "energy-weighted angular variance of the two halves. Each round splits every region; when "
                    "`light_count` is not a power of two the last round splits the most energetic ones"),
             option("sky", &E::sky, boolean(), "",
-                   "the sky term through the diffuse and specular cones that leave the volumes (the map "
-                   "minus the extracted lights, prefiltered to their aperture). `false`: the extracted "
-                   "lights only"),
+                   "with `shadow.method` `\"cones\"`: the sky term through the diffuse and specular cones "
+                   "that leave the volumes (the map minus the extracted lights, prefiltered to their "
+                   "aperture). `false`: the extracted lights only. With `\"rays\"` the whole map, sky "
+                   "included, is traced by rays and this has no effect"),
             option(
                 "max_light_aperture_deg", &E::maxLightApertureDeg, numbers(kOpenAperture), "degrees",
                 "an extracted light's shadow cone is as wide as its region of the map (full apex angle), at "

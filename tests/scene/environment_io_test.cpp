@@ -74,10 +74,14 @@ TEST_F(EnvironmentIoTest, AnEquirectangularMapLoadsItsLightsRotatedAndScaled) {
     EXPECT_TRUE(plain.warnings.empty());
     EXPECT_EQ(plain.lights.size(), 16u);
     for (const Light& l : plain.lights) EXPECT_TRUE(l.fromEnvironment && l.type == Light::Type::Directional);
-    EXPECT_FALSE(plain.environment->sky.empty());
+    // The sky is prefiltered for the cones only: with the map traced by rays (the default) it is not needed.
+    EXPECT_TRUE(plain.environment->sky.empty());
+    const Scene byCones = load({{"file", "sky.hdr"}}, {{"shadow", {{"method", "cones"}}}});
+    EXPECT_FALSE(byCones.environment->sky.empty());
 
     const Scene turned = load({{"file", "sky.hdr"}, {"rotate_deg", {0, 90, 0}}, {"intensity", 2}},
-                              {{"environment", {{"light_count", 4}, {"sky", false}}}});
+                              {{"environment", {{"light_count", 4}, {"sky", false}}},
+                               {"shadow", {{"method", "cones"}}}});
     EXPECT_EQ(turned.lights.size(), 4u);
     EXPECT_TRUE(turned.environment->sky.empty());
     EXPECT_FLOAT_EQ(turned.environment->radiance.rgb(0, 0).x, 1.0f);
