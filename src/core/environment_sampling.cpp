@@ -3,12 +3,16 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "core/environment.h"
 
 namespace deltagi {
 
 namespace {
+
+// How far (in y of a unit direction) below the lowest lit row a direction must be to count as dark.
+constexpr float kDarkMargin = 1e-4f;
 
 // Index k with cdf[k] <= u < cdf[k + 1] among the n intervals of a cdf of n + 1 entries, skipping empty ones
 // (the last k with cdf[k] <= u, clamped to [0, n - 1]), from where `guide` (guideOf) says to start.
@@ -37,8 +41,12 @@ void guideOf(const double* cdf, int n, int* guide) {
 
 EnvironmentSampler::EnvironmentSampler(const Environment& environment)
     : environment_(environment),
+      environmentFromWorld_(environment.environmentFromWorld()),
+      pixels_(environment.radiance.data().data()),
       width_(environment.radiance.width()),
       height_(environment.radiance.height()) {
+    if (!environment.radiance.empty() && environment.radiance.channels() != 3)
+        throw std::invalid_argument("EnvironmentSampler: the environment's radiance must be RGB");
     rowCdf_.assign(height_ + 1, 0.0);
     columnCdfs_.assign(static_cast<size_t>(height_) * (width_ + 1), 0.0);
     for (int y = 0; y < height_; ++y) {
@@ -49,6 +57,14 @@ EnvironmentSampler::EnvironmentSampler(const Environment& environment)
         rowCdf_[y + 1] = rowCdf_[y] + row * equirectPixelSolidAngle(y, width_, height_);
     }
     total_ = rowCdf_[height_];
+    // Below the bottom edge of the lowest lit row, by a margin far wider than the floats' error in the
+    // elevation that pixelOf() computes, so that no direction that maps to a lit row counts as dark.
+    int lowestLit = -1;
+    for (int y = 0; y < height_; ++y)
+        if (rowCdf_[y + 1] > rowCdf_[y]) lowestLit = y;
+    darkBelowY_ = lowestLit < 0 ? 2.0f
+                                : static_cast<float>(std::sin(equirectRowElevation(lowestLit + 1, height_))) -
+                                      kDarkMargin;
     for (double& c : rowCdf_) c = total_ > 0.0 ? c / total_ : 0.0;
     rowGuide_.resize(height_);
     guideOf(rowCdf_.data(), height_, rowGuide_.data());
@@ -103,7 +119,7 @@ float EnvironmentSampler::meanRadiance(glm::ivec2 p) const {
 }
 
 glm::ivec2 EnvironmentSampler::pixelOf(glm::vec3 worldDirection) const {
-    const glm::vec2 uv = equirectUv(environment_.environmentFromWorld() * worldDirection);
+    const glm::vec2 uv = equirectUv(environmentFromWorld_ * worldDirection);
     return {std::clamp(static_cast<int>(uv.x * static_cast<float>(width_)), 0, width_ - 1),
             std::clamp(static_cast<int>(uv.y * static_cast<float>(height_)), 0, height_ - 1)};
 }
@@ -141,8 +157,13 @@ glm::vec3 EnvironmentSampler::radiance(glm::vec3 worldDirection) const {
 
 EnvironmentSampler::Value EnvironmentSampler::value(glm::vec3 worldDirection) const {
     if (!(total_ > 0.0)) return {radiance(worldDirection), 0.0f};
-    const glm::ivec2 p = pixelOf(worldDirection);
-    const glm::vec3 radiance = environment_.radiance.rgb(p.x, p.y);
+    const glm::vec3 d = environmentFromWorld_ * worldDirection;
+    if (d.y < darkBelowY_) return {};
+    const glm::vec2 uv = equirectUv(d);
+    const int x = std::clamp(static_cast<int>(uv.x * static_cast<float>(width_)), 0, width_ - 1);
+    const int y = std::clamp(static_cast<int>(uv.y * static_cast<float>(height_)), 0, height_ - 1);
+    const float* rgb = &pixels_[3 * (static_cast<size_t>(y) * width_ + x)];
+    const glm::vec3 radiance(rgb[0], rgb[1], rgb[2]);
     return {radiance, static_cast<float>(meanOf(radiance) / total_)};
 }
 

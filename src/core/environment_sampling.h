@@ -27,7 +27,7 @@ class EnvironmentSampler {
     Sample sample(float u1, float u2) const;
     float pdf(glm::vec3 worldDirection) const;
     glm::vec3 radiance(glm::vec3 worldDirection) const;
-    // Both at once (one look-up of the pixel).
+    // Both at once (one look-up of the pixel), for a unit direction.
     struct Value {
         glm::vec3 radiance{0.0f};
         float pdf = 0.0f;
@@ -51,7 +51,12 @@ class EnvironmentSampler {
     float meanRadiance(glm::ivec2 pixel) const;
 
     const Environment& environment_;
+    glm::mat3 environmentFromWorld_;
+    const float* pixels_;  // environment_.radiance's, RGB
     int width_, height_;
+    // Directions (unit, environment frame) whose y is below this lie below the lowest row with any light:
+    // black (a fish-eye light camera's lower hemisphere), known without finding their pixel.
+    float darkBelowY_ = 2.0f;
     double total_ = 0.0;              // sum over pixels of meanRadiance * dOmega
     std::vector<double> rowCdf_;      // height + 1 entries, 0 ... 1
     std::vector<double> columnCdfs_;  // per row, width + 1 entries, 0 ... 1

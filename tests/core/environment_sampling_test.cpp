@@ -108,6 +108,35 @@ TEST(EnvironmentSamplingTest, ARowsElevationBoundsItsPixelCentresAngleToADirecti
         }
 }
 
+// A map lit above its horizon only (a fish-eye light camera's): value() is the map's own pixel for every
+// direction, those just above and below the lowest lit row's bottom edge included, which value() passes over
+// as dark without finding their pixel.
+TEST(EnvironmentSamplingTest, AValueBelowTheLowestLitRowIsThePixelsOwn) {
+    for (const int litRows : {1, 9, 16}) {
+        Environment map = numberedMap(64, 32);
+        for (int y = litRows; y < 32; ++y)
+            for (int x = 0; x < 64; ++x) map.radiance.setRgb(x, y, glm::vec3(0.0f));
+        const EnvironmentSampler sampler(map);
+        // The bottom edge of the lowest lit row, in the map's frame.
+        const float edge = static_cast<float>(std::sin(equirectRowElevation(litRows, 32)));
+        int checked = 0;
+        for (int k = 0; k < 4000; ++k) {
+            // Directions spread over the sphere, and many within 1e-3 of the edge in y.
+            const float phi = 2.3999632f * static_cast<float>(k);
+            const float y = k % 2 == 0 ? 1.0f - 2.0f * (static_cast<float>(k) + 0.5f) / 4000.0f
+                                       : edge + 1e-3f * (static_cast<float>(k % 200) / 100.0f - 1.0f);
+            const float r = std::sqrt(std::max(0.0f, 1.0f - y * y));
+            const glm::vec3 local(r * std::cos(phi), y, r * std::sin(phi));
+            const glm::vec3 world = map.worldFromEnvironment * local;
+            const EnvironmentSampler::Value value = sampler.value(world);
+            ASSERT_EQ(value.radiance, sampler.radiance(world)) << litRows << " " << k;
+            ASSERT_EQ(value.pdf, sampler.pdf(world)) << litRows << " " << k;
+            checked += value.radiance != glm::vec3(0.0f);
+        }
+        EXPECT_GT(checked, 100);
+    }
+}
+
 // A map too dark to sample gives no sample, and a pdf of 0 everywhere.
 TEST(EnvironmentSamplingTest, ABlackMapGivesNoSample) {
     Environment black;
