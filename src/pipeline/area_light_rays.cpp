@@ -136,7 +136,6 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     if (!rays.scene) return out;
     const auto [objects, offset, objectCentre, objectRadius, side, count] = RaySetup(rays, options);
-    constexpr float kInfinity = std::numeric_limits<float>::infinity();
 
     forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
         const SurfacePoint& p = points[i];
@@ -160,6 +159,7 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
         auto conePdf = [&](glm::vec3 wi) {
             return cone.valid() && glm::dot(wi, cone.axis) >= cone.cosHalfAngle ? cone.pdf() : 0.0f;
         };
+        EnvironmentOcclusion occlusion(objects, *rays.scene, origin);
         glm::vec3 sum(0.0f);
         if (cone.valid()) {
             const float jitterS = hashToUnit(i, kEnvironmentStream + 2),
@@ -175,9 +175,7 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
                 const float cosSurface = glm::dot(wi, p.normal);
                 if (cosSurface <= 0.0f) continue;
                 const EnvironmentSampler::Value map = sampler.value(wi);
-                if (map.radiance == glm::vec3(0.0f)) continue;
-                if (!objects->occludedTopLayer(origin, wi, 0.0f, kInfinity)) continue;
-                if (rays.scene->occluded(origin, wi, 0.0f, kInfinity)) continue;
+                if (map.radiance == glm::vec3(0.0f) || !occlusion.objectsOnly(wi)) continue;
                 const float pdf = cone.pdf();
                 const float weight = pdf / (pdf + map.pdf);
                 sum -= evalBrdf(m, p.normal, p.toEye, wi) * map.radiance * (cosSurface * weight / pdf);
@@ -215,21 +213,17 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
             const bool mayMeetObjects = objects && mode != ShadowMode::SceneOnly &&
                                         coneMayMeetSphere(origin, s.wi, 0.0f, objectCentre, objectRadius);
             if (mode == ShadowMode::DeltaShadow && !mayMeetObjects) continue;
-            const bool byObjects = mayMeetObjects && objects->occludedTopLayer(origin, s.wi, 0.0f, kInfinity);
-            if (mode == ShadowMode::DeltaShadow && !byObjects) continue;
             float visibility = 0.0f;
             switch (mode) {
                 case ShadowMode::Shaded:
                 case ShadowMode::SceneOnly:
-                    visibility =
-                        !byObjects && !rays.scene->occluded(origin, s.wi, 0.0f, kInfinity) ? 1.0f : 0.0f;
+                    visibility = occlusion.either(s.wi, mayMeetObjects) ? 0.0f : 1.0f;
                     break;
                 case ShadowMode::DeltaShadow:
-                    visibility = rays.scene->occluded(origin, s.wi, 0.0f, kInfinity) ? 0.0f : -1.0f;
+                    visibility = occlusion.objectsOnly(s.wi) ? -1.0f : 0.0f;
                     break;
                 case ShadowMode::DeltaSingleVisibility:
-                    visibility =
-                        byObjects || rays.scene->occluded(origin, s.wi, 0.0f, kInfinity) ? -1.0f : 0.0f;
+                    visibility = occlusion.either(s.wi, mayMeetObjects) ? -1.0f : 0.0f;
                     break;
             }
             if (visibility == 0.0f) continue;

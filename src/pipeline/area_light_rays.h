@@ -10,6 +10,7 @@
 // reaches surfaces through the diffuse cones only (one bounce, no shadows of its own).
 #pragma once
 
+#include <limits>
 #include <span>
 #include <vector>
 
@@ -40,6 +41,52 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
                                             const EnvironmentSampler& sampler, const ShadowRayScenes& rays,
                                             const Options& options, ShadowMode mode,
                                             std::span<const uint32_t> pixels = {});
+
+// A point's environment rays to infinity, tested against the objects' layer and the real scene, each only
+// where the answer needs it. Which goes first is learnt at the point: the scene while it blocks at least one
+// ray in kSceneFirstShare of those tested so far (a room's walls hide most of the sky, and its few triangles
+// answer faster than a detailed object), else the objects (open ground blocks nothing above it). The
+// answers do not depend on the order, only the time does.
+class EnvironmentOcclusion {
+  public:
+    EnvironmentOcclusion(const RayScene* objects, const RayScene& scene, glm::vec3 origin)
+        : objects_(objects), scene_(scene), origin_(origin) {}
+    // Whether the objects block the ray and the scene does not (the light the objects take from a real
+    // surface). Needs the objects' layer.
+    bool objectsOnly(glm::vec3 wi) {
+        if (sceneFirst()) return !sceneBlocks(wi) && objectsBlock(wi);
+        return objectsBlock(wi) && !sceneBlocks(wi);
+    }
+    // Whether the scene or (where `mayMeetObjects`) the objects block the ray.
+    bool either(glm::vec3 wi, bool mayMeetObjects) {
+        if (!mayMeetObjects) return sceneBlocks(wi);
+        if (sceneFirst()) return sceneBlocks(wi) || objectsBlock(wi);
+        return objectsBlock(wi) || sceneBlocks(wi);
+    }
+    // Whether the next ray tests the scene first.
+    bool sceneFirst() const {
+        return sceneTests_ < kProbeRays || kSceneFirstShare * sceneBlocked_ >= sceneTests_;
+    }
+
+  private:
+    // The share of scene rays that must be blocked for the scene to go first, and how many it goes first for
+    // before the share is judged.
+    static constexpr int kSceneFirstShare = 4, kProbeRays = 2;
+    bool sceneBlocks(glm::vec3 wi) {
+        const bool blocked = scene_.occluded(origin_, wi, 0.0f, std::numeric_limits<float>::infinity());
+        ++sceneTests_;
+        sceneBlocked_ += blocked;
+        return blocked;
+    }
+    bool objectsBlock(glm::vec3 wi) const {
+        return objects_->occludedTopLayer(origin_, wi, 0.0f, std::numeric_limits<float>::infinity());
+    }
+
+    const RayScene* objects_;
+    const RayScene& scene_;
+    glm::vec3 origin_;
+    int sceneTests_ = 0, sceneBlocked_ = 0;
+};
 
 // The stand-in lights of the real scene's emitting meshes for the reflective shadow maps: per mesh, a
 // Lambertian light (Light::lambertian) at its area-weighted centroid with the mesh's emitted power, facing

@@ -145,6 +145,42 @@ TEST(EnvironmentRays, AUniformSkyGivesAlbedoTimesItsRadianceAndALidTakesItAway) 
     EXPECT_NEAR(shaded[0].x, 0.0f, 0.02f * 0.35f);
 }
 
+// A point's environment rays are tested against the scene first while the scene blocks them (walls), against
+// the objects first once it does not (open ground), and each answer is that of both tests, in either order:
+// a wall at x = 1 hides the sky towards +x, a ball sits straight above the point.
+TEST(EnvironmentRays, TheOcclusionTestsOrderFollowsTheSceneAndAnswersAsBothTests) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(
+        placed(makeBox({0.1f, 4.0f, 4.0f}), {1.0f, 2.0f, 0}, diffuse(glm::vec3(0.5f)), "wall"));
+    scene.virtuals.push_back(placed(makeSphere(0.3f, 32), {0, 1.0f, 0}, diffuse(glm::vec3(0.5f)), "ball"));
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
+    const glm::vec3 origin(0.0f, 1e-3f, 0.0f);
+    const glm::vec3 up(0, 1, 0), wallward = glm::normalize(glm::vec3(1, 0.5f, 0)),
+                                 open = glm::normalize(glm::vec3(-1, 0.5f, 0.3f));
+    auto check = [&](EnvironmentOcclusion& occlusion, glm::vec3 wi) {
+        const bool byObjects = objects.occludedTopLayer(origin, wi), byScene = realOnly.occluded(origin, wi);
+        EXPECT_EQ(occlusion.objectsOnly(wi), byObjects && !byScene);
+        EXPECT_EQ(occlusion.either(wi, true), byObjects || byScene);
+        EXPECT_EQ(occlusion.either(wi, false), byScene);
+    };
+    ASSERT_TRUE(objects.occludedTopLayer(origin, up) && !realOnly.occluded(origin, up));
+    ASSERT_TRUE(realOnly.occluded(origin, wallward) && !objects.occludedTopLayer(origin, wallward));
+    ASSERT_TRUE(!realOnly.occluded(origin, open) && !objects.occludedTopLayer(origin, open));
+
+    // Open sky: the scene first for the first rays, then the objects first.
+    EnvironmentOcclusion ground(&objects, realOnly, origin);
+    EXPECT_TRUE(ground.sceneFirst());
+    for (int k = 0; k < 4; ++k) check(ground, k % 2 ? up : open);
+    EXPECT_FALSE(ground.sceneFirst());
+    for (int k = 0; k < 8; ++k) check(ground, k % 2 ? up : open);
+    // Rays the wall blocks: the scene first again.
+    for (int k = 0; k < 8; ++k) check(ground, wallward);
+    EXPECT_TRUE(ground.sceneFirst());
+    for (const glm::vec3 wi : {up, open, wallward, up}) check(ground, wi);
+}
+
 // A ball of radius r at height d over a floor point under a uniform sky L takes away the sky of its cap:
 // albedo L sin^2(a) cos(t) with sin(a) = r / d and t the cap's tilt from the normal. Relit points sample the
 // cap's cone besides the map (multiple importance sampling): each point within 30 % with the default 16 rays.
