@@ -79,9 +79,9 @@ TEST_F(EnvironmentIoTest, AnEquirectangularMapLoadsItsLightsRotatedAndScaled) {
     const Scene byCones = load({{"file", "sky.hdr"}}, {{"shadow", {{"method", "cones"}}}});
     EXPECT_FALSE(byCones.environment->sky.empty());
 
-    const Scene turned = load({{"file", "sky.hdr"}, {"rotate_deg", {0, 90, 0}}, {"intensity", 2}},
-                              {{"environment", {{"light_count", 4}, {"sky", false}}},
-                               {"shadow", {{"method", "cones"}}}});
+    const Scene turned =
+        load({{"file", "sky.hdr"}, {"rotate_deg", {0, 90, 0}}, {"intensity", 2}},
+             {{"environment", {{"light_count", 4}, {"sky", false}}}, {"shadow", {{"method", "cones"}}}});
     EXPECT_EQ(turned.lights.size(), 4u);
     EXPECT_TRUE(turned.environment->sky.empty());
     EXPECT_FLOAT_EQ(turned.environment->radiance.rgb(0, 0).x, 1.0f);
