@@ -11,8 +11,9 @@ namespace deltagi {
 
 namespace {
 
-// How far (in y of a unit direction) below the lowest lit row a direction must be to count as dark.
-constexpr float kDarkMargin = 1e-4f;
+// How far (in y of a unit direction) below the lowest lit row a direction must be to count as dark, and how
+// much further the highest direction of a cone (darkCone).
+constexpr float kDarkMargin = 1e-4f, kDarkConeMargin = 1e-3f;
 
 // Index k with cdf[k] <= u < cdf[k + 1] among the n intervals of a cdf of n + 1 entries, skipping empty ones
 // (the last k with cdf[k] <= u, clamped to [0, n - 1]), from where `guide` (guideOf) says to start.
@@ -91,15 +92,22 @@ EnvironmentSampler::EnvironmentSampler(const Environment& environment)
     pixelRadius_ = static_cast<float>(0.5 * std::numbers::pi / height_ + std::numbers::pi / width_) + 1e-4f;
 }
 
+int EnvironmentSampler::rowOf(float u1) const {
+    return findInterval(rowCdf_.data(), rowGuide_.data(), height_, u1);
+}
+
+int EnvironmentSampler::columnOf(int row, float u2) const {
+    return findInterval(&columnCdfs_[static_cast<size_t>(row) * (width_ + 1)],
+                        &columnGuides_[static_cast<size_t>(row) * width_], width_, u2);
+}
+
 glm::ivec2 EnvironmentSampler::pixelOf(float u1, float u2) const {
-    const int y = findInterval(rowCdf_.data(), rowGuide_.data(), height_, u1);
-    const int x = findInterval(&columnCdfs_[static_cast<size_t>(y) * (width_ + 1)],
-                               &columnGuides_[static_cast<size_t>(y) * width_], width_, u2);
-    return {x, y};
+    const int y = rowOf(u1);
+    return {columnOf(y, u2), y};
 }
 
 float EnvironmentSampler::rowCentreElevation(float u1) const {
-    return rowElevations_[findInterval(rowCdf_.data(), rowGuide_.data(), height_, u1)];
+    return rowElevations_[rowOf(u1)];
 }
 
 float EnvironmentSampler::elevationOf(glm::vec3 worldDirection) const {
@@ -108,7 +116,10 @@ float EnvironmentSampler::elevationOf(glm::vec3 worldDirection) const {
 }
 
 glm::vec3 EnvironmentSampler::pixelCentre(float u1, float u2) const {
-    const glm::ivec2 p = pixelOf(u1, u2);
+    return pixelCentre(pixelOf(u1, u2));
+}
+
+glm::vec3 EnvironmentSampler::pixelCentre(glm::ivec2 p) const {
     const glm::vec3 row = rowCentres_[p.y];
     const glm::vec2 column = columnCentres_[p.x];
     return environment_.worldFromEnvironment * glm::vec3(column.x * row.x, row.y, column.y * row.x);
@@ -125,9 +136,14 @@ glm::ivec2 EnvironmentSampler::pixelOf(glm::vec3 worldDirection) const {
 }
 
 EnvironmentSampler::Sample EnvironmentSampler::sample(float u1, float u2) const {
+    if (!(total_ > 0.0)) return {};
+    return sample(u1, u2, pixelOf(u1, u2));
+}
+
+EnvironmentSampler::Sample EnvironmentSampler::sample(float u1, float u2, glm::ivec2 pixel) const {
     Sample s;
     if (!(total_ > 0.0)) return s;
-    const auto [x, y] = pixelOf(u1, u2);
+    const auto [x, y] = pixel;
     const double* cdf = &columnCdfs_[static_cast<size_t>(y) * (width_ + 1)];
     // The numbers' positions inside the chosen intervals are uniform: reuse them within the pixel.
     const double fy = std::clamp((u1 - rowCdf_[y]) / std::max(rowCdf_[y + 1] - rowCdf_[y], 1e-300), 0.0, 1.0);
@@ -165,6 +181,15 @@ EnvironmentSampler::Value EnvironmentSampler::value(glm::vec3 worldDirection) co
     const float* rgb = &pixels_[3 * (static_cast<size_t>(y) * width_ + x)];
     const glm::vec3 radiance(rgb[0], rgb[1], rgb[2]);
     return {radiance, static_cast<float>(meanOf(radiance) / total_)};
+}
+
+bool EnvironmentSampler::darkCone(glm::vec3 worldAxis, float halfAngle) const {
+    if (!(total_ > 0.0)) return true;
+    const glm::vec3 d = environmentFromWorld_ * worldAxis;
+    // The cone's highest direction is halfAngle nearer the zenith than its axis (or the zenith itself).
+    const float fromZenith = std::acos(std::clamp(d.y, -1.0f, 1.0f)) - halfAngle;
+    const float highest = fromZenith > 0.0f ? std::cos(fromZenith) : 1.0f;
+    return highest + kDarkConeMargin < darkBelowY_;
 }
 
 }  // namespace deltagi

@@ -33,6 +33,9 @@ class EnvironmentSampler {
         float pdf = 0.0f;
     };
     Value value(glm::vec3 worldDirection) const;
+    // Whether value() is zero for every direction within `halfAngle` (radians) of `worldAxis` (unit), all of
+    // them below the map's lowest lit row (by a margin wider than the floats' error in making them).
+    bool darkCone(glm::vec3 worldAxis, float halfAngle) const;
 
     // Where sample(u1, u2) goes, cheaply: the world direction of the centre of its pixel, which lies within
     // pixelRadius() (radians) of the sample's direction. For culling samples before drawing them.
@@ -44,6 +47,15 @@ class EnvironmentSampler {
     float rowCentreElevation(float u1) const;
     // The elevation of a world direction in the environment's frame.
     float elevationOf(glm::vec3 worldDirection) const;
+
+    // The same in steps, for callers that cull many samples that share their u1: the row sample(u1, u2) falls
+    // in and its centre's elevation, the column in that row, the world direction of a pixel's centre, and
+    // sample(u1, u2) drawn in its pixel (found by these), each the same as above.
+    int rowOf(float u1) const;
+    float rowElevation(int row) const { return rowElevations_[row]; }
+    int columnOf(int row, float u2) const;
+    glm::vec3 pixelCentre(glm::ivec2 pixel) const;
+    Sample sample(float u1, float u2, glm::ivec2 pixel) const;
 
   private:
     glm::ivec2 pixelOf(glm::vec3 worldDirection) const;

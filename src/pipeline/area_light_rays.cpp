@@ -1,5 +1,7 @@
 #include "pipeline/area_light_rays.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -15,6 +17,8 @@ namespace {
 constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kAreaLightStream = 7000;  // hashToUnit streams of the sample grid's offsets
 constexpr uint32_t kEnvironmentStream = 7100;
+// The widest grid of rays per point (options.shadow.area_ray_samples allows at most 256 = 16 x 16).
+constexpr int kMaxRaySide = 16;
 // Radians beyond a relit point's cull limit before a whole row of the map is passed over: far more than the
 // floats' error in the pixel centres (about 1e-6), so that the row test never culls a sample the pixel test
 // keeps (bit for bit the same samples).
@@ -31,7 +35,7 @@ struct RaySetup {
     RaySetup(const ShadowRayScenes& rays, const Options& options)
         : objects(rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr),
           offset(shadowRayOffset(*rays.scene)),
-          count(squareSampleCount(options.shadow.areaRaySamples)) {
+          count(squareSampleCount(std::min(options.shadow.areaRaySamples, kMaxRaySide * kMaxRaySide))) {
         if (objects) {
             objectCentre = rays.objectBounds.center();
             objectRadius = rays.boundingRadius();
@@ -161,17 +165,25 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
         };
         EnvironmentOcclusion occlusion(objects, *rays.scene, origin);
         glm::vec3 sum(0.0f);
-        if (cone.valid()) {
+        // A cone wholly in the map's dark part (below a fish-eye light camera's horizon) gives nothing.
+        if (cone.valid() && !sampler.darkCone(cone.axis, std::acos(cone.cosHalfAngle))) {
             const float jitterS = hashToUnit(i, kEnvironmentStream + 2),
                         jitterT = hashToUnit(i, kEnvironmentStream + 3);
             const glm::mat3 frame = frameAround(cone.axis);
+            // The grid's columns share their angle from the axis, its rows their angle about it.
+            std::array<float, kMaxRaySide> cosThetas, sinThetas, cosPhis, sinPhis;
+            for (int c = 0; c < side; ++c) {
+                const glm::vec2 u = jitteredGridPoint(c * (side + 1), side, jitterS, jitterT);
+                cosThetas[c] = 1.0f - u.x * (1.0f - cone.cosHalfAngle);
+                sinThetas[c] = std::sqrt(std::max(0.0f, 1.0f - cosThetas[c] * cosThetas[c]));
+                const float phi = 2.0f * std::numbers::pi_v<float> * u.y;
+                cosPhis[c] = std::cos(phi);
+                sinPhis[c] = std::sin(phi);
+            }
             for (int k = 0; k < count; ++k) {
-                const auto [u1, u2] = jitteredGridPoint(k, side, jitterS, jitterT);
-                const float cosTheta = 1.0f - u1 * (1.0f - cone.cosHalfAngle);
-                const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
-                const float phi = 2.0f * std::numbers::pi_v<float> * u2;
+                const int c = k % side, r = k / side;
                 const glm::vec3 wi = glm::normalize(
-                    frame * glm::vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta));
+                    frame * glm::vec3(sinThetas[c] * cosPhis[r], sinThetas[c] * sinPhis[r], cosThetas[c]));
                 const float cosSurface = glm::dot(wi, p.normal);
                 if (cosSurface <= 0.0f) continue;
                 const EnvironmentSampler::Value map = sampler.value(wi);
@@ -202,12 +214,26 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
                 cullRowLimit = limit + kRowCullMargin;
             }
         }
+        // The grid's columns share their u1, so their row and its test: found once per column.
+        std::array<int, kMaxRaySide> rows;
+        std::array<bool, kMaxRaySide> rowKept;
+        if (cullCos > -2.0f)
+            for (int c = 0; c < side; ++c) {
+                rows[c] = sampler.rowOf(jitteredGridPoint(c, side, jitterU, jitterV).x);
+                rowKept[c] = std::abs(sampler.rowElevation(rows[c]) - cullElevation) <= cullRowLimit;
+            }
         for (int k = 0; k < count; ++k) {
             const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
-            if (cullCos > -2.0f && (std::abs(sampler.rowCentreElevation(u1) - cullElevation) > cullRowLimit ||
-                                    glm::dot(sampler.pixelCentre(u1, u2), cullAxis) < cullCos))
-                continue;
-            const EnvironmentSampler::Sample s = sampler.sample(u1, u2);
+            EnvironmentSampler::Sample s;
+            if (cullCos > -2.0f) {
+                const int c = k % side;
+                if (!rowKept[c]) continue;
+                const glm::ivec2 pixel(sampler.columnOf(rows[c], u2), rows[c]);
+                if (glm::dot(sampler.pixelCentre(pixel), cullAxis) < cullCos) continue;
+                s = sampler.sample(u1, u2, pixel);
+            } else {
+                s = sampler.sample(u1, u2);
+            }
             const float cosSurface = glm::dot(s.wi, p.normal);
             if (!(s.pdf > 0.0f) || cosSurface <= 0.0f || s.radiance == glm::vec3(0.0f)) continue;
             const bool mayMeetObjects = objects && mode != ShadowMode::SceneOnly &&

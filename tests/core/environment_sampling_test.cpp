@@ -6,6 +6,7 @@
 
 #include "core/environment.h"
 #include "core/environment_sampling.h"
+#include "core/sampling.h"
 
 namespace deltagi {
 namespace {
@@ -135,6 +136,42 @@ TEST(EnvironmentSamplingTest, AValueBelowTheLowestLitRowIsThePixelsOwn) {
         }
         EXPECT_GT(checked, 100);
     }
+}
+
+// A cone the sampler calls dark has no light anywhere in it (directions over its whole disk of directions and
+// its rim); a cone that reaches a lit row is not dark, one below it by more than the margin is.
+TEST(EnvironmentSamplingTest, ADarkConeHoldsNoLight) {
+    Environment map = numberedMap(64, 32);
+    for (int y = 16; y < 32; ++y)  // lit above the horizon only
+        for (int x = 0; x < 64; ++x) map.radiance.setRgb(x, y, glm::vec3(0.0f));
+    const EnvironmentSampler sampler(map);
+    const glm::mat3 world = map.worldFromEnvironment;
+    auto direction = [](float elevation, float azimuth) {
+        return glm::vec3(std::cos(elevation) * std::sin(azimuth), std::sin(elevation),
+                         -std::cos(elevation) * std::cos(azimuth));
+    };
+    EXPECT_TRUE(sampler.darkCone(world * direction(-0.8f, 1.0f), 0.3f));
+    EXPECT_FALSE(sampler.darkCone(world * direction(-0.2f, 1.0f), 0.3f));  // reaches above the horizon
+    EXPECT_FALSE(sampler.darkCone(world * direction(-1.5f, 2.0f), 1.6f));  // over the nadir and beyond
+    EXPECT_FALSE(sampler.darkCone(world * direction(0.5f, 0.0f), 0.01f));
+    int dark = 0;
+    for (int k = 0; k < 400; ++k) {
+        const float elevation = -1.5f + 1.6f * static_cast<float>(k % 20) / 20.0f;
+        const float halfAngle = 0.02f + 0.05f * static_cast<float>(k / 20);
+        const glm::vec3 axis = world * direction(elevation, 0.37f * static_cast<float>(k));
+        if (!sampler.darkCone(axis, halfAngle)) continue;
+        ++dark;
+        const glm::mat3 frame = frameAround(axis);
+        for (int j = 0; j < 64; ++j) {
+            const float theta = halfAngle * (j < 32 ? static_cast<float>(j % 8) / 7.0f : 1.0f);
+            const float phi = 2.0f * 3.14159265f * static_cast<float>(j) / 32.0f;
+            const glm::vec3 wi =
+                glm::normalize(frame * glm::vec3(std::sin(theta) * std::cos(phi),
+                                                 std::sin(theta) * std::sin(phi), std::cos(theta)));
+            ASSERT_EQ(sampler.value(wi).radiance, glm::vec3(0.0f)) << k << " " << j;
+        }
+    }
+    EXPECT_GT(dark, 50);
 }
 
 // A map too dark to sample gives no sample, and a pdf of 0 everywhere.
