@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <stdexcept>
 
 #include "core/parallel.h"
 
@@ -25,44 +26,91 @@ int convertedHeight(double pixelsPerRadian) {
                       kMaxConvertedHeight);
 }
 
-// Bilinear lookup in an ordinary image, clamped at the borders; `pixel` in the camera pixel convention.
-glm::vec3 samplePixel(const Image& image, glm::vec2 pixel) {
-    const float x = pixel.x - 0.5f, y = pixel.y - 0.5f;
-    const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
-    const float fx = x - static_cast<float>(x0), fy = y - static_cast<float>(y0);
-    auto at = [&](int i, int j) {
-        return image.rgb(std::clamp(i, 0, image.width() - 1), std::clamp(j, 0, image.height() - 1));
-    };
-    return glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), fx),
-                    glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx), fy);
-}
-
 // Each converted pixel averages a k x k grid of lookups over its area, so that a small bright sun keeps its
 // energy (one lookup per pixel would catch it or miss it).
 constexpr int kConversionSubsamples = 3;
+constexpr float kConversionStep = 1.0f / kConversionSubsamples;
+
+int fisheyeHeight(const FisheyeProjection& p) {
+    const float halfFov = 0.5f * glm::radians(p.fovDeg);
+    const double perRadian = p.model == FisheyeProjection::Model::Equidistant
+                                 ? p.radius / halfFov
+                                 : p.radius / (2.0 * std::sin(0.5 * halfFov));
+    return convertedHeight(perRadian);
+}
+
+}  // namespace
 
 template <typename PixelOf>
-Image convertToEquirect(const Image& source, int height, PixelOf&& pixelOf) {
-    Image out(2 * height, height, 3);
-    const float w = static_cast<float>(out.width()), h = static_cast<float>(height);
-    constexpr float kStep = 1.0f / kConversionSubsamples;
+EquirectConversion EquirectConversion::make(int sourceWidth, int sourceHeight, int height,
+                                            PixelOf&& pixelOf) {
+    EquirectConversion c;
+    c.sourceWidth_ = sourceWidth;
+    c.sourceHeight_ = sourceHeight;
+    c.height_ = height;
+    constexpr int kPerPixel = kConversionSubsamples * kConversionSubsamples;
+    const int width = 2 * height;
+    c.lookups_.resize(static_cast<size_t>(width) * height * kPerPixel);
+    const float w = static_cast<float>(width), h = static_cast<float>(height);
     parallelFor(0, height, 4, [&](int64_t row) {
-        for (int col = 0; col < out.width(); ++col) {
-            glm::vec3 sum(0.0f);
+        Lookup* out = &c.lookups_[static_cast<size_t>(row) * width * kPerPixel];
+        for (int col = 0; col < width; ++col)
             for (int j = 0; j < kConversionSubsamples; ++j)
                 for (int i = 0; i < kConversionSubsamples; ++i) {
                     const glm::vec3 d = equirectDirection(
-                        (static_cast<float>(col) + (static_cast<float>(i) + 0.5f) * kStep) / w,
-                        (static_cast<float>(row) + (static_cast<float>(j) + 0.5f) * kStep) / h);
-                    if (const std::optional<glm::vec2> pixel = pixelOf(d)) sum += samplePixel(source, *pixel);
+                        (static_cast<float>(col) + (static_cast<float>(i) + 0.5f) * kConversionStep) / w,
+                        (static_cast<float>(row) + (static_cast<float>(j) + 0.5f) * kConversionStep) / h);
+                    Lookup& lookup = *out++;
+                    lookup = {kUnseen, 0, 0.0f, 0.0f};
+                    // Bilinear in the camera pixel convention (pixel (i, j) centred at i + 0.5).
+                    if (const std::optional<glm::vec2> pixel = pixelOf(d)) {
+                        const float x = pixel->x - 0.5f, y = pixel->y - 0.5f;
+                        lookup.x0 = static_cast<int>(std::floor(x));
+                        lookup.y0 = static_cast<int>(std::floor(y));
+                        lookup.fx = x - static_cast<float>(lookup.x0);
+                        lookup.fy = y - static_cast<float>(lookup.y0);
+                    }
                 }
-            out.setRgb(col, static_cast<int>(row), sum * (kStep * kStep));
+    });
+    return c;
+}
+
+EquirectConversion EquirectConversion::fromFisheye(int sourceWidth, int sourceHeight,
+                                                   const FisheyeProjection& p, int height) {
+    return make(sourceWidth, sourceHeight, height > 0 ? height : fisheyeHeight(p),
+                [&](glm::vec3 d) { return fisheyePixel(d, p); });
+}
+
+EquirectConversion EquirectConversion::fromMirrorBall(int sourceWidth, int sourceHeight,
+                                                      const MirrorBallProjection& p, int height) {
+    // At the ball's centre the reflected direction turns twice as fast as the normal: radius / 2 per radian.
+    return make(sourceWidth, sourceHeight, height > 0 ? height : convertedHeight(0.5 * p.radius),
+                [&](glm::vec3 d) { return mirrorBallPixel(d, p); });
+}
+
+Image EquirectConversion::apply(const Image& source) const {
+    if (source.width() != sourceWidth_ || source.height() != sourceHeight_)
+        throw std::invalid_argument("EquirectConversion::apply: an image of another size");
+    constexpr int kPerPixel = kConversionSubsamples * kConversionSubsamples;
+    Image out(2 * height_, height_, 3);
+    auto at = [&](int i, int j) {
+        return source.rgb(std::clamp(i, 0, sourceWidth_ - 1), std::clamp(j, 0, sourceHeight_ - 1));
+    };
+    parallelFor(0, height_, 4, [&](int64_t row) {
+        const Lookup* lookup = &lookups_[static_cast<size_t>(row) * out.width() * kPerPixel];
+        for (int col = 0; col < out.width(); ++col) {
+            glm::vec3 sum(0.0f);
+            for (int k = 0; k < kPerPixel; ++k, ++lookup) {
+                if (lookup->x0 == kUnseen) continue;
+                const auto [x0, y0, fx, fy] = *lookup;
+                sum += glm::mix(glm::mix(at(x0, y0), at(x0 + 1, y0), fx),
+                                glm::mix(at(x0, y0 + 1), at(x0 + 1, y0 + 1), fx), fy);
+            }
+            out.setRgb(col, static_cast<int>(row), sum * (kConversionStep * kConversionStep));
         }
     });
     return out;
 }
-
-}  // namespace
 
 glm::vec3 equirectDirection(float u, float v) {
     const float phi = 2.0f * kPiF * (u - 0.5f), theta = kPiF * (0.5f - v);
@@ -132,20 +180,11 @@ std::optional<glm::vec2> mirrorBallPixel(glm::vec3 direction, const MirrorBallPr
 }
 
 Image equirectFromFisheye(const Image& fisheye, const FisheyeProjection& p, int height) {
-    if (height <= 0) {
-        const float halfFov = 0.5f * glm::radians(p.fovDeg);
-        const double perRadian = p.model == FisheyeProjection::Model::Equidistant
-                                     ? p.radius / halfFov
-                                     : p.radius / (2.0 * std::sin(0.5 * halfFov));
-        height = convertedHeight(perRadian);
-    }
-    return convertToEquirect(fisheye, height, [&](glm::vec3 d) { return fisheyePixel(d, p); });
+    return EquirectConversion::fromFisheye(fisheye.width(), fisheye.height(), p, height).apply(fisheye);
 }
 
 Image equirectFromMirrorBall(const Image& ball, const MirrorBallProjection& p, int height) {
-    // At the ball's centre the reflected direction turns twice as fast as the normal: radius / 2 per radian.
-    if (height <= 0) height = convertedHeight(0.5 * p.radius);
-    return convertToEquirect(ball, height, [&](glm::vec3 d) { return mirrorBallPixel(d, p); });
+    return EquirectConversion::fromMirrorBall(ball.width(), ball.height(), p, height).apply(ball);
 }
 
 size_t sanitizeRadiance(Image& image) {

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstddef>
+#include <limits>
 #include <optional>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -64,6 +66,34 @@ std::optional<glm::vec2> mirrorBallPixel(glm::vec3 direction, const MirrorBallPr
 // centre.
 Image equirectFromFisheye(const Image& fisheye, const FisheyeProjection& projection, int height = 0);
 Image equirectFromMirrorBall(const Image& ball, const MirrorBallProjection& projection, int height = 0);
+
+// The same conversion made once for images of one size and projection and applied to each (a light camera's
+// frames): where every sub-sample of every map pixel looks the image up, found once. apply() gives what
+// equirectFromFisheye() / equirectFromMirrorBall() give, bit for bit.
+class EquirectConversion {
+  public:
+    static EquirectConversion fromFisheye(int sourceWidth, int sourceHeight,
+                                          const FisheyeProjection& projection, int height = 0);
+    static EquirectConversion fromMirrorBall(int sourceWidth, int sourceHeight,
+                                             const MirrorBallProjection& projection, int height = 0);
+    // `source` must be sourceWidth() x sourceHeight().
+    Image apply(const Image& source) const;
+    int sourceWidth() const { return sourceWidth_; }
+    int sourceHeight() const { return sourceHeight_; }
+
+  private:
+    // A bilinear lookup: the top-left of its four pixels (before clamping to the image) and its weights; a
+    // sub-sample the image does not see has none (x0 = kUnseen).
+    struct Lookup {
+        int x0, y0;
+        float fx, fy;
+    };
+    static constexpr int kUnseen = std::numeric_limits<int>::min();
+    template <typename PixelOf>
+    static EquirectConversion make(int sourceWidth, int sourceHeight, int height, PixelOf&& pixelOf);
+    int sourceWidth_ = 0, sourceHeight_ = 0, height_ = 0;
+    std::vector<Lookup> lookups_;  // per map pixel in row order, its sub-samples in order
+};
 
 // ---- repair
 // -------------------------------------------------------------------------------------------------

@@ -40,7 +40,7 @@ Environment LightCamera::environment(Image frame, double timeSeconds, const std:
     }
     clippedShare_ =
         frame.pixelCount() ? static_cast<double>(clipped) / static_cast<double>(frame.pixelCount()) : 0.0;
-    Environment e = environmentFromImage(node, std::move(frame), frameName);
+    Environment e = environmentFromImage(node, std::move(frame), frameName, &conversion_);
     const Image& map = e.radiance;
     if (smoothed_.empty() || smoothed_.width() != map.width() || smoothed_.height() != map.height() ||
         !(timeSeconds > lastTime_)) {

@@ -9,11 +9,13 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "core/environment.h"
 #include "deltagi/environment.h"
 #include "deltagi/image.h"
 
@@ -37,6 +39,7 @@ class LightCamera {
     std::string file_;
     nlohmann::json document_;
     double timeConstant_;
+    std::optional<EquirectConversion> conversion_;  // the projection's, for frames of its size
     Image smoothed_;
     double lastTime_ = 0.0;
     double clippedShare_ = 0.0;

@@ -77,7 +77,8 @@ void checkEnvironmentKeys(const JsonNode& node) {
 
 }  // namespace
 
-Environment environmentFromImage(const JsonNode& node, Image image, const std::string& imageName) {
+Environment environmentFromImage(const JsonNode& node, Image image, const std::string& imageName,
+                                 std::optional<EquirectConversion>* conversion) {
     checkEnvironmentKeys(node);
     Environment environment;
     std::string projection = "equirectangular";
@@ -101,10 +102,19 @@ Environment environmentFromImage(const JsonNode& node, Image image, const std::s
                                          "got {}x{}",
                                          image.width(), image.height()));
         environment.radiance = std::move(image);
-    } else if (projection == "fisheye") {
-        environment.radiance = equirectFromFisheye(image, readFisheye(node.find("fisheye"), image));
     } else {
-        environment.radiance = equirectFromMirrorBall(image, readMirrorBall(node.find("mirror_ball"), image));
+        // The projection's parameters are read (and checked) for every image; its conversion is made again
+        // only for an image of another size.
+        const bool fisheye = projection == "fisheye";
+        const FisheyeProjection f = fisheye ? readFisheye(node.find("fisheye"), image) : FisheyeProjection{};
+        const MirrorBallProjection b =
+            fisheye ? MirrorBallProjection{} : readMirrorBall(node.find("mirror_ball"), image);
+        std::optional<EquirectConversion> local;
+        std::optional<EquirectConversion>& kept = conversion ? *conversion : local;
+        if (!kept || kept->sourceWidth() != image.width() || kept->sourceHeight() != image.height())
+            kept = fisheye ? EquirectConversion::fromFisheye(image.width(), image.height(), f)
+                           : EquirectConversion::fromMirrorBall(image.width(), image.height(), b);
+        environment.radiance = kept->apply(image);
     }
     float brightest = 0.0f;
     for (float& v : environment.radiance.data()) brightest = std::max(brightest, v *= intensity);
