@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "core/environment.h"
+#include "core/parallel.h"
 
 namespace deltagi {
 
@@ -50,13 +51,20 @@ EnvironmentSampler::EnvironmentSampler(const Environment& environment)
         throw std::invalid_argument("EnvironmentSampler: the environment's radiance must be RGB");
     rowCdf_.assign(height_ + 1, 0.0);
     columnCdfs_.assign(static_cast<size_t>(height_) * (width_ + 1), 0.0);
-    for (int y = 0; y < height_; ++y) {
+    columnGuides_.resize(static_cast<size_t>(height_) * width_);
+    // Each row's column cdf and its guide, rows in parallel (a light camera's new map every frame); each
+    // row's weight (its sum times its pixels' solid angle), then the row cdf in order.
+    std::vector<double> rowWeights(height_);
+    parallelFor(0, height_, 8, [&](int64_t row) {
+        const int y = static_cast<int>(row);
         double* cdf = &columnCdfs_[static_cast<size_t>(y) * (width_ + 1)];
         for (int x = 0; x < width_; ++x) cdf[x + 1] = cdf[x] + meanRadiance({x, y});
-        const double row = cdf[width_];
-        for (int x = 1; x <= width_; ++x) cdf[x] = row > 0.0 ? cdf[x] / row : static_cast<double>(x) / width_;
-        rowCdf_[y + 1] = rowCdf_[y] + row * equirectPixelSolidAngle(y, width_, height_);
-    }
+        const double sum = cdf[width_];
+        for (int x = 1; x <= width_; ++x) cdf[x] = sum > 0.0 ? cdf[x] / sum : static_cast<double>(x) / width_;
+        guideOf(cdf, width_, &columnGuides_[static_cast<size_t>(y) * width_]);
+        rowWeights[y] = sum * equirectPixelSolidAngle(y, width_, height_);
+    });
+    for (int y = 0; y < height_; ++y) rowCdf_[y + 1] = rowCdf_[y] + rowWeights[y];
     total_ = rowCdf_[height_];
     // Below the bottom edge of the lowest lit row, by a margin far wider than the floats' error in the
     // elevation that pixelOf() computes, so that no direction that maps to a lit row counts as dark.
@@ -69,10 +77,6 @@ EnvironmentSampler::EnvironmentSampler(const Environment& environment)
     for (double& c : rowCdf_) c = total_ > 0.0 ? c / total_ : 0.0;
     rowGuide_.resize(height_);
     guideOf(rowCdf_.data(), height_, rowGuide_.data());
-    columnGuides_.resize(static_cast<size_t>(height_) * width_);
-    for (int y = 0; y < height_; ++y)
-        guideOf(&columnCdfs_[static_cast<size_t>(y) * (width_ + 1)], width_,
-                &columnGuides_[static_cast<size_t>(y) * width_]);
     rowCentres_.resize(height_);
     rowElevations_.resize(height_);
     for (int y = 0; y < height_; ++y) {
