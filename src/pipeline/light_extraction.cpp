@@ -57,13 +57,14 @@ struct EnergyTables {
     int width, height;
     SummedArea energy, px, py, squares;
 
-    explicit EnergyTables(const Image& map)
+    // The variance's tables (px, py, squares) are built only `withVariance` (varianceCut reads them).
+    EnergyTables(const Image& map, bool withVariance)
         : width(map.width()),
           height(map.height()),
           energy(width, height),
-          px(width, height),
-          py(width, height),
-          squares(width, height) {
+          px(withVariance ? width : 0, withVariance ? height : 0),
+          py(withVariance ? width : 0, withVariance ? height : 0),
+          squares(withVariance ? width : 0, withVariance ? height : 0) {
         std::vector<double> pixelEnergy(static_cast<size_t>(width) * height);
         for (int y = 0; y < height; ++y) {
             const double dOmega = equirectPixelSolidAngle(y, width, height);
@@ -72,6 +73,7 @@ struct EnergyTables {
         }
         auto e = [&](int x, int y) { return pixelEnergy[static_cast<size_t>(y) * width + x]; };
         energy.build(height, e);
+        if (!withVariance) return;
         px.build(height, [&](int x, int y) { return e(x, y) * position(x, y).x; });
         py.build(height, [&](int x, int y) { return e(x, y) * position(x, y).y; });
         squares.build(height, [&](int x, int y) {
@@ -219,7 +221,7 @@ ExtractedLight lightOf(const Region& r, const Image& map) {
 std::vector<ExtractedLight> extractLights(const Image& equirect, int count, ExtractionMethod method) {
     std::vector<ExtractedLight> lights;
     if (count <= 0 || equirect.empty()) return lights;
-    const EnergyTables tables(equirect);
+    const EnergyTables tables(equirect, method == ExtractionMethod::VarianceMinimization);
     for (const Region& r : splitRegions(tables, count, method)) {
         ExtractedLight light = lightOf(r, equirect);
         if (light.irradiance != glm::vec3(0.0f)) lights.push_back(light);
