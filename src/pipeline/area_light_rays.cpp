@@ -170,7 +170,8 @@ std::vector<glm::vec3> traceEnvironmentRays(std::span<const SurfacePoint> points
             const float jitterS = hashToUnit(i, kEnvironmentStream + 2),
                         jitterT = hashToUnit(i, kEnvironmentStream + 3);
             const glm::mat3 frame = frameAround(cone.axis);
-            // The grid's columns share their angle from the axis, its rows their angle about it.
+            // The grid's columns share their angle from the axis, its rows their angle about it (point
+            // c * (side + 1) of the grid lies in column c and row c).
             std::array<float, kMaxRaySide> cosThetas, sinThetas, cosPhis, sinPhis;
             for (int c = 0; c < side; ++c) {
                 const glm::vec2 u = jitteredGridPoint(c * (side + 1), side, jitterS, jitterT);
