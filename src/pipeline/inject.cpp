@@ -135,17 +135,73 @@ Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {
     return delta;
 }
 
+VoxelRows::VoxelRows(int resolution)
+    : n_(resolution),
+      lo_(static_cast<size_t>(resolution) * resolution, static_cast<uint16_t>(resolution)),
+      hi_(static_cast<size_t>(resolution) * resolution, 0) {}
+
+VoxelRows VoxelRows::all(int resolution) {
+    VoxelRows rows(resolution);
+    rows.add(VoxelBox::all(resolution));
+    return rows;
+}
+
+void VoxelRows::add(const VoxelBox& box) {
+    if (box.empty()) return;
+    for (int z = box.lo.z; z < box.hi.z; ++z)
+        for (int y = box.lo.y; y < box.hi.y; ++y) {
+            const size_t r = static_cast<size_t>(z) * n_ + y;
+            lo_[r] = std::min(lo_[r], static_cast<uint16_t>(box.lo.x));
+            hi_[r] = std::max(hi_[r], static_cast<uint16_t>(box.hi.x));
+        }
+}
+
+void VoxelRows::add(int x, int y, int z) {
+    add(VoxelBox::voxel(glm::ivec3(x, y, z)));
+}
+
+void VoxelRows::add(const VoxelRows& other) {
+    for (size_t r = 0; r < lo_.size(); ++r)
+        if (other.lo_[r] < other.hi_[r]) {
+            lo_[r] = std::min(lo_[r], other.lo_[r]);
+            hi_[r] = std::max(hi_[r], other.hi_[r]);
+        }
+}
+
+bool VoxelRows::contains(const VoxelRows& other) const {
+    for (size_t r = 0; r < lo_.size(); ++r)
+        if (other.lo_[r] < other.hi_[r] && (other.lo_[r] < lo_[r] || other.hi_[r] > hi_[r])) return false;
+    return true;
+}
+
+size_t VoxelRows::count() const {
+    size_t sum = 0;
+    for (size_t r = 0; r < lo_.size(); ++r)
+        if (lo_[r] < hi_[r]) sum += hi_[r] - lo_[r];
+    return sum;
+}
+
+VoxelBox VoxelRows::bounds() const {
+    VoxelBox box;
+    for (size_t r = 0; r < lo_.size(); ++r)
+        if (lo_[r] < hi_[r]) {
+            const int y = static_cast<int>(r % n_), z = static_cast<int>(r / n_);
+            box.extend({glm::ivec3(lo_[r], y, z), glm::ivec3(hi_[r], y + 1, z + 1)});
+        }
+    return box;
+}
+
 TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
-                    const VoxelBox& box) {
+                    const VoxelRows& voxels) {
     const int n = region.resolution;
     TexelBins bins;
     bins.resolution = n;
-    bins.box = box;
+    bins.voxels = voxels;
     // A counting sort by row, which keeps injectLight's order inside each row, then each row by x.
     const TexelVoxels texelVoxel(region);
     size_t texels = 0;
     for (const ReflectiveShadowMap& rsm : rsms) texels += rsm.texels.size();
-    // Each texel's voxel, found in parallel: the row (z * n + y) and x; kOutside for a voxel outside the box.
+    // Each texel's voxel, found in parallel: the row (z * n + y) and x; kOutside for a voxel not binned.
     constexpr uint32_t kOutside = std::numeric_limits<uint32_t>::max();
     std::vector<uint32_t> rowOf(texels);
     std::vector<uint16_t> xOf(texels);
@@ -153,7 +209,8 @@ TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegio
     for (const ReflectiveShadowMap& rsm : rsms) {
         parallelFor(0, static_cast<int64_t>(rsm.texels.size()), 1 << 14, [&](int64_t t) {
             const glm::ivec3 v = texelVoxel(rsm.texels[t].position);
-            rowOf[first + t] = box.contains(v.x, v.y, v.z) ? static_cast<uint32_t>(v.z * n + v.y) : kOutside;
+            rowOf[first + t] =
+                voxels.contains(v.x, v.y, v.z) ? static_cast<uint32_t>(v.z * n + v.y) : kOutside;
             xOf[first + t] = static_cast<uint16_t>(v.x);
         });
         first += rsm.texels.size();
@@ -234,11 +291,11 @@ RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone, std::spa
     std::sort(changes.added.begin(), changes.added.end(), [](const auto& a, const auto& b) {
         return std::tuple(a.voxel, a.light, a.texel->index) < std::tuple(b.voxel, b.light, b.texel->index);
     });
+    changes.voxels = VoxelRows(n);
     for (const auto* list : {&changes.removed, &changes.added})
-        for (const RsmChanges::Texel& t : *list) {
-            const uint32_t x = t.voxel % n, y = t.voxel / n % n, z = t.voxel / n / n;
-            changes.bounds.extend(VoxelBox::voxel(glm::ivec3(x, y, z)));
-        }
+        for (const RsmChanges::Texel& t : *list)
+            changes.voxels.add(static_cast<int>(t.voxel % n), static_cast<int>(t.voxel / n % n),
+                               static_cast<int>(t.voxel / n / n));
     return changes;
 }
 
@@ -306,17 +363,17 @@ std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelB
 
 }  // namespace
 
-void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
+void reinjectLight(const VoxelRows& voxels, const TexelBins& sceneTexels,
                    std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
                    std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight,
                    PackedGrid3& fullLight, PackedGrid3& deltaLight, const Grid3* bounce) {
     const std::vector<uint32_t> gone = goneEntries(sceneTexels, changes);
-    forEachRow(box, [&](int y, int z) {
+    voxels.forEachRow([&](int y, int z, int x0, int x1) {
         const std::vector<VoxelTexels> sums =
-            rowTexelSums(y, z, box.lo.x, box.hi.x, sceneTexels, sceneAlone, gone, changes, geometry);
-        for (int x = box.lo.x; x < box.hi.x; ++x) {
+            rowTexelSums(y, z, x0, x1, sceneTexels, sceneAlone, gone, changes, geometry);
+        for (int x = x0; x < x1; ++x) {
             const size_t i = fullLight.index(x, y, z);
-            const VoxelTexels& texels = sums[x - box.lo.x];
+            const VoxelTexels& texels = sums[x - x0];
             glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, i);
             if (bounce) light += (*bounce)[i];
             fullLight.set(i, light);

@@ -4,7 +4,9 @@
 // light that reached real surfaces, positive on the lit virtual objects.
 #pragma once
 
+#include <cstdint>
 #include <span>
+#include <vector>
 
 #include "pipeline/reflective_shadow_map.h"
 #include "pipeline/voxelize.h"
@@ -53,6 +55,34 @@ class TexelVoxels {
 // voxels around them, each from all the texels that land in it, summed in the order injectLight sums them:
 // the voxels are injectLight's bit for bit (no differences of sums, which would round differently).
 
+// A set of level-0 voxels held as one x-range per row (y, z) of the grid: as cheap to walk as a box, and far
+// tighter than one box around regions apart (the objects' shadows towards many lights).
+class VoxelRows {
+  public:
+    VoxelRows() = default;
+    explicit VoxelRows(int resolution);  // empty
+    static VoxelRows all(int resolution);
+    int resolution() const { return n_; }
+    // Adds voxels; a row keeps one range, so the voxels between two ranges of a row are added too.
+    void add(const VoxelBox& box);
+    void add(int x, int y, int z);
+    void add(const VoxelRows& other);  // of the same resolution
+    bool contains(const VoxelRows& other) const;
+    bool contains(int x, int y, int z) const {
+        const size_t r = static_cast<size_t>(z) * n_ + y;
+        return lo_[r] <= x && x < hi_[r];
+    }
+    size_t count() const;
+    VoxelBox bounds() const;
+    // body(y, z, x0, x1) for each row with voxels, rows in parallel.
+    template <typename RowBody>
+    void forEachRow(RowBody&& body) const;
+
+  private:
+    int n_ = 0;
+    std::vector<uint16_t> lo_, hi_;  // per row z * n + y: [lo, hi), no voxel when lo >= hi
+};
+
 // The texels of the real scene's RSMs, binned by row of voxels (built once, kept while the maps are): the
 // texels of any voxel of `box` are found without going through the maps.
 struct TexelBins {
@@ -61,14 +91,14 @@ struct TexelBins {
         uint32_t texel;     // position in the map's texels
     };
     int resolution = 0;
-    VoxelBox box;                    // the voxels whose texels are binned
+    VoxelRows voxels;                // the voxels whose texels are binned
     std::vector<uint32_t> rowStart;  // resolution^2 + 1 offsets into entries; row (y, z) is z * n + y
     std::vector<Entry> entries;      // each row's texels by x, then in injectLight's order (map, texel)
 };
-// The texels landing in `box` (VoxelBox::all for every voxel of the region): where the maps change every
+// The texels landing in `voxels` (VoxelRows::all for every voxel of the region): where the maps change every
 // frame (a live light), only those that frame re-injects.
 TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
-                    const VoxelBox& box);
+                    const VoxelRows& voxels);
 
 // Where the maps with the objects differ from the real scene's own: the scene's texels that are gone or
 // changed, and the texels that are new or changed.
@@ -81,7 +111,7 @@ struct RsmChanges {
     };
     std::vector<Texel> removed;  // by light and texel
     std::vector<Texel> added;    // by voxel, light and texel: injectLight's order in each voxel
-    VoxelBox bounds;             // the voxels all of them land in
+    VoxelRows voxels;            // the voxels all of them land in
 };
 // Compares each map of `sceneAlone` with its update for the objects (traceRsmUpdate, one per light) in the
 // texels the update traced again: the others are the same. Added texels point into the updates.
@@ -89,12 +119,20 @@ RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone, std::spa
                        const VolumeRegion& region);
 
 // injectLight(withObjects, region, geometry) and deltaVolume(it, sceneLight), written into `fullLight` and
-// `deltaLight` inside `box` only, where withObjects = the maps of `sceneTexels` (binTexels of `sceneAlone`)
+// `deltaLight` in `voxels` only, where withObjects = the maps of `sceneTexels` (binTexels of `sceneAlone`)
 // with `changes`. The result there is bit for bit the same as those functions' rounded to bfloat16.
 // `bounce` (the real scene's further bounces, if any) is added to the full volume, as to the scene's light.
-void reinjectLight(const VoxelBox& box, const TexelBins& sceneTexels,
+void reinjectLight(const VoxelRows& voxels, const TexelBins& sceneTexels,
                    std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
                    std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight,
                    PackedGrid3& fullLight, PackedGrid3& deltaLight, const Grid3* bounce = nullptr);
+
+template <typename RowBody>
+void VoxelRows::forEachRow(RowBody&& body) const {
+    parallelFor(0, static_cast<int64_t>(lo_.size()), 64, [&](int64_t r) {
+        if (lo_[r] < hi_[r])
+            body(static_cast<int>(r % n_), static_cast<int>(r / n_), int{lo_[r]}, int{hi_[r]});
+    });
+}
 
 }  // namespace deltagi

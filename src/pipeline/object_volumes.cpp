@@ -56,14 +56,18 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     }
     const RsmChanges changes = compareRsms(real.rsms, updates, region_);
     const VoxelGeometry* both[] = {&real.geometry, &objects_};
-    VoxelBox differs = objects_.bounds;
-    differs.extend(changes.bounds);
+    // Where the objects change the light: their voxels and those of the texels they change, row by row (with
+    // many lights the texels' voxels lie in many regions apart, whose one bounding box would be most of the
+    // volume).
+    VoxelRows differs = changes.voxels;
+    differs.add(objects_.bounds);
     // A new light rewrites the whole full volume, but the delta volume only where the objects change the
     // light now or did last frame: elsewhere it is (0, 0, 0, occupancy) whatever the light.
     const bool wholeDelta = deltaLight_.empty();
-    VoxelBox changed = differs;
-    if (!wholeDelta) changed.extend(lightDiffers_);
-    lightDiffers_ = differs;
+    VoxelRows changed = differs;
+    if (!wholeDelta && lightDiffersRows_.resolution() == region_.resolution) changed.add(lightDiffersRows_);
+    lightDiffers_ = differs.bounds();
+    lightDiffersRows_ = std::move(differs);
     const VoxelBox all = VoxelBox::all(region_.resolution);
     if (changed.count() > all.count() / kFreshInjectionFraction) {
         std::vector<ReflectiveShadowMap> withObjects;
@@ -75,12 +79,13 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
         freshDelta_.emplace(deltaVolume(full, real.light));
         freshFull_.emplace(full);
         lightChanged_ = all;
+        reinjected_ = all.count();
         return;
     }
     // A new light bins the texels of the box it re-injects only (a live light is new every frame); a box
     // beyond the binned one under the same light bins them all.
-    if (!sceneTexels_ || !sceneTexels_->box.contains(changed))
-        sceneTexels_ = binTexels(real.rsms, region_, newLight ? changed : all);
+    if (!sceneTexels_ || !sceneTexels_->voxels.contains(changed))
+        sceneTexels_ = binTexels(real.rsms, region_, newLight ? changed : VoxelRows::all(region_.resolution));
     if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, all);
     if (newLight) {
         // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).
@@ -90,7 +95,8 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light,
                   newLight ? *freshFull_ : fullLight_.levelForUpdate(0),
                   wholeDelta ? *freshDelta_ : deltaLight_.levelForUpdate(0), real.bounce);
-    lightChanged_ = wholeDelta ? all : changed;
+    lightChanged_ = wholeDelta ? all : changed.bounds();
+    reinjected_ = changed.count();
 }
 
 namespace {

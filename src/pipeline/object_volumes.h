@@ -66,6 +66,9 @@ class ObjectVolumes {
     // The level-0 voxels of the light volumes that the last inject() wrote (all of them when it injected
     // from scratch): what a frame cost, for tests and measurements.
     const VoxelBox& injectedBox() const { return lightChanged_; }
+    // How many of them it computed from their texels (all of them when it injected from scratch; with many
+    // lights a box holds far more than the rows of voxels the objects change).
+    size_t reinjectedVoxels() const { return reinjected_; }
 
   private:
     // mipmap() without the objects' bounce.
@@ -78,8 +81,10 @@ class ObjectVolumes {
     // The box over which objectVisibility_ and objectLight_ are stored (zero outside it): the objects' and a
     // margin, fitted anew when they leave it.
     VoxelBox window_;
-    VoxelBox objectsChanged_;  // level-0 voxels that this frame's voxelization changed
-    VoxelBox lightDiffers_;    // outside it the full light volume is the scene's (the last injection)
+    VoxelBox objectsChanged_;     // level-0 voxels that this frame's voxelization changed
+    VoxelBox lightDiffers_;       // outside it the full light volume is the scene's (the last injection)
+    VoxelRows lightDiffersRows_;  // the same voxels row by row (lightDiffers_ is their bounding box)
+    size_t reinjected_ = 0;
     VoxelBox lightChanged_;  // level-0 voxels that this frame's injection rewrote (a new light: of the delta
                              // volume)
     std::optional<PackedGrid3> freshFull_, freshDelta_;  // made whole this frame, for mipmap()

@@ -180,6 +180,34 @@ TEST(ObjectVolumes, FramesOfAChangingLightEqualVolumesFromScratch) {
     frameEqualsScratch(kept, RealScene(s, 6), s);
 }
 
+// A light camera's many directional lights: the ball's shadows fall apart on the floor in eight directions,
+// and only the rows of voxels they and the ball change are injected again, not their bounding box (which
+// holds most of the floor and everything up to the ball's top). Still the volumes from scratch.
+TEST(ObjectVolumes, ManyLightsReinjectTheRowsTheyChangeAndEqualVolumesFromScratch) {
+    Scene s = floorWithBall();
+    s.lights.clear();
+    for (int k = 0; k < 8; ++k) {
+        const float azimuth = glm::radians(45.0f * static_cast<float>(k) + 10.0f),
+                    elevation = glm::radians(25.0f);
+        Light sun;
+        sun.type = Light::Type::Directional;
+        sun.direction = -glm::vec3(std::cos(elevation) * std::cos(azimuth), std::sin(elevation),
+                                   std::cos(elevation) * std::sin(azimuth));
+        sun.intensity = 0.3f;
+        s.lights.push_back(sun);
+    }
+    ObjectVolumes kept;
+    for (uint64_t version = 1; version <= 3; ++version) {
+        SCOPED_TRACE(testing::Message() << "light " << version);
+        for (Light& sun : s.lights) sun.intensity *= 1.1f;
+        moveMesh(s.virtuals[0], {0.03f, 0.0f, -0.02f});
+        const RealScene real(s, version);
+        const size_t box = frameEqualsScratch(kept, real, s);
+        if (HasFatalFailure()) return;
+        if (version > 1) EXPECT_LT(2 * kept.reinjectedVoxels(), box);
+    }
+}
+
 // A directional light's map is traced again whole when the objects reach beyond the real scene (its rays
 // start further out); a large jump injects everything again. Both give the volumes from scratch too.
 TEST(ObjectVolumes, WholeMapsRetracedAndLargeJumpsEqualVolumesFromScratch) {
