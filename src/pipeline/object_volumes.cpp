@@ -82,8 +82,8 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
         reinjected_ = all.count();
         return;
     }
-    // A new light bins the texels of the box it re-injects only (a live light is new every frame); a box
-    // beyond the binned one under the same light bins them all.
+    // A new light bins the texels of the voxels it re-injects only (a live light is new every frame); voxels
+    // beyond the binned ones under the same light bin them all.
     if (!sceneTexels_ || !sceneTexels_->voxels.contains(changed))
         sceneTexels_ = binTexels(real.rsms, region_, newLight ? changed : VoxelRows::all(region_.resolution));
     if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, all);
