@@ -110,17 +110,9 @@ glm::ivec2 EnvironmentSampler::pixelOf(float u1, float u2) const {
     return {columnOf(y, u2), y};
 }
 
-float EnvironmentSampler::rowCentreElevation(float u1) const {
-    return rowElevations_[rowOf(u1)];
-}
-
 float EnvironmentSampler::elevationOf(glm::vec3 worldDirection) const {
-    const glm::vec3 d = glm::normalize(environment_.environmentFromWorld() * worldDirection);
+    const glm::vec3 d = glm::normalize(environmentFromWorld_ * worldDirection);
     return std::asin(std::clamp(d.y, -1.0f, 1.0f));
-}
-
-glm::vec3 EnvironmentSampler::pixelCentre(float u1, float u2) const {
-    return pixelCentre(pixelOf(u1, u2));
 }
 
 glm::vec3 EnvironmentSampler::pixelCentre(glm::ivec2 p) const {
@@ -130,11 +122,15 @@ glm::vec3 EnvironmentSampler::pixelCentre(glm::ivec2 p) const {
 }
 
 float EnvironmentSampler::meanRadiance(glm::ivec2 p) const {
-    return meanOf(environment_.radiance.rgb(p.x, p.y));
+    return meanOf(rgbAt(p));
 }
 
 glm::ivec2 EnvironmentSampler::pixelOf(glm::vec3 worldDirection) const {
-    const glm::vec2 uv = equirectUv(environmentFromWorld_ * worldDirection);
+    return pixelAt(environmentFromWorld_ * worldDirection);
+}
+
+glm::ivec2 EnvironmentSampler::pixelAt(glm::vec3 localDirection) const {
+    const glm::vec2 uv = equirectUv(localDirection);
     return {std::clamp(static_cast<int>(uv.x * static_cast<float>(width_)), 0, width_ - 1),
             std::clamp(static_cast<int>(uv.y * static_cast<float>(height_)), 0, height_ - 1)};
 }
@@ -160,7 +156,7 @@ EnvironmentSampler::Sample EnvironmentSampler::sample(float u1, float u2, glm::i
     const glm::vec3 d(static_cast<float>(std::sin(phi) * cosTheta), static_cast<float>(sinTheta),
                       static_cast<float>(-std::cos(phi) * cosTheta));
     s.wi = glm::normalize(environment_.worldFromEnvironment * d);
-    s.radiance = environment_.radiance.rgb(x, y);
+    s.radiance = rgbAt(pixel);
     s.pdf = static_cast<float>(meanOf(s.radiance) / total_);
     return s;
 }
@@ -171,19 +167,14 @@ float EnvironmentSampler::pdf(glm::vec3 worldDirection) const {
 }
 
 glm::vec3 EnvironmentSampler::radiance(glm::vec3 worldDirection) const {
-    const glm::ivec2 p = pixelOf(worldDirection);
-    return environment_.radiance.rgb(p.x, p.y);
+    return rgbAt(pixelOf(worldDirection));
 }
 
 EnvironmentSampler::Value EnvironmentSampler::value(glm::vec3 worldDirection) const {
     if (!(total_ > 0.0)) return {radiance(worldDirection), 0.0f};
     const glm::vec3 d = environmentFromWorld_ * worldDirection;
     if (d.y < darkBelowY_) return {};
-    const glm::vec2 uv = equirectUv(d);
-    const int x = std::clamp(static_cast<int>(uv.x * static_cast<float>(width_)), 0, width_ - 1);
-    const int y = std::clamp(static_cast<int>(uv.y * static_cast<float>(height_)), 0, height_ - 1);
-    const float* rgb = &pixels_[3 * (static_cast<size_t>(y) * width_ + x)];
-    const glm::vec3 radiance(rgb[0], rgb[1], rgb[2]);
+    const glm::vec3 radiance = rgbAt(pixelAt(d));
     return {radiance, static_cast<float>(meanOf(radiance) / total_)};
 }
 

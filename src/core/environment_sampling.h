@@ -37,29 +37,30 @@ class EnvironmentSampler {
     // them below the map's lowest lit row (by a margin wider than the floats' error in making them).
     bool darkCone(glm::vec3 worldAxis, float halfAngle) const;
 
-    // Where sample(u1, u2) goes, cheaply: the world direction of the centre of its pixel, which lies within
-    // pixelRadius() (radians) of the sample's direction. For culling samples before drawing them.
-    glm::vec3 pixelCentre(float u1, float u2) const;
+    // sample(u1, u2) in steps, for culling samples before drawing them: the row it falls in (from u1 alone),
+    // the column in that row, and the sample drawn in the pixel so found, the same as sample(u1, u2).
+    int rowOf(float u1) const;
+    int columnOf(int row, float u2) const;
+    glm::ivec2 pixelOf(float u1, float u2) const;
+    Sample sample(float u1, float u2, glm::ivec2 pixel) const;
+    // The world direction of a pixel's centre, which lies within pixelRadius() (radians) of every sample
+    // drawn in the pixel.
+    glm::vec3 pixelCentre(glm::ivec2 pixel) const;
     float pixelRadius() const { return pixelRadius_; }
-    // Cheaper still, from u1 alone: the elevation (radians, in the environment's frame) of the centre of the
-    // row that sample(u1, u2) falls in. Its pixel centre is at least |that - elevationOf(d)| from a direction
-    // d, whatever u2: samples can be culled by row before the column is looked up.
-    float rowCentreElevation(float u1) const;
+    // The elevation (radians, in the environment's frame) of the centre of a row: its pixel centres are at
+    // least |that - elevationOf(d)| from a direction d, so samples can be culled by row before their column
+    // is looked up.
+    float rowElevation(int row) const { return rowElevations_[row]; }
     // The elevation of a world direction in the environment's frame.
     float elevationOf(glm::vec3 worldDirection) const;
 
-    // The same in steps, for callers that cull many samples that share their u1: the row sample(u1, u2) falls
-    // in and its centre's elevation, the column in that row, the world direction of a pixel's centre, and
-    // sample(u1, u2) drawn in its pixel (found by these), each the same as above.
-    int rowOf(float u1) const;
-    float rowElevation(int row) const { return rowElevations_[row]; }
-    int columnOf(int row, float u2) const;
-    glm::vec3 pixelCentre(glm::ivec2 pixel) const;
-    Sample sample(float u1, float u2, glm::ivec2 pixel) const;
-
   private:
     glm::ivec2 pixelOf(glm::vec3 worldDirection) const;
-    glm::ivec2 pixelOf(float u1, float u2) const;  // the pixel sample(u1, u2) falls in
+    glm::ivec2 pixelAt(glm::vec3 localDirection) const;  // in the environment's frame
+    glm::vec3 rgbAt(glm::ivec2 pixel) const {
+        const float* rgb = &pixels_[3 * (static_cast<size_t>(pixel.y) * width_ + pixel.x)];
+        return {rgb[0], rgb[1], rgb[2]};
+    }
     float meanRadiance(glm::ivec2 pixel) const;
 
     const Environment& environment_;

@@ -186,21 +186,22 @@ std::vector<Region> splitRegions(const EnergyTables& t, int count, ExtractionMet
     return regions;
 }
 
-// The directions of a map's pixel centres, as equirectDirection() gives them, from the sines and cosines of
-// each column's longitude and each row's elevation.
+// The directions of a map's pixel centres, equirectDirection()'s, from the sines and cosines of each
+// column's longitude and each row's elevation: equirectDirection() of the column on the equator is
+// (sin phi, 0, -cos phi), of the row on the meridian u = 1/2 (0, sin theta, -cos theta).
 struct PixelDirections {
     std::vector<float> sinPhi, cosPhi, sinTheta, cosTheta;
     explicit PixelDirections(const Image& map) {
         const float w = static_cast<float>(map.width()), h = static_cast<float>(map.height());
         for (int x = 0; x < map.width(); ++x) {
-            const float phi = 2.0f * std::numbers::pi_v<float> * ((static_cast<float>(x) + 0.5f) / w - 0.5f);
-            sinPhi.push_back(std::sin(phi));
-            cosPhi.push_back(std::cos(phi));
+            const glm::vec3 d = equirectDirection((static_cast<float>(x) + 0.5f) / w, 0.5f);
+            sinPhi.push_back(d.x);
+            cosPhi.push_back(-d.z);
         }
         for (int y = 0; y < map.height(); ++y) {
-            const float theta = std::numbers::pi_v<float> * (0.5f - (static_cast<float>(y) + 0.5f) / h);
-            sinTheta.push_back(std::sin(theta));
-            cosTheta.push_back(std::cos(theta));
+            const glm::vec3 d = equirectDirection(0.5f, (static_cast<float>(y) + 0.5f) / h);
+            sinTheta.push_back(d.y);
+            cosTheta.push_back(-d.z);
         }
     }
     glm::vec3 operator()(int x, int y) const {

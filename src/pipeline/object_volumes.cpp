@@ -65,9 +65,8 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     // light now or did last frame: elsewhere it is (0, 0, 0, occupancy) whatever the light.
     const bool wholeDelta = deltaLight_.empty();
     VoxelRows changed = differs;
-    if (!wholeDelta && lightDiffersRows_.resolution() == region_.resolution) changed.add(lightDiffersRows_);
-    lightDiffers_ = differs.bounds();
-    lightDiffersRows_ = std::move(differs);
+    if (!wholeDelta && lightDiffers_.resolution() == region_.resolution) changed.add(lightDiffers_);
+    lightDiffers_ = std::move(differs);
     const VoxelBox all = VoxelBox::all(region_.resolution);
     if (changed.count() > all.count() / kFreshInjectionFraction) {
         std::vector<ReflectiveShadowMap> withObjects;
@@ -177,7 +176,7 @@ void ObjectVolumes::buildLightMips() {
     // Outside lightDiffers_ both are non-zero only where the scene's light is.
     auto update = [&](MipVolume& volume) {
         VoxelBox occupied = *sceneLightBounds_;
-        occupied.extend(nonZeroBounds(volume.level(0), lightDiffers_));
+        occupied.extend(nonZeroBounds(volume.level(0), lightDiffers_.bounds()));
         updateMipChain(volume, lightChanged_, occupied);
     };
     if (freshFull_) {

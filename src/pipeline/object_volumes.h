@@ -81,9 +81,8 @@ class ObjectVolumes {
     // The box over which objectVisibility_ and objectLight_ are stored (zero outside it): the objects' and a
     // margin, fitted anew when they leave it.
     VoxelBox window_;
-    VoxelBox objectsChanged_;     // level-0 voxels that this frame's voxelization changed
-    VoxelBox lightDiffers_;       // outside it the full light volume is the scene's (the last injection)
-    VoxelRows lightDiffersRows_;  // the same voxels row by row (lightDiffers_ is their bounding box)
+    VoxelBox objectsChanged_;  // level-0 voxels that this frame's voxelization changed
+    VoxelRows lightDiffers_;   // outside them the full light volume is the scene's (the last injection)
     size_t reinjected_ = 0;
     VoxelBox lightChanged_;  // level-0 voxels that this frame's injection rewrote (a new light: of the delta
                              // volume)

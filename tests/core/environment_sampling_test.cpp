@@ -69,7 +69,7 @@ TEST(EnvironmentSamplingTest, LandsWhereTheCdfsSayWithTheMapsPdfAndRadiance) {
                     EXPECT_GT(s.pdf, 0.0f);
                     // The map looked up at the centre of the sample's pixel (a direction on a pixel's edge
                     // may round into its neighbour).
-                    const glm::vec3 centre = sampler.pixelCentre(u1, u2);
+                    const glm::vec3 centre = sampler.pixelCentre(sampler.pixelOf(u1, u2));
                     const EnvironmentSampler::Value value = sampler.value(centre);
                     EXPECT_EQ(value.radiance, s.radiance);
                     EXPECT_EQ(value.pdf, s.pdf);
@@ -99,8 +99,8 @@ TEST(EnvironmentSamplingTest, ARowsElevationBoundsItsPixelCentresAngleToADirecti
         for (int j = 0; j < kSide; ++j) {
             const float u1 = (static_cast<float>(i) + 0.37f) / kSide,
                         u2 = (static_cast<float>(j) + 0.61f) / kSide;
-            const glm::vec3 centre = sampler.pixelCentre(u1, u2);
-            const float row = sampler.rowCentreElevation(u1);
+            const glm::vec3 centre = sampler.pixelCentre(sampler.pixelOf(u1, u2));
+            const float row = sampler.rowElevation(sampler.rowOf(u1));
             ASSERT_NEAR(sampler.elevationOf(centre), row, 1e-5f) << u1 << " " << u2;
             for (const glm::vec3& d : directions) {
                 const float angle = std::acos(std::clamp(glm::dot(centre, d), -1.0f, 1.0f));
