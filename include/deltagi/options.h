@@ -52,6 +52,7 @@ struct DiffuseConeOptions {
     int relightPixelStride = 0;       // 0: "auto" (kAutoRelightDiffuseStride)
     int objectRays = 16;              // 0: cones (object_bounce_rays.h, bounce_light.h)
     int objectRayPixelStride = 0;     // 0: "auto" (kAutoObjectRayStride)
+    int objectGatherRays = 32;        // 0: the objects' pixels gather by cones (diffuse_rays.h)
 
     bool operator==(const DiffuseConeOptions&) const = default;
 };
@@ -99,8 +100,9 @@ struct RenderOptions {
     int temporalFrames = 4;  // pipeline/temporal_reuse.h; FrameRenderer only
     RelightCones relightCones = RelightCones::Differential;
     RelightObjectLight relightObjectLight = RelightObjectLight::Rays;
-    bool layers = false;   // RenderOutput's compositing layers
-    int lightBounces = 2;  // bounce_light.h
+    bool layers = false;     // RenderOutput's compositing layers
+    int lightBounces = 2;    // bounce_light.h
+    bool bounceTail = true;  // the bounces beyond lightBounces, estimated (bounce_light.h)
     int denoiseRadius = 2;
 
     bool operator==(const RenderOptions&) const = default;
@@ -119,6 +121,9 @@ struct EnvironmentOptions {
 // The "auto" pixel strides: these at a 640x480 image, scaled with its smaller side (so that an image samples
 // its surfaces alike at any size) and rounded down to a power of two, at least 1.
 inline constexpr int kAutoDiffuseStride = 8, kAutoRelightDiffuseStride = 16;
+// The objects' pixels' diffuse light by rays (options.diffuse.object_gather_rays): a detailed statue's light
+// changes from pixel to pixel more than the filter interpolates over 8.
+inline constexpr int kAutoDiffuseRayStride = 4;
 // Shadows of point, spot and directional lights; the area lights' direct light by rays on rendered surfaces
 // (noisier: many directions, few rays each) at twice their stride, so that the filter averages more samples.
 // Relit, the environment's rays sample the objects' cone of directions too (traceEnvironmentRays), and the

@@ -1,5 +1,6 @@
 #include "pipeline/bounce_light.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/brdf_sampling.h"
@@ -55,6 +56,49 @@ glm::vec3 gatherAtVoxel(glm::vec3 centre, glm::vec3 normal, float size, size_t i
     return sum;
 }
 
+// The bounces beyond the last one gathered (options.render.bounce_tail). Each bounce passes on about the same
+// share of the light before it (the surfaces' albedo times how much of the scene they see), so the bounces
+// after the last form a geometric series of it: last x (r + r^2 + ...) = last x r / (1 - r), where r is the
+// ratio of the last bounce's light to the one before's, summed over the scene's surfaces (per colour
+// channel). In the path tracer's Cornell box under a bare bulb the third and further bounces are as much as
+// the second (r = 0.50-0.54 from bounce to bounce); an open scene, a plane that does not see itself, has
+// r near 0. At most kMaxTailRatio: a tail at most 4 times the last bounce.
+constexpr double kMaxTailRatio = 0.8;
+glm::vec3 tailScale(glm::dvec3 last, glm::dvec3 before) {
+    glm::vec3 scale(0.0f);
+    for (int c = 0; c < 3; ++c) {
+        if (!(before[c] > 0.0) || !(last[c] > 0.0)) continue;
+        const double r = std::min(last[c] / before[c], kMaxTailRatio);
+        scale[c] = static_cast<float>(r / (1.0 - r));
+    }
+    return scale;
+}
+
+// The sum over the voxels of `geometry`'s bounds of their surface area times value(voxel index): the light
+// of a bounce over the scene's surfaces, up to a constant. Rows are summed in parallel and added in order
+// (the same for any thread count).
+template <typename Value>
+glm::dvec3 areaWeightedSum(const VoxelGeometry& geometry, Value&& value) {
+    const VoxelBox& box = geometry.bounds;
+    if (box.empty()) return glm::dvec3(0.0);
+    const glm::ivec3 extent = box.hi - box.lo;
+    std::vector<glm::dvec3> rows(static_cast<size_t>(extent.y) * extent.z, glm::dvec3(0.0));
+    parallelFor(0, static_cast<int64_t>(rows.size()), 16, [&](int64_t row) {
+        const int z = box.lo.z + static_cast<int>(row / extent.y),
+                  y = box.lo.y + static_cast<int>(row % extent.y);
+        glm::dvec3 sum(0.0);
+        for (int x = box.lo.x; x < box.hi.x; ++x) {
+            const size_t i = geometry.visibility.index(x, y, z);
+            const float area = geometry.area[i];
+            if (area > 0.0f) sum += glm::dvec3(value(i)) * static_cast<double>(area);
+        }
+        rows[static_cast<size_t>(row)] = sum;
+    });
+    glm::dvec3 total(0.0);
+    for (const glm::dvec3& r : rows) total += r;
+    return total;
+}
+
 }  // namespace
 
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
@@ -72,7 +116,14 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
     const VisibilityVolumes occluders{&visibility, nullptr, VisibilityVolumes::Self::Scene};
     std::vector<glm::vec3> gathered(coarse.size());
+    const bool tail = options.render.bounceTail;
+    // The light the last pass gathered from: the volume's own (emitters' included), then each pass's bounce.
+    glm::dvec3 before =
+        tail ? areaWeightedSum(geometry, [&](size_t i) { return glm::vec3(direct[i]); }) : glm::dvec3(0.0);
+    glm::dvec3 gatheredSoFar(0.0);  // the passes' bounces before this one, summed alike
+    Grid3 previous(0);              // indirect before the last pass (tail with bounces > 1)
     for (int bounce = 0; bounce < bounces; ++bounce) {
+        if (tail && bounce == bounces - 1 && bounces > 1) previous = indirect.clone();
         // The light so far: direct plus the bounces gathered before.
         PackedGrid3 total(n);
         parallelFor(0, static_cast<int64_t>(total.size()), 1 << 14,
@@ -105,6 +156,21 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
                 const glm::vec3 g = gathered[coarse.index(x / factor, y / factor, z / factor)];
                 indirect[i] = glm::vec4(geometry.albedo[i] * g * occupancy, 0.0f);
             }
+        });
+        if (!tail) continue;
+        const glm::dvec3 sum = areaWeightedSum(geometry, [&](size_t i) { return glm::vec3(indirect[i]); });
+        const glm::dvec3 last = sum - gatheredSoFar;
+        if (bounce < bounces - 1) {
+            before = last;
+            gatheredSoFar = sum;
+            continue;
+        }
+        const glm::vec3 scale = tailScale(last, before);
+        const bool lastOnly = previous.size() == indirect.size();
+        parallelFor(0, static_cast<int64_t>(indirect.size()), 1 << 14, [&](int64_t i) {
+            glm::vec3 b(indirect[i]);
+            if (lastOnly) b -= glm::vec3(previous[i]);
+            indirect[i] += glm::vec4(b * scale, 0.0f);
         });
     }
     return indirect;

@@ -3,7 +3,9 @@
 // the further bounces are a quarter or more of the light (the Cornell box: the real scene's mean radiance is
 // 0.27 with one bounce and 0.37 with all of them, in the path tracer). bounceLight() gathers the light volume
 // at every surface voxel of the real scene with the diffuse cones, reflects it by the voxel's albedo, and
-// adds it to the volume, as many times as asked: each pass adds one bounce.
+// adds it to the volume, as many times as asked: each pass adds one bounce. The bounces beyond the last are
+// added as a geometric series of it (options.render.bounce_tail): in a closed room they are as much light as
+// the last one gathered.
 //
 // It runs on the real scene alone, once while the real side stays the same (FrameRenderer keeps it), and the
 // result is added to the full light volume as well, so that the delta volume keeps only what the objects
@@ -25,8 +27,9 @@ namespace deltagi {
 // The light is gathered at the voxels of the mip level that has 16^3 (level 3 at 128^3: each gathers for its
 // 512 level-0 voxels, whose albedos reflect it), with the diffuse cones of `options` around the voxel's mean
 // normal, turned to face `viewpoint` (the camera, which stands in the room it sees: surfaces are two-sided,
-// and a reconstruction's winding does not say which side is the room's). Deterministic for any thread count;
-// zero for bounces <= 0.
+// and a reconstruction's winding does not say which side is the room's). With options.render.bounce_tail the
+// last bounce is added again times r / (1 - r), r the ratio of its light to the one before's over the
+// geometry's surfaces (per colour channel). Deterministic for any thread count; zero for bounces <= 0.
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
                   const Options& options, int bounces, glm::vec3 viewpoint);
 

@@ -98,9 +98,15 @@ struct ConeJob {
         return pixelStrideFor(o.specular.relightPixelStride, kAutoRelightSpecularStride, c.width, c.height);
     }
     int diffuseStride(const Options& o, const Camera& c) const {
-        return relit() ? pixelStrideFor(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride, c.width,
-                                        c.height)
-                       : pixelStrideFor(o.diffuse.pixelStride, kAutoDiffuseStride, c.width, c.height);
+        if (relit())
+            return pixelStrideFor(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride, c.width, c.height);
+        return pixelStrideFor(o.diffuse.pixelStride,
+                              diffuseByRays(o) ? kAutoDiffuseRayStride : kAutoDiffuseStride, c.width,
+                              c.height);
+    }
+    // The rendered objects' diffuse light by rays (traceDiffuseRays) rather than cones.
+    bool diffuseByRays(const Options& o) const {
+        return mode == ShadowMode::Shaded && o.diffuse.objectGatherRays > 0 && (rays.objects || rays.scene);
     }
 };
 

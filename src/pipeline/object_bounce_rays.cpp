@@ -14,13 +14,13 @@ namespace {
 constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kBounceStream = 7200;
 
-// Where volumeRadianceAt reads `volume` (and any volume of its region) for `hit`: level 0, half a voxel off
-// the surface on the ray's side.
-VolumeLookup lookupOffSurface(const MipVolume& volume, const RayLanding& hit) {
+// Where volumeRadianceAt reads `volume` (and any volume of its region) for `hit`: at `level`, half a voxel
+// off the surface on the ray's side.
+VolumeLookup lookupOffSurface(const MipVolume& volume, const RayLanding& hit, float level = 0.0f) {
     const VolumeRegion& region = volume.region();
     const float invVoxel = 1.0f / region.voxelSize();
     return volume.lookup(
-        (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) * invVoxel, 0.0f);
+        (hit.position + 0.5f * region.voxelSize() * hit.geometricNormal - region.origin) * invVoxel, level);
 }
 
 glm::vec3 radianceOf(glm::vec4 l) {
@@ -29,8 +29,8 @@ glm::vec3 radianceOf(glm::vec4 l) {
 
 }  // namespace
 
-glm::vec3 volumeRadianceAt(const MipVolume& light, const RayLanding& hit) {
-    return radianceOf(light.gather(lookupOffSurface(light, hit)));
+glm::vec3 volumeRadianceAt(const MipVolume& light, const RayLanding& hit, float level) {
+    return radianceOf(light.gather(lookupOffSurface(light, hit, level)));
 }
 
 glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayLanding& hit) {

@@ -45,8 +45,9 @@ std::vector<glm::vec3> traceObjectBounceRays(std::span<const SurfacePoint> point
                                              RealLight realLight = {});
 
 // The radiance of `light`'s level-0 voxels where a ray meets a surface, half a voxel out on the ray's side of
-// it (the volume's values over their occupancy); zero where no voxel there is occupied.
-glm::vec3 volumeRadianceAt(const MipVolume& light, const RayLanding& hit);
+// it (the volume's values over their occupancy); zero where no voxel there is occupied. At a `level` above 0,
+// the mean radiance of that mip level's voxels there.
+glm::vec3 volumeRadianceAt(const MipVolume& light, const RayLanding& hit, float level = 0.0f);
 // volumeRadianceAt(a, hit) - volumeRadianceAt(b, hit) for two volumes of one region, whose lookup is worked
 // out once (the same values).
 glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayLanding& hit);

@@ -58,6 +58,7 @@ float meanAdded(const Furnace& f, const Grid3& added) {
 
 TEST(BounceLight, AFurnaceGainsAlbedoTimesItsRadiancePerBounce) {
     Options options;
+    options.render.bounceTail = false;
     // Faces pointing in, as a room's walls do: the cone marcher takes a coherent surface seen from behind as
     // a back face (options.trace.backface_weight), which does not apply to a box wound the other way.
     for (const bool inward : {true}) {
@@ -68,6 +69,23 @@ TEST(BounceLight, AFurnaceGainsAlbedoTimesItsRadiancePerBounce) {
         EXPECT_NEAR(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 2, kCentre)), 0.75f,
                     0.15f);
         EXPECT_EQ(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 0, kCentre)), 0.0f);
+    }
+}
+
+// With the bounces beyond the last estimated (options.render.bounce_tail), a furnace's walls gain the whole
+// series rho L + rho^2 L + ... = rho L / (1 - rho), however many bounces are gathered.
+TEST(BounceLight, AFurnaceWithTheTailGainsTheWholeSeries) {
+    Options options;
+    ASSERT_TRUE(options.render.bounceTail);
+    for (const float albedo : {0.3f, 0.5f}) {
+        SCOPED_TRACE(albedo);
+        const Furnace f = furnace(albedo, true);
+        const float series = albedo / (1.0f - albedo);
+        for (const int bounces : {1, 2})
+            EXPECT_NEAR(
+                meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, bounces, kCentre)),
+                series, 0.15f * series)
+                << bounces;
     }
 }
 

@@ -242,6 +242,7 @@ TEST(Render, TheObjectsConesHaveTheirOwnAperture) {
     // The relit cones carry the box's light on the floor (with "rays" only the floor's own change, which a
     // plane does not see).
     s.options.render.relightObjectLight = RelightObjectLight::Cones;
+    s.options.diffuse.objectGatherRays = 0;  // the objects' cones, not rays
     s.options.diffuse.objectApertureDeg = 20.0f;
     const RenderOutput narrow = render(s);
     s.options.diffuse.objectApertureDeg = 70.0f;

@@ -44,7 +44,8 @@ Options everyOptionChanged() {
                  .pixelStride = 2,
                  .relightPixelStride = 32,
                  .objectRays = 0,
-                 .objectRayPixelStride = 4};
+                 .objectRayPixelStride = 4,
+                 .objectGatherRays = 0};
     o.specular = {.minApertureDeg = 10.0f, .maxApertureDeg = 45.0f, .relightPixelStride = 1};
     o.shadow = {.method = ShadowMethod::Cones,
                 .raySamples = 9,
@@ -68,6 +69,7 @@ Options everyOptionChanged() {
                 .relightObjectLight = RelightObjectLight::Cones,
                 .layers = true,
                 .lightBounces = 8,
+                .bounceTail = false,
                 .denoiseRadius = 0};
     o.environment = {.lightCount = 0,
                      .extraction = ExtractionMethod::VarianceMinimization,
@@ -105,7 +107,7 @@ TEST(OptionTable, EachOptionIsDescribedOnce) {
             ++count;
         }
     }
-    EXPECT_EQ(count, 44u);  // the fields of the 8 structs of options.h
+    EXPECT_EQ(count, 46u);  // the fields of the 8 structs of options.h
 }
 
 // Each name of `names` reads back as its value and is written as itself, and each value of the enum (in

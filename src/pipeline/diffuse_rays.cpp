@@ -1,0 +1,54 @@
+#include "pipeline/diffuse_rays.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/brdf_sampling.h"
+#include "pipeline/cone_trace.h"
+#include "pipeline/object_bounce_rays.h"
+#include "pipeline/shadow_rays.h"
+
+namespace deltagi {
+
+namespace {
+constexpr int64_t kPointGrain = 16;
+constexpr uint32_t kGatherStream = 7300;  // hashToUnit streams of the grid's jitter
+}  // namespace
+
+float rayFootprintLevel(float distance, int count, float voxelSize, float maxLevel) {
+    // A cone of solid angle 2 pi / count: 2 pi (1 - cos a) = 2 pi / count.
+    const float cosHalf = 1.0f - 1.0f / static_cast<float>(std::max(count, 1));
+    const float tanHalf = std::sqrt(std::max(0.0f, 1.0f - cosHalf * cosHalf)) / std::max(cosHalf, 1e-3f);
+    const float width = distance * tanHalf / voxelSize;
+    return width > 1.0f ? std::min(std::log2(width), maxLevel) : 0.0f;
+}
+
+std::vector<glm::vec3> traceDiffuseRays(std::span<const SurfacePoint> points, const MipVolume& light,
+                                        const RayScene& scene, const Options& options,
+                                        std::span<const uint32_t> pixels) {
+    std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+    const int count = squareSampleCount(std::max(options.diffuse.objectGatherRays, 1));
+    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
+    const float offset = shadowRayOffset(scene);
+    const float voxelSize = light.region().voxelSize();
+    const float maxLevel = static_cast<float>(light.levelCount() - 1);
+    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
+        const SurfacePoint& p = points[i];
+        if (p.surface.diffuse == glm::vec3(0.0f)) return;
+        const glm::vec3 origin = p.position + offset * p.normal;
+        const glm::mat3 frame = frameAround(p.normal);
+        const float jitterU = hashToUnit(i, kGatherStream), jitterV = hashToUnit(i, kGatherStream + 1);
+        glm::vec3 sum(0.0f);
+        for (int k = 0; k < count; ++k) {
+            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
+            const glm::vec3 wi = frame * sampleCosineHemisphere(u1, u2);
+            const RayLanding hit = scene.land(origin, wi);
+            if (!hit.hit()) continue;
+            sum += volumeRadianceAt(light, hit, rayFootprintLevel(hit.t, count, voxelSize, maxLevel));
+        }
+        out[i] = sum / static_cast<float>(count);
+    });
+    return out;
+}
+
+}  // namespace deltagi
