@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "core/ggx.h"
 
@@ -104,6 +105,20 @@ glm::vec3 mappedNormal(const TriangleMesh& mesh, glm::uvec3 tri, float u, float 
 // GGX: the exponent whose cos^n falls to half at the GGX lobe's half-maximum (ggx.h).
 float SurfaceMaterial::ggxPhongExponentOf(float perceptualRoughness) {
     return ggxPhongExponent(perceptualRoughness * perceptualRoughness);
+}
+
+float phongDirectionalAlbedo(float exponent, float nDotV) {
+    const float mu = std::clamp(nDotV, 0.0f, 1.0f);
+    const auto overHorizon = [mu](float n) {
+        const float sigma = 1.0f / std::sqrt(n + 1.0f), z = mu / sigma;
+        const float cdf = 0.5f * std::erfc(-z * std::numbers::sqrt2_v<float> * 0.5f);
+        const float pdf = std::exp(-0.5f * z * z) *
+                          (0.5f * std::numbers::sqrt2_v<float> * std::numbers::inv_sqrtpi_v<float>);
+        return std::min(1.0f, mu * cdf + sigma * pdf);
+    };
+    const float n = std::max(exponent, 0.0f);
+    if (n >= 1.0f) return overHorizon(n);
+    return (1.0f - n) * 0.5f * (1.0f + mu) + n * overHorizon(1.0f);
 }
 
 glm::vec3 SurfaceMaterial::ggxSpecularReflectance(float nDotV) const {

@@ -11,6 +11,14 @@
 
 namespace deltagi {
 
+// The directional albedo of the normalized Phong lobe of brdf.h, (n + 2) / (2 pi) cos^n of the angle to the
+// mirror direction, seen at n.v = `nDotV`: its integral times cos(theta_i) over the hemisphere. Where the
+// lobe lies above the horizon that is the cosine's mean over the lobe, n.v; towards grazing views the horizon
+// cuts off the lobe's part that would count negative. Taken as the mean of max(0, x) for x normal with mean
+// n.v and deviation 1 / sqrt(n + 1), the lobe's angular width: within 0.04 of numerical integration for n >=
+// 1 (0.007 for n >= 5); below 1, blended towards n = 0's (1 + n.v) / 2.
+float phongDirectionalAlbedo(float exponent, float nDotV);
+
 struct SurfaceMaterial {
     // The Lambertian part's reflectance: Phong's albedo; glTF's base colour * (1 - metallic).
     glm::vec3 diffuse{0.0f};
@@ -36,12 +44,15 @@ struct SurfaceMaterial {
         const float r = std::max(roughness, 1e-3f);
         return std::max(2.0f / (r * r) - 2.0f, 0.0f);
     }
-    // What the specular cone's radiance is weighted by, seen at n.v = `nDotV`: Phong's glossy reflectance;
-    // for GGX the lobe's directional albedo with Schlick's Fresnel, F0 * A + B (the split-sum
-    // approximation), after Karis' analytic fit ("Physically Based Shading on Mobile", 2014): the glancing
-    // Fresnel rise of a dielectric, and the energy a rough lobe loses.
+    // What the specular cone's radiance is weighted by, seen at n.v = `nDotV`: the lobe's directional albedo.
+    // Phong: the glossy reflectance times the normalized lobe's (phongDirectionalAlbedo: about n.v, as the
+    // path tracer's reflection dims towards grazing views). GGX: with Schlick's Fresnel, F0 * A + B (the
+    // split-sum approximation), after Karis' analytic fit ("Physically Based Shading on Mobile", 2014): the
+    // glancing Fresnel rise of a dielectric, and the energy a rough lobe loses.
     glm::vec3 specularReflectance(float nDotV) const {
-        return model == MaterialModel::MetallicRoughness ? ggxSpecularReflectance(nDotV) : specular;
+        return model == MaterialModel::MetallicRoughness
+                   ? ggxSpecularReflectance(nDotV)
+                   : specular * phongDirectionalAlbedo(phongExponent(), nDotV);
     }
 
   private:
