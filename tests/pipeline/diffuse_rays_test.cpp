@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "bright_sphere.h"
 #include "pipeline/mipmap.h"
 #include "pipeline/voxelize.h"
 #include "scene/shapes.h"
@@ -34,20 +35,9 @@ Options manyRays() {
 }
 
 TEST(DiffuseRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
-    constexpr float kRadius = 0.2f, kHeight = 0.5f, kRadiance = 2.0f;
-    Scene s;
-    s.real.push_back(
-        test::placed(makeQuad({2.0f, 2.0f}), {0.5f, 0.0f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
-    s.virtuals.push_back(
-        test::placed(makeSphere(kRadius, 64), {0.5f, kHeight, 0.5f}, test::diffuse(glm::vec3(0.5f))));
-    const VolumeRegion region{glm::vec3(0.0f, -0.25f, 0.0f), 1.0f, 64};
-    const VoxelGeometry sphere = voxelize(s.virtuals, region);
-    Grid3 grid(region.resolution);
-    for (size_t i = 0; i < grid.size(); ++i) {
-        const float occupancy = sphere.visibility[i].x;
-        grid[i] = glm::vec4(glm::vec3(kRadiance * occupancy), occupancy);
-    }
-    const MipVolume light = buildMipChain(region, std::move(grid));
+    using Bright = test::BrightSphereScene;
+    const Scene s = Bright::makeScene(2.0f);
+    const MipVolume light = Bright::light(s);
     const RayScene realOnly(s, SceneContent::RealOnly);
     const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
     const Material& floor = s.real[0].material;
@@ -57,9 +47,10 @@ TEST(DiffuseRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
         for (int c = 0; c < kCopies; ++c) points.push_back(test::floorPoint({0.5f + dx, 0.0f, 0.5f}, floor));
     const std::vector<glm::vec3> got = traceDiffuseRays(points, light, all, manyRays());
     for (size_t k = 0; k < std::size(offsets); ++k) {
-        const glm::vec3 toCentre = glm::vec3(0.5f, kHeight, 0.5f) - points[k * kCopies].position;
+        const glm::vec3 toCentre = glm::vec3(0.5f, Bright::kHeight, 0.5f) - points[k * kCopies].position;
         const float d = glm::length(toCentre);
-        const float expected = kRadiance * (kRadius / d) * (kRadius / d) * (toCentre.y / d);
+        const float expected =
+            Bright::kRadiance * (Bright::kRadius / d) * (Bright::kRadius / d) * (toCentre.y / d);
         EXPECT_NEAR(meanOfCopies(got, k), expected, 0.08f * expected) << offsets[k];
     }
     // A point without a diffuse part gathers nothing.

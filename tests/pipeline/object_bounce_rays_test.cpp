@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include "bright_sphere.h"
 #include "core/ray_scene.h"
 #include "pipeline/mipmap.h"
 #include "pipeline/voxelize.h"
@@ -66,28 +67,9 @@ float sphereSolidAngle(glm::vec3 p, float radius, float height) {
 
 // A sphere of uniform radiance kRadiance (its voxels in the objects' light volume) over a grey floor of
 // `floorSize`, and the ray scenes.
-struct BrightSphere {
-    static constexpr float kRadius = 0.2f, kHeight = 0.5f, kRadiance = 2.0f;
+struct BrightSphere : test::BrightSphereScene {
     explicit BrightSphere(float floorSize)
         : scene(makeScene(floorSize)), objectLight(light(scene)), traced(scene, kRadius, kHeight) {}
-    static Scene makeScene(float floorSize) {
-        Scene s;
-        s.real.push_back(test::placed(makeQuad({floorSize, floorSize}), {0.5f, 0.0f, 0.5f},
-                                      test::diffuse(glm::vec3(0.5f))));
-        s.virtuals.push_back(
-            test::placed(makeSphere(kRadius, 64), {0.5f, kHeight, 0.5f}, test::diffuse(glm::vec3(0.5f))));
-        return s;
-    }
-    static MipVolume light(const Scene& s) {
-        const VolumeRegion region{glm::vec3(0.0f, -0.25f, 0.0f), 1.0f, 64};
-        const VoxelGeometry sphere = voxelize(s.virtuals, region);
-        Grid3 grid(region.resolution);
-        for (size_t i = 0; i < grid.size(); ++i) {
-            const float occupancy = sphere.visibility[i].x;
-            grid[i] = glm::vec4(glm::vec3(kRadiance * occupancy), occupancy);
-        }
-        return buildMipChain(region, std::move(grid));
-    }
     Scene scene;
     MipVolume objectLight;
     SphereRays traced;
