@@ -111,6 +111,8 @@ float phongDirectionalAlbedo(float exponent, float nDotV) {
     const float mu = std::clamp(nDotV, 0.0f, 1.0f);
     const auto overHorizon = [mu](float n) {
         const float sigma = 1.0f / std::sqrt(n + 1.0f), z = mu / sigma;
+        // The lobe wholly above the horizon (to 1e-5): its mean cosine.
+        if (z > 4.5f) return mu;
         const float cdf = 0.5f * std::erfc(-z * std::numbers::sqrt2_v<float> * 0.5f);
         const float pdf = std::exp(-0.5f * z * z) *
                           (0.5f * std::numbers::sqrt2_v<float> * std::numbers::inv_sqrtpi_v<float>);
