@@ -6,6 +6,7 @@
 #include "core/brdf_sampling.h"
 #include "core/parallel.h"
 #include "pipeline/cone_trace.h"
+#include "pipeline/diffuse_rays.h"
 #include "pipeline/mipmap.h"
 #include "pipeline/object_bounce_rays.h"
 #include "pipeline/shadow_rays.h"
@@ -287,19 +288,10 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
             const RayLanding surface = scene.landTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
             if (!surface.hit())
                 return gatherAtVoxel(centre, normal, size, index, light, occluders, cones, settings);
-            const glm::vec3 origin = surface.position + offset * normal;
-            const glm::mat3 frame = frameAround(normal);
-            const float jitterU = hashToUnit(index, kBounceStream + 100),
-                        jitterV = hashToUnit(index, kBounceStream + 101);
-            glm::vec3 sum(0.0f);
-            for (int k = 0; k < count; ++k) {
-                const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
-                const glm::vec3 wi = frame * sampleCosineHemisphere(u1, u2);
-                const RayLanding hit = scene.land(origin, wi, offset);
-                if (!hit.hit()) continue;
-                sum += volumeRadianceAt(light, hit);
-            }
-            return sum / static_cast<float>(count);
+            const glm::vec2 jitter(hashToUnit(index, kBounceStream + 100),
+                                   hashToUnit(index, kBounceStream + 101));
+            return gatherOverHemisphere(scene, light, surface.position + offset * normal, normal, side,
+                                        jitter, offset);
         });
 }
 

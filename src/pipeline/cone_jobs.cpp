@@ -198,10 +198,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         results[j].diffuse = traceSparse<glm::vec3>(
             job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
             job.filter(o, job.diffuseStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
-                if (job.diffuseByRays(o))
-                    return traceDiffuseRays(job.points, *job.light,
-                                            job.rays.objects ? *job.rays.objects : *job.rays.scene, o,
-                                            pixels);
+                if (const RayScene* scene = job.diffuseRays(o))
+                    return traceDiffuseRays(job.points, *job.light, *scene, o, pixels);
                 return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
                                          job.objectLight, job.objectBounceByRays(o), job.diffuseAperture(o));
             });

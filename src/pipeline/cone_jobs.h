@@ -101,12 +101,12 @@ struct ConeJob {
         if (relit())
             return pixelStrideFor(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride, c.width, c.height);
         return pixelStrideFor(o.diffuse.pixelStride,
-                              diffuseByRays(o) ? kAutoDiffuseRayStride : kAutoDiffuseStride, c.width,
-                              c.height);
+                              diffuseRays(o) ? kAutoDiffuseRayStride : kAutoDiffuseStride, c.width, c.height);
     }
-    // The rendered objects' diffuse light by rays (traceDiffuseRays) rather than cones.
-    bool diffuseByRays(const Options& o) const {
-        return mode == ShadowMode::Shaded && o.diffuse.objectGatherRays > 0 && (rays.objects || rays.scene);
+    // The rendered objects' diffuse light by rays (traceDiffuseRays) rather than cones, cast against this.
+    const RayScene* diffuseRays(const Options& o) const {
+        if (mode != ShadowMode::Shaded || o.diffuse.objectGatherRays <= 0) return nullptr;
+        return rays.objects ? rays.objects : rays.scene;
     }
 };
 

@@ -33,9 +33,21 @@ std::vector<glm::vec3> traceDiffuseRays(std::span<const SurfacePoint> points, co
                                         const RayScene& scene, const Options& options,
                                         std::span<const uint32_t> pixels = {});
 
+// The cosine-weighted mean radiance over the hemisphere around `normal` seen from `origin`: side^2 rays on a
+// grid jittered by `jitter` (in [0, 1)^2), cosine-distributed, each taking `light`'s radiance where it lands
+// on `scene` (from `tMin` on; volumeRadianceAt). At level 0, or with `footprintTan` > 0 at the mip level as
+// wide as the distance times it. A ray that meets nothing brings nothing. traceDiffuseRays' points and the
+// objects' coarse voxels (gatherObjectBounceByRays) gather so.
+glm::vec3 gatherOverHemisphere(const RayScene& scene, const MipVolume& light, glm::vec3 origin,
+                               glm::vec3 normal, int side, glm::vec2 jitter, float tMin = 0.0f,
+                               float footprintTan = 0.0f);
+
+// The tangent of the half-angle of a cone of 2 pi / count steradians: a ray's share of the hemisphere when
+// `count` rays share it.
+float rayFootprintTan(int count);
 // The mip level whose voxels are as wide as a ray's footprint at `distance` (world units) when `count` rays
-// share the hemisphere: the distance times the tangent of the half-angle of a cone of 2 pi / count
-// steradians, in voxels of `voxelSize`; 0 within a voxel, at most `maxLevel`.
+// share the hemisphere: the distance times rayFootprintTan(count), in voxels of `voxelSize`; 0 within a
+// voxel, at most `maxLevel`.
 float rayFootprintLevel(float distance, int count, float voxelSize, float maxLevel);
 
 }  // namespace deltagi
