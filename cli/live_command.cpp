@@ -204,10 +204,19 @@ int runLive(const LiveArgs& args) {
         std::optional<RenderOutput> rendered;
         if (tracked.state == TrackedFrame::State::Lost) {
             ++lost;
-            if (!wasLost && !args.quiet)
-                note(
-                    "deltagi: frame {} ({:.2f} s): no marker for {:g} s: showing the camera image as it is\n",
-                    frame.index, frame.timeSeconds, args.tracking.holdSeconds);
+            if (!wasLost && !args.quiet) {
+                if (tracked.uncertain)
+                    note(
+                        "deltagi: frame {} ({:.2f} s): the markers seen fit poses far apart (one small "
+                        "marker alone; a second marker or a nearer camera decides): showing the camera image "
+                        "as it is\n",
+                        frame.index, frame.timeSeconds);
+                else
+                    note(
+                        "deltagi: frame {} ({:.2f} s): no marker for {:g} s: showing the camera image as it "
+                        "is\n",
+                        frame.index, frame.timeSeconds, args.tracking.holdSeconds);
+            }
             wasLost = true;
             composite = frame.image;
         } else {
@@ -242,6 +251,7 @@ int runLive(const LiveArgs& args) {
         row["dropped"] = arrival->dropped;
         row["registration"] = stateName(tracked.state);
         row["markers_seen"] = tracked.markersSeen;
+        if (tracked.uncertain) row["uncertain"] = true;
         if (tracked.state == TrackedFrame::State::Registered)
             row["reprojection_error_px"] = rounded(tracked.reprojectionErrorPx, 1e4);
         row["track_ms"] = rounded(trackMs, 1e3);

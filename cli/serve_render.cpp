@@ -41,6 +41,7 @@ bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFra
             {"decode_ms",
              std::round(std::chrono::duration<double, std::milli>(decoded - start).count() * 100.0) / 100.0},
             {"track_ms", std::round(trackMs * 100.0) / 100.0}};
+    if (tracked.uncertain) info["uncertain"] = true;
     if (tracked.state == TrackedFrame::State::Registered)
         info["reprojection_error_px"] = std::round(tracked.reprojectionErrorPx * 1e4) / 1e4;
     if (tracked.state != TrackedFrame::State::Lost) {  // where the camera is, smoothed (world units)
@@ -64,8 +65,8 @@ void Server::renderLoop() {
     std::optional<LiveCamera> camera;                // the last registered camera frame, once a page sent one
     std::shared_ptr<const Environment> environment;  // the light camera's newest (live --serve)
     bool interactiveLit = false, fullLit = false;    // whether the two scenes have it
+    json lightInfo;  // the light camera's newest frame, said with every frame once there is one
     for (;;) {
-        json lightInfo;
         bool refining = false, sameOptions = false;
         int scale = 1;  // the interactive frames at 1 / scale of the camera's width and height
         View view;

@@ -140,7 +140,7 @@ int runTrack(const TrackArgs& args) {
     transforms["fps"] = source->frameRate() > 0.0 ? source->frameRate() : args.patternFps;
     ordered_json& frames = transforms["frames"] = ordered_json::array();
     OutputFiles outputs;
-    int registered = 0, held = 0, lost = 0, unknownTags = 0, tooSmall = 0;
+    int registered = 0, held = 0, lost = 0, uncertain = 0, unknownTags = 0, tooSmall = 0;
     std::vector<double> errors;
     const bool progress = !args.quiet && isatty(STDERR_FILENO);
     int64_t count = 0;
@@ -154,6 +154,7 @@ int runTrack(const TrackArgs& args) {
         if (progress) fmt::print(stderr, "\rframe {}   ", frame->index);
         if (tracked.state == TrackedFrame::State::Lost) {
             ++lost;
+            uncertain += tracked.uncertain;
             continue;
         }
         const fs::path photo = framesFolder / fmt::format("frame_{:04d}.png", frame->index);
@@ -181,10 +182,14 @@ int runTrack(const TrackArgs& args) {
             source->name(),
             fmt::format(
                 "no frame registered: none of the scene's markers (tag36h11, ids {}) was seen "
-                "in {} frames{}{}",
+                "in {} frames{}{}{}",
                 markerIds(scene), count, unknownTags ? fmt::format("; tags of other ids were") : "",
                 tooSmall ? fmt::format("; the markers were too small (under {:g} pixels)", kMinMarkerSidePx)
-                         : ""));
+                         : "",
+                uncertain ? fmt::format("; in {} the markers seen fit poses far apart (one small marker "
+                                        "alone: show a second marker or come nearer)",
+                                        uncertain)
+                          : ""));
     outputs.json(transforms, args.output);
     outputs.commit();
     if (!args.quiet) {
@@ -192,9 +197,11 @@ int runTrack(const TrackArgs& args) {
         fmt::print(
             stderr,
             "deltagi: wrote {} ({} of {} frames: {} registered by markers, {} holding the last pose; {} "
-            "without markers left out); reprojection error median {:.3f} px, max {:.3f} px\n",
-            args.output.string(), registered + held, count, registered, held, lost, errors[errors.size() / 2],
-            errors.back());
+            "without a pose left out{}); reprojection error median {:.3f} px, max {:.3f} px\n",
+            args.output.string(), registered + held, count, registered, held, lost,
+            uncertain ? fmt::format(", {} of them of uncertain pose (one small marker alone)", uncertain)
+                      : "",
+            errors[errors.size() / 2], errors.back());
     }
     return 0;
 }

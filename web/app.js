@@ -365,7 +365,9 @@ function cameraShown(info, now) {
   const c = info.camera;
   const registration = c.registration === 'markers'
     ? `registered by ${c.markers_seen} marker${c.markers_seen === 1 ? '' : 's'} (${c.reprojection_error_px.toFixed(2)} px)`
-    : c.registration === 'held' ? 'no marker: the last pose' : 'no marker: the camera image as it is';
+    : c.registration === 'held' ? 'no marker: the last pose'
+    : c.uncertain ? 'the markers seen fit poses far apart (one small marker alone: show another or come nearer): the camera image as it is'
+    : 'no marker: the camera image as it is';
   const latency = median(live.camera.latencies.slice(-30));
   $('camera-status').textContent = `${own ? '' : `${live.serverCamera}: `}${registration} · ` +
     `${latency.toFixed(0)} ms from ${own ? 'capture to picture' : 'arrival to JPEG'} (median of the last 30) · ` +

@@ -342,12 +342,74 @@ std::optional<RigidPose> planePose(std::span<const glm::dvec2> plane, std::span<
     return pose;
 }
 
-// Gauss-Newton (with a little damping) on the normalized reprojection error of points p (world) seen at n;
-// returns the sum of squared errors it ends with.
-double refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span<const glm::dvec2> observed) {
+// The Gauss-Newton normal equations of the normalized reprojection error of points (world) seen at
+// `observed`, at `pose`: J^T J and J^T e over the parameters (rotation w, translation),
+// q' = exp(w) R p + t + dt.
+void normalEquations(const RigidPose& pose, std::span<const glm::dvec3> points,
+                     std::span<const glm::dvec2> observed, std::array<double, 36>& jtj,
+                     std::array<double, 6>& jte) {
+    jtj.fill(0.0);
+    jte.fill(0.0);
+    for (size_t i = 0; i < points.size(); ++i) {
+        const glm::dvec3 rp = pose.r * points[i];
+        const glm::dvec3 q = rp + pose.t;
+        const double iz = 1.0 / q.z;
+        const glm::dvec2 e = glm::dvec2(q.x, q.y) * iz - observed[i];
+        // d(projection)/dq, and dq/d(rotation w, translation).
+        const glm::dvec3 du(iz, 0.0, -q.x * iz * iz), dv(0.0, iz, -q.y * iz * iz);
+        auto rowFor = [&](glm::dvec3 d) {
+            // d/dw of exp(w) rp = w x rp: -rp x, i.e. column k is e_k x rp.
+            const glm::dvec3 dw = glm::cross(rp, d);  // d . (e_k x rp) = e_k . (rp x d)
+            return std::array<double, 6>{dw.x, dw.y, dw.z, d.x, d.y, d.z};
+        };
+        const std::array<double, 6> ju = rowFor(du), jv = rowFor(dv);
+        for (int a = 0; a < 6; ++a) {
+            for (int b = 0; b < 6; ++b) jtj[a * 6 + b] += ju[a] * ju[b] + jv[a] * jv[b];
+            jte[a] += ju[a] * e.x + jv[a] * e.y;
+        }
+    }
+}
+
+// How far a refined corner may be from the true one in x and in y (pixels): the noise poses are judged by.
+constexpr double kCornerNoisePx = 0.3;
+
+// The camera's position c = -R^T t of a pose, and its change with the parameters (rotation w, translation;
+// exp(w) R, t + dt): -R^T ([t]x w + dt), rows of G = -R^T [[t]x | I].
+glm::dvec3 cameraPositionOf(const RigidPose& pose) {
+    return -glm::transpose(pose.r) * pose.t;
+}
+std::array<std::array<double, 6>, 3> cameraPositionJacobian(const RigidPose& pose) {
+    const glm::dmat3 rt = glm::transpose(pose.r);
+    const glm::dvec3 t = pose.t;
+    const glm::dmat3 tx(0, t.z, -t.y, -t.z, 0, t.x, t.y, -t.x, 0);  // columns: cross(t, .)
+    const glm::dmat3 left = rt * tx;
+    std::array<std::array<double, 6>, 3> g{};
+    for (int row = 0; row < 3; ++row)
+        for (int c = 0; c < 3; ++c) {
+            g[row][c] = -left[c][row];
+            g[row][3 + c] = -rt[c][row];
+        }
+    return g;
+}
+
+// Where the camera was (`position`) and how far it may have gone since (`sigma`, world units): a term of
+// the refinement, |c - position|^2 / sigma^2, against the corners' |e|^2 / noise^2. It holds the poses
+// that the corners alone barely tell apart (one small marker) near the last one, and moves a pose the
+// corners fix by a small part of the way.
+struct PositionPrior {
+    glm::dvec3 position{0.0};
+    double sigma = 0.0;
+    double weight = 0.0;  // (noise / sigma)^2, noise in normalized units: 0 is no prior
+};
+
+// Gauss-Newton (with a little damping) on the normalized reprojection error of points p (world) seen at n,
+// plus the prior's term; returns the sum of squared errors it ends with (the prior's term included).
+double refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span<const glm::dvec2> observed,
+                  const PositionPrior& prior = {}) {
     double lambda = 1e-6;
     auto cost = [&](const RigidPose& p) {
-        double c = 0.0;
+        const glm::dvec3 away = cameraPositionOf(p) - prior.position;
+        double c = prior.weight * glm::dot(away, away);
         for (size_t i = 0; i < points.size(); ++i) {
             const glm::dvec3 q = p.r * points[i] + p.t;
             if (!(q.z > 0.0)) return static_cast<double>(INFINITY);
@@ -360,23 +422,15 @@ double refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span
     for (int iteration = 0; iteration < 30 && std::isfinite(current); ++iteration) {
         std::array<double, 36> jtj{};
         std::array<double, 6> jte{};
-        for (size_t i = 0; i < points.size(); ++i) {
-            const glm::dvec3 rp = pose.r * points[i];
-            const glm::dvec3 q = rp + pose.t;
-            const double iz = 1.0 / q.z;
-            const glm::dvec2 e = glm::dvec2(q.x, q.y) * iz - observed[i];
-            // d(projection)/dq, and dq/d(rotation w, translation): q' = exp(w) R p + t + dt.
-            const glm::dvec3 du(iz, 0.0, -q.x * iz * iz), dv(0.0, iz, -q.y * iz * iz);
-            auto rowFor = [&](glm::dvec3 d) {
-                // d/dw of exp(w) rp = w x rp: -rp x, i.e. column k is e_k x rp.
-                const glm::dvec3 dw = glm::cross(rp, d);  // d . (e_k x rp) = e_k . (rp x d)
-                return std::array<double, 6>{dw.x, dw.y, dw.z, d.x, d.y, d.z};
-            };
-            const std::array<double, 6> ju = rowFor(du), jv = rowFor(dv);
-            for (int a = 0; a < 6; ++a) {
-                for (int b = 0; b < 6; ++b) jtj[a * 6 + b] += ju[a] * ju[b] + jv[a] * jv[b];
-                jte[a] += ju[a] * e.x + jv[a] * e.y;
-            }
+        normalEquations(pose, points, observed, jtj, jte);
+        if (prior.weight > 0.0) {
+            const glm::dvec3 away = cameraPositionOf(pose) - prior.position;
+            const std::array<std::array<double, 6>, 3> g = cameraPositionJacobian(pose);
+            for (int row = 0; row < 3; ++row)
+                for (int a = 0; a < 6; ++a) {
+                    for (int b = 0; b < 6; ++b) jtj[a * 6 + b] += prior.weight * g[row][a] * g[row][b];
+                    jte[a] += prior.weight * g[row][a] * away[row];
+                }
         }
         bool improved = false;
         for (int attempt = 0; attempt < 10 && !improved; ++attempt) {
@@ -405,11 +459,35 @@ double refinePose(RigidPose& pose, std::span<const glm::dvec3> points, std::span
     return current;
 }
 
+// The standard deviation of the camera's position (world units; the root of its covariance's trace) at
+// `pose`, were each corner's x and y off by `noise` (normalized units) at random: the pose's covariance
+// noise^2 (J^T J)^-1, taken through the camera position (cameraPositionJacobian).
+// Infinite where the corners do not fix the pose.
+double cameraPositionSigma(const RigidPose& pose, std::span<const glm::dvec3> points, double noise) {
+    std::array<double, 36> jtj;
+    std::array<double, 6> unused;
+    std::vector<glm::dvec2> exact(points.size());  // the residuals play no part
+    normalEquations(pose, points, exact, jtj, unused);
+    std::array<double, 36> covariance{};  // column k: (J^T J)^-1 e_k
+    for (int k = 0; k < 6; ++k) {
+        std::array<double, 6> unit{}, column{};
+        unit[k] = 1.0;
+        if (!solveLinear<6>(jtj, unit, column)) return INFINITY;
+        for (int a = 0; a < 6; ++a) covariance[a * 6 + k] = column[a];
+    }
+    // The position's variance: trace(G C G^T) noise^2.
+    double variance = 0.0;
+    for (const std::array<double, 6>& g : cameraPositionJacobian(pose))
+        for (int a = 0; a < 6; ++a)
+            for (int b = 0; b < 6; ++b) variance += g[a] * covariance[a * 6 + b] * g[b];
+    return variance >= 0.0 ? noise * std::sqrt(variance) : INFINITY;
+}
+
 }  // namespace
 
 std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sightings,
                                           std::span<const Marker> markers, const Camera& camera,
-                                          const std::optional<glm::mat4>& previous) {
+                                          const std::optional<glm::mat4>& previous, double previousSigma) {
     if (sightings.empty() || !(camera.fx > 0.0f) || !(camera.fy > 0.0f)) return std::nullopt;
     // Every corner: its world point and its undistorted normalized image point.
     std::vector<glm::dvec3> world;
@@ -460,7 +538,6 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
         starts.push_back(other);
     }
     const glm::dmat4 markerFromWorld = glm::inverse(glm::dmat4(first.worldFromMarker));
-    auto cameraPosition = [&](const RigidPose& p) { return -glm::transpose(p.r) * p.t; };
     std::vector<std::pair<RigidPose, double>> solutions;
     for (const RigidPose& start : starts) {
         RigidPose p;
@@ -479,22 +556,46 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
     std::sort(solutions.begin(), solutions.end(),
               [](const auto& a, const auto& b) { return a.second < b.second; });
     RigidPose pose = solutions.front().first;
+    // The solutions that explain the corners about as well as the best: within 4 times its squared error plus
+    // what corners 0.3 pixels off in x and y add (one marker's 4 corners fit a wrong tilt better than the
+    // true one by that much).
+    const double pixel = 1.0 / std::max<double>(camera.fy, 1.0);  // a pixel in normalized units
+    const double noise =
+        2.0 * static_cast<double>(world.size()) * (kCornerNoisePx * pixel) * (kCornerNoisePx * pixel);
+    auto plausible = [&](double cost) { return cost <= 4.0 * solutions.front().second + noise; };
+    // Two of them are distinct minima when their cameras lie further apart than kDistinctMinima of the
+    // camera's distance from the marker (the same minimum reached from two starts differs by rounding).
+    constexpr double kDistinctMinima = 0.01;
+    const double reach =
+        kDistinctMinima * glm::length(cameraPositionOf(pose) - glm::dvec3(first.worldFromMarker[3]));
+    double spread = 0.0;  // between the plausible solutions' cameras
+    for (const auto& [candidate, cost] : solutions)
+        if (plausible(cost))
+            spread = std::max(spread, glm::length(cameraPositionOf(candidate) - cameraPositionOf(pose)));
+    const bool ambiguous = spread > reach;
     if (previous) {
-        // Of the solutions that explain the corners about as well as the best (within 4 times its squared
-        // error plus what corners 0.3 pixels off in x and y add: one marker's 4 corners fit a wrong tilt
-        // better than the true one by that much), the one nearest the last frame's camera.
-        const double pixel = 1.0 / std::max<double>(camera.fy, 1.0);  // a pixel in normalized units
-        const double noise = 2.0 * static_cast<double>(world.size()) * (0.3 * pixel) * (0.3 * pixel);
+        // Of the plausible solutions, the one nearest the last frame's camera.
         const glm::dvec3 last = glm::dvec3((*previous)[3]);
-        double nearest = glm::length(cameraPosition(pose) - last);
+        double nearest = glm::length(cameraPositionOf(pose) - last);
         for (const auto& [candidate, cost] : solutions)
-            if (cost <= 4.0 * solutions.front().second + noise &&
-                glm::length(cameraPosition(candidate) - last) < nearest) {
+            if (plausible(cost) && glm::length(cameraPositionOf(candidate) - last) < nearest) {
                 pose = candidate;
-                nearest = glm::length(cameraPosition(candidate) - last);
+                nearest = glm::length(cameraPositionOf(candidate) - last);
             }
     }
+    if (previous && previousSigma > 0.0) {
+        const double noiseNormalized = kCornerNoisePx * pixel;
+        const PositionPrior prior{glm::dvec3((*previous)[3]), previousSigma,
+                                  (noiseNormalized / previousSigma) * (noiseNormalized / previousSigma)};
+        RigidPose held = pose;
+        if (std::isfinite(refinePose(held, world, normalized, prior))) pose = held;
+    }
     MarkerPose result;
+    result.ambiguous = ambiguous;
+    // Distinct minima: the camera is as uncertain as they are apart.
+    result.positionSigma =
+        std::max(cameraPositionSigma(pose, world, kCornerNoisePx * pixel), ambiguous ? spread : 0.0);
+    result.markerDistance = glm::length(cameraPositionOf(pose) - glm::dvec3(first.worldFromMarker[3]));
     result.worldFromCamera = worldFromCameraOf(pose);
     result.markersSeen = static_cast<int>(sightings.size());
     // The RMS pixel error through the lens model.
@@ -583,14 +684,31 @@ TrackedFrame MarkerTracker::track(const Image& frame, double timeSeconds) {
     out.unknownTags = found.unknown;
     out.tooSmall = found.tooSmall;
     const std::optional<glm::mat4> previous = lastSeen_ ? std::optional<glm::mat4>(lastRaw_) : std::nullopt;
-    std::optional<MarkerPose> pose = solveCameraPose(found.sightings, markers_, camera_, previous);
+    // How far the camera may have gone since the last registered frame (plus 1 cm): the prior's width.
+    constexpr double kSlack = 0.01;
+    const double reach =
+        lastSeen_ ? options_.maxSpeed * std::max(timeSeconds - *lastSeen_, 0.0) + kSlack : 0.0;
+    std::optional<MarkerPose> pose =
+        solveCameraPose(found.sightings, markers_, camera_, previous, options_.maxSpeed > 0.0 ? reach : 0.0);
     const bool recent = lastSeen_ && timeSeconds - *lastSeen_ <= options_.holdSeconds;
     // More markers than the last registered frame saw fix the camera better than it was: always taken.
     if (pose && recent && options_.maxSpeed > 0.0 && pose->markersSeen <= lastMarkersSeen_) {
-        constexpr double kSlack = 0.01;
         const double moved = glm::distance(glm::dvec3(pose->worldFromCamera[3]), glm::dvec3(lastRaw_[3]));
-        if (moved > options_.maxSpeed * std::max(timeSeconds - *lastSeen_, 0.0) + kSlack) {
+        if (moved > reach) {
             out.jumped = true;
+            out.markersSeen = pose->markersSeen;
+            pose.reset();
+        }
+    }
+    // An uncertain pose (one small marker alone: its corners fit cameras tens of centimetres apart about as
+    // well) is a guess without an earlier pose to choose by, and the refinement's prior holds it near the
+    // last one only while the camera cannot have gone further than the corners are uncertain: taken then,
+    // otherwise treated as no marker. So a stream starts from a certain pose.
+    if (pose && !(pose->positionSigma <= options_.certainSigma * pose->markerDistance)) {
+        const bool priorHolds = previous && options_.maxSpeed > 0.0 && reach <= pose->positionSigma;
+        const bool open = previous && options_.maxSpeed == 0.0;  // every pose taken
+        if (!priorHolds && !open) {
+            out.uncertain = true;
             out.markersSeen = pose->markersSeen;
             pose.reset();
         }

@@ -73,16 +73,28 @@ struct MarkerPose {
     glm::mat4 worldFromCamera{1.0f};
     double reprojectionErrorPx = 0.0;  // RMS over every corner, through the lens distortion
     int markersSeen = 0;
+    // Another pose, its camera elsewhere, explains the corners about as well (the planar ambiguity below):
+    // the pose returned is the nearer to `previous`, or without one a guess.
+    bool ambiguous = false;
+    // The standard deviation of the camera's position (world units) were each corner 0.3 pixels off at
+    // random, and at least the distance to the other pose when ambiguous: about 1 % of the distance to the
+    // markers with two 10-12 cm markers 1 m away at 320x240, 15-30 % with one of them seen nearly head-on.
+    double positionSigma = 0.0;
+    double markerDistance = 0.0;  // from the camera to the largest marker seen (world units)
 };
 
 // The pose of `camera` (its intrinsics and distortion; its pose is ignored) that best explains the
 // sightings; nothing when there is none or the solution is behind the camera or not finite. A marker seen
 // nearly head-on has two poses that explain its corners almost equally well (tilted either way about the
 // line of sight): where their errors are close, the one whose camera is nearer `previous` (the last frame's
-// world-from-camera) is taken.
+// world-from-camera) is taken. With `previousSigma` (world units: how far the camera may have moved since
+// `previous`) the pose is then refined with the camera's distance from the last one as a term of the error
+// (a prior): one small marker alone, whose corners fit cameras tens of centimetres apart almost equally, then
+// gives the pose near the last one that fits them.
 std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sightings,
                                           std::span<const Marker> markers, const Camera& camera,
-                                          const std::optional<glm::mat4>& previous = std::nullopt);
+                                          const std::optional<glm::mat4>& previous = std::nullopt,
+                                          double previousSigma = 0.0);
 
 // One-Euro filtering of a camera pose: position and orientation (a quaternion kept in one hemisphere) each
 // low-passed with a cut-off that rises with their speed.
@@ -118,8 +130,14 @@ struct TrackingOptions {
     // than this (world units per second, metres in the examples; plus 1 cm) since that frame, within the
     // hold time, is not trusted: the frame is held. One small marker seen alone leaves the tilt uncertain,
     // and a little corner noise (a JPEG's) can put the camera tens of centimetres off for a frame or two. 0:
-    // every pose is taken.
+    // every pose is taken. The same speed times the time since the last registered frame is the width of the
+    // prior a pose is refined with (solveCameraPose's previousSigma).
     double maxSpeed = 2.0;
+    // A pose is certain when its position's standard deviation (MarkerPose::positionSigma) is at most this
+    // share of the distance to the marker. A stream starts from a certain pose; an uncertain
+    // one later is taken only when the prior holds it (solveCameraPose: the camera cannot have gone further
+    // since the last registered frame than the corners are uncertain), else treated as no marker.
+    double certainSigma = 0.05;
 };
 
 struct TrackedFrame {
@@ -134,6 +152,10 @@ struct TrackedFrame {
     int markersSeen = 0;
     int unknownTags = 0, tooSmall = 0;
     bool jumped = false;  // Held because the markers' pose moved the camera faster than maxSpeed
+    // No pose from this frame: the markers seen fit poses far apart (TrackingOptions::certainSigma) and no
+    // earlier pose near enough in time chooses between them (one small marker alone; a second marker or a
+    // nearer camera decides)
+    bool uncertain = false;
 };
 
 class MarkerTracker {

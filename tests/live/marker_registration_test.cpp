@@ -58,6 +58,7 @@ TEST(MarkerCells, AreTheTag36h11PatternWithItsBlackBorderAndWhiteRing) {
 void expectRegistration(int width, int height, int views, float maxPositionMedian, float maxRotationMedian) {
     const std::vector<Marker> markers = {floorMarker(3, 0.12f, glm::vec3(0.0f))};
     std::vector<float> positionErrors, rotationErrors;
+    int beyondThreeSigma = 0;
     MarkerDetector detector(markers);
     int seed = 0;
     for (const auto& [position, target] : viewsAround(views)) {
@@ -72,7 +73,13 @@ void expectRegistration(int width, int height, int views, float maxPositionMedia
         positionErrors.push_back(e.position);
         rotationErrors.push_back(e.rotationDeg);
         EXPECT_LT(pose->reprojectionErrorPx, 0.5);
+        // Seen from 35-75 degrees above the floor, one marker fixes the camera: a stream may start from it
+        // (TrackingOptions::certainSigma), and its stated uncertainty bounds the error.
+        EXPECT_FALSE(pose->ambiguous);
+        EXPECT_LE(pose->positionSigma, 0.05 * pose->markerDistance);
+        beyondThreeSigma += e.position > 3.0 * pose->positionSigma;
     }
+    EXPECT_LE(beyondThreeSigma, views / 10);
     const float p = median(positionErrors), r = median(rotationErrors);
     testing::Test::RecordProperty("position_error_median_cm", std::to_string(100.0f * p));
     testing::Test::RecordProperty("rotation_error_median_deg", std::to_string(r));
@@ -213,6 +220,8 @@ TEST(MarkerRegistration, SolvesTheExactCornersOfAMarkerSeenHeadOn) {
     const std::optional<MarkerPose> alone = solveCameraPose(sightings, markers, right);
     ASSERT_TRUE(alone);
     EXPECT_LT(poseError(alone->worldFromCamera, right.worldFromCamera).position, 0.01f);
+    // Corners off by the noise of a real frame could as well be the other camera's: no certain pose.
+    EXPECT_TRUE(alone->ambiguous || alone->positionSigma > 0.05 * alone->markerDistance);
     const std::optional<MarkerPose> afterLeft =
         solveCameraPose(sightings, markers, right, left.worldFromCamera);
     ASSERT_TRUE(afterLeft);
@@ -280,6 +289,41 @@ TEST(MarkerTracker, HoldsThroughAPoseThatJumps) {
     MarkerTracker open(markers, here, options);
     ASSERT_EQ(open.track(renderMarkerFrame(here, markers), 0.0).state, TrackedFrame::State::Registered);
     EXPECT_EQ(open.track(far, 1.0 / 30.0).state, TrackedFrame::State::Registered);
+}
+
+// One small marker seen from straight in front, 1.3 m away (30 pixels wide at 320x240), fits cameras tens of
+// centimetres apart about as well: a stream does not start from it (the frame is Lost, `uncertain`) but from
+// the first frame that also sees a second marker; after that the lone marker's pose near the last is taken
+// while the camera cannot have gone far since.
+TEST(MarkerTracker, StartsFromACertainPoseOnly) {
+    Marker wall, side;
+    wall.id = 3;
+    wall.size = 0.12f;
+    wall.worldFromMarker = glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 0.4f, 0.0f));  // facing +z
+    side.id = 4;
+    side.size = 0.12f;
+    side.worldFromMarker = glm::translate(glm::mat4(1.0f), glm::vec3(-0.3f, 0.3f, 0.1f)) *
+                           glm::rotate(glm::mat4(1.0f), glm::radians(40.0f), glm::vec3(0, 1, 0));
+    const Camera camera = markerCamera(320, 240, 40.0f, {0.02f, 0.42f, 1.3f}, {0.05f, 0.3f, 0.0f});
+    const std::vector<Marker> both = {wall, side}, alone = {wall};
+    MarkerTracker tracker(both, camera);
+    const TrackedFrame first = tracker.track(renderMarkerFrame(camera, alone, 1.5f, 1), 0.0);
+    EXPECT_EQ(first.state, TrackedFrame::State::Lost);
+    EXPECT_TRUE(first.uncertain);
+    EXPECT_EQ(first.markersSeen, 1);
+    const TrackedFrame second = tracker.track(renderMarkerFrame(camera, both, 1.5f, 2), 1.0 / 30.0);
+    EXPECT_EQ(second.markersSeen, 2);
+    ASSERT_EQ(second.state, TrackedFrame::State::Registered);
+    EXPECT_FALSE(second.uncertain);
+    EXPECT_LT(poseError(second.worldFromCamera, camera.worldFromCamera).position, 0.01f);
+    const TrackedFrame third = tracker.track(renderMarkerFrame(camera, alone, 1.5f, 3), 2.0 / 30.0);
+    EXPECT_EQ(third.state, TrackedFrame::State::Registered);
+    EXPECT_FALSE(third.uncertain);
+    EXPECT_LT(poseError(third.worldFromCamera, camera.worldFromCamera).position, 0.03f);
+    // A second later the camera may be anywhere within 2 m (TrackingOptions::maxSpeed): no pose again.
+    const TrackedFrame late = tracker.track(renderMarkerFrame(camera, alone, 1.5f, 4), 2.0 / 30.0 + 1.0);
+    EXPECT_EQ(late.state, TrackedFrame::State::Lost);
+    EXPECT_TRUE(late.uncertain);
 }
 
 // A 640x480 stream is searched at half resolution but for every eighth frame (its first among them): the

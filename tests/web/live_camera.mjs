@@ -204,11 +204,20 @@ try {
   }));
   check(pageCamera.hidden && pageCamera.status.includes('frame_####.png'),
     `the page shows the server's camera and offers none of its own: "${pageCamera.status}"`);
+  // The capture's camera sees both markers but in a few frames, in which it sees one alone: its pose is
+  // uncertain, and at 2 frames a second the camera could have gone far since the frame before, so those
+  // frames hold the last pose or show no pose (docs/live.md). A stream starts from a certain pose: on a slow
+  // machine the first frames the server gets to may be such frames.
+  const first = seen.findIndex((i) => i.registration === 'markers');
+  const unexplained = seen.filter((i) => i.registration === 'lost' && !i.uncertain);
   const servedRegistered = seen.filter((i) => i.registration === 'markers' && i.client === 0);
-  check(servedRegistered.length >= 0.75 * seen.length && seen.length >= 4,
-    `${servedRegistered.length} of ${seen.length} of the server camera's frames shown registered by markers`);
+  check(first >= 0 && seen.slice(0, first).every((i) => i.uncertain) && unexplained.length === 0 &&
+    servedRegistered.length >= 2,
+    `${servedRegistered.length} of the ${seen.length} server camera's frames shown registered by markers, ` +
+    `the others of one marker alone (${JSON.stringify(seen.map((i) => [i.number, i.markers_seen, i.registration]))})`);
   const servedOffsets = servedRegistered.map((i) => distanceToTruth(i.position));
-  check(median(servedOffsets) < 0.015, `their camera position median ${(100 * median(servedOffsets)).toFixed(2)} cm from the truth`);
+  check(median(servedOffsets) < 0.015 && Math.max(...servedOffsets) < 0.05, `their camera position median ${(100 * median(servedOffsets)).toFixed(2)} cm from the truth ` +
+    `(${JSON.stringify(servedRegistered.map((i) => [i.number, i.markers_seen, i.position]))})`);
   check(lit >= 1, `frames lit by the light camera's frames (up to frame ${lit})`);
 } catch (e) {
   failed = e;
