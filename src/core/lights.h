@@ -38,6 +38,17 @@ class SpotCone {
     }
     // The largest angle (radians) from the axis at which the falloff is not 0: pi for a light without one.
     float reach() const { return reach_; }
+    // False only where falloff(normalize(d)) is 0 for sure, d any direction from the light (not unit length):
+    // a test without square roots, a hair wider than the falloff's own.
+    bool mayReach(glm::vec3 d) const {
+        if (lambertian_) return glm::dot(d, direction_) > -1e-6f * glm::length(d);
+        if (!spot_) return true;
+        const float c = glm::dot(d, direction_);
+        if (cosOuter_ <= 0.0f) return true;  // a cone of 90 degrees or more: the exact test decides
+        constexpr float kMargin = 1e-4f;
+        const float cosWider = cosOuter_ * (1.0f - kMargin);
+        return c > 0.0f && c * c >= cosWider * cosWider * glm::dot(d, d);
+    }
 
   private:
     glm::vec3 direction_;

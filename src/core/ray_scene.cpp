@@ -337,4 +337,39 @@ bool RayScene::occludedTopLayer(glm::vec3 origin, glm::vec3 direction, float tMi
     return ray.tfar < 0.0f;  // Embree sets tfar to -inf when the ray is occluded
 }
 
+void RayScene::occludedCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
+                                std::span<const float> tMax, std::span<uint8_t> blocked) const {
+    if (meshes_.empty()) {
+        std::fill(blocked.begin(), blocked.end(), uint8_t{0});
+        return;
+    }
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    constexpr size_t kPacket = 8;
+    for (size_t first = 0; first < directions.size(); first += kPacket) {
+        alignas(32) RTCRay8 ray;
+        alignas(32) int valid[kPacket];
+        const size_t n = std::min(kPacket, directions.size() - first);
+        for (size_t k = 0; k < kPacket; ++k) {
+            const size_t i = first + std::min(k, n - 1);
+            valid[k] = k < n && tMax[i] > 0.0f ? -1 : 0;
+            ray.org_x[k] = origin.x;
+            ray.org_y[k] = origin.y;
+            ray.org_z[k] = origin.z;
+            ray.dir_x[k] = directions[i].x;
+            ray.dir_y[k] = directions[i].y;
+            ray.dir_z[k] = directions[i].z;
+            ray.tnear[k] = 0.0f;
+            ray.tfar[k] = tMax[i];
+            ray.time[k] = 0.0f;
+            ray.mask[k] = ~0u;
+            ray.id[k] = static_cast<unsigned>(k);
+            ray.flags[k] = 0;
+        }
+        rtcOccluded8(valid, impl_->scene, &context, &ray);
+        for (size_t k = 0; k < n; ++k) blocked[first + k] = valid[k] && ray.tfar[k] < 0.0f ? 1 : 0;
+    }
+}
+
 }  // namespace deltagi

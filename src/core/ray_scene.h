@@ -112,6 +112,10 @@ class RayScene {
                   float tMax = std::numeric_limits<float>::infinity()) const;
     bool occludedTopLayer(glm::vec3 origin, glm::vec3 direction, float tMin = 0.0f,
                           float tMax = std::numeric_limits<float>::infinity()) const;
+    // occludedTopLayer() for many rays from one origin (camera rays), t in (0, tMax[i]), traced in packets:
+    // blocked[i] for directions[i]; a ray with tMax[i] <= 0 is not traced (not blocked).
+    void occludedCoherent(glm::vec3 origin, std::span<const glm::vec3> directions,
+                          std::span<const float> tMax, std::span<uint8_t> blocked) const;
     const RayScene* base() const { return base_; }
     Bounds3f bounds() const { return bounds_; }  // of this layer and its base
     bool empty() const { return meshes_.empty() && (!base_ || base_->empty()); }

@@ -75,25 +75,27 @@ glm::vec3 tailScale(glm::dvec3 last, glm::dvec3 before) {
     return scale;
 }
 
-// The sum over the voxels of `geometry`'s bounds of their surface area times value(voxel index): the light
+// Calls body(row, i) for every surface voxel i of `geometry` (VoxelGeometry::surfaceVoxels) in index order
+// within each row of its bounds, rows in parallel (`row` their place in the bounds' rows).
+template <typename Body>
+void forEachSurfaceVoxel(const VoxelGeometry& geometry, Body&& body) {
+    const size_t rows = geometry.surfaceRowStart.empty() ? 0 : geometry.surfaceRowStart.size() - 1;
+    parallelFor(0, static_cast<int64_t>(rows), 64, [&](int64_t row) {
+        for (uint32_t k = geometry.surfaceRowStart[row]; k < geometry.surfaceRowStart[row + 1]; ++k)
+            body(static_cast<size_t>(row), static_cast<size_t>(geometry.surfaceVoxels[k]));
+    });
+}
+
+// The sum over the voxels of `geometry`'s surfaces of their surface area times value(voxel index): the light
 // of a bounce over the scene's surfaces, up to a constant. Rows are summed in parallel and added in order
 // (the same for any thread count).
 template <typename Value>
 glm::dvec3 areaWeightedSum(const VoxelGeometry& geometry, Value&& value) {
-    const VoxelBox& box = geometry.bounds;
-    if (box.empty()) return glm::dvec3(0.0);
-    const glm::ivec3 extent = box.hi - box.lo;
-    std::vector<glm::dvec3> rows(static_cast<size_t>(extent.y) * extent.z, glm::dvec3(0.0));
-    parallelFor(0, static_cast<int64_t>(rows.size()), 16, [&](int64_t row) {
-        const int z = box.lo.z + static_cast<int>(row / extent.y),
-                  y = box.lo.y + static_cast<int>(row % extent.y);
-        glm::dvec3 sum(0.0);
-        for (int x = box.lo.x; x < box.hi.x; ++x) {
-            const size_t i = geometry.visibility.index(x, y, z);
-            const float area = geometry.area[i];
-            if (area > 0.0f) sum += glm::dvec3(value(i)) * static_cast<double>(area);
-        }
-        rows[static_cast<size_t>(row)] = sum;
+    if (geometry.surfaceRowStart.empty()) return glm::dvec3(0.0);
+    std::vector<glm::dvec3> rows(geometry.surfaceRowStart.size() - 1, glm::dvec3(0.0));
+    forEachSurfaceVoxel(geometry, [&](size_t row, size_t i) {
+        const float area = geometry.area[i];
+        if (area > 0.0f) rows[row] += glm::dvec3(value(i)) * static_cast<double>(area);
     });
     glm::dvec3 total(0.0);
     for (const glm::dvec3& r : rows) total += r;
@@ -108,6 +110,9 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     Grid3 indirect(n);
     const int level = gatherLevel(visibility);
     if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= level) return indirect;
+    // Only the surface voxels (VoxelGeometry::surfaceVoxels) reflect light: the passes below visit them
+    // alone.
+    const int nn = n * n;
     const VolumeRegion& region = visibility.region();
     const PackedGrid3& coarse = visibility.level(level);
     const int m = coarse.resolution();
@@ -148,15 +153,12 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
             }
         });
         // Reflect it at every surface voxel of level 0 by the voxel's albedo.
-        parallelFor(0, static_cast<int64_t>(n) * n, 16, [&](int64_t row) {
-            const int z = static_cast<int>(row / n), y = static_cast<int>(row % n);
-            for (int x = 0; x < n; ++x) {
-                const size_t i = direct.index(x, y, z);
-                const float occupancy = geometry.visibility[i].x;
-                if (occupancy <= 0.0f) continue;
-                const glm::vec3 g = gathered[coarse.index(x / factor, y / factor, z / factor)];
-                indirect[i] = glm::vec4(geometry.albedo[i] * g * occupancy, 0.0f);
-            }
+        forEachSurfaceVoxel(geometry, [&](size_t, size_t i) {
+            const float occupancy = geometry.visibility[i].x;
+            const int z = static_cast<int>(i / nn), y = static_cast<int>(i % nn) / n,
+                      x = static_cast<int>(i % n);
+            const glm::vec3 g = gathered[coarse.index(x / factor, y / factor, z / factor)];
+            indirect[i] = glm::vec4(geometry.albedo[i] * g * occupancy, 0.0f);
         });
         if (!tail) continue;
         const glm::dvec3 sum = areaWeightedSum(geometry, [&](size_t i) { return glm::vec3(indirect[i]); });
@@ -168,13 +170,17 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
         }
         const glm::vec3 scale = tailScale(last, before);
         const bool lastOnly = previous.size() == indirect.size();
-        parallelFor(0, static_cast<int64_t>(indirect.size()), 1 << 14, [&](int64_t i) {
+        forEachSurfaceVoxel(geometry, [&](size_t, size_t i) {  // zero elsewhere
             glm::vec3 b(indirect[i]);
             if (lastOnly) b -= glm::vec3(previous[i]);
             indirect[i] += glm::vec4(b * scale, 0.0f);
         });
     }
     return indirect;
+}
+
+void addBounce(Grid3& light, const Grid3& bounced, const VoxelGeometry& geometry) {
+    forEachSurfaceVoxel(geometry, [&](size_t, size_t i) { light[i] += bounced[i]; });
 }
 
 std::vector<bool> bounceViewSides(const MipVolume& visibility, glm::vec3 viewpoint) {

@@ -33,6 +33,10 @@ namespace deltagi {
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
                   const Options& options, int bounces, glm::vec3 viewpoint);
 
+// light += bounced, where `bounced` is bounceLight's result over `geometry` (zero but at its surface voxels:
+// only those are added, in parallel).
+void addBounce(Grid3& light, const Grid3& bounced, const VoxelGeometry& geometry);
+
 // Which side of each gathering voxel faces `viewpoint` (per voxel of bounceLight's gathering level: true
 // where it is the side against the voxel's mean normal): bounceLight's result for two viewpoints is the same
 // where these are (FrameRenderer keeps it while the camera moves).

@@ -122,8 +122,15 @@ void visibleObjectHits(const RayScene& all, glm::vec3 eye, std::span<const glm::
         return;
     }
     all.intersectCoherent(eye, directions, hits, true, true);
+    // The real scene in front of the hits, in packets too (a ray that met no object is not traced).
+    thread_local std::vector<float> reach;
+    thread_local std::vector<uint8_t> blocked;
+    reach.resize(directions.size());
+    blocked.resize(directions.size());
+    for (size_t i = 0; i < directions.size(); ++i) reach[i] = hits[i].isVirtual ? hits[i].t : 0.0f;
+    all.base()->occludedCoherent(eye, directions, reach, blocked);
     for (size_t i = 0; i < directions.size(); ++i)
-        if (!hits[i].isVirtual || all.base()->occluded(eye, directions[i], 0.0f, hits[i].t)) hits[i] = {};
+        if (!hits[i].isVirtual || blocked[i]) hits[i] = {};
 }
 
 // The surfaces seen through an m x m grid of positions in pixel (x, y), into `out` (m * m; invalid where

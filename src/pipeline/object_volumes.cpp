@@ -1,8 +1,8 @@
 #include "pipeline/object_volumes.h"
 
-#include "pipeline/bounce_light.h"
-
 #include <algorithm>
+
+#include "pipeline/bounce_light.h"
 
 namespace deltagi {
 
@@ -73,8 +73,7 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
         for (size_t l = 0; l < updates.size(); ++l)
             withObjects.push_back(applyRsmUpdate(real.rsms[l], updates[l]));
         Grid3 full = injectLight(withObjects, region_, both);
-        if (real.bounce)
-            for (size_t i = 0; i < full.size(); ++i) full[i] += (*real.bounce)[i];
+        if (real.bounce) addBounce(full, *real.bounce, real.geometry);
         freshDelta_.emplace(deltaVolume(full, real.light));
         freshFull_.emplace(full);
         lightChanged_ = all;

@@ -83,6 +83,17 @@ class MapLayout {
     }
     float rayStart() const { return back_; }
 
+    // False only where ray(face, i, j) carries no light for sure (outside a spot's cone), found without
+    // working the ray out.
+    bool mayCarryLight(int face, int i, int j) const {
+        if (light_.type == Light::Type::Directional) return true;
+        const Face& f = faces_[face];
+        const float res = static_cast<float>(res_);
+        const float x = (2.0f * (i + 0.5f) / res - 1.0f) * f.halfTan;
+        const float y = (1.0f - 2.0f * (j + 0.5f) / res) * f.halfTan;
+        return cone_.mayReach(f.forward + x * f.right + y * f.up);
+    }
+
     TexelRay ray(int face, int i, int j) const {
         const Face& f = faces_[face];
         const float res = static_cast<float>(res_);
@@ -280,6 +291,7 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
         origins.clear();
         directions.clear();
         for (int i = 0; i < resolution; ++i) {
+            if (!layout.mayCarryLight(face, i, j)) continue;
             const TexelRay ray = layout.ray(face, i, j);
             if (!carriesLight(ray)) continue;
             rays.push_back(ray);

@@ -204,7 +204,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
             light.bounce =
                 bounceLight(*light.injected, *real.geometry, visibility(), scene.options, bounces, viewpoint);
             light.bounceSides = bounceViewSides(visibility(), viewpoint);
-            for (size_t i = 0; i < light.injected->size(); ++i) (*light.injected)[i] += (*light.bounce)[i];
+            addBounce(*light.injected, *light.bounce, *real.geometry);
             timer.lap("bounce");
         }
     }
@@ -248,7 +248,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     Grid3 direct = injectLight(rsms, region, geometries);
     if (bounces > 0) {
         const Grid3 bounced = bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene));
-        for (size_t i = 0; i < direct.size(); ++i) direct[i] += bounced[i];
+        addBounce(direct, bounced, geometry);
     }
     const MipVolume light = buildMipChain(region, std::move(direct));
     const ConeJob job{.points = points,

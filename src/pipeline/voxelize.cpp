@@ -276,12 +276,38 @@ VoxelTriangles toVoxelSpace(std::span<const TriangleMesh> meshes, const VolumeRe
     return result;
 }
 
+// VoxelGeometry::surfaceVoxels and surfaceRowStart of `out`: each row's count, in parallel, then their
+// places, and each row's voxels written there.
+void listSurfaceVoxels(VoxelGeometry& out) {
+    const VoxelBox& box = out.bounds;
+    out.surfaceVoxels.clear();
+    out.surfaceRowStart.clear();
+    if (box.empty()) return;
+    const glm::ivec3 extent = box.hi - box.lo;
+    auto rowOf = [&](int y, int z) { return static_cast<size_t>(z - box.lo.z) * extent.y + (y - box.lo.y); };
+    out.surfaceRowStart.assign(static_cast<size_t>(extent.y) * extent.z + 1, 0);
+    forEachRow(box, [&](int y, int z) {
+        uint32_t count = 0;
+        for (size_t i = out.visibility.index(box.lo.x, y, z), end = i + extent.x; i < end; ++i)
+            count += out.visibility[i].x > 0.0f;
+        out.surfaceRowStart[rowOf(y, z) + 1] = count;
+    });
+    for (size_t r = 1; r < out.surfaceRowStart.size(); ++r)
+        out.surfaceRowStart[r] += out.surfaceRowStart[r - 1];
+    out.surfaceVoxels.resize(out.surfaceRowStart.back());
+    forEachRow(box, [&](int y, int z) {
+        uint32_t* at = out.surfaceVoxels.data() + out.surfaceRowStart[rowOf(y, z)];
+        for (size_t i = out.visibility.index(box.lo.x, y, z), end = i + extent.x; i < end; ++i)
+            if (out.visibility[i].x > 0.0f) *at++ = static_cast<uint32_t>(i);
+    });
+}
+
 }  // namespace
 
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission,
                        bool withAlbedo) {
     const int n = region.resolution;
-    VoxelGeometry out{Grid3(n), {}, {}, {}, {}, {}};
+    VoxelGeometry out{Grid3(n), {}, {}, {}, {}, {}, {}, {}};
     out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
     if (withAlbedo) out.albedo.assign(out.area.size(), glm::vec3(0.0f));
     revoxelize(out, meshes, region, withEmission);
@@ -311,7 +337,10 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     const auto& tris = voxelTriangles.triangles;
     VoxelBox& box = out.bounds;
     box = voxelTriangles.bounds;
-    if (box.empty()) return old;
+    if (box.empty()) {
+        listSurfaceVoxels(out);  // none
+        return old;
+    }
     // Scatter in slabs of the box's layers.
     const int slabCount = (box.hi.z - box.lo.z + kSlabThickness - 1) / kSlabThickness;
     const SlabBins bins = binBySlab(tris.size(), slabCount, [&](size_t i) {
@@ -383,6 +412,7 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             if (emissive) out.emission[i] *= voxelArea;
         }
     });
+    if (withAlbedo) listSurfaceVoxels(out);
     return old;
 }
 

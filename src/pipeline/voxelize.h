@@ -31,6 +31,11 @@ struct VoxelGeometry {
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> albedo;
     // Every voxel outside it is zero in all three: the voxels that the triangles' bounding boxes touch.
     VoxelBox bounds;
+    // With albedo: the voxels any triangle touches (occupancy 1), by index, and where each row of `bounds`
+    // starts among them (row (y, z) at (z - lo.z) * extent.y + (y - lo.y); one entry more for the end), so
+    // that the passes over the surfaces alone (bounceLight) skip the empty grid.
+    std::vector<uint32_t> surfaceVoxels;
+    std::vector<uint32_t> surfaceRowStart;
     // Textured objects' triangles (meshes placed from an object-space mesh, TriangleMesh::objectSpace): each
     // triangle's voxel material, its emission and reflectance at its centre filtered over a voxel, used for
     // the triangles smaller than a voxel (most of a detailed mesh's), for each of their pieces. Kept from one

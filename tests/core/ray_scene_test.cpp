@@ -56,5 +56,33 @@ TEST(RayScene, RefitLayerAnswersAsAFreshBuild) {
     EXPECT_TRUE(objects.refit(s));
 }
 
+// Camera rays in packets ask the same as one at a time: blocked within their tMax; a ray with tMax <= 0 is
+// not traced. The sphere above the floor blocks some of the rays towards the floor, and rays stopped short
+// of it are not blocked.
+TEST(RayScene, OccludedCoherentAnswersAsOneRayAtATime) {
+    Scene s = test::floorScene();
+    s.real.push_back(test::placed(makeSphere(0.3f, 16), {0.0f, 0.5f, 0.0f}, test::diffuse(glm::vec3(0.5f))));
+    const RayScene rays(s, SceneContent::RealOnly);
+    const glm::vec3 eye(0.1f, 2.0f, 0.2f);
+    std::vector<glm::vec3> directions;
+    std::vector<float> tMax;
+    for (int i = -10; i <= 10; ++i)
+        for (int j = -10; j <= 10; ++j) {
+            directions.push_back(glm::normalize(glm::vec3(0.04f * i, -1.0f, 0.04f * j)));
+            const int kind = (i + j + 20) % 3;  // to the floor, short of the sphere's top, or not traced
+            tMax.push_back(kind == 0 ? 1.9f : kind == 1 ? 1.1f : 0.0f);
+        }
+    std::vector<uint8_t> blocked(directions.size(), 7);
+    rays.occludedCoherent(eye, directions, tMax, blocked);
+    size_t count = 0;
+    for (size_t i = 0; i < directions.size(); ++i) {
+        const bool expected = tMax[i] > 0.0f && rays.occludedTopLayer(eye, directions[i], 0.0f, tMax[i]);
+        ASSERT_EQ(blocked[i], expected ? 1 : 0) << i;
+        count += expected;
+    }
+    EXPECT_GT(count, 20u);
+    EXPECT_LT(count, directions.size() / 3);
+}
+
 }  // namespace
 }  // namespace deltagi

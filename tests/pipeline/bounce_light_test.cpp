@@ -89,6 +89,21 @@ TEST(BounceLight, AFurnaceWithTheTailGainsTheWholeSeries) {
     }
 }
 
+// The bounced light lies on the surface voxels alone, so addBounce, which adds those, adds all of it.
+TEST(BounceLight, AddsOnlyAtTheSurfaceVoxelsWhereAllTheBounceIs) {
+    const Furnace f = furnace(0.5f, true);
+    const Grid3 bounced = bounceLight(f.direct, f.geometry, f.visibility, Options{}, 2, kCentre);
+    Grid3 light = f.direct.clone();
+    addBounce(light, bounced, f.geometry);
+    size_t nonZero = 0;
+    for (size_t i = 0; i < light.size(); ++i) {
+        ASSERT_EQ(light[i], f.direct[i] + bounced[i]) << i;
+        if (f.geometry.visibility[i].x <= 0.0f) ASSERT_EQ(bounced[i], glm::vec4(0.0f)) << i;
+        nonZero += bounced[i] != glm::vec4(0.0f);
+    }
+    EXPECT_GT(nonZero, 1000u);
+}
+
 TEST(BounceLight, BlackWallsReflectNothing) {
     const Furnace f = furnace(0.0f);
     Options options;

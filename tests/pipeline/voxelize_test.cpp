@@ -222,20 +222,50 @@ TEST(Voxelize, PiecesAreTheTrianglesClippedToEachVoxel) {
 
 // Voxelizing again in place (as frames do) gives voxelize()'s bits, whatever the meshes did: moved, partly
 // and wholly out of the region, emissive and not, more and fewer.
+// With albedo, the voxels that any triangle touches are listed by row of the bounds, in index order: every
+// occupied voxel, nothing else.
+TEST(Voxelize, ListsTheSurfaceVoxelsRowByRow) {
+    const VolumeRegion region = unitRegion(32);
+    const std::vector<TriangleMesh> meshes = {
+        test::placed(makeSphere(0.3f, 24), {0.1f, 0.0f, -0.2f}, test::diffuse(glm::vec3(0.5f))),
+        test::placed(makeBox(glm::vec3(0.2f)), {-0.5f, 0.5f, 0.5f}, test::diffuse(glm::vec3(1)))};
+    EXPECT_TRUE(voxelize(meshes, region).surfaceVoxels.empty());  // without albedo: not asked for
+    const VoxelGeometry g = voxelize(meshes, region, true, true);
+    const VoxelBox& b = g.bounds;
+    const glm::ivec3 extent = b.hi - b.lo;
+    ASSERT_EQ(g.surfaceRowStart.size(), static_cast<size_t>(extent.y) * extent.z + 1);
+    std::vector<uint32_t> occupied;
+    for (size_t i = 0; i < g.area.size(); ++i)
+        if (g.visibility[i].x > 0.0f) occupied.push_back(static_cast<uint32_t>(i));
+    EXPECT_GT(occupied.size(), 300u);
+    EXPECT_EQ(g.surfaceVoxels, occupied);
+    for (int z = b.lo.z; z < b.hi.z; ++z)
+        for (int y = b.lo.y; y < b.hi.y; ++y) {
+            const size_t row = static_cast<size_t>(z - b.lo.z) * extent.y + (y - b.lo.y);
+            for (uint32_t k = g.surfaceRowStart[row]; k < g.surfaceRowStart[row + 1]; ++k) {
+                const uint32_t i = g.surfaceVoxels[k];
+                ASSERT_EQ(i / (32 * 32), static_cast<uint32_t>(z));
+                ASSERT_EQ(i / 32 % 32, static_cast<uint32_t>(y));
+            }
+        }
+}
+
 TEST(Voxelize, RevoxelizingChangedMeshesEqualsVoxelizingThemAfresh) {
     const VolumeRegion region = unitRegion(32);
     std::vector<TriangleMesh> meshes = {
         test::placed(makeSphere(0.3f, 24), {0.1f, 0.0f, -0.2f}, test::diffuse(glm::vec3(0.5f)))};
-    VoxelGeometry kept = voxelize(meshes, region);
+    VoxelGeometry kept = voxelize(meshes, region, true, true);
     auto expectSame = [&](const char* step) {
         const VoxelBox old = kept.bounds;
         const VoxelBox returned = revoxelize(kept, meshes, region);
         EXPECT_EQ(returned.lo, old.lo) << step;
         EXPECT_EQ(returned.hi, old.hi) << step;
-        const VoxelGeometry fresh = voxelize(meshes, region);
+        const VoxelGeometry fresh = voxelize(meshes, region, true, true);
         EXPECT_EQ(kept.bounds.lo, fresh.bounds.lo) << step;
         EXPECT_EQ(kept.bounds.hi, fresh.bounds.hi) << step;
         ASSERT_EQ(kept.emission.size(), fresh.emission.size()) << step;
+        EXPECT_EQ(kept.surfaceVoxels, fresh.surfaceVoxels) << step;
+        EXPECT_EQ(kept.surfaceRowStart, fresh.surfaceRowStart) << step;
         for (size_t i = 0; i < fresh.area.size(); ++i) {
             ASSERT_EQ(std::memcmp(&kept.visibility[i], &fresh.visibility[i], sizeof(glm::vec4)), 0) << step;
             ASSERT_EQ(kept.area[i], fresh.area[i]) << step;
