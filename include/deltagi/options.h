@@ -104,6 +104,7 @@ struct RenderOptions {
     int lightBounces = 2;    // bounce_light.h
     bool bounceTail = true;  // the bounces beyond lightBounces, estimated (bounce_light.h)
     int denoiseRadius = 2;
+    int relightDenoiseRadius = 1;  // the same for the real surfaces' change (the relit passes)
 
     bool operator==(const RenderOptions&) const = default;
 };

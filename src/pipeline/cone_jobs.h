@@ -67,7 +67,7 @@ struct ConeJob {
     // The passes of one stride share their plan: their weights are the same.
     DenoiseSettings filter(const Options& o, int stride) const {
         DenoiseSettings s;
-        s.radius = o.render.denoiseRadius;
+        s.radius = relit() ? o.render.relightDenoiseRadius : o.render.denoiseRadius;
         s.interpolate = relit();
         if (plans) {
             auto plan = std::find_if(plans->begin(), plans->end(),
