@@ -473,7 +473,9 @@ OptionGroup renderGroup() {
                    "where the stride is over 1: the pixels between samples are interpolated). 1, the "
                    "3×3 samples around each, keeps a contact shadow's core and the objects' light next to "
                    "them: 2 spread them over 5×5 samples, 40 pixels at the objects' light's stride of 8 "
-                   "(quality suite: every delta_rel_error lower with 1, [quality-notes.md](quality-notes.md))"),
+                   "(quality suite: every delta_rel_error lower with 1). 2 gives steadier frames: the noise "
+                   "of the objects' light by rays, averaged over fewer samples, flickers about a quarter more "
+                   "with 1 ([quality-notes.md](quality-notes.md#stable-frames))"),
             option(
                 "temporal_frames", &R::temporalFrames, integers(1, 8), "frames",
                 "frames of a sequence (`deltagi render` over a `\"sequence\"`, `stability`, `bench`, "
