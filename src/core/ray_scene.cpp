@@ -37,6 +37,30 @@ void initRay(RTCRay& ray, glm::vec3 origin, glm::vec3 direction, float tMin, flo
     ray.flags = 0;
 }
 
+// Lane k of a packet of 8 rays, as initRay for one.
+void initPacketRay(RTCRay8& ray, size_t k, glm::vec3 origin, glm::vec3 direction, float tMax) {
+    ray.org_x[k] = origin.x;
+    ray.org_y[k] = origin.y;
+    ray.org_z[k] = origin.z;
+    ray.dir_x[k] = direction.x;
+    ray.dir_y[k] = direction.y;
+    ray.dir_z[k] = direction.z;
+    ray.tnear[k] = 0.0f;
+    ray.tfar[k] = tMax;
+    ray.time[k] = 0.0f;
+    ray.mask[k] = ~0u;
+    ray.id[k] = static_cast<unsigned>(k);
+    ray.flags[k] = 0;
+}
+
+// The context of a packet of rays from one point (or parallel), which Embree traces as coherent.
+RTCIntersectContext coherentContext() {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    return context;
+}
+
 // The closest hit of one ray in `scene` into `rh`; false when it meets nothing.
 bool closestHit(RTCScene scene, glm::vec3 origin, glm::vec3 direction, float tMin, float tMax,
                 RTCRayHit& rh) {
@@ -238,9 +262,7 @@ void RayScene::intersectCoherent(std::span<const glm::vec3> origins, std::span<c
                                                std::numeric_limits<float>::infinity(), texturesLater);
         return;
     }
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCIntersectContext context = coherentContext();
     constexpr size_t kPacket = 8;
     for (size_t first = 0; first < directions.size(); first += kPacket) {
         alignas(32) RTCRayHit8 rh;
@@ -248,20 +270,8 @@ void RayScene::intersectCoherent(std::span<const glm::vec3> origins, std::span<c
         const size_t n = std::min(kPacket, directions.size() - first);
         for (size_t k = 0; k < kPacket; ++k) {
             const size_t i = first + std::min(k, n - 1);
-            const glm::vec3 o = originOf(i), d = directions[i];
             valid[k] = k < n ? -1 : 0;
-            rh.ray.org_x[k] = o.x;
-            rh.ray.org_y[k] = o.y;
-            rh.ray.org_z[k] = o.z;
-            rh.ray.dir_x[k] = d.x;
-            rh.ray.dir_y[k] = d.y;
-            rh.ray.dir_z[k] = d.z;
-            rh.ray.tnear[k] = 0.0f;
-            rh.ray.tfar[k] = std::numeric_limits<float>::infinity();
-            rh.ray.time[k] = 0.0f;
-            rh.ray.mask[k] = ~0u;
-            rh.ray.id[k] = static_cast<unsigned>(k);
-            rh.ray.flags[k] = 0;
+            initPacketRay(rh.ray, k, originOf(i), directions[i], std::numeric_limits<float>::infinity());
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
             rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
         }
@@ -343,9 +353,7 @@ void RayScene::occludedCoherent(glm::vec3 origin, std::span<const glm::vec3> dir
         std::fill(blocked.begin(), blocked.end(), uint8_t{0});
         return;
     }
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    RTCIntersectContext context = coherentContext();
     constexpr size_t kPacket = 8;
     for (size_t first = 0; first < directions.size(); first += kPacket) {
         alignas(32) RTCRay8 ray;
@@ -354,18 +362,7 @@ void RayScene::occludedCoherent(glm::vec3 origin, std::span<const glm::vec3> dir
         for (size_t k = 0; k < kPacket; ++k) {
             const size_t i = first + std::min(k, n - 1);
             valid[k] = k < n && tMax[i] > 0.0f ? -1 : 0;
-            ray.org_x[k] = origin.x;
-            ray.org_y[k] = origin.y;
-            ray.org_z[k] = origin.z;
-            ray.dir_x[k] = directions[i].x;
-            ray.dir_y[k] = directions[i].y;
-            ray.dir_z[k] = directions[i].z;
-            ray.tnear[k] = 0.0f;
-            ray.tfar[k] = tMax[i];
-            ray.time[k] = 0.0f;
-            ray.mask[k] = ~0u;
-            ray.id[k] = static_cast<unsigned>(k);
-            ray.flags[k] = 0;
+            initPacketRay(ray, k, origin, directions[i], tMax[i]);
         }
         rtcOccluded8(valid, impl_->scene, &context, &ray);
         for (size_t k = 0; k < n; ++k) blocked[first + k] = valid[k] && ray.tfar[k] < 0.0f ? 1 : 0;
