@@ -53,6 +53,22 @@ void initPacketRay(RTCRay8& ray, size_t k, glm::vec3 origin, glm::vec3 direction
     ray.flags[k] = 0;
 }
 
+// Packets of 8 of `count` rays: lane(packet, k, i) sets lane k to ray i and says whether it is traced (the
+// lanes past the last ray repeat it, not traced), then trace(packet, valid, first, n) for rays [first, first
+// + n).
+constexpr size_t kPacket = 8;
+template <typename Packet, typename Lane, typename Trace>
+void forEachPacket(size_t count, Lane&& lane, Trace&& trace) {
+    for (size_t first = 0; first < count; first += kPacket) {
+        alignas(32) Packet packet;
+        alignas(32) int valid[kPacket];
+        const size_t n = std::min(kPacket, count - first);
+        for (size_t k = 0; k < kPacket; ++k)
+            valid[k] = lane(packet, k, first + std::min(k, n - 1)) && k < n ? -1 : 0;
+        trace(packet, valid, first, n);
+    }
+}
+
 // The context of a packet of rays from one point (or parallel), which Embree traces as coherent.
 RTCIntersectContext coherentContext() {
     RTCIntersectContext context;
@@ -263,29 +279,26 @@ void RayScene::intersectCoherent(std::span<const glm::vec3> origins, std::span<c
         return;
     }
     RTCIntersectContext context = coherentContext();
-    constexpr size_t kPacket = 8;
-    for (size_t first = 0; first < directions.size(); first += kPacket) {
-        alignas(32) RTCRayHit8 rh;
-        alignas(32) int valid[kPacket];
-        const size_t n = std::min(kPacket, directions.size() - first);
-        for (size_t k = 0; k < kPacket; ++k) {
-            const size_t i = first + std::min(k, n - 1);
-            valid[k] = k < n ? -1 : 0;
+    forEachPacket<RTCRayHit8>(
+        directions.size(),
+        [&](RTCRayHit8& rh, size_t k, size_t i) {
             initPacketRay(rh.ray, k, originOf(i), directions[i], std::numeric_limits<float>::infinity());
             rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
             rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect8(valid, impl_->scene, &context, &rh);
-        for (size_t k = 0; k < n; ++k) {
-            if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
-                hits[first + k] = RayHit{};
-                continue;
+            return true;
+        },
+        [&](RTCRayHit8& rh, const int* valid, size_t first, size_t n) {
+            rtcIntersect8(valid, impl_->scene, &context, &rh);
+            for (size_t k = 0; k < n; ++k) {
+                if (rh.hit.geomID[k] == RTC_INVALID_GEOMETRY_ID) {
+                    hits[first + k] = RayHit{};
+                    continue;
+                }
+                hitOn(rh.hit.geomID[k], rh.hit.primID[k], {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
+                      {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, originOf(first + k),
+                      directions[first + k], !texturesLater, hits[first + k]);
             }
-            hitOn(rh.hit.geomID[k], rh.hit.primID[k], {rh.hit.u[k], rh.hit.v[k], rh.ray.tfar[k]},
-                  {rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]}, originOf(first + k),
-                  directions[first + k], !texturesLater, hits[first + k]);
-        }
-    }
+        });
 }
 
 void RayScene::hitOn(unsigned geomID, unsigned primID, glm::vec3 uvt, glm::vec3 ng, glm::vec3 origin,
@@ -354,19 +367,16 @@ void RayScene::occludedCoherent(glm::vec3 origin, std::span<const glm::vec3> dir
         return;
     }
     RTCIntersectContext context = coherentContext();
-    constexpr size_t kPacket = 8;
-    for (size_t first = 0; first < directions.size(); first += kPacket) {
-        alignas(32) RTCRay8 ray;
-        alignas(32) int valid[kPacket];
-        const size_t n = std::min(kPacket, directions.size() - first);
-        for (size_t k = 0; k < kPacket; ++k) {
-            const size_t i = first + std::min(k, n - 1);
-            valid[k] = k < n && tMax[i] > 0.0f ? -1 : 0;
+    forEachPacket<RTCRay8>(
+        directions.size(),
+        [&](RTCRay8& ray, size_t k, size_t i) {
             initPacketRay(ray, k, origin, directions[i], tMax[i]);
-        }
-        rtcOccluded8(valid, impl_->scene, &context, &ray);
-        for (size_t k = 0; k < n; ++k) blocked[first + k] = valid[k] && ray.tfar[k] < 0.0f ? 1 : 0;
-    }
+            return tMax[i] > 0.0f;
+        },
+        [&](RTCRay8& ray, const int* valid, size_t first, size_t n) {
+            rtcOccluded8(valid, impl_->scene, &context, &ray);
+            for (size_t k = 0; k < n; ++k) blocked[first + k] = valid[k] && ray.tfar[k] < 0.0f ? 1 : 0;
+        });
 }
 
 }  // namespace deltagi
