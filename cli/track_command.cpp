@@ -71,7 +71,9 @@ void addMaxSpeedOption(CLI::App& command, TrackingOptions& tracking) {
             "--max-speed", tracking.maxSpeed,
             "Within the hold time, a pose from no more markers than the last frame's that moves the "
             "camera faster than this (world units per second; default 2) is not trusted: the last pose "
-            "stands in (0: every pose is taken)")
+            "stands in. This speed times the time since the last pose also bounds how far a pose is "
+            "let move from it (a prior on the camera's position; docs/live.md, Registration) (0: every "
+            "pose is taken, no prior)")
         ->check(finiteRange(0.0, 1e6));
 }
 
