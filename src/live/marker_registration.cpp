@@ -398,7 +398,6 @@ std::array<std::array<double, 6>, 3> cameraPositionJacobian(const RigidPose& pos
 // corners fix by a small part of the way.
 struct PositionPrior {
     glm::dvec3 position{0.0};
-    double sigma = 0.0;
     double weight = 0.0;  // (noise / sigma)^2, noise in normalized units: 0 is no prior
 };
 
@@ -585,7 +584,7 @@ std::optional<MarkerPose> solveCameraPose(std::span<const MarkerSighting> sighti
     }
     if (previous && previousSigma > 0.0) {
         const double noiseNormalized = kCornerNoisePx * pixel;
-        const PositionPrior prior{glm::dvec3((*previous)[3]), previousSigma,
+        const PositionPrior prior{glm::dvec3((*previous)[3]),
                                   (noiseNormalized / previousSigma) * (noiseNormalized / previousSigma)};
         RigidPose held = pose;
         if (std::isfinite(refinePose(held, world, normalized, prior))) pose = held;

@@ -88,17 +88,14 @@ class MapLayout {
     bool mayCarryLight(int face, int i, int j) const {
         if (light_.type == Light::Type::Directional) return true;
         const Face& f = faces_[face];
-        const float res = static_cast<float>(res_);
-        const float x = (2.0f * (i + 0.5f) / res - 1.0f) * f.halfTan;
-        const float y = (1.0f - 2.0f * (j + 0.5f) / res) * f.halfTan;
-        return cone_.mayReach(f.forward + x * f.right + y * f.up);
+        const glm::vec2 p = texelCentre(face, i, j);
+        return cone_.mayReach(f.forward + p.x * f.right + p.y * f.up);
     }
 
     TexelRay ray(int face, int i, int j) const {
         const Face& f = faces_[face];
         const float res = static_cast<float>(res_);
-        const float x = (2.0f * (i + 0.5f) / res - 1.0f) * f.halfTan;
-        const float y = (1.0f - 2.0f * (j + 0.5f) / res) * f.halfTan;
+        const auto [x, y] = texelCentre(face, i, j);
         const float texelSide = 2.0f * f.halfTan / res;
         if (light_.type == Light::Type::Directional) {
             const glm::vec3 origin = center_ + x * f.right + y * f.up - back_ * f.forward;
@@ -170,6 +167,13 @@ class MapLayout {
     }
 
   private:
+    // Texel (i, j)'s centre on `face`'s plane at distance 1 (orthographic: its offset from the centre), along
+    // the face's right and up.
+    glm::vec2 texelCentre(int face, int i, int j) const {
+        const float halfTan = faces_[face].halfTan, res = static_cast<float>(res_);
+        return {(2.0f * (i + 0.5f) / res - 1.0f) * halfTan, (1.0f - 2.0f * (j + 0.5f) / res) * halfTan};
+    }
+
     const Light& light_;
     SpotCone cone_;
     int res_;

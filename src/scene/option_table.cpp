@@ -396,12 +396,14 @@ OptionGroup shadowGroup() {
                 "environment map, sampled with more rays of more noise, take a stride of their own unless "
                 "given")
                 .withDefaultNote(autoStrideNote(kAutoShadowStride, kAutoAreaLightStride)),
-            option("relight_pixel_stride", &S::relightPixelStride, integers(kStrides), "pixels",
-                   fmt::format(
-                       "the same for the shadows the objects cast on real surfaces: the filter spreads "
-                       "{0}×{0} samples `relight_pixel_stride` apart (`options.render.relight_denoise_radius`), "
-                       "and a contact shadow is sharper than that ([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))",
-                       relitFilterSide))
+            option(
+                "relight_pixel_stride", &S::relightPixelStride, integers(kStrides), "pixels",
+                fmt::format(
+                    "the same for the shadows the objects cast on real surfaces: the filter spreads "
+                    "{0}×{0} samples `relight_pixel_stride` apart (`options.render.relight_denoise_radius`), "
+                    "and a contact shadow is sharper than that "
+                    "([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))",
+                    relitFilterSide))
                 .withDefaultNote(autoStrideNote(kAutoRelightShadowStride, kAutoRelightAreaLightStride)),
         });
 }
@@ -467,15 +469,16 @@ OptionGroup renderGroup() {
                 "pixels of the edge-aware filter over the shadow and diffuse cone results (it averages the "
                 "noise of the jittered cone starts, `options.trace.jitter`) on the rendered surfaces (the "
                 "virtual objects; the real scene when there is no photo); 0 disables it"),
-            option("relight_denoise_radius", &R::relightDenoiseRadius, integers(0, 8), "samples",
-                   "the same filter over the real surfaces' change (the relit shadow, diffuse, objects' light "
-                   "and specular passes), in samples of each pass's stride (at least 1 "
-                   "where the stride is over 1: the pixels between samples are interpolated). 1, the "
-                   "3×3 samples around each, keeps a contact shadow's core and the objects' light next to "
-                   "them: 2 spread them over 5×5 samples, 40 pixels at the objects' light's stride of 8 "
-                   "(quality suite: every delta_rel_error lower with 1). 2 gives steadier frames: the noise "
-                   "of the objects' light by rays, averaged over fewer samples, flickers about a quarter more "
-                   "with 1 ([quality-notes.md](quality-notes.md#stable-frames))"),
+            option(
+                "relight_denoise_radius", &R::relightDenoiseRadius, integers(0, 8), "samples",
+                "the same filter over the real surfaces' change (the relit shadow, diffuse, objects' light "
+                "and specular passes), in samples of each pass's stride (at least 1 "
+                "where the stride is over 1: the pixels between samples are interpolated). 1, the "
+                "3×3 samples around each, keeps a contact shadow's core and the objects' light next to "
+                "them: 2 spread them over 5×5 samples, 40 pixels at the objects' light's stride of 8 "
+                "(quality suite: every delta_rel_error lower with 1). 2 gives steadier frames: the noise "
+                "of the objects' light by rays, averaged over fewer samples, flickers about a quarter more "
+                "with 1 ([quality-notes.md](quality-notes.md#stable-frames))"),
             option(
                 "temporal_frames", &R::temporalFrames, integers(1, 8), "frames",
                 "frames of a sequence (`deltagi render` over a `\"sequence\"`, `stability`, `bench`, "
