@@ -472,19 +472,43 @@ void forEachRow(const VoxelBox& box, RowBody&& rowBody) {
     });
 }
 
+// Whether voxel (x, y, z) of a grid is zero (all four channels == 0), read without unpacking it: a
+// bfloat16 is +-0 exactly where its bits but the sign are.
+inline bool zeroVoxel(const Grid3& grid, int x, int y, int z) {
+    return grid.at(x, y, z) == glm::vec4(0.0f);
+}
+inline bool zeroVoxel(const PackedGrid3& grid, int x, int y, int z) {
+    constexpr PackedVoxel kAllButSigns = 0x7FFF7FFF7FFF7FFFull;
+    return !grid.window().contains(x, y, z) || (grid.packed(grid.index(x, y, z)) & kAllButSigns) == 0;
+}
+
 template <typename Grid>
 VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within) {
-    glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
-    for (int z = within.lo.z; z < within.hi.z; ++z)
+    if (within.empty()) return {};
+    // Slices of z in parallel, each its own box; joined in order (min and max: the same for any thread
+    // count).
+    const int slices = within.hi.z - within.lo.z;
+    std::vector<VoxelBox> sliceBounds(static_cast<size_t>(slices));
+    parallelFor(0, slices, 1, [&](int64_t s) {
+        const int z = within.lo.z + static_cast<int>(s);
+        glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
         for (int y = within.lo.y; y < within.hi.y; ++y) {
             // The first and the last non-zero voxel of the row.
             int first = within.lo.x;
-            while (first < within.hi.x && grid.at(first, y, z) == glm::vec4(0.0f)) ++first;
+            while (first < within.hi.x && zeroVoxel(grid, first, y, z)) ++first;
             if (first == within.hi.x) continue;
             int last = within.hi.x - 1;
-            while (grid.at(last, y, z) == glm::vec4(0.0f)) --last;
+            while (zeroVoxel(grid, last, y, z)) --last;
             lo = glm::min(lo, glm::ivec3(first, y, z));
             hi = glm::max(hi, glm::ivec3(last + 1, y + 1, z + 1));
+        }
+        if (lo.x <= hi.x) sliceBounds[static_cast<size_t>(s)] = VoxelBox{lo, hi};
+    });
+    glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
+    for (const VoxelBox& b : sliceBounds)
+        if (!b.empty()) {
+            lo = glm::min(lo, b.lo);
+            hi = glm::max(hi, b.hi);
         }
     return lo.x <= hi.x ? VoxelBox{lo, hi} : VoxelBox{};
 }

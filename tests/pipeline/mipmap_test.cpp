@@ -231,5 +231,23 @@ TEST(MipVolume, OccupiedBoundsAreTheBoxOfTheNonZeroVoxels) {
     EXPECT_TRUE(v.mayReadNonZero({3.0f, 2.0f, 5.0f}, 0));
 }
 
+// A packed grid's non-zero bounds read its bits: -0 counts as zero, the smallest value that survives the
+// rounding does not; voxels outside its window are zero.
+TEST(MipVolume, PackedNonZeroBoundsReadTheBits) {
+    PackedGrid3 g(16, {{2, 2, 2}, {14, 12, 10}});
+    g.set(3, 3, 3, glm::vec4(-0.0f, 0.0f, -0.0f, 0.0f));
+    g.set(4, 5, 6, glm::vec4(0.0f, 0.0f, 1e-38f, 0.0f));
+    g.set(12, 4, 8, glm::vec4(-2.0f, 0.0f, 0.0f, 0.0f));
+    ASSERT_NE(g.at(4, 5, 6), glm::vec4(0.0f));
+    const VoxelBox all = nonZeroBounds(g, VoxelBox::all(16));
+    EXPECT_EQ(all.lo, glm::ivec3(4, 4, 6));
+    EXPECT_EQ(all.hi, glm::ivec3(13, 6, 9));
+    const VoxelBox part = nonZeroBounds(g, {{0, 0, 7}, {16, 16, 16}});
+    EXPECT_EQ(part.lo, glm::ivec3(12, 4, 8));
+    EXPECT_EQ(part.hi, glm::ivec3(13, 5, 9));
+    EXPECT_TRUE(nonZeroBounds(g, {{0, 0, 0}, {4, 16, 16}}).empty());
+    EXPECT_TRUE(nonZeroBounds(g, {{5, 5, 5}, {5, 9, 9}}).empty());
+}
+
 }  // namespace
 }  // namespace deltagi
