@@ -102,9 +102,10 @@ void ViewWork::forget() {
         plan.stride = 0;
         plan.weights.clear();
     }
-    gbuffer.object.clear();  // renderObjectSurfaces starts afresh
-    gbuffer.coverage.clear();
-    relitSurfaces.clear();
+    // The objects' G-buffer stays: renderObjectSurfaces clears the last frame's pixels of it, wherever the
+    // camera was (an image of another size starts afresh). The relit surfaces keep their memory too; they
+    // are made again from the real ones (hideCoveredSurfaces, renderRelitSurfaces) before they are read.
+    relitSurfacesMade = false;
     hidden.clear();
 }
 

@@ -78,11 +78,13 @@ struct ViewWork {
     bool realSurfacesMade = false;
     std::array<InterpolationPlan, 5> relitPlans;  // the relit passes' filter weights over realSurfaces
     GBuffer gbuffer;                              // the objects' half, redone where they were and are
-    // realSurfaces without the pixels the objects cover (the last frame's `hidden`).
+    // realSurfaces without the pixels the objects cover (the last frame's `hidden`), when relitSurfacesMade.
     std::vector<SurfacePoint> relitSurfaces;
+    bool relitSurfacesMade = false;
     std::vector<uint32_t> hidden;
-    // Empties it for another camera. The large buffers keep their memory (14 MiB each at 640 x 480: allocated
-    // afresh, their pages would be faulted in every frame).
+    // Empties it for another camera. The large buffers keep their memory and their size (29 MiB each at 640 x
+    // 480: allocated afresh, their pages would be faulted in every frame; resized from empty, each element
+    // would be set twice, the first time on one thread).
     void forget();
 };
 

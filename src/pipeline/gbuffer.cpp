@@ -187,7 +187,7 @@ std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScen
 }
 
 void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vector<SurfacePoint>& real) {
-    real.resize(static_cast<size_t>(camera.width) * camera.height);
+    real.resize(static_cast<size_t>(camera.width) * camera.height);  // each point written in full below
     const glm::vec3 eye = camera.position();
     parallelFor(0, camera.height, 2, [&](int64_t y) {
         // A row's rays in packets, kRun at a time: their hits stay in the first-level cache until they are

@@ -131,8 +131,9 @@ void hideCovered(const GBuffer& gbuffer, std::vector<SurfacePoint>& points, std:
 const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePoint>& real,
                                                      const GBuffer& gbuffer, ViewWork& kept) {
     std::vector<SurfacePoint>& points = kept.relitSurfaces;
-    if (points.size() != real.size()) {  // a new camera: 14 MiB at 640 x 480, copied in parallel
+    if (!kept.relitSurfacesMade || points.size() != real.size()) {  // a new camera: copied in parallel
         points.resize(real.size());
+        kept.relitSurfacesMade = true;
         constexpr int64_t kChunk = 1 << 14;
         parallelFor(0, (static_cast<int64_t>(real.size()) + kChunk - 1) / kChunk, 1, [&](int64_t c) {
             const size_t begin = static_cast<size_t>(c * kChunk);
@@ -154,6 +155,7 @@ const std::vector<SurfacePoint>& renderRelitSurfaces(const Camera& camera, const
                                                      const GBuffer& gbuffer, ViewWork& kept) {
     std::vector<SurfacePoint>& points = kept.relitSurfaces;
     renderRealSurfaces(camera, realOnly, points);
+    kept.relitSurfacesMade = true;
     kept.hidden.clear();
     hideCovered(gbuffer, points, kept.hidden);
     return points;
