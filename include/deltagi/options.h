@@ -103,6 +103,7 @@ struct RenderOptions {
     bool layers = false;     // RenderOutput's compositing layers
     int lightBounces = 2;    // bounce_light.h
     bool bounceTail = true;  // the bounces beyond lightBounces, estimated (bounce_light.h)
+    int bounceCones = 5;     // the diffuse cones of each further bounce's gather (bounce_light.h)
     int denoiseRadius = 2;
     int relightDenoiseRadius = 1;  // the same for the real surfaces' change (the relit passes)
 

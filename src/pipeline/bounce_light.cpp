@@ -57,6 +57,11 @@ glm::vec3 gatherAtVoxel(glm::vec3 centre, glm::vec3 normal, float size, size_t i
     return sum;
 }
 
+// The cones of a further bounce's gathers (options.render.bounce_cones, with the diffuse cones' aperture).
+DiffuseConeSet bounceConeSet(const Options& options) {
+    return makeDiffuseCones(options.render.bounceCones, options.diffuse.apertureDeg);
+}
+
 // The bounces beyond the last one gathered (options.render.bounce_tail). Each bounce passes on about the same
 // share of the light before it (the surfaces' albedo times how much of the scene they see), so the bounces
 // after the last form a geometric series of it: last x (r + r^2 + ...) = last x r / (1 - r), where r is the
@@ -119,7 +124,7 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     const int factor = n / m;  // level-0 voxels per coarse voxel along each axis
     const float coarseSize = region.voxelSize() * static_cast<float>(factor);
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
-    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const DiffuseConeSet cones = bounceConeSet(options);
     const VisibilityVolumes occluders{&visibility, nullptr, VisibilityVolumes::Self::Scene};
     std::vector<glm::vec3> gathered(coarse.size());
     const bool tail = options.render.bounceTail;
@@ -267,7 +272,7 @@ std::vector<glm::vec3> gatherObjectBounce(const MipVolume& light, const VoxelGeo
                                           const MipVolume& objectVisibility, const MipVolume& sceneVisibility,
                                           const Options& options, const VoxelBox& box, int level) {
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
-    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const DiffuseConeSet cones = bounceConeSet(options);
     const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
     return gatherAtObjectVoxels(objects, objectVisibility, box, level,
                                 [&](size_t index, glm::vec3 centre, glm::vec3 normal, float size) {
@@ -281,7 +286,7 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
                                                 const MipVolume& sceneVisibility, const RayScene& scene,
                                                 const Options& options, const VoxelBox& box, int level) {
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
-    const DiffuseConeSet cones = makeDiffuseCones(options.diffuse.count, options.diffuse.apertureDeg);
+    const DiffuseConeSet cones = bounceConeSet(options);
     const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
     const float offset = shadowRayOffset(scene);
     const int count = squareSampleCount(std::max(options.diffuse.objectRays, 1));

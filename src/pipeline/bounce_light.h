@@ -2,10 +2,10 @@
 // reach directly, so the cones of §3.1 gather one bounce of indirect light; in a closed room of bright walls
 // the further bounces are a quarter or more of the light (the Cornell box: the real scene's mean radiance is
 // 0.27 with one bounce and 0.37 with all of them, in the path tracer). bounceLight() gathers the light volume
-// at every surface voxel of the real scene with the diffuse cones, reflects it by the voxel's albedo, and
-// adds it to the volume, as many times as asked: each pass adds one bounce. The bounces beyond the last are
-// added as a geometric series of it (options.render.bounce_tail): in a closed room they are as much light as
-// the last one gathered.
+// at every surface voxel of the real scene with options.render.bounce_cones cones, reflects it by the voxel's
+// albedo, and adds it to the volume, as many times as asked: each pass adds one bounce. The bounces beyond
+// the last are added as a geometric series of it (options.render.bounce_tail): in a closed room they are as
+// much light as the last one gathered.
 //
 // It runs on the real scene alone, once while the real side stays the same (FrameRenderer keeps it), and the
 // result is added to the full light volume as well, so that the delta volume keeps only what the objects
@@ -25,7 +25,7 @@ namespace deltagi {
 // times occupancy, occupancy) as a grid of the same form with zero occupancy, to be added to it. `geometry`
 // is the scene's voxelization with albedo (voxelize's `withAlbedo`), `visibility` its visibility mip chain.
 // The light is gathered at the voxels of the mip level that has 16^3 (level 3 at 128^3: each gathers for its
-// 512 level-0 voxels, whose albedos reflect it), with the diffuse cones of `options` around the voxel's mean
+// 512 level-0 voxels, whose albedos reflect it), with the bounce cones of `options` around the voxel's mean
 // normal, turned to face `viewpoint` (the camera, which stands in the room it sees: surfaces are two-sided,
 // and a reconstruction's winding does not say which side is the room's). With options.render.bounce_tail the
 // last bounce is added again times r / (1 - r), r the ratio of its light to the one before's over the

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <vector>
+
 #include "core/ray_scene.h"
 #include "pipeline/mipmap.h"
 #include "scene/shapes.h"
@@ -70,6 +72,26 @@ TEST(BounceLight, AFurnaceGainsAlbedoTimesItsRadiancePerBounce) {
                     0.15f);
         EXPECT_EQ(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 0, kCentre)), 0.0f);
     }
+}
+
+// The gather's cones are options.render.bounce_cones, not the diffuse cones: a furnace gains its albedo with
+// few or many of them, and changing the diffuse count leaves the bounce as it was.
+TEST(BounceLight, GathersWithTheBounceCones) {
+    Options options;
+    options.render.bounceTail = false;
+    const Furnace f = furnace(0.5f, true);
+    std::vector<float> added;
+    for (const int cones : {1, 5, 16}) {
+        SCOPED_TRACE(cones);
+        options.render.bounceCones = cones;
+        added.push_back(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 1, kCentre)));
+        EXPECT_NEAR(added.back(), 0.5f, 0.1f);
+    }
+    EXPECT_NE(added[0], added[1]);
+    EXPECT_NE(added[1], added[2]);
+    options.render.bounceCones = 5;
+    options.diffuse.count = 3;
+    EXPECT_EQ(meanAdded(f, bounceLight(f.direct, f.geometry, f.visibility, options, 1, kCentre)), added[1]);
 }
 
 // With the bounces beyond the last estimated (options.render.bounce_tail), a furnace's walls gain the whole

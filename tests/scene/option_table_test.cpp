@@ -70,6 +70,7 @@ Options everyOptionChanged() {
                 .layers = true,
                 .lightBounces = 8,
                 .bounceTail = false,
+                .bounceCones = 7,
                 .denoiseRadius = 0,
                 .relightDenoiseRadius = 3};
     o.environment = {.lightCount = 0,
@@ -108,7 +109,7 @@ TEST(OptionTable, EachOptionIsDescribedOnce) {
             ++count;
         }
     }
-    EXPECT_EQ(count, 47u);  // the fields of the 8 structs of options.h
+    EXPECT_EQ(count, 48u);  // the fields of the 8 structs of options.h
 }
 
 // Each name of `names` reads back as its value and is written as itself, and each value of the enum (in
