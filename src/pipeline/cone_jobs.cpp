@@ -186,8 +186,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         addInto(
             results[j].areaLight,
             traceSparse<glm::vec3>(
-                job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-                job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
+                job.points, job.bounds, scene.camera, job.environmentStride(o, scene.camera), 1,
+                job.filter(o, job.environmentStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                     return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode, pixels);
                 }));
     });

@@ -51,9 +51,15 @@ struct ConeJob {
     }
     // The pixel strides of its shadow, specular (relit only) and diffuse cones, "auto" resolved for the
     // camera's image.
-    // Emitters' and the environment's direct light: as the shadows when given, else their own "auto".
+    // Emitters' direct light: as the shadows when given, else its own "auto".
     int areaLightStride(const Options& o, const Camera& c) const {
         return relit() ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightAreaLightStride, c.width,
+                                        c.height)
+                       : pixelStrideFor(o.shadow.pixelStride, kAutoAreaLightStride, c.width, c.height);
+    }
+    // The environment map's direct light by rays: as the shadows when given, else its own "auto".
+    int environmentStride(const Options& o, const Camera& c) const {
+        return relit() ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightEnvironmentStride, c.width,
                                         c.height)
                        : pixelStrideFor(o.shadow.pixelStride, kAutoAreaLightStride, c.width, c.height);
     }

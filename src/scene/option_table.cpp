@@ -192,6 +192,12 @@ std::string autoStrideNote(int stride, int areaStride) {
     if (stride == areaStride) return fmt::format("{} at 640x480, for every kind of light", stride);
     return fmt::format("{} at 640x480 ({} for emitters and the environment map)", stride, areaStride);
 }
+// ... and `environmentStride` for the environment map.
+std::string autoStrideNote(int stride, int areaStride, int environmentStride) {
+    if (areaStride == environmentStride) return autoStrideNote(stride, areaStride);
+    return fmt::format("{} at 640x480 ({} for emitters, {} for the environment map)", stride, areaStride,
+                       environmentStride);
+}
 std::string autoStrideNote(int stride) {
     return fmt::format("{} at 640x480", stride);
 }
@@ -401,10 +407,11 @@ OptionGroup shadowGroup() {
                 fmt::format(
                     "the same for the shadows the objects cast on real surfaces: the filter spreads "
                     "{0}×{0} samples `relight_pixel_stride` apart (`options.render.relight_denoise_radius`), "
-                    "and a contact shadow is sharper than that "
+                    "and a contact shadow is sharper than that; a sky's is softer "
                     "([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))",
                     relitFilterSide))
-                .withDefaultNote(autoStrideNote(kAutoRelightShadowStride, kAutoRelightAreaLightStride)),
+                .withDefaultNote(autoStrideNote(kAutoRelightShadowStride, kAutoRelightAreaLightStride,
+                                                kAutoRelightEnvironmentStride)),
         });
 }
 
