@@ -14,6 +14,8 @@ of the same frame and pose (a renderer of its own), and the objects compared too
 
     PYTHONPATH=build/python scripts/track-vs-truth.py out/live-capture/scene.json \\
         out/live-capture/tracked/transforms.json --still
+
+`--set KEY=VALUE` (as many as needed, as deltagi's) changes the scene of every render.
 """
 import json
 import os
@@ -32,11 +34,11 @@ def frames(path):
             for frame in document["frames"]]
 
 
-def live_against_still(scene_file, tracked_file):
+def live_against_still(scene_file, tracked_file, overrides=()):
     tracked = frames(tracked_file)
     first = tracked[0][1][:3, 3]
     viewpoint = f"options.volume.viewpoint=[{first[0]}, {first[1]}, {first[2]}]"
-    live_scene = deltagi.Scene.load(scene_file, [viewpoint])
+    live_scene = deltagi.Scene.load(scene_file, [viewpoint, *overrides])
     live = deltagi.FrameRenderer()
     deltas, objects = [], []
     for photo_path, pose in tracked:
@@ -44,7 +46,7 @@ def live_against_still(scene_file, tracked_file):
         live_scene.camera_pose = pose
         live_scene.background = photo
         a = live.render(live_scene)
-        still_scene = deltagi.Scene.load(scene_file, [viewpoint])
+        still_scene = deltagi.Scene.load(scene_file, [viewpoint, *overrides])
         still_scene.camera_pose = pose
         still_scene.background = photo
         b = deltagi.FrameRenderer().render(still_scene)
@@ -62,17 +64,26 @@ def live_against_still(scene_file, tracked_file):
 
 
 def main():
-    if len(sys.argv) == 4 and sys.argv[3] == "--still":
-        return live_against_still(sys.argv[1], sys.argv[2])
-    if len(sys.argv) != 4:
+    # --set KEY=VALUE (any number, as deltagi's --set) changes the scene of every render.
+    args, overrides = [], []
+    argv = sys.argv[1:]
+    while argv:
+        arg = argv.pop(0)
+        if arg == "--set" and argv:
+            overrides.append(argv.pop(0))
+        else:
+            args.append(arg)
+    if len(args) == 3 and args[2] == "--still":
+        return live_against_still(args[0], args[1], overrides)
+    if len(args) != 3:
         sys.exit(__doc__)
-    scene_file, tracked_file, truth_file = sys.argv[1:]
+    scene_file, tracked_file, truth_file = args
     tracked = {os.path.basename(photo): pose for photo, pose in frames(tracked_file)}
     truth = frames(truth_file)
     # The light kept on the side the first true camera sees, as `deltagi live` keeps it.
     first = truth[0][1][:3, 3]
     viewpoint = f"options.volume.viewpoint=[{first[0]}, {first[1]}, {first[2]}]"
-    scenes = {kind: deltagi.Scene.load(scene_file, [viewpoint]) for kind in ("tracked", "true")}
+    scenes = {kind: deltagi.Scene.load(scene_file, [viewpoint, *overrides]) for kind in ("tracked", "true")}
     renderers = {kind: deltagi.FrameRenderer() for kind in scenes}
     errors, positions = [], []
     for photo_path, true_pose in truth:
