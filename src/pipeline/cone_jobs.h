@@ -51,22 +51,21 @@ struct ConeJob {
     }
     // The pixel strides of its shadow, specular (relit only) and diffuse cones, "auto" resolved for the
     // camera's image.
-    // Emitters' direct light: as the shadows when given, else its own "auto".
-    int areaLightStride(const Options& o, const Camera& c) const {
-        return relit() ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightAreaLightStride, c.width,
-                                        c.height)
-                       : pixelStrideFor(o.shadow.pixelStride, kAutoAreaLightStride, c.width, c.height);
+    // Shadows, emitters' and the environment map's direct light by rays: options.shadow.pixel_stride (or
+    // relight_pixel_stride) when given, else each its own "auto" (`shadedAuto` on rendered surfaces,
+    // `relitAuto` on relit ones).
+    int shadowOptionStride(const Options& o, const Camera& c, int shadedAuto, int relitAuto) const {
+        return relit() ? pixelStrideFor(o.shadow.relightPixelStride, relitAuto, c.width, c.height)
+                       : pixelStrideFor(o.shadow.pixelStride, shadedAuto, c.width, c.height);
     }
-    // The environment map's direct light by rays: as the shadows when given, else its own "auto".
+    int areaLightStride(const Options& o, const Camera& c) const {
+        return shadowOptionStride(o, c, kAutoAreaLightStride, kAutoRelightAreaLightStride);
+    }
     int environmentStride(const Options& o, const Camera& c) const {
-        return relit() ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightEnvironmentStride, c.width,
-                                        c.height)
-                       : pixelStrideFor(o.shadow.pixelStride, kAutoAreaLightStride, c.width, c.height);
+        return shadowOptionStride(o, c, kAutoAreaLightStride, kAutoRelightEnvironmentStride);
     }
     int shadowStride(const Options& o, const Camera& c) const {
-        return relit()
-                   ? pixelStrideFor(o.shadow.relightPixelStride, kAutoRelightShadowStride, c.width, c.height)
-                   : pixelStrideFor(o.shadow.pixelStride, kAutoShadowStride, c.width, c.height);
+        return shadowOptionStride(o, c, kAutoShadowStride, kAutoRelightShadowStride);
     }
     // The edge-aware filter of its sparse cones; the real surfaces' change varies slowly, so its pixels
     // between samples are interpolated.

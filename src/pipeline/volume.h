@@ -504,13 +504,9 @@ VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within) {
         }
         if (lo.x <= hi.x) sliceBounds[static_cast<size_t>(s)] = VoxelBox{lo, hi};
     });
-    glm::ivec3 lo(std::numeric_limits<int>::max()), hi(std::numeric_limits<int>::min());
-    for (const VoxelBox& b : sliceBounds)
-        if (!b.empty()) {
-            lo = glm::min(lo, b.lo);
-            hi = glm::max(hi, b.hi);
-        }
-    return lo.x <= hi.x ? VoxelBox{lo, hi} : VoxelBox{};
+    VoxelBox bounds;
+    for (const VoxelBox& b : sliceBounds) bounds.extend(b);
+    return bounds;
 }
 
 inline PackedGrid3::PackedGrid3(const Grid3& grid, const VoxelBox& window)
