@@ -38,6 +38,9 @@ bool Server::registerFrame(const CameraInput& input, int64_t dropped, TrackedFra
             {"dropped", dropped},
             {"registration", state},
             {"markers_seen", tracked.markersSeen},
+            {"queued_ms",  // from its arrival until the render thread took it
+             std::round(std::chrono::duration<double, std::milli>(start - input.arrived).count() * 100.0) /
+                 100.0},
             {"decode_ms",
              std::round(std::chrono::duration<double, std::milli>(decoded - start).count() * 100.0) / 100.0},
             {"track_ms", std::round(trackMs * 100.0) / 100.0}};

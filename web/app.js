@@ -66,6 +66,8 @@ function connect() {
       live.client = message.client;
       camera.number = 0;  // the server counts a new connection's camera frames from 1
       camera.inFlight.clear();
+      camera.serverMs = [];
+      camera.queuedMs = [];
       // The server reads a camera of its own (deltagi live --serve): its frames come, the page sends none.
       live.serverCamera = message.camera || null;
       $('camera-toggle').hidden = Boolean(live.serverCamera);
@@ -83,7 +85,7 @@ function connect() {
       flushDrag();
     } else if (message.type === 'frame') {
       pendingInfo = message;
-      if (message.camera && message.camera.client === live.client) cameraAnswered(message.camera.number);
+      if (message.camera && message.camera.client === live.client) cameraAnswered(message.camera.number, message);
       if (message.client === live.client) {
         for (const drag of inFlight.filter((d) => d.seq <= message.seq)) awaiting.push({ ...drag, number: message.number });
         inFlight = inFlight.filter((d) => d.seq > message.seq);
@@ -340,15 +342,42 @@ for (const control of document.querySelectorAll('[data-option]')) {
 // a JPEG and sent as a binary message; the server numbers them from 1 per connection. At most
 // kCameraInFlight frames are unanswered (no frame info or error yet): the server renders one while the page
 // takes and encodes the next, and frames never queue up (the server keeps only the newest anyway).
+// While one is unanswered, the next is taken only once the server's time per frame (decoding, registering,
+// rendering, encoding: the median of the last few) has passed since the one before, lengthened or shortened
+// by half of how much longer than kCameraQueued the last frames waited in the server before it took them:
+// so a frame arrives about when the server is free, not a whole frame early (a frame that waits there is
+// a frame late), and the server does not sit idle either.
 const kCameraQuality = 0.85;
 const kCameraInFlight = 2;
 const kCameraTimeout = 2000;  // ms after which an unanswered frame no longer holds the next back
-const camera = { stream: null, video: null, canvas: null, number: 0, inFlight: new Map(), waiting: false };
+const kCameraQueued = 10;     // ms a frame may wait in the server for the one before it
+const camera = {
+  stream: null, video: null, canvas: null, number: 0, inFlight: new Map(), waiting: false,
+  serverMs: [],  // per frame the server answered lately: its time for the frame
+  queuedMs: [],  // and how long the frame waited there
+  lastCaptured: -Infinity,
+};
 
-function cameraAnswered(number) {
+function cameraAnswered(number, message) {
   const sent = camera.inFlight.get(number);
   if (sent) sent.answered = true;
+  if (message && message.camera && message.timings) {
+    const c = message.camera;
+    const ms = (c.decode_ms || 0) + (c.track_ms || 0) + message.timings.total_ms + (message.encode_ms || 0);
+    if (Number.isFinite(ms) && Number.isFinite(c.queued_ms)) {
+      camera.serverMs.push(ms);
+      camera.queuedMs.push(c.queued_ms);
+    }
+    if (camera.serverMs.length > 8) camera.serverMs.shift();
+    if (camera.queuedMs.length > 3) camera.queuedMs.shift();
+  }
   if (camera.waiting) sendCameraFrame();
+}
+
+// ms from one frame taken to the next while one is unanswered (0 until the server has answered a few)
+function cameraPace() {
+  if (camera.serverMs.length < 3) return 0;
+  return Math.max(0, median(camera.serverMs) + 0.5 * (median(camera.queuedMs) - kCameraQueued));
 }
 
 // A frame drawn over a camera frame: the page's own (the latency from its capture) or the server's (from its
@@ -379,7 +408,8 @@ function sendCameraFrame() {
   const now = performance.now();
   for (const [n, sent] of camera.inFlight) if (now - sent.captured > kCameraTimeout) camera.inFlight.delete(n);
   const unanswered = [...camera.inFlight.values()].filter((sent) => !sent.answered).length;
-  if (unanswered >= kCameraInFlight || camera.video.readyState < 2) {
+  const early = unanswered > 0 && now - camera.lastCaptured < cameraPace();
+  if (unanswered >= kCameraInFlight || early || camera.video.readyState < 2) {
     camera.waiting = true;
     return;
   }
@@ -390,6 +420,7 @@ function sendCameraFrame() {
     camera.canvas.height = height;
   }
   const captured = performance.now();
+  camera.lastCaptured = captured;
   camera.canvas.getContext('2d').drawImage(camera.video, 0, 0, width, height);
   const number = ++camera.number;
   camera.inFlight.set(number, { captured, answered: false });
@@ -441,6 +472,8 @@ function stopCamera() {
   camera.stream = null;
   camera.video = null;
   camera.inFlight.clear();
+  camera.serverMs = [];
+  camera.queuedMs = [];
   camera.waiting = false;
   $('camera-toggle').textContent = 'use my camera';
 }

@@ -104,6 +104,7 @@ try {
     latency_ms_median: Number(median(run.latencies).toFixed(1)),
     dropped: infos.length ? infos[infos.length - 1].dropped : 0,
     render_ms_median: Number(median(registered.map((i) => i.render_ms)).toFixed(1)),
+    queued_ms_median: Number(median(infos.map((i) => i.queued_ms)).toFixed(1)),
     decode_ms_median: Number(median(infos.map((i) => i.decode_ms)).toFixed(1)),
     track_ms_median: Number(median(infos.map((i) => i.track_ms)).toFixed(1)),
     server_latency_ms_median: Number(median(infos.map((i) => i.latency_ms)).toFixed(1)),
