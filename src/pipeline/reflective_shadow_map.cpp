@@ -37,6 +37,25 @@ Face makeFace(glm::vec3 forward, float halfTan) {
 
 constexpr float kMinCos = 1e-3f;  // grazing texels: cap the footprint area
 
+// Whether the ray from `origin` along `dir` (t >= 0) meets the box `b` (slab test; a component of `dir` that
+// is zero meets the box's slab only from inside it).
+bool rayMeetsBox(glm::vec3 origin, glm::vec3 dir, const Bounds3f& b) {
+    float tNear = 0.0f, tFar = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        if (dir[a] == 0.0f) {
+            if (origin[a] < b.min[a] || origin[a] > b.max[a]) return false;
+            continue;
+        }
+        const float inv = 1.0f / dir[a];
+        float t0 = (b.min[a] - origin[a]) * inv, t1 = (b.max[a] - origin[a]) * inv;
+        if (t0 > t1) std::swap(t0, t1);
+        tNear = std::max(tNear, t0);
+        tFar = std::min(tFar, t1);
+        if (tNear > tFar) return false;
+    }
+    return true;
+}
+
 // The faces of a light's map over a region and the ray of each texel.
 class MapLayout {
   public:
@@ -283,6 +302,11 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
     std::vector<char> faceLit(static_cast<size_t>(layout.faceCount()));
     for (int f = 0; f < layout.faceCount(); ++f)
         faceLit[static_cast<size_t>(f)] = layout.faceMayCarryLight(f);
+    // A ray that does not meet the region (grown by a margin against rounding) hits nothing in it: most of a
+    // directional light's window, a square around the region's bounding sphere.
+    Bounds3f reach = regionBounds;
+    const glm::vec3 margin(1e-3f * std::max(regionBounds.maxExtent(), 1e-6f));
+    reach.min -= margin, reach.max += margin;
     return renderRows(layout, resolution, [&](int face, int j, std::vector<RsmTexel>& row) {
         if (!faceLit[static_cast<size_t>(face)]) return;
         // A thread's row buffers, kept from row to row.
@@ -297,7 +321,7 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
         for (int i = 0; i < resolution; ++i) {
             if (!layout.mayCarryLight(face, i, j)) continue;
             const TexelRay ray = layout.ray(face, i, j);
-            if (!carriesLight(ray)) continue;
+            if (!carriesLight(ray) || !rayMeetsBox(ray.origin, ray.dir, reach)) continue;
             rays.push_back(ray);
             columns.push_back(i);
             if (directional || origins.empty()) origins.push_back(ray.origin);

@@ -71,6 +71,28 @@ TEST(Inject, GlossySurfacesReflectTheirWholeReflectanceIntoTheVolume) {
     EXPECT_NEAR(light.at(8, 8, 8).x, 0.5f * 2.0f / std::numbers::pi_v<float>, 0.01f);
 }
 
+// A slanted directional light's map holds the light on all of the region's floor, also where the floor is the
+// region's bottom face: of the window's rays only those that miss the region are left out.
+TEST(ReflectiveShadowMap, ASlantedDirectionalLightsMapHoldsTheWholeFloorOfTheRegion) {
+    for (const float height : {kRegion.origin.y, 0.0625f}) {
+        Scene s;
+        s.real.push_back(
+            test::placed(makeQuad({4.0f, 4.0f}), {0, height, 0}, test::diffuse(glm::vec3(0.5f))));
+        RayScene rays(s, SceneContent::RealOnly);
+        for (const glm::vec3 d :
+             {glm::vec3(0, -1, 0), glm::vec3(0.6f, -0.8f, 0.0f), glm::vec3(-0.5f, -0.7f, 0.5f)}) {
+            Light light = directionalDown(2.0f);
+            light.direction = glm::normalize(d);
+            const ReflectiveShadowMap rsm = renderReflectiveShadowMap(rays, light, kRegion, 256);
+            double flux = 0.0;
+            for (const RsmTexel& t : rsm.texels) flux += t.flux.x;
+            // albedo * E * cos * (the floor's area inside the region, 2 x 2)
+            const double expected = 0.5 * 2.0 * -light.direction.y * 4.0;
+            EXPECT_NEAR(flux, expected, 0.015 * expected) << height << " " << d.x << "," << d.y << "," << d.z;
+        }
+    }
+}
+
 // Two lights that both light the whole floor: each voxel holds the sum of their radiances, albedo * (E1 cos1
 // + E2 cos2) / pi. (Summing the texels of both before dividing by their footprints gave the mean of the two:
 // an environment map's 16 lights lit the volume at a tenth of its light.)
