@@ -98,6 +98,9 @@ class FrameRenderer {
     // plane) and its camera-space work (its G-buffer, the filter's weights).
     struct KeptWork {
         bool world = false, light = false, camera = false;
+        // Where the light was not kept: how many of the new lights' reflective shadow maps were the frame
+        // before's, for the lights that did not change (a lamp beside a light camera's new environment).
+        int lightMapsKept = 0;
     };
     KeptWork lastFrameKept() const;
     // Bytes of the voxel volumes with their mip chains that the last frame's cones read: the real scene's

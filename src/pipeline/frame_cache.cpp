@@ -1,6 +1,7 @@
 #include "pipeline/frame_cache.h"
 
 #include <algorithm>
+#include <string>
 
 #include "pipeline/bounce_light.h"
 
@@ -70,24 +71,39 @@ uint64_t environmentKey(const Scene& scene) {
     return keyOf(scene.environment->radiance.data().data(), scene.environment->worldFromEnvironment);
 }
 
+// Calls `f` with each field of a light that its light depends on.
+template <class F>
+void visitLightFields(const Light& l, F&& f) {
+    f(l.type);
+    f(l.color);
+    f(l.intensity);
+    f(l.position);
+    f(l.direction);
+    f(l.innerAngleDeg);
+    f(l.outerAngleDeg);
+    f(l.radius);
+    f(l.fromEnvironment);
+    f(l.angularRadius);
+    f(l.lambertian);
+}
+
 // The real light: the lights and the environment map.
 uint64_t lightsKey(const Scene& scene) {
     Hasher h;
-    for (const Light& l : scene.lights) {  // field by field: Light has padding after its bools
-        h.value(l.type);
-        h.value(l.color);
-        h.value(l.intensity);
-        h.value(l.position);
-        h.value(l.direction);
-        h.value(l.innerAngleDeg);
-        h.value(l.outerAngleDeg);
-        h.value(l.radius);
-        h.value(l.fromEnvironment);
-        h.value(l.angularRadius);
-        h.value(l.lambertian);
-    }
+    // field by field: Light has padding after its bools
+    for (const Light& l : scene.lights) visitLightFields(l, [&](const auto& v) { h.value(v); });
     h.value(environmentKey(scene));
     return h.digest();
+}
+
+// Whether two lights are the same, field by field (bitwise: -0 and 0 differ, as in the keys).
+bool sameLight(const Light& a, const Light& b) {
+    auto bytes = [](const Light& l) {
+        std::string out;
+        visitLightFields(l, [&](const auto& v) { out.append(reinterpret_cast<const char*>(&v), sizeof(v)); });
+        return out;
+    };
+    return bytes(a) == bytes(b);
 }
 
 uint64_t regionKey(const VolumeRegion& r) {
@@ -107,6 +123,29 @@ void ViewWork::forget() {
     // are made again from the real ones (hideCoveredSurfaces, renderRelitSurfaces) before they are read.
     relitSurfacesMade = false;
     hidden.clear();
+}
+
+void LightWork::forget() {
+    if (rsms) spare = {std::move(*rsms), std::move(rsmLights), std::move(rsmSides), rsmVoxels};
+    Spare kept = std::move(spare);
+    *this = LightWork{};
+    spare = std::move(kept);
+}
+
+std::optional<ReflectiveShadowMap> LightWork::spareRsm(const Light& light, int resolution, uint64_t voxels,
+                                                       const std::vector<int8_t>& sides) {
+    // A surface whose plane holds the viewpoint (side 0) has no side to keep.
+    if (spare.voxels != voxels || spare.sides != sides ||
+        std::find(sides.begin(), sides.end(), 0) != sides.end())
+        return std::nullopt;
+    for (size_t i = 0; i < spare.lights.size(); ++i) {
+        ReflectiveShadowMap& rsm = spare.rsms[i];
+        if (rsm.resolution != resolution || !sameLight(spare.lights[i], light) || rsm.faces == 0) continue;
+        ReflectiveShadowMap taken = std::move(rsm);
+        rsm = ReflectiveShadowMap{};  // taken: faces 0
+        return taken;
+    }
+    return std::nullopt;
 }
 
 glm::vec3 viewpointOf(const Scene& scene) {

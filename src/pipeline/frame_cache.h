@@ -57,11 +57,30 @@ struct VoxelWork {
 // each voxel: `rsmSides` and `bounceSides` are those sides, and what depends on them is redone where the
 // viewpoint crossed a surface's plane (FrameCache::update).
 struct LightWork {
+    // The maps of `rsmLights`, made over the voxel part of version `rsmVoxels`.
     std::optional<std::vector<ReflectiveShadowMap>> rsms;
+    std::vector<Light> rsmLights;
+    uint64_t rsmVoxels = 0;
+    int rsmsKept = 0;  // of them, taken from the spare ones
     std::vector<int8_t> rsmSides;
     std::optional<Grid3> injected;  // from `rsms`, plus `bounce`
     std::optional<Grid3> bounce;    // the further bounces (options.render.light_bounces)
     std::vector<bool> bounceSides;
+    // The maps of the light before, when it changed: a light that did not change (a lamp beside a light
+    // camera's environment) takes its map from here as long as the region's voxels and the viewpoint's sides
+    // are those it was made for (spareRsm).
+    struct Spare {
+        std::vector<ReflectiveShadowMap> rsms;
+        std::vector<Light> lights;
+        std::vector<int8_t> sides;
+        uint64_t voxels = 0;
+    } spare;
+    // Empties it for another light; its maps become the spare ones.
+    void forget();
+    // The spare map of `light` at `resolution`, over the voxel part of version `voxels` with the viewpoint's
+    // sides `sides`, taken out of the spare ones; nullopt when there is none.
+    std::optional<ReflectiveShadowMap> spareRsm(const Light& light, int resolution, uint64_t voxels,
+                                                const std::vector<int8_t>& sides);
 };
 
 // The environment map's sampler (its CDFs), when its light is traced by rays.

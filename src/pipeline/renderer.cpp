@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <limits>
 #include <optional>
 
@@ -55,14 +56,19 @@ Image toImage(std::span<const glm::vec3> pixels, int width, int height) {
     return image;
 }
 
-// One map per light, each at its resolution (rsmResolutions).
+// One map per light, each at its resolution (rsmResolutions); `kept(light, resolution)` gives one made
+// before, if it has it.
+using KeptRsm = std::function<std::optional<ReflectiveShadowMap>(const Light&, int)>;
 std::vector<ReflectiveShadowMap> renderRsms(const RayScene& rays, std::span<const Light> lights,
                                             const VolumeRegion& region, const Options& options,
-                                            glm::vec3 viewpoint) {
+                                            glm::vec3 viewpoint, const KeptRsm& kept = {}) {
     const std::vector<int> resolutions = rsmResolutions(options, lights, region);
     std::vector<ReflectiveShadowMap> rsms;
-    for (size_t l = 0; l < lights.size(); ++l)
-        rsms.push_back(renderReflectiveShadowMap(rays, lights[l], region, resolutions[l], viewpoint));
+    for (size_t l = 0; l < lights.size(); ++l) {
+        std::optional<ReflectiveShadowMap> rsm = kept ? kept(lights[l], resolutions[l]) : std::nullopt;
+        rsms.push_back(rsm ? std::move(*rsm)
+                           : renderReflectiveShadowMap(rays, lights[l], region, resolutions[l], viewpoint));
+    }
     return rsms;
 }
 
@@ -185,8 +191,18 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
     if (!light.rsms) {
-        light.rsms = renderRsms(realOnly, lights, region, scene.options, viewpoint);
         light.rsmSides = rsmViewSides(scene.real, viewpoint);
+        light.rsmsKept = 0;
+        light.rsms =
+            renderRsms(realOnly, lights, region, scene.options, viewpoint, [&](const Light& l, int res) {
+                std::optional<ReflectiveShadowMap> kept =
+                    light.spareRsm(l, res, cache.voxels.version, light.rsmSides);
+                light.rsmsKept += kept.has_value();
+                return kept;
+            });
+        light.rsmLights.assign(lights.begin(), lights.end());
+        light.rsmVoxels = cache.voxels.version;
+        light.spare = {};
     }
     std::vector<RsmUpdate> updates;
     const Bounds3f objectBounds = boundsOf(scene.virtuals);
@@ -508,7 +524,9 @@ void FrameRenderer::clearHistory() {
 }
 
 FrameRenderer::KeptWork FrameRenderer::lastFrameKept() const {
-    return state_->cache.kept();
+    FrameRenderer::KeptWork kept = state_->cache.kept();
+    if (!kept.light) kept.lightMapsKept = state_->cache.light.work.rsmsKept;
+    return kept;
 }
 
 size_t FrameRenderer::volumeBytes() const {

@@ -247,6 +247,39 @@ TEST(FrameRenderer, FramesOfAMovingLightKeepTheGeometryAndTheViewAndAreExactlyRe
     }
 }
 
+// A light that does not change keeps its reflective shadow map while another one changes (a lamp beside a
+// light camera's environment), also when the camera moves: the frames are still exactly render()'s.
+TEST(FrameRenderer, ALightThatDoesNotChangeKeepsItsMapWhileAnotherChanges) {
+    Scene s = ballOverFloor();
+    Light sun;
+    sun.type = Light::Type::Directional;
+    sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+    sun.intensity = 0.5f;
+    s.lights.push_back(sun);
+    FrameRenderer frames;
+    expectSameImages(frames.render(s), render(s));
+    for (int f = 1; f <= 2; ++f) {
+        SCOPED_TRACE(testing::Message() << "frame " << f);
+        s.lights[1].direction = glm::normalize(s.lights[1].direction + glm::vec3(0.1f, 0.0f, 0.0f));
+        moveVirtuals(s, {0.02f, 0.0f, 0.0f});
+        if (f == 2) s.camera = test::lookAtCamera({0.1f, 1.6f, 1.6f}, {0.1f, 0.3f, 0.0f}, 64, 48, 60.0f);
+        expectSameImages(frames.render(s), render(s));
+        EXPECT_FALSE(frames.lastFrameKept().light);
+        EXPECT_EQ(frames.lastFrameKept().lightMapsKept, 1);
+    }
+    s.lights[0].position += glm::vec3(0.05f, 0.0f, 0.0f);  // both change: none is kept
+    s.lights[1].intensity *= 2.0f;
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_EQ(frames.lastFrameKept().lightMapsKept, 0);
+    s.lights[1].intensity *= 2.0f;  // the lamp's map is the last frame's again
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_EQ(frames.lastFrameKept().lightMapsKept, 1);
+    moveVirtuals(s, {0.01f, 0.0f, 0.0f});  // the light kept whole
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_TRUE(frames.lastFrameKept().light);
+    EXPECT_EQ(frames.lastFrameKept().lightMapsKept, 0);
+}
+
 TEST(Benchmark, ReportsEveryRowAndPutsTheObjectsBack) {
     Scene s = ballOverFloor();
     const std::vector<glm::vec3> before = s.virtuals[0].positions;
