@@ -15,11 +15,21 @@ of the same frame and pose (a renderer of its own), and the objects compared too
     PYTHONPATH=build/python scripts/track-vs-truth.py out/live-capture/scene.json \\
         out/live-capture/tracked/transforms.json --still
 
+With --still and --reference-spp N as well: frames (every 8th, or --frames 0,8,16) are also path-traced at the
+tracked pose (`deltagi reference --spp N`, the binary given by --deltagi, build/deltagi by default), and the live
+and the still render are each judged against that reference as `deltagi eval` judges DGI: delta_rel_error over
+the pixels that show the real scene in all three, object_rel_rmse over those the objects cover in all three.
+
+    PYTHONPATH=build/python scripts/track-vs-truth.py out/live-capture/scene.json \
+        out/live-capture/tracked/transforms.json --still --reference-spp 4096
+
 `--set KEY=VALUE` (as many as needed, as deltagi's) changes the scene of every render.
 """
 import json
 import os
+import subprocess
 import sys
+import tempfile
 
 import numpy as np
 
@@ -34,8 +44,40 @@ def frames(path):
             for frame in document["frames"]]
 
 
-def live_against_still(scene_file, tracked_file, overrides=()):
+def path_traced(deltagi_binary, scene_file, pose, spp, overrides, folder):
+    """The reference's composite, the change to the real scene (with - without) and the objects' mask at `pose`
+    (world from camera, the camera looking along its -z with +y up)."""
+    position, forward, up = pose[:3, 3], -pose[:3, 2], pose[:3, 1]
+    look_at = position + forward
+    vector = lambda v: "[" + ", ".join(f"{float(x):.9g}" for x in v) + "]"
+    command = [deltagi_binary, "reference", scene_file, "--spp", str(spp), "-q", "-o", os.path.join(folder, "ref.exr"),
+               "--aov", folder, "--set", f"camera.position={vector(position)}",
+               "--set", f"camera.look_at={vector(look_at)}", "--set", f"camera.up={vector(up)}"]
+    for o in overrides:
+        command += ["--set", o]
+    subprocess.run(command, check=True)
+    read = lambda name: deltagi.read_image(os.path.join(folder, name + ".exr"))
+    return read("composite"), read("with") - read("without"), read("object_mask")[..., 0]
+
+
+def figures(render, reference):
+    """delta_rel_error and object_rel_rmse of a render (a FrameRenderer's result) against a path-traced one."""
+    ref_composite, ref_delta, ref_mask = reference
+    mask = render["object_mask"][..., 0] if render["object_mask"].ndim == 3 else render["object_mask"]
+    real = (mask <= 0.0) & (ref_mask <= 0.0)
+    covered = (mask >= 1.0) & (ref_mask >= 1.0)
+    d = (render["delta"] - ref_delta)[real]
+    o = (render["composite"] - ref_composite)[covered]
+    return (float(np.sqrt((d ** 2).sum()) / max(np.sqrt((ref_delta[real] ** 2).sum()), 1e-30)),
+            float(np.sqrt((o ** 2).sum()) / max(np.sqrt((ref_composite[covered] ** 2).sum()), 1e-30)))
+
+
+def live_against_still(scene_file, tracked_file, overrides=(), reference_spp=0, chosen=None,
+                       deltagi_binary="build/deltagi"):
     tracked = frames(tracked_file)
+    if chosen is None:
+        chosen = set(range(0, len(tracked), 8))
+    judged = []  # per frame judged: (live delta, still delta, live object, still object) against the reference
     first = tracked[0][1][:3, 3]
     viewpoint = f"options.volume.viewpoint=[{first[0]}, {first[1]}, {first[2]}]"
     live_scene = deltagi.Scene.load(scene_file, [viewpoint, *overrides])
@@ -58,23 +100,44 @@ def live_against_still(scene_file, tracked_file, overrides=()):
         objects.append(float(np.sqrt((o ** 2).mean()) / max(np.sqrt((b["composite"][covered] ** 2).mean()), 1e-30)))
         print(f"{os.path.basename(photo_path)}: delta_rel_error {deltas[-1]:.4f}, object_rel_rmse {objects[-1]:.4f}",
               flush=True)
+        if reference_spp > 0 and len(deltas) - 1 in chosen:
+            with tempfile.TemporaryDirectory() as folder:
+                reference = path_traced(deltagi_binary, scene_file, pose, reference_spp, overrides, folder)
+            (live_delta, live_object), (still_delta, still_object) = figures(a, reference), figures(b, reference)
+            judged.append((live_delta, still_delta, live_object, still_object))
+            print(f"  against the path tracer ({reference_spp} spp): delta_rel_error live {live_delta:.4f}, still "
+                  f"{still_delta:.4f}; object_rel_rmse live {live_object:.4f}, still {still_object:.4f}", flush=True)
     print(f"{len(deltas)} frames, live against still: delta_rel_error median {sorted(deltas)[len(deltas) // 2]:.4f}, "
           f"worst {max(deltas):.4f}; object_rel_rmse median {sorted(objects)[len(objects) // 2]:.4f}, "
           f"worst {max(objects):.4f}")
+    if judged:
+        gaps = lambda i, j: sorted(abs(row[i] - row[j]) for row in judged)
+        delta_gaps, object_gaps = gaps(0, 1), gaps(2, 3)
+        print(f"{len(judged)} frames against the path tracer: live minus still, delta_rel_error "
+              f"{', '.join(f'{row[0] - row[1]:+.4f}' for row in judged)} (largest gap {delta_gaps[-1]:.4f}); "
+              f"object_rel_rmse {', '.join(f'{row[2] - row[3]:+.4f}' for row in judged)} "
+              f"(largest gap {object_gaps[-1]:.4f})")
 
 
 def main():
     # --set KEY=VALUE (any number, as deltagi's --set) changes the scene of every render.
     args, overrides = [], []
+    reference_spp, chosen, deltagi_binary = 0, None, "build/deltagi"
     argv = sys.argv[1:]
     while argv:
         arg = argv.pop(0)
         if arg == "--set" and argv:
             overrides.append(argv.pop(0))
+        elif arg == "--reference-spp" and argv:
+            reference_spp = int(argv.pop(0))
+        elif arg == "--frames" and argv:
+            chosen = {int(f) for f in argv.pop(0).split(",")}
+        elif arg == "--deltagi" and argv:
+            deltagi_binary = argv.pop(0)
         else:
             args.append(arg)
     if len(args) == 3 and args[2] == "--still":
-        return live_against_still(args[0], args[1], overrides)
+        return live_against_still(args[0], args[1], overrides, reference_spp, chosen, deltagi_binary)
     if len(args) != 3:
         sys.exit(__doc__)
     scene_file, tracked_file, truth_file = args

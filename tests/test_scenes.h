@@ -64,6 +64,15 @@ inline Light pointLight(glm::vec3 position, float intensity) {
     return l;
 }
 
+// A directional light along `direction` (normalized here) with irradiance `irradiance`.
+inline Light directionalLight(glm::vec3 direction, float irradiance) {
+    Light l;
+    l.type = Light::Type::Directional;
+    l.direction = glm::normalize(direction);
+    l.intensity = irradiance;
+    return l;
+}
+
 // A 2 x 2 grey floor at y = 0, a point light 1.5 above it and a camera looking down at it from the front.
 // Small volumes and images, so a render takes well under a second.
 inline Scene floorScene() {

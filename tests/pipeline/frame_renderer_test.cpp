@@ -251,11 +251,7 @@ TEST(FrameRenderer, FramesOfAMovingLightKeepTheGeometryAndTheViewAndAreExactlyRe
 // light camera's environment), also when the camera moves: the frames are still exactly render()'s.
 TEST(FrameRenderer, ALightThatDoesNotChangeKeepsItsMapWhileAnotherChanges) {
     Scene s = ballOverFloor();
-    Light sun;
-    sun.type = Light::Type::Directional;
-    sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
-    sun.intensity = 0.5f;
-    s.lights.push_back(sun);
+    s.lights.push_back(test::directionalLight({0.3f, -1.0f, 0.2f}, 0.5f));
     FrameRenderer frames;
     expectSameImages(frames.render(s), render(s));
     for (int f = 1; f <= 2; ++f) {

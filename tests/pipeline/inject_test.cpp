@@ -81,8 +81,7 @@ TEST(ReflectiveShadowMap, ASlantedDirectionalLightsMapHoldsTheWholeFloorOfTheReg
         RayScene rays(s, SceneContent::RealOnly);
         for (const glm::vec3 d :
              {glm::vec3(0, -1, 0), glm::vec3(0.6f, -0.8f, 0.0f), glm::vec3(-0.5f, -0.7f, 0.5f)}) {
-            Light light = directionalDown(2.0f);
-            light.direction = glm::normalize(d);
+            const Light light = test::directionalLight(d, 2.0f);
             const ReflectiveShadowMap rsm = renderReflectiveShadowMap(rays, light, kRegion, 256);
             double flux = 0.0;
             for (const RsmTexel& t : rsm.texels) flux += t.flux.x;

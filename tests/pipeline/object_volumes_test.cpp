@@ -212,11 +212,7 @@ TEST(ObjectVolumes, ManyLightsReinjectTheRowsTheyChangeAndEqualVolumesFromScratc
 // start further out); a large jump injects everything again. Both give the volumes from scratch too.
 TEST(ObjectVolumes, WholeMapsRetracedAndLargeJumpsEqualVolumesFromScratch) {
     Scene s = floorWithBall();
-    Light sun;
-    sun.type = Light::Type::Directional;
-    sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
-    sun.intensity = 1.5f;
-    s.lights = {sun};
+    s.lights = {test::directionalLight({0.3f, -1.0f, 0.2f}, 1.5f)};
     const RealScene real(s);
     ObjectVolumes kept;
     frameEqualsScratch(kept, real, s);
