@@ -2,6 +2,8 @@
 // that inverting the map's row and column CDFs gives (the guided search is exact, empty rows and columns
 // skipped), its pdf and radiance are the map's there, and the centre of its pixel lies within pixelRadius()
 // of it (what the relit shadow rays cull by, src/pipeline/area_light_rays.cpp).
+#include <tuple>
+
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "core/environment.h"
@@ -52,8 +54,13 @@ glm::ivec2 invertedPixel(const Image& map, double u1, double u2) {
 }
 
 TEST(EnvironmentSamplingTest, LandsWhereTheCdfsSayWithTheMapsPdfAndRadiance) {
-    for (const auto [width, height] : {std::pair{16, 8}, std::pair{64, 32}, std::pair{100, 37}}) {
-        const Environment map = numberedMap(width, height);
+    for (const auto [width, height, sun] :
+         {std::tuple{16, 8, false}, std::tuple{64, 32, false}, std::tuple{100, 37, false},
+          std::tuple{100, 37, true}, std::tuple{256, 128, true}}) {
+        Environment map = numberedMap(width, height);
+        // A sun: one pixel with most of the light, the others' share a few bins of the CDFs.
+        if (sun)
+            map.radiance.setRgb(width / 3, height / 4, {1.0f + (height / 4) * width + width / 3, 1e6f, 0.0f});
         const EnvironmentSampler sampler(map);
         constexpr int kSide = 48;
         for (int i = 0; i <= kSide; ++i)
