@@ -4,6 +4,9 @@
 
 #include <arpa/inet.h>
 
+#include <bit>
+#include <cmath>
+
 #include <tbb/global_control.h>
 
 #include "web_assets.h"
@@ -155,12 +158,31 @@ void Server::onMessage(const std::shared_ptr<WebSocket>& socket, bool binary, st
     inboxWake_.notify_one();
 }
 
+// A page's camera frame: a JPEG, or the page's own form, "DGIT" and the time it was taken (a little-endian
+// float64, milliseconds on the page's clock) before the JPEG. The pose filter takes that time (on the
+// server's clock from the page's first such frame on) instead of the arrival, which the page's encoding and a
+// loaded machine delay unevenly: frames that arrive in a burst after a stall are not frames taken a moment
+// apart (the prior that holds an uncertain pose near the last one would hold it where the camera no longer
+// is).
 void Server::onCameraFrame(const std::shared_ptr<Client>& client, std::string_view data) {
+    constexpr std::string_view kTimed = "DGIT";
+    constexpr size_t kTimedHeader = kTimed.size() + 8;
     const int64_t number = ++client->cameraFrames;
     CameraInput input;
-    input.jpeg.assign(data);
     input.arrived = Clock::now();
     input.timeSeconds = std::chrono::duration<double>(input.arrived - started_).count();
+    if (data.size() >= kTimedHeader && data.substr(0, kTimed.size()) == kTimed) {
+        uint64_t bits = 0;
+        for (size_t b = 0; b < 8; ++b)
+            bits |= static_cast<uint64_t>(static_cast<uint8_t>(data[kTimed.size() + b])) << (8 * b);
+        const double takenSeconds = std::bit_cast<double>(bits) / 1000.0;
+        data.remove_prefix(kTimedHeader);
+        if (std::isfinite(takenSeconds)) {
+            if (!client->cameraClockOffset) client->cameraClockOffset = input.timeSeconds - takenSeconds;
+            input.timeSeconds = takenSeconds + *client->cameraClockOffset;
+        }
+    }
+    input.jpeg.assign(data);
     input.client = client;
     input.clientId = client->id();
     input.number = number;

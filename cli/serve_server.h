@@ -76,6 +76,9 @@ class Client {
     int id() const { return id_; }
     // The camera frames this client sent (numbered from 1); one socket's messages come one at a time.
     int64_t cameraFrames = 0;
+    // The server's seconds minus the page's at its first camera frame that said when it was taken: the
+    // page's capture times on the server's clock.
+    std::optional<double> cameraClockOffset;
 
     void reply(std::string text) {
         {

@@ -426,7 +426,12 @@ function sendCameraFrame() {
   camera.inFlight.set(number, { captured, answered: false });
   camera.canvas.toBlob((blob) => {
     if (!blob || !socket || socket.readyState !== WebSocket.OPEN) return;
-    socket.send(blob);
+    // "DGIT" and the time the frame was taken (ms, little-endian float64) before the JPEG: the server's pose
+    // filter takes it instead of the frame's arrival, which the encoding delays unevenly.
+    const header = new DataView(new ArrayBuffer(12));
+    for (let i = 0; i < 4; ++i) header.setUint8(i, 'DGIT'.charCodeAt(i));
+    header.setFloat64(4, captured, true);
+    socket.send(new Blob([header.buffer, blob]));
     live.camera.sent += 1;
   }, 'image/jpeg', kCameraQuality);
 }
