@@ -65,9 +65,7 @@ function connect() {
     if (message.type === 'hello') {
       live.client = message.client;
       camera.number = 0;  // the server counts a new connection's camera frames from 1
-      camera.inFlight.clear();
-      camera.serverMs = [];
-      camera.queuedMs = [];
+      forgetCameraFrames();
       // The server reads a camera of its own (deltagi live --serve): its frames come, the page sends none.
       live.serverCamera = message.camera || null;
       $('camera-toggle').hidden = Boolean(live.serverCamera);
@@ -374,6 +372,13 @@ function cameraAnswered(number, message) {
   if (camera.waiting) sendCameraFrame();
 }
 
+// The frames in flight and the server's times for the last ones, forgotten (a new connection, the camera off).
+function forgetCameraFrames() {
+  camera.inFlight.clear();
+  camera.serverMs = [];
+  camera.queuedMs = [];
+}
+
 // ms from one frame taken to the next while one is unanswered (0 until the server has answered a few)
 function cameraPace() {
   if (camera.serverMs.length < 3) return 0;
@@ -476,9 +481,7 @@ function stopCamera() {
   if (camera.stream) for (const track of camera.stream.getTracks()) track.stop();
   camera.stream = null;
   camera.video = null;
-  camera.inFlight.clear();
-  camera.serverMs = [];
-  camera.queuedMs = [];
+  forgetCameraFrames();
   camera.waiting = false;
   $('camera-toggle').textContent = 'use my camera';
 }

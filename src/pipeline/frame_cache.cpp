@@ -106,6 +106,11 @@ bool sameLight(const Light& a, const Light& b) {
     return bytes(a) == bytes(b);
 }
 
+// Whether the viewpoint lies in the plane of a real surface (side 0): it has no side to keep.
+bool onASurfacesPlane(const std::vector<int8_t>& sides) {
+    return std::find(sides.begin(), sides.end(), 0) != sides.end();
+}
+
 uint64_t regionKey(const VolumeRegion& r) {
     return keyOf(r.origin, r.size, r.resolution);
 }
@@ -134,10 +139,7 @@ void LightWork::forget() {
 
 std::optional<ReflectiveShadowMap> LightWork::spareRsm(const Light& light, int resolution, uint64_t voxels,
                                                        const std::vector<int8_t>& sides) {
-    // A surface whose plane holds the viewpoint (side 0) has no side to keep.
-    if (spare.voxels != voxels || spare.sides != sides ||
-        std::find(sides.begin(), sides.end(), 0) != sides.end())
-        return std::nullopt;
+    if (spare.voxels != voxels || spare.sides != sides || onASurfacesPlane(sides)) return std::nullopt;
     for (size_t i = 0; i < spare.lights.size(); ++i) {
         ReflectiveShadowMap& rsm = spare.rsms[i];
         if (rsm.resolution != resolution || !sameLight(spare.lights[i], light) || rsm.faces == 0) continue;
@@ -182,8 +184,7 @@ void FrameCache::keepLightFor(const Scene& scene, glm::vec3 viewpoint) {
     LightWork& l = light.work;
     if (l.rsms) {
         const std::vector<int8_t> sides = rsmViewSides(scene.real, viewpoint);
-        // A surface whose plane holds the viewpoint (side 0) has no side to keep.
-        if (sides != l.rsmSides || std::find(sides.begin(), sides.end(), 0) != sides.end()) {
+        if (sides != l.rsmSides || onASurfacesPlane(sides)) {
             emptyLight(false);
             return;
         }
