@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <numbers>
@@ -12,10 +13,17 @@
 namespace deltagi {
 
 namespace {
-// Texel footprints tile a lit surface only up to the RSM's sampling: a fully lit voxel collects between about
-// (k-1)^2 and (k+1)^2 texels of k^2. A voxel whose footprints cover this fraction of its area counts as fully
-// lit; below it, the radiance is scaled by the covered fraction (partly shadowed voxels).
-constexpr float kFullCoverage = 0.75f;
+// One light's texels in one voxel: their reflected flux, footprint area and number.
+struct TexelSum {
+    glm::vec3 flux{0.0f};
+    float area = 0.0f;
+    float count = 0.0f;
+    void add(const RsmTexel& t) {
+        flux += t.flux;
+        area += t.area;
+        count += 1.0f;
+    }
+};
 
 // The surface area of `geometry` in voxel i (world units^2).
 [[gnu::always_inline]] inline float geometryArea(std::span<const VoxelGeometry* const> geometry, size_t i) {
@@ -24,14 +32,26 @@ constexpr float kFullCoverage = 0.75f;
     return area;
 }
 
-// The radiance one light's texels give a voxel from their summed (reflected flux, footprint area) and the
-// geometry's `area` in it: the mean radiance of the lit texels (reflected flux / (pi * footprint area)),
-// times the lit fraction of the voxel's surface. Each light's is computed apart and the lights' are summed: a
-// voxel lit fully by two lights has the radiance of both, not their mean.
-[[gnu::always_inline]] inline glm::vec3 lightRadiance(glm::vec4 texelSum, float area) {
-    if (!(texelSum.w > 0.0f)) return glm::vec3(0.0f);
-    const float litFraction = area > 0.0f ? std::min(1.0f, texelSum.w / (kFullCoverage * area)) : 1.0f;
-    return glm::vec3(texelSum) * (litFraction / (std::numbers::pi_v<float> * texelSum.w));
+// The radiance one light's texels give a voxel from their sum and the geometry's `area` in it: the mean
+// radiance of the lit texels (reflected flux / (pi * footprint area)), times the lit fraction of the voxel's
+// surface, footprint / area. Footprints tile a lit surface only up to the map's sampling: with k texels across
+// the voxel's surface, a fully lit voxel collects between about (k-1)^2 and (k+1)^2 of its k^2. Where the map
+// is dense (k >= 6) a voxel whose footprints cover 3/4 of its area counts as fully lit, which removes that
+// aliasing; where it is sparse the footprint share is kept as it is (up to 4: a grazing texel's footprint
+// reaches into the voxels beside), as any threshold would darken the voxels that caught fewer texels than the
+// mean more than it brightens the others. Between, the two blend. Each light's is computed apart and the
+// lights' are summed: a voxel lit fully by two lights has the radiance of both, not their mean.
+[[gnu::always_inline]] inline glm::vec3 lightRadiance(const TexelSum& sum, float area) {
+    if (!(sum.area > 0.0f)) return glm::vec3(0.0f);
+    float litFraction = 1.0f;
+    if (area > 0.0f) {
+        const float share = sum.area / area;
+        const float across = std::sqrt(sum.count / share);  // k: the texels across the voxel's surface
+        const float dense = std::clamp((across - 3.0f) / 3.0f, 0.0f, 1.0f);
+        const float fullShare = 1.0f - 0.25f * dense, maxFraction = 4.0f - 3.0f * dense;
+        litFraction = std::min(maxFraction, share / fullShare);
+    }
+    return sum.flux * (litFraction / (std::numbers::pi_v<float> * sum.area));
 }
 
 // The texels of one voxel as they arrive in light and texel order: each light's sum is turned into its
@@ -40,18 +60,18 @@ constexpr float kFullCoverage = 0.75f;
 struct VoxelTexels {
     float area = 0.0f;         // of the geometry in the voxel
     glm::vec3 radiance{0.0f};  // of the lights finished
-    glm::vec4 current{0.0f};   // the current light's (reflected flux, footprint area)
+    TexelSum current;          // the current light's
     uint32_t light = 0;
     bool lit = false;  // any texel at all
     void add(uint32_t l, const RsmTexel& t) {
         if (lit && l != light) finishLight();
         light = l;
         lit = true;
-        current += glm::vec4(t.flux, t.area);
+        current.add(t);
     }
     void finishLight() {
         radiance += lightRadiance(current, area);
-        current = glm::vec4(0.0f);
+        current = TexelSum{};
     }
 };
 
@@ -104,20 +124,19 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
         parallelFor(0, slabCount, 1, [&](int64_t s) {
             // One light's texels of the slab: (reflected flux, footprint area) per voxel, then their
             // radiance. A thread's slab of sums, all zero between slabs.
-            thread_local std::vector<glm::vec4> accum;
-            if (accum.size() != slabVoxels) accum.assign(slabVoxels, glm::vec4(0.0f));
+            thread_local std::vector<TexelSum> accum;
+            if (accum.size() != slabVoxels) accum.assign(slabVoxels, TexelSum{});
             const size_t first = static_cast<size_t>(s) * slabVoxels;
-            for (uint32_t t : bins.slab(s))
-                accum[voxels[t] - first] += glm::vec4(rsm.texels[t].flux, rsm.texels[t].area);
+            for (uint32_t t : bins.slab(s)) accum[voxels[t] - first].add(rsm.texels[t]);
             // Each voxel of the slab once (at its first texel), in the slab's order.
             for (uint32_t t : bins.slab(s)) {
-                glm::vec4& sum = accum[voxels[t] - first];
-                if (sum.w > 0.0f) {
+                TexelSum& sum = accum[voxels[t] - first];
+                if (sum.area > 0.0f) {
                     light[voxels[t]] +=
                         glm::vec4(lightRadiance(sum, geometryArea(geometry, voxels[t])), 0.0f);
                     light[voxels[t]].w = 1.0f;
                 }
-                sum = glm::vec4(0.0f);
+                sum = TexelSum{};
             }
         });
     }

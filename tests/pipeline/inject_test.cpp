@@ -57,6 +57,24 @@ TEST(Inject, DirectionalLightOnAFloorGivesAlbedoTimesIrradianceOverPi) {
     EXPECT_EQ(light.at(8, 9, 8), glm::vec4(0.0f));
 }
 
+// ... also where the map is sparse: with about 1.7 texels across a voxel's floor, a fully lit voxel catches
+// between a fifth and 2.5 times its share of texels, and the floor's voxels keep the light on average (a
+// threshold that counts a voxel as fully lit from 3/4 of its share darkens them by 9 %).
+TEST(Inject, ASparseMapKeepsTheFloorsLightOnAverage) {
+    Scene s = floorOnly(0.5f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const std::vector<ReflectiveShadowMap> rsm = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 48)};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    const Grid3 light = injectLight(rsm, kRegion, geometry);
+    const float expected = 0.5f * 2.0f / std::numbers::pi_v<float>;
+    double sum = 0.0;
+    for (int z = 1; z < 15; ++z)
+        for (int x = 1; x < 15; ++x) sum += light.at(x, 8, z).x;
+    EXPECT_NEAR(sum / (14 * 14), expected, 0.03f * expected);
+}
+
 // A glossy floor reflects its glossy share into the volume too, spread over the hemisphere: albedo 0.3 and
 // specular 0.2 light the voxels as a Lambertian 0.5 does.
 TEST(Inject, GlossySurfacesReflectTheirWholeReflectanceIntoTheVolume) {

@@ -90,7 +90,8 @@ TEST(Render, TheBackgroundsSoftShadowsDoNotDependOnTheRaysOfTheFrames) {
 }
 
 // ... and traces its diffuse cones 4 times as densely as the frames: a wall's bounce on the floor, rendered
-// as the background at the frames' stride 8, is within 1.2 % of every pixel traced (0.7 %; at stride 8 the
+// as the background at the frames' stride 8, is within 1.5 % of every pixel traced (1.25 %: the floor's map
+// has about 3 texels across a voxel, and the voxels' share of them shows in the bounce; at stride 8 the
 // interpolation showed as a grid of blocks, 2.1 % apart).
 TEST(Render, TheBackgroundsIndirectLightIsTracedDensely) {
     Scene s = test::floorScene();
@@ -104,7 +105,7 @@ TEST(Render, TheBackgroundsIndirectLightIsTracedDensely) {
     const Image sparse = render(s).background;
     s.options.diffuse.pixelStride = 1;
     const Image dense = render(s).background;
-    EXPECT_LT(largestDifferenceOverBrightest(sparse, dense), 0.012f);
+    EXPECT_LT(largestDifferenceOverBrightest(sparse, dense), 0.015f);
 }
 
 TEST(Render, TheObjectsShadowDarkensTheFloorUnderIt) {
