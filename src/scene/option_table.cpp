@@ -254,7 +254,8 @@ OptionGroup rsmGroup() {
         "texels along each side of one shadow-map face (up to 6 faces, 48 bytes per texel, two maps per "
         "light: the scene's and its update with the objects). `\"auto\"`: a point or spot light's maps have "
         "{} texels per voxel along the volume's side, in [{}, {}] ({} at 256³ and above, {} at 128³, {} at "
-        "64³, {} at 32³), a directional light's {} (its orthographic map spreads over the whole region); "
+        "64³, {} at 32³), a directional light's {} per voxel, in [{}, {}] ({} at 128³ and below, {} at 256³: its "
+        "orthographic map spreads over the whole region); "
         "with several lights, each takes the square root of its share of the brightest light's irradiance in "
         "the volume (its largest over the region's centre and corners) times that, to the nearest power of "
         "two, at least 1/{} of it. Figures: "
@@ -263,7 +264,8 @@ OptionGroup rsmGroup() {
         kAutoRsmTexelsPerVoxel, kAutoRsmMinResolution, kAutoRsmMaxResolution,
         rsmResolutionCeiling(0, 256, false), rsmResolutionCeiling(0, 128, false),
         rsmResolutionCeiling(0, 64, false), rsmResolutionCeiling(0, 32, false),
-        rsmResolutionCeiling(0, 128, true), kAutoRsmMinShare);
+        kAutoRsmDirectionalTexelsPerVoxel, kAutoRsmDirectionalMinResolution, kAutoRsmMaxResolution,
+        rsmResolutionCeiling(0, 128, true), rsmResolutionCeiling(0, 256, true), kAutoRsmMinShare);
     return group("rsm", &Options::rsm,
                  {option("resolution", &RsmOptions::resolution,
                          integers({16, 8192, Integers::Only::All, true}), "texels", doc)});

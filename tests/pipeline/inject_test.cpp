@@ -131,9 +131,9 @@ TEST(Inject, TwoLightsAddTheirRadiance) {
 }
 
 // options.rsm.resolution "auto": a point light's map has 3 texels per voxel (96 at 32^3, 384 at 128^3, 512 at
-// 256^3 and above), a directional light's 512 (its orthographic map spreads over the whole region); among
-// several lights each takes the square root of its share of the brightest one's irradiance (1/4 and 1/16 of
-// it: a half and a quarter of the side), at least a quarter. A given resolution is every light's.
+// 256^3 and above), a directional light's 2 (256 up to 128^3, 512 at 256^3: its orthographic map spreads over
+// the whole region); among several lights each takes the square root of its share of the brightest one's
+// irradiance (1/4 and 1/16 of it: a half and a quarter of the side), at least a quarter. A given resolution is every light's.
 TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
     Options options;
     options.volume.resolution = 32;
@@ -145,11 +145,15 @@ TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
     EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, quarter, sixteenth, dim}, kRegion),
               (std::vector<int>{96, 48, 24, 24}));
     EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion),
-              std::vector<int>{512});
+              std::vector<int>{256});
     options.volume.resolution = 128;
     EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright}, kRegion), std::vector<int>{384});
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion),
+              std::vector<int>{256});
     options.volume.resolution = 256;
     EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright}, kRegion), std::vector<int>{512});
+    EXPECT_EQ(rsmResolutions(options, std::vector<Light>{directionalDown(1.0f)}, kRegion),
+              std::vector<int>{512});
     options.rsm.resolution = 200;
     EXPECT_EQ(rsmResolutions(options, std::vector<Light>{bright, dim}, kRegion),
               (std::vector<int>{200, 200}));
@@ -182,12 +186,15 @@ TEST(ReflectiveShadowMap, ASpotLightsMapHoldsTheLightOfItsWholeCone) {
 }
 
 // Lights whose maps differ in resolution still add their radiance: each light's texels are turned into
-// radiance with their own footprints.
+// radiance with their own footprints ("auto"'s resolutions for a light and one of 1/16 its irradiance, at
+// 256^3, where each map has many texels across a voxel of this region).
 TEST(Inject, LightsWithMapsOfDifferentResolutionsAddTheirRadiance) {
     Scene s = floorOnly(0.5f);
     RayScene rays(s, SceneContent::RealOnly);
     const std::vector<Light> lights = {directionalDown(2.0f), directionalDown(2.0f / 16.0f)};
-    const std::vector<int> resolutions = rsmResolutions(Options{}, lights, kRegion);
+    Options options;
+    options.volume.resolution = 256;
+    const std::vector<int> resolutions = rsmResolutions(options, lights, kRegion);
     ASSERT_EQ(resolutions, (std::vector<int>{512, 128}));
     const std::vector<ReflectiveShadowMap> rsms = {
         renderReflectiveShadowMap(rays, lights[0], kRegion, resolutions[0]),

@@ -107,7 +107,7 @@ TEST(RenderMemoryTest, AutoResolutionCountsEachLightsOwnMaps) {
     EXPECT_EQ(point, uint64_t{2} * 6 * 96 * 96 * 48);
     const uint64_t directional =
         estimateRenderMemory(options, camera, 1, 1) - estimateRenderMemory(options, camera, 1, 0);
-    EXPECT_EQ(directional, uint64_t{2} * 6 * 512 * 512 * 48);
+    EXPECT_EQ(directional, uint64_t{2} * 6 * 256 * 256 * 48);
     EXPECT_LT(estimateRenderMemory(options, camera, 40) - estimateRenderMemory(options, camera, 0),
               uint64_t{400} << 20);
 }
