@@ -80,17 +80,6 @@ glm::vec3 tailScale(glm::dvec3 last, glm::dvec3 before) {
     return scale;
 }
 
-// Calls body(row, i) for every surface voxel i of `geometry` (VoxelGeometry::surfaceVoxels) in index order
-// within each row of its bounds, rows in parallel (`row` their place in the bounds' rows).
-template <typename Body>
-void forEachSurfaceVoxel(const VoxelGeometry& geometry, Body&& body) {
-    const size_t rows = geometry.surfaceRowStart.empty() ? 0 : geometry.surfaceRowStart.size() - 1;
-    parallelFor(0, static_cast<int64_t>(rows), 64, [&](int64_t row) {
-        for (uint32_t k = geometry.surfaceRowStart[row]; k < geometry.surfaceRowStart[row + 1]; ++k)
-            body(static_cast<size_t>(row), static_cast<size_t>(geometry.surfaceVoxels[k]));
-    });
-}
-
 // The sum over the voxels of `geometry`'s surfaces of their surface area times value(voxel index): the light
 // of a bounce over the scene's surfaces, up to a constant. Rows are summed in parallel and added in order
 // (the same for any thread count).

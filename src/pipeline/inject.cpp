@@ -102,9 +102,29 @@ struct VoxelTexels {
 
 }  // namespace
 
+namespace {
+
+// Whether voxel i is on a surface of `geometry` (VoxelGeometry::surfaceVoxels).
+[[gnu::always_inline]] inline bool onASurface(std::span<const VoxelGeometry* const> geometry, size_t i) {
+    for (const VoxelGeometry* g : geometry)
+        if (g->visibility[i].x > 0.0f) return true;
+    return false;
+}
+
+// Whether each of `geometry` lists its surface voxels (voxelize's `withAlbedo`).
+bool surfacesListed(std::span<const VoxelGeometry* const> geometry) {
+    return std::all_of(geometry.begin(), geometry.end(),
+                       [](const VoxelGeometry* g) { return g->bounds.empty() || !g->surfaceRowStart.empty(); });
+}
+
+}  // namespace
+
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
                   std::span<const VoxelGeometry* const> geometry) {
     const int n = region.resolution;
+    // voxelLight is zero where no texel landed and no surface is: with the surface voxels listed, only they
+    // and the lit voxels off them (a texel rounded into the voxel beside its surface) are visited.
+    const bool listed = surfacesListed(geometry);
 
     // Per voxel: the lights' summed radiance, and (w) 1 where any texel landed; then the light volume, in
     // place.
@@ -113,6 +133,7 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
     const size_t slabVoxels = static_cast<size_t>(kSlabThickness) * n * n;
     std::vector<uint32_t> voxels;
+    std::vector<std::vector<uint32_t>> offSurfaces(listed ? slabCount : 0);  // lit voxels, by slab
     for (const ReflectiveShadowMap& rsm : rsms) {
         voxels.resize(rsm.texels.size());
         parallelFor(0, static_cast<int64_t>(voxels.size()), 1 << 14,
@@ -132,17 +153,28 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
             for (uint32_t t : bins.slab(s)) {
                 TexelSum& sum = accum[voxels[t] - first];
                 if (sum.area > 0.0f) {
-                    light[voxels[t]] +=
-                        glm::vec4(lightRadiance(sum, geometryArea(geometry, voxels[t])), 0.0f);
-                    light[voxels[t]].w = 1.0f;
+                    const uint32_t v = voxels[t];
+                    light[v] += glm::vec4(lightRadiance(sum, geometryArea(geometry, v)), 0.0f);
+                    if (listed && light[v].w == 0.0f && !onASurface(geometry, v)) offSurfaces[s].push_back(v);
+                    light[v].w = 1.0f;
                 }
                 sum = TexelSum{};
             }
         });
     }
 
-    parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) {
-        light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, i);
+    auto finish = [&](size_t i) { light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, i); };
+    if (!listed) {
+        parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) { finish(i); });
+        return light;
+    }
+    // Each surface voxel once: the first geometry's, then each next one's off the ones before.
+    for (size_t g = 0; g < geometry.size(); ++g)
+        forEachSurfaceVoxel(*geometry[g], [&](size_t, size_t i) {
+            if (!onASurface(geometry.first(g), i)) finish(i);
+        });
+    parallelFor(0, slabCount, 1, [&](int64_t s) {
+        for (uint32_t i : offSurfaces[s]) finish(i);
     });
     return light;
 }

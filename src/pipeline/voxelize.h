@@ -50,6 +50,17 @@ struct VoxelGeometry {
     std::vector<TriangleMaterials> triangleMaterials;
 };
 
+// Calls body(row, i) for every surface voxel i of `geometry` (VoxelGeometry::surfaceVoxels) in index order
+// within each row of its bounds, rows in parallel (`row` their place in the bounds' rows).
+template <typename Body>
+inline void forEachSurfaceVoxel(const VoxelGeometry& geometry, Body&& body) {
+    const size_t rows = geometry.surfaceRowStart.empty() ? 0 : geometry.surfaceRowStart.size() - 1;
+    parallelFor(0, static_cast<int64_t>(rows), 64, [&](int64_t row) {
+        for (uint32_t k = geometry.surfaceRowStart[row]; k < geometry.surfaceRowStart[row + 1]; ++k)
+            body(static_cast<size_t>(row), static_cast<size_t>(geometry.surfaceVoxels[k]));
+    });
+}
+
 // Voxelizes `meshes` over `region`. Deterministic for any thread count (each voxel sums its triangles in
 // mesh and triangle order).
 // `withEmission` false leaves emitting surfaces' radiance out (VoxelGeometry::emission empty): their light

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 #include <gtest/gtest.h>
@@ -73,6 +74,42 @@ TEST(Inject, ASparseMapKeepsTheFloorsLightOnAverage) {
     for (int z = 1; z < 15; ++z)
         for (int x = 1; x < 15; ++x) sum += light.at(x, 8, z).x;
     EXPECT_NEAR(sum / (14 * 14), expected, 0.03f * expected);
+}
+
+// With the surface voxels listed (voxelize's `withAlbedo`), injection finishes only them and the lit voxels off
+// them: the same volume, bit for bit, as finishing every voxel, for two geometries that share voxels (a ball on
+// the floor, the ball emitting) and a texel that lands off every surface.
+TEST(Inject, TheSurfaceVoxelsAloneGiveTheSameVolume) {
+    Scene s = floorOnly(0.5f);
+    Scene objects;
+    objects.real.push_back(test::placed(makeSphere(0.2f, 24), {0.1f, 0.26f, 0.0f}, test::diffuse(glm::vec3(0.7f))));
+    objects.real[0].material.emission = glm::vec3(0.3f);
+    s.real.push_back(objects.real[0]);
+    RayScene rays(s, SceneContent::RealOnly);
+    std::vector<ReflectiveShadowMap> rsm = {renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 64)};
+    RsmTexel stray;
+    stray.position = glm::vec3(-0.55f, 0.7f, 0.45f);  // in the air
+    stray.normal = glm::vec3(0, 1, 0);
+    stray.flux = glm::vec3(0.01f);
+    stray.area = 1e-3f;
+    rsm[0].texels.push_back(stray);
+    const VoxelGeometry floorListed = voxelize(std::span(s.real).first(1), kRegion, true, true);
+    const VoxelGeometry ballListed = voxelize(objects.real, kRegion, true, true);
+    const VoxelGeometry floorAll = voxelize(std::span(s.real).first(1), kRegion, true, false);
+    const VoxelGeometry ballAll = voxelize(objects.real, kRegion, true, false);
+    ASSERT_FALSE(floorListed.surfaceRowStart.empty());
+    ASSERT_TRUE(floorAll.surfaceRowStart.empty());
+    const VoxelGeometry* listed[] = {&floorListed, &ballListed};
+    const VoxelGeometry* all[] = {&floorAll, &ballAll};
+    const Grid3 a = injectLight(rsm, kRegion, listed), b = injectLight(rsm, kRegion, all);
+    ASSERT_EQ(a.size(), b.size());
+    size_t differing = 0;
+    for (size_t i = 0; i < a.size(); ++i) differing += std::memcmp(&a[i], &b[i], sizeof(glm::vec4)) != 0;
+    EXPECT_EQ(differing, 0u);
+    const glm::ivec3 v = TexelVoxels(kRegion)(stray.position);
+    EXPECT_GT(a.at(v.x, v.y, v.z).x, 0.0f);
+    EXPECT_EQ(a.at(v.x, v.y, v.z).w, 1.0f);
+    EXPECT_GT(a.at(8, 11, 8).x, 0.0f);  // the ball's lit top
 }
 
 // A glossy floor reflects its glossy share into the volume too, spread over the hemisphere: albedo 0.3 and
