@@ -148,7 +148,7 @@ inline constexpr int kAutoObjectRayStride = 8;
 // A directional light's map is orthographic over the region's bounding sphere: kAutoRsmDirectionalTexelsPerVoxel
 // per voxel along the volume's side (about 1.2 across a voxel facing the light), in
 // [kAutoRsmDirectionalMinResolution, kAutoRsmMaxResolution]. The field photo's 16 lights at 128^3: 256 against
-// 512 gives delta_rel_error 0.347 against 0.340 for a live frame's shadow maps and injection in 45 % of the
+// 512 gives delta_rel_error 0.347 against 0.340 for a live frame's shadow maps and injection in a third of the
 // time; at 32^3 and 64^3 the floor keeps 2.3 texels and more across a voxel (docs/design.md, "Sparse tracing").
 // Among several lights, each takes its ceiling times the square root of its share of the brightest light's
 // irradiance in the volume (the split of a texel budget that minimizes the sum of the lights' injection

@@ -98,6 +98,9 @@ class FrameRenderer {
     // plane) and its camera-space work (its G-buffer, the filter's weights).
     struct KeptWork {
         bool world = false, light = false, camera = false;
+        // The virtual objects were the frame before's, bit for bit: their BVH was not refit and their voxels
+        // not redone (a still object in a live frame whose camera or light changed).
+        bool objects = false;
         // Where the light was not kept: how many of the new lights' reflective shadow maps were the frame
         // before's, for the lights that did not change (a lamp beside a light camera's new environment).
         int lightMapsKept = 0;

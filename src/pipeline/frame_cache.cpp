@@ -66,6 +66,27 @@ uint64_t realMeshesKey(const Scene& scene) {
     return h.digest();
 }
 
+// The virtual objects' meshes and materials, with their addresses (the objects' BVH points into them).
+uint64_t objectsKey(const Scene& scene) {
+    Hasher h;
+    h.value(scene.virtuals.data());
+    h.value(scene.virtuals.size());
+    for (const TriangleMesh& m : scene.virtuals) {
+        h.value(m.positions.data());
+        h.values(m.positions);
+        h.values(m.normals);
+        h.values(m.triangles);
+        h.values(m.uvs);
+        h.values(m.uvs1);
+        h.values(m.tangents);
+        h.values(m.colors);
+        visitMaterialFields(m.material, [&](const auto& v) { h.value(v); });
+        h.value(m.objectSpace.get());
+        h.value(m.worldFromObject);
+    }
+    return h.digest();
+}
+
 uint64_t environmentKey(const Scene& scene) {
     if (!scene.environment) return 0;
     return keyOf(scene.environment->radiance.data().data(), scene.environment->worldFromEnvironment);
@@ -210,8 +231,12 @@ void FrameCache::update(const Scene& scene) {
     view.work.steady = kept_.camera;
     renew(litView, keyOf(world.version, lights, view.version));
     renew(relitShadows, keyOf(voxels.version, lights, view.version));
-    renew(objectRays, keyOf(world.version));
-    renew(objectVolumes, keyOf(voxels.version));  // a new light: ObjectVolumes starts from it (lightVersion)
+    const bool objectRaysKept = renew(objectRays, keyOf(world.version));
+    const bool objectVolumesKept =
+        renew(objectVolumes, keyOf(voxels.version));  // a new light: ObjectVolumes starts from it (lightVersion)
+    const uint64_t objects = objectsKey(scene);
+    kept_.objects = objects == objectsKey_ && objectRaysKept && objectVolumesKept;
+    objectsKey_ = objects;
     renew(environment, environmentKey(scene));
     const uint64_t realScene = keyOf(world.version, lights);
     newRealScene_ = realScene != realSceneKey_;

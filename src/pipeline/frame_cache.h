@@ -177,6 +177,7 @@ class FrameCache {
     std::optional<glm::vec3> viewpoint_;  // the one LightWork's sides were taken for
     uint64_t realSceneKey_ = 0;
     bool newRealScene_ = true;
+    uint64_t objectsKey_ = 0;
     FrameRenderer::KeptWork kept_;
 };
 

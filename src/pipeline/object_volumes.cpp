@@ -28,8 +28,13 @@ bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
 }  // namespace
 
 void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region,
-                             bool withEmission, bool withAlbedo) {
-    if (objectVisibility_.empty() || !sameRegion(region, region_)) {
+                             bool withEmission, bool withAlbedo, bool unchanged) {
+    const bool fresh = objectVisibility_.empty() || !sameRegion(region, region_);
+    if (unchanged && !fresh) {
+        objectsChanged_ = VoxelBox{};
+        return;
+    }
+    if (fresh) {
         *this = ObjectVolumes{};
         region_ = region;
         objects_ = deltagi::voxelize(objects, region, withEmission, withAlbedo);

@@ -42,9 +42,10 @@ struct RealSceneVolumes {
 
 class ObjectVolumes {
   public:
-    // Stage 1: the objects' voxels, over `region` (a new region starts afresh).
+    // Stage 1: the objects' voxels, over `region` (a new region starts afresh). `unchanged`: the objects are
+    // those of the last call, bit for bit (FrameRenderer::KeptWork::objects), and their voxels are kept.
     void voxelize(std::span<const TriangleMesh> objects, const VolumeRegion& region, bool withEmission = true,
-                  bool withAlbedo = false);
+                  bool withAlbedo = false, bool unchanged = false);
     // Stage 3: the full and delta light volumes (level 0). `updates` are the real scene's RSMs' updates for
     // the objects (traceRsmUpdate), one per light.
     void inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates);

@@ -186,7 +186,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
     const int bounces = scene.options.render.lightBounces - 1;
     if (!real.geometry) real.geometry = voxelize(scene.real, region, withEmission, bounces > 0);
-    objects.voxelize(scene.virtuals, region, withEmission, bounces > 0);
+    objects.voxelize(scene.virtuals, region, withEmission, bounces > 0, cache.kept().objects);
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
@@ -311,9 +311,10 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
     std::unique_ptr<RayScene>& realRays = cache.world.work.realOnly;
     if (!realRays) realRays = std::make_unique<RayScene>(scene, SceneContent::RealOnly);
     const RayScene& realOnly = *realRays;
-    // The virtual objects get their own BVH, layered over the reconstruction's; refit when they only moved.
+    // The virtual objects get their own BVH, layered over the reconstruction's; refit when they only moved,
+    // kept when they did not.
     std::unique_ptr<RayScene>& objectRays = cache.objectRays.work.objects;
-    if (!scene.virtuals.empty() && !(objectRays && objectRays->refit(scene)))
+    if (!scene.virtuals.empty() && !(objectRays && (cache.kept().objects || objectRays->refit(scene))))
         objectRays = std::make_unique<RayScene>(scene, SceneContent::VirtualOnly, &realOnly);
     const RayScene* all = scene.virtuals.empty() ? nullptr : objectRays.get();
     timer.lap("bvh");

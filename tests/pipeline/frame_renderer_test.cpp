@@ -276,6 +276,31 @@ TEST(FrameRenderer, ALightThatDoesNotChangeKeepsItsMapWhileAnotherChanges) {
     EXPECT_EQ(frames.lastFrameKept().lightMapsKept, 0);
 }
 
+// Objects that stay where they were keep their BVH and voxels while the light and the camera change (a live
+// frame with a still object): the frames are still exactly render()'s, and the objects' work is redone when
+// they move or their material changes.
+TEST(FrameRenderer, ObjectsThatDoNotChangeKeepTheirWorkWhileTheLightAndCameraChange) {
+    Scene s = ballOverFloor();
+    FrameRenderer frames;
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_FALSE(frames.lastFrameKept().objects);
+    s.lights[0].position += glm::vec3(0.05f, 0.0f, 0.0f);
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_TRUE(frames.lastFrameKept().objects);
+    EXPECT_FALSE(frames.lastFrameKept().light);
+    s.camera = test::lookAtCamera({0.1f, 1.6f, 1.6f}, {0.1f, 0.3f, 0.0f}, 64, 48, 60.0f);
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_TRUE(frames.lastFrameKept().objects);
+    moveVirtuals(s, {0.02f, 0.0f, 0.0f});
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_FALSE(frames.lastFrameKept().objects);
+    s.virtuals[0].material.albedo = glm::vec3(0.2f, 0.6f, 0.2f);
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_FALSE(frames.lastFrameKept().objects);
+    expectSameImages(frames.render(s), render(s));
+    EXPECT_TRUE(frames.lastFrameKept().objects);
+}
+
 TEST(Benchmark, ReportsEveryRowAndPutsTheObjectsBack) {
     Scene s = ballOverFloor();
     const std::vector<glm::vec3> before = s.virtuals[0].positions;

@@ -34,6 +34,16 @@ Light directionalDown(float irradiance) {
     return l;
 }
 
+// The light volume of `s`'s real surfaces under directionalDown(2) through a map of `resolution`.
+Grid3 lightUnderDirectionalDown(const Scene& s, int resolution) {
+    RayScene rays(s, SceneContent::RealOnly);
+    const std::vector<ReflectiveShadowMap> rsm = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, resolution)};
+    VoxelGeometry g = voxelize(s.real, kRegion);
+    const VoxelGeometry* geometry[] = {&g};
+    return injectLight(rsm, kRegion, geometry);
+}
+
 // A directional light straight down on a Lambertian floor: every lit floor voxel holds albedo * E / pi.
 TEST(Inject, DirectionalLightOnAFloorGivesAlbedoTimesIrradianceOverPi) {
     Scene s = floorOnly(0.5f);
@@ -62,13 +72,7 @@ TEST(Inject, DirectionalLightOnAFloorGivesAlbedoTimesIrradianceOverPi) {
 // between a fifth and 2.5 times its share of texels, and the floor's voxels keep the light on average (a
 // threshold that counts a voxel as fully lit from 3/4 of its share darkens them by 9 %).
 TEST(Inject, ASparseMapKeepsTheFloorsLightOnAverage) {
-    Scene s = floorOnly(0.5f);
-    RayScene rays(s, SceneContent::RealOnly);
-    const std::vector<ReflectiveShadowMap> rsm = {
-        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 48)};
-    VoxelGeometry g = voxelize(s.real, kRegion);
-    const VoxelGeometry* geometry[] = {&g};
-    const Grid3 light = injectLight(rsm, kRegion, geometry);
+    const Grid3 light = lightUnderDirectionalDown(floorOnly(0.5f), 48);
     const float expected = 0.5f * 2.0f / std::numbers::pi_v<float>;
     double sum = 0.0;
     for (int z = 1; z < 15; ++z)
@@ -117,12 +121,7 @@ TEST(Inject, TheSurfaceVoxelsAloneGiveTheSameVolume) {
 TEST(Inject, GlossySurfacesReflectTheirWholeReflectanceIntoTheVolume) {
     Scene s = floorOnly(0.3f);
     s.real[0].material.specular = glm::vec3(0.2f);
-    RayScene rays(s, SceneContent::RealOnly);
-    const std::vector<ReflectiveShadowMap> rsm = {
-        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 256)};
-    VoxelGeometry g = voxelize(s.real, kRegion);
-    const VoxelGeometry* geometry[] = {&g};
-    const Grid3 light = injectLight(rsm, kRegion, geometry);
+    const Grid3 light = lightUnderDirectionalDown(s, 256);
     EXPECT_NEAR(light.at(8, 8, 8).x, 0.5f * 2.0f / std::numbers::pi_v<float>, 0.01f);
 }
 
