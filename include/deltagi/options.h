@@ -145,14 +145,14 @@ inline constexpr int kAutoObjectRayStride = 8;
 // volume's side, in [kAutoRsmMinResolution, kAutoRsmMaxResolution]. At 128^3, 3 (384) against 4 (512): every
 // quality-suite delta_rel_error within 0.006 (0.003-0.006 higher on the 640x480 boxes, under 0.001 on the
 // bare bulb and the bunny) for a live frame's shadow maps and injection in 60 % of the time (docs/design.md).
-// A directional light's map is orthographic over the region's bounding sphere: kAutoRsmDirectionalTexelsPerVoxel
-// per voxel along the volume's side (about 1.2 across a voxel facing the light), in
-// [kAutoRsmDirectionalMinResolution, kAutoRsmMaxResolution]. The field photo's 16 lights at 128^3: 256 against
-// 512 gives delta_rel_error 0.347 against 0.340 for a live frame's shadow maps and injection in a third of the
-// time; at 32^3 and 64^3 the floor keeps 2.3 texels and more across a voxel (docs/design.md, "Sparse tracing").
-// Among several lights, each takes its ceiling times the square root of its share of the brightest light's
-// irradiance in the volume (the split of a texel budget that minimizes the sum of the lights' injection
-// noise), rounded to the nearest power of two, at least the ceiling / kAutoRsmMinShare.
+// A directional light's map is orthographic over the region's bounding sphere:
+// kAutoRsmDirectionalTexelsPerVoxel per voxel along the volume's side (about 1.2 across a voxel facing the
+// light), in [kAutoRsmDirectionalMinResolution, kAutoRsmMaxResolution]. The field photo's 16 lights at 128^3:
+// 256 against 512 gives delta_rel_error 0.347 against 0.340 for a live frame's shadow maps and injection in a
+// third of the time; at 32^3 and 64^3 the floor keeps 2.3 texels and more across a voxel (docs/design.md,
+// "Sparse tracing"). Among several lights, each takes its ceiling times the square root of its share of the
+// brightest light's irradiance in the volume (the split of a texel budget that minimizes the sum of the
+// lights' injection noise), rounded to the nearest power of two, at least the ceiling / kAutoRsmMinShare.
 inline constexpr int kAutoRsmTexelsPerVoxel = 3, kAutoRsmMinResolution = 64, kAutoRsmMaxResolution = 512;
 inline constexpr int kAutoRsmMinShare = 4;
 inline constexpr int kAutoRsmDirectionalTexelsPerVoxel = 2, kAutoRsmDirectionalMinResolution = 256;
@@ -162,8 +162,8 @@ inline constexpr int kAutoRsmDirectionalTexelsPerVoxel = 2, kAutoRsmDirectionalM
 inline int rsmResolutionCeiling(int option, int volumeResolution, bool directional) {
     if (option > 0) return option;
     if (directional)
-        return std::clamp(kAutoRsmDirectionalTexelsPerVoxel * volumeResolution, kAutoRsmDirectionalMinResolution,
-                          kAutoRsmMaxResolution);
+        return std::clamp(kAutoRsmDirectionalTexelsPerVoxel * volumeResolution,
+                          kAutoRsmDirectionalMinResolution, kAutoRsmMaxResolution);
     return std::clamp(kAutoRsmTexelsPerVoxel * volumeResolution, kAutoRsmMinResolution,
                       kAutoRsmMaxResolution);
 }

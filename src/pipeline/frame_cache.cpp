@@ -43,6 +43,19 @@ uint64_t keyOf(const T&... values) {
     return h.digest();
 }
 
+// A mesh's geometry, its attributes and material, and its positions' address (a kept BVH points into them).
+void hashMesh(Hasher& h, const TriangleMesh& m) {
+    h.value(m.positions.data());
+    h.values(m.positions);
+    h.values(m.normals);
+    h.values(m.triangles);
+    h.values(m.uvs);
+    h.values(m.uvs1);
+    h.values(m.tangents);
+    h.values(m.colors);
+    visitMaterialFields(m.material, [&](const auto& v) { h.value(v); });
+}
+
 // The real scene's geometry and materials. The scene's and its real meshes' addresses are part of it: the
 // kept BVH and surfaces point into them.
 uint64_t realMeshesKey(const Scene& scene) {
@@ -50,37 +63,20 @@ uint64_t realMeshesKey(const Scene& scene) {
     h.value(&scene);
     h.value(scene.real.data());
     h.value(scene.real.size());
-    for (const TriangleMesh& m : scene.real) {
-        h.value(m.positions.data());
-        h.values(m.positions);
-        h.values(m.normals);
-        h.values(m.triangles);
-        h.values(m.uvs);
-        h.values(m.uvs1);
-        h.values(m.tangents);
-        h.values(m.colors);
-        visitMaterialFields(m.material, [&](const auto& v) { h.value(v); });
-    }
+    for (const TriangleMesh& m : scene.real) hashMesh(h, m);
     // Whether there is a photo: without one the background is the real scene rendered alone.
     h.value(scene.background.has_value());
     return h.digest();
 }
 
-// The virtual objects' meshes and materials, with their addresses (the objects' BVH points into them).
+// The virtual objects' meshes, materials and placement, with their addresses (the objects' BVH points into
+// them).
 uint64_t objectsKey(const Scene& scene) {
     Hasher h;
     h.value(scene.virtuals.data());
     h.value(scene.virtuals.size());
     for (const TriangleMesh& m : scene.virtuals) {
-        h.value(m.positions.data());
-        h.values(m.positions);
-        h.values(m.normals);
-        h.values(m.triangles);
-        h.values(m.uvs);
-        h.values(m.uvs1);
-        h.values(m.tangents);
-        h.values(m.colors);
-        visitMaterialFields(m.material, [&](const auto& v) { h.value(v); });
+        hashMesh(h, m);
         h.value(m.objectSpace.get());
         h.value(m.worldFromObject);
     }
@@ -232,8 +228,8 @@ void FrameCache::update(const Scene& scene) {
     renew(litView, keyOf(world.version, lights, view.version));
     renew(relitShadows, keyOf(voxels.version, lights, view.version));
     const bool objectRaysKept = renew(objectRays, keyOf(world.version));
-    const bool objectVolumesKept =
-        renew(objectVolumes, keyOf(voxels.version));  // a new light: ObjectVolumes starts from it (lightVersion)
+    const bool objectVolumesKept = renew(
+        objectVolumes, keyOf(voxels.version));  // a new light: ObjectVolumes starts from it (lightVersion)
     const uint64_t objects = objectsKey(scene);
     kept_.objects = objects == objectsKey_ && objectRaysKept && objectVolumesKept;
     objectsKey_ = objects;

@@ -34,13 +34,13 @@ struct TexelSum {
 
 // The radiance one light's texels give a voxel from their sum and the geometry's `area` in it: the mean
 // radiance of the lit texels (reflected flux / (pi * footprint area)), times the lit fraction of the voxel's
-// surface, footprint / area. Footprints tile a lit surface only up to the map's sampling: with k texels across
-// the voxel's surface, a fully lit voxel collects between about (k-1)^2 and (k+1)^2 of its k^2. Where the map
-// is dense (k >= 6) a voxel whose footprints cover 3/4 of its area counts as fully lit, which removes that
-// aliasing; where it is sparse the footprint share is kept as it is (up to 4: a grazing texel's footprint
-// reaches into the voxels beside), as any threshold would darken the voxels that caught fewer texels than the
-// mean more than it brightens the others. Between, the two blend. Each light's is computed apart and the
-// lights' are summed: a voxel lit fully by two lights has the radiance of both, not their mean.
+// surface, footprint / area. Footprints tile a lit surface only up to the map's sampling: with k texels
+// across the voxel's surface, a fully lit voxel collects between about (k-1)^2 and (k+1)^2 of its k^2. Where
+// the map is dense (k >= 6) a voxel whose footprints cover 3/4 of its area counts as fully lit, which removes
+// that aliasing; where it is sparse the footprint share is kept as it is (up to 4: a grazing texel's
+// footprint reaches into the voxels beside), as any threshold would darken the voxels that caught fewer
+// texels than the mean more than it brightens the others. Between, the two blend. Each light's is computed
+// apart and the lights' are summed: a voxel lit fully by two lights has the radiance of both, not their mean.
 [[gnu::always_inline]] inline glm::vec3 lightRadiance(const TexelSum& sum, float area) {
     if (!(sum.area > 0.0f)) return glm::vec3(0.0f);
     float litFraction = 1.0f;
@@ -113,8 +113,9 @@ namespace {
 
 // Whether each of `geometry` lists its surface voxels (voxelize's `withAlbedo`).
 bool surfacesListed(std::span<const VoxelGeometry* const> geometry) {
-    return std::all_of(geometry.begin(), geometry.end(),
-                       [](const VoxelGeometry* g) { return g->bounds.empty() || !g->surfaceRowStart.empty(); });
+    return std::all_of(geometry.begin(), geometry.end(), [](const VoxelGeometry* g) {
+        return g->bounds.empty() || !g->surfaceRowStart.empty();
+    });
 }
 
 }  // namespace
@@ -163,7 +164,9 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
         });
     }
 
-    auto finish = [&](size_t i) { light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, i); };
+    auto finish = [&](size_t i) {
+        light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, i);
+    };
     if (!listed) {
         parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) { finish(i); });
         return light;

@@ -80,17 +80,19 @@ TEST(Inject, ASparseMapKeepsTheFloorsLightOnAverage) {
     EXPECT_NEAR(sum / (14 * 14), expected, 0.03f * expected);
 }
 
-// With the surface voxels listed (voxelize's `withAlbedo`), injection finishes only them and the lit voxels off
-// them: the same volume, bit for bit, as finishing every voxel, for two geometries that share voxels (a ball on
-// the floor, the ball emitting) and a texel that lands off every surface.
+// With the surface voxels listed (voxelize's `withAlbedo`), injection finishes only them and the lit voxels
+// off them: the same volume, bit for bit, as finishing every voxel, for two geometries that share voxels (a
+// ball on the floor, the ball emitting) and a texel that lands off every surface.
 TEST(Inject, TheSurfaceVoxelsAloneGiveTheSameVolume) {
     Scene s = floorOnly(0.5f);
     Scene objects;
-    objects.real.push_back(test::placed(makeSphere(0.2f, 24), {0.1f, 0.26f, 0.0f}, test::diffuse(glm::vec3(0.7f))));
+    objects.real.push_back(
+        test::placed(makeSphere(0.2f, 24), {0.1f, 0.26f, 0.0f}, test::diffuse(glm::vec3(0.7f))));
     objects.real[0].material.emission = glm::vec3(0.3f);
     s.real.push_back(objects.real[0]);
     RayScene rays(s, SceneContent::RealOnly);
-    std::vector<ReflectiveShadowMap> rsm = {renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 64)};
+    std::vector<ReflectiveShadowMap> rsm = {
+        renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 64)};
     RsmTexel stray;
     stray.position = glm::vec3(-0.55f, 0.7f, 0.45f);  // in the air
     stray.normal = glm::vec3(0, 1, 0);
@@ -169,7 +171,8 @@ TEST(Inject, TwoLightsAddTheirRadiance) {
 // options.rsm.resolution "auto": a point light's map has 3 texels per voxel (96 at 32^3, 384 at 128^3, 512 at
 // 256^3 and above), a directional light's 2 (256 up to 128^3, 512 at 256^3: its orthographic map spreads over
 // the whole region); among several lights each takes the square root of its share of the brightest one's
-// irradiance (1/4 and 1/16 of it: a half and a quarter of the side), at least a quarter. A given resolution is every light's.
+// irradiance (1/4 and 1/16 of it: a half and a quarter of the side), at least a quarter. A given resolution
+// is every light's.
 TEST(ReflectiveShadowMap, AutoResolutionFollowsTheVolumeAndEachLightsShare) {
     Options options;
     options.volume.resolution = 32;
