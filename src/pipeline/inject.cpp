@@ -32,6 +32,11 @@ struct TexelSum {
     return area;
 }
 
+// lightRadiance's blend: the footprint share as it is (up to kSparseMaxFraction) with up to kSparseAcross
+// texels across a voxel, full from kDenseFullShare of it with kDenseAcross and more.
+constexpr float kSparseAcross = 3.0f, kDenseAcross = 6.0f;  // texels across a voxel
+constexpr float kDenseFullShare = 0.75f, kSparseMaxFraction = 4.0f;
+
 // The radiance one light's texels give a voxel from their sum and the geometry's `area` in it: the mean
 // radiance of the lit texels (reflected flux / (pi * footprint area)), times the lit fraction of the voxel's
 // surface, footprint / area. Footprints tile a lit surface only up to the map's sampling: with k texels
@@ -47,8 +52,9 @@ struct TexelSum {
     if (area > 0.0f) {
         const float share = sum.area / area;
         const float across = std::sqrt(sum.count / share);  // k: the texels across the voxel's surface
-        const float dense = std::clamp((across - 3.0f) / 3.0f, 0.0f, 1.0f);
-        const float fullShare = 1.0f - 0.25f * dense, maxFraction = 4.0f - 3.0f * dense;
+        const float dense = std::clamp((across - kSparseAcross) / (kDenseAcross - kSparseAcross), 0.0f, 1.0f);
+        const float fullShare = 1.0f - (1.0f - kDenseFullShare) * dense;
+        const float maxFraction = kSparseMaxFraction - (kSparseMaxFraction - 1.0f) * dense;
         litFraction = std::min(maxFraction, share / fullShare);
     }
     return sum.flux * (litFraction / (std::numbers::pi_v<float> * sum.area));
@@ -99,10 +105,6 @@ struct VoxelTexels {
 [[gnu::always_inline]] inline glm::vec4 deltaVoxel(glm::vec4 full, glm::vec4 sceneOnly) {
     return glm::vec4(full.x - sceneOnly.x, full.y - sceneOnly.y, full.z - sceneOnly.z, full.w);
 }
-
-}  // namespace
-
-namespace {
 
 // Whether voxel i is on a surface of `geometry` (VoxelGeometry::surfaceVoxels).
 [[gnu::always_inline]] inline bool onASurface(std::span<const VoxelGeometry* const> geometry, size_t i) {

@@ -16,10 +16,10 @@ namespace deltagi {
 // Radiance of a voxel = the mean radiance of the texels that landed in it (reflected flux / (pi * footprint
 // area)), times the lit fraction of the geometry's surface area in the voxel (footprint / area; where the map
 // has many texels across a voxel, saturating at 3/4, which absorbs their count's jitter: lightRadiance in
-// inject.cpp). Voxels are (radiance * occupancy,
-// occupancy), with occupancy 1 where any of `geometry` touches the voxel. Emissive geometry adds its emitted
-// radiance, averaged over the voxel's surface area: the cones then carry the light of emitters (one bounce of
-// it: emitted light is not reflected into the volume again). Deterministic for any thread count.
+// inject.cpp). Voxels are (radiance * occupancy, occupancy), with occupancy 1 where any of `geometry` touches
+// the voxel. Emissive geometry adds its emitted radiance, averaged over the voxel's surface area: the cones
+// then carry the light of emitters (one bounce of it: emitted light is not reflected into the volume again).
+// Deterministic for any thread count.
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
                   std::span<const VoxelGeometry* const> geometry);
 

@@ -255,11 +255,9 @@ OptionGroup rsmGroup() {
         "light: the scene's and its update with the objects). `\"auto\"`: a point or spot light's maps have "
         "{} texels per voxel along the volume's side, in [{}, {}] ({} at 256³ and above, {} at 128³, {} at "
         "64³, {} at 32³), a directional light's {} per voxel, in [{}, {}] ({} at 128³ and below, {} at 256³: "
-        "its "
-        "orthographic map spreads over the whole region); "
-        "with several lights, each takes the square root of its share of the brightest light's irradiance in "
-        "the volume (its largest over the region's centre and corners) times that, to the nearest power of "
-        "two, at least 1/{} of it. Figures: "
+        "its orthographic map spreads over the whole region); with several lights, each takes the square "
+        "root of its share of the brightest light's irradiance in the volume (its largest over the region's "
+        "centre and corners) times that, to the nearest power of two, at least 1/{} of it. Figures: "
         "[design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays), "
         "[performance.md](performance.md#many-lights)",
         kAutoRsmTexelsPerVoxel, kAutoRsmMinResolution, kAutoRsmMaxResolution,
