@@ -9,6 +9,7 @@
 #include <optional>
 
 #include <fmt/core.h>
+#include <tbb/parallel_invoke.h>
 #include <nlohmann/json.hpp>
 
 #include "deltagi/environment.h"
@@ -175,31 +176,37 @@ int runLive(const LiveArgs& args) {
         const double waited =
             std::chrono::duration<double, std::milli>(Clock::now() - arrival->arrived).count();
         // The light: the newest light-camera frame (replayed files: one per scene-camera frame).
-        double environmentMs = 0.0;
-        if (lightFeed) {
-            std::optional<FrameFeed::Arrival> lit = args.realtime ? lightFeed->poll() : lightFeed->take();
-            if (lit) {
+        std::optional<FrameFeed::Arrival> lit;
+        if (lightFeed) lit = args.realtime ? lightFeed->poll() : lightFeed->take();
+        // The frame's pose and its new light do not depend on each other: found side by side (each is
+        // mostly one thread's work).
+        double environmentMs = 0.0, trackMs = 0.0;
+        TrackedFrame tracked;
+        tbb::parallel_invoke(
+            [&] {
+                const Clock::time_point start = Clock::now();
+                tracked = tracker.track(frame.image, frame.timeSeconds);
+                trackMs = millisecondsSince(start);
+            },
+            [&] {
+                if (!lit) return;
                 const Clock::time_point start = Clock::now();
                 setEnvironment(scene, light->environment(std::move(lit->frame.image), lit->frame.timeSeconds,
                                                          lightFeed->source().name()));
                 environmentMs = millisecondsSince(start);
-                ++lightFrames;
-                if (!warnedClipped && light->clippedShare() > kClippedShareWarning) {
-                    warnedClipped = true;
-                    note(
-                        "deltagi: warning: {}: frame {}: {:.1f} % of the light camera's pixels are at its "
-                        "white: "
-                        "a light brighter than that (the sun, a bare lamp) is recorded too dim and lights "
-                        "the scene "
-                        "too weakly; lower the camera's exposure and raise the environment's intensity to "
-                        "match\n",
-                        lightFeed->source().name(), lit->frame.index, 100.0 * light->clippedShare());
-                }
+            });
+        if (lit) {
+            ++lightFrames;
+            if (!warnedClipped && light->clippedShare() > kClippedShareWarning) {
+                warnedClipped = true;
+                note(
+                    "deltagi: warning: {}: frame {}: {:.1f} % of the light camera's pixels are at its white: "
+                    "a light brighter than that (the sun, a bare lamp) is recorded too dim and lights the "
+                    "scene too weakly; lower the camera's exposure and raise the environment's intensity to "
+                    "match\n",
+                    lightFeed->source().name(), lit->frame.index, 100.0 * light->clippedShare());
             }
         }
-        const Clock::time_point trackStart = Clock::now();
-        const TrackedFrame tracked = tracker.track(frame.image, frame.timeSeconds);
-        const double trackMs = millisecondsSince(trackStart);
         Image composite;
         std::optional<RenderOutput> rendered;
         if (tracked.state == TrackedFrame::State::Lost) {

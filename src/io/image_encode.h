@@ -14,6 +14,10 @@ namespace deltagi {
 
 // linearToSrgb() of image_io.cpp: the exact piecewise sRGB encoding of a linear value in [0, 1].
 float linearToSrgbValue(float linear);
+// The 8-bit sRGB code of a linear value as encodeSrgb8() writes it (clamped to [0, 1], NaN and infinities as
+// 0, encoded exactly and rounded), from tables: the same byte as lround(255 * linearToSrgbValue(v)) for every
+// float v in [0, 1], several times faster.
+uint8_t linearToSrgb8(float linear);
 // srgbToLinear() of image_io.cpp: the exact piecewise sRGB decoding of an encoded value in [0, 1].
 float srgbToLinearValue(float encoded);
 // srgbToLinearValue(i / 255) for every 8-bit value i, the table image_io.cpp reads 8-bit files with.

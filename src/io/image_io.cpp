@@ -2,10 +2,12 @@
 // 8/16-bit or linear float pixels; in memory every image is linear float.
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include <unistd.h>
@@ -175,12 +177,54 @@ std::vector<std::string> exrChannelNames(int channels) {
 std::vector<uint8_t> encodeSrgb8(const Image& image) {
     std::vector<uint8_t> bytes(image.data().size());
     for (size_t i = 0; i < bytes.size(); ++i) {
-        float linear = std::clamp(finiteOrZero(image.data()[i]), 0.0f, 1.0f);
-        bool isAlpha = image.channels() == 4 && i % 4 == 3;  // alpha is stored linear
-        float encoded = isAlpha ? linear : linearToSrgb(linear);
-        bytes[i] = static_cast<uint8_t>(std::lround(encoded * 255.0f));
+        const float value = image.data()[i];
+        const bool isAlpha = image.channels() == 4 && i % 4 == 3;  // alpha is stored linear
+        bytes[i] =
+            isAlpha ? static_cast<uint8_t>(std::lround(std::clamp(finiteOrZero(value), 0.0f, 1.0f) * 255.0f))
+                    : linearToSrgb8(value);
     }
     return bytes;
+}
+
+namespace {
+
+// The 8-bit code of a linear value as the exact encoding rounds it.
+uint8_t exactSrgb8(float linear) {
+    return static_cast<uint8_t>(std::lround(linearToSrgb(linear) * 255.0f));
+}
+
+// Where each 8-bit code begins: the smallest float in [0, 1] that exactSrgb8 rounds to it or above (the
+// encoding is non-decreasing, so a bisection over the floats' bit patterns, which are ordered like the
+// floats, finds it); and the code at the start of each of kSrgb8Bins equal bins of [0, 1].
+struct Srgb8Table {
+    static constexpr int kBins = 4096;
+    std::array<float, 257> codeStart{};  // codeStart[256] = infinity, a guard
+    std::array<uint8_t, kBins + 1> binCode{};
+    Srgb8Table() {
+        const uint32_t one = std::bit_cast<uint32_t>(1.0f);
+        codeStart[0] = 0.0f;
+        for (int k = 1; k < 256; ++k) {
+            uint32_t lo = 0, hi = one;  // exactSrgb8(lo) < k <= exactSrgb8(hi)
+            while (hi - lo > 1) {
+                const uint32_t mid = lo + (hi - lo) / 2;
+                (exactSrgb8(std::bit_cast<float>(mid)) >= k ? hi : lo) = mid;
+            }
+            codeStart[k] = std::bit_cast<float>(hi);
+        }
+        codeStart[256] = std::numeric_limits<float>::infinity();
+        for (int b = 0; b <= kBins; ++b) binCode[b] = exactSrgb8(static_cast<float>(b) / kBins);
+    }
+};
+
+}  // namespace
+
+uint8_t linearToSrgb8(float linear) {
+    static const Srgb8Table table;
+    const float v = std::clamp(finiteOrZero(linear), 0.0f, 1.0f);
+    // The bin's first code, then on past the codes that begin at or before v (one or two steps at most).
+    int k = table.binCode[static_cast<int>(v * static_cast<float>(Srgb8Table::kBins))];
+    while (v >= table.codeStart[k + 1]) ++k;
+    return static_cast<uint8_t>(k);
 }
 
 float linearToSrgbValue(float linear) {

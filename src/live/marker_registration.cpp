@@ -9,6 +9,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "core/environment.h"
+#include "core/parallel.h"
 #include "io/image_encode.h"
 
 namespace deltagi {
@@ -177,14 +178,14 @@ MarkerDetector::Result MarkerDetector::detect(const Image& frame) {
     GreyImage linear{frame.width(), frame.height(), std::vector<float>(frame.pixelCount())};
     image_u8_t* grey =
         image_u8_create(static_cast<unsigned>(frame.width()), static_cast<unsigned>(frame.height()));
-    for (int y = 0; y < frame.height(); ++y)
+    parallelFor(0, frame.height(), 16, [&](int64_t y) {
         for (int x = 0; x < frame.width(); ++x) {
-            const float l = luminance(frame.rgb(x, y));
+            const float l = luminance(frame.rgb(x, static_cast<int>(y)));
             const float v = std::clamp(std::isfinite(l) ? l : 0.0f, 0.0f, 1.0f);
             linear.values[static_cast<size_t>(y) * frame.width() + x] = v;
-            grey->buf[static_cast<size_t>(y) * grey->stride + x] =
-                static_cast<uint8_t>(std::lround(255.0f * linearToSrgbValue(v)));
+            grey->buf[static_cast<size_t>(y) * grey->stride + x] = linearToSrgb8(v);
         }
+    });
     // Squares are searched for at half resolution in frames kHalfResolutionWidth wide or more (a third of the
     // time; the decoding and the corners' refinement use the full frame; a 12 cm marker 1 m away is still 40
     // pixels wide there, as in a 320x240 frame at full resolution). When that finds fewer of the scene's
