@@ -99,11 +99,12 @@ glm::dvec3 areaWeightedSum(const VoxelGeometry& geometry, Value&& value) {
 }  // namespace
 
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
-                  const Options& options, int bounces, glm::vec3 viewpoint) {
+                  const Options& options, int bounces, glm::vec3 viewpoint, Grid3 reuse) {
     const int n = direct.resolution();
-    Grid3 indirect(n);
     const int level = gatherLevel(visibility);
-    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= level) return indirect;
+    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= level) return Grid3(n);
+    // Every pass below writes each surface voxel of `indirect` before it reads it; the others stay zero.
+    Grid3 indirect = reuse.resolution() == n && reuse.size() == direct.size() ? std::move(reuse) : Grid3(n);
     // Only the surface voxels (VoxelGeometry::surfaceVoxels) reflect light: the passes below visit them
     // alone.
     const int nn = n * n;
@@ -124,10 +125,11 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     Grid3 previous(0);              // indirect before the last pass (tail with bounces > 1)
     for (int bounce = 0; bounce < bounces; ++bounce) {
         if (tail && bounce == bounces - 1 && bounces > 1) previous = indirect.clone();
-        // The light so far: direct plus the bounces gathered before.
-        PackedGrid3 total(n);
-        parallelFor(0, static_cast<int64_t>(total.size()), 1 << 14,
-                    [&](int64_t i) { total.set(i, direct[i] + indirect[i]); });
+        // The light so far: direct plus the bounces gathered before (none before the first pass, where
+        // `indirect` may still hold the reused grid's values; adding zero keeps the bits the sum had).
+        PackedGrid3 total =
+            bounce == 0 ? PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + glm::vec4(0.0f); })
+                        : PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + indirect[i]; });
         const MipVolume light = buildMipChain(region, std::move(total));
         // Gather at each surface voxel of the coarse level.
         parallelFor(0, static_cast<int64_t>(m) * m, 4, [&](int64_t row) {

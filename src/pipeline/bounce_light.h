@@ -30,8 +30,10 @@ namespace deltagi {
 // and a reconstruction's winding does not say which side is the room's). With options.render.bounce_tail the
 // last bounce is added again times r / (1 - r), r the ratio of its light to the one before's over the
 // geometry's surfaces (per colour channel). Deterministic for any thread count; zero for bounces <= 0.
+// `reuse`: an earlier result over the same `geometry` (zero off its surface voxels), whose memory holds the
+// new one (only the surface voxels are written: no 32 MiB grid zeroed at 128^3); any other grid is ignored.
 Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
-                  const Options& options, int bounces, glm::vec3 viewpoint);
+                  const Options& options, int bounces, glm::vec3 viewpoint, Grid3 reuse = {});
 
 // light += bounced, where `bounced` is bounceLight's result over `geometry` (zero but at its surface voxels:
 // only those are added, in parallel).

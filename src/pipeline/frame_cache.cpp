@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <string>
+#include <utility>
 
 #include "pipeline/bounce_light.h"
 
@@ -148,10 +149,25 @@ void ViewWork::forget() {
 }
 
 void LightWork::forget() {
-    if (rsms) spare = {std::move(*rsms), std::move(rsmLights), std::move(rsmSides), rsmVoxels};
     Spare kept = std::move(spare);
+    if (rsms) {
+        kept.rsms = std::move(*rsms);
+        kept.lights = std::move(rsmLights);
+        kept.sides = std::move(rsmSides);
+        kept.voxels = rsmVoxels;
+    }
+    if (bounce) {
+        kept.bounce = std::move(*bounce);
+        kept.bounceVoxels = bounceVoxels;
+    }
     *this = LightWork{};
     spare = std::move(kept);
+}
+
+Grid3 LightWork::spareBounce(uint64_t voxels) {
+    if (spare.bounceVoxels != voxels) return {};
+    spare.bounceVoxels = 0;
+    return std::exchange(spare.bounce, Grid3{});
 }
 
 std::optional<ReflectiveShadowMap> LightWork::spareRsm(const Light& light, int resolution, uint64_t voxels,

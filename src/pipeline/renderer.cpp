@@ -219,8 +219,9 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
         light.injected = injectLight(*light.rsms, region, sceneAlone);
         if (bounces > 0) {
             timer.lap("inject");
-            light.bounce =
-                bounceLight(*light.injected, *real.geometry, visibility(), scene.options, bounces, viewpoint);
+            light.bounce = bounceLight(*light.injected, *real.geometry, visibility(), scene.options, bounces,
+                                       viewpoint, light.spareBounce(cache.voxels.version));
+            light.bounceVoxels = cache.voxels.version;
             light.bounceSides = bounceViewSides(visibility(), viewpoint);
             addBounce(*light.injected, *light.bounce, *real.geometry);
             timer.lap("bounce");

@@ -175,6 +175,10 @@ class PackedGrid3 {
     // `grid` rounded to bfloat16, inside `window` (zero outside it is the caller's promise).
     explicit PackedGrid3(const Grid3& grid) : PackedGrid3(grid, VoxelBox::all(grid.resolution())) {}
     PackedGrid3(const Grid3& grid, const VoxelBox& window);
+    // Every voxel of an n^3 grid set to value(i) (a glm::vec4 for voxel index i), in parallel: no pass that
+    // zeroes it first.
+    template <typename Value>
+    static PackedGrid3 fromEach(int n, Value&& value);
     PackedGrid3(PackedGrid3&&) noexcept = default;
     PackedGrid3& operator=(PackedGrid3&&) noexcept = default;
     PackedGrid3(const PackedGrid3&) = delete;
@@ -209,12 +213,46 @@ class PackedGrid3 {
     PackedVoxel packed(size_t i) const { return voxels_[i]; }
 
   private:
+    // Its voxels left as the allocator gives them (uninitialized): every one is written next. The guard voxel
+    // of a level one voxel wide is zeroed.
+    struct Unset {};
+    PackedGrid3(int n, const VoxelBox& window, Unset)
+        : n_(n),
+          window_(window.intersection(VoxelBox::all(n))),
+          extent_(window_.hi - window_.lo),
+          whole_(window_.count() == static_cast<size_t>(n) * n * n),
+          count_(window_.count()) {
+        voxels_.resize(count_ + (extent_.x == 1 ? 1 : 0));
+        if (extent_.x == 1) voxels_.back() = PackedVoxel(0);
+    }
+    // LargeBlockAllocator whose elements made without a value are left uninitialized (PackedVoxel is an
+    // integer): for Unset.
+    template <typename T>
+    struct UnsetAllocator : LargeBlockAllocator<T> {
+        using value_type = T;
+        template <typename U>
+        struct rebind {
+            using other = UnsetAllocator<U>;
+        };
+        UnsetAllocator() = default;
+        template <typename U>
+        UnsetAllocator(const UnsetAllocator<U>&) {}
+        template <typename U>
+        void construct(U* p) noexcept {
+            ::new (static_cast<void*>(p)) U;
+        }
+        template <typename U, typename... Args>
+        void construct(U* p, Args&&... args) {
+            ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+        }
+    };
+
     int n_ = 0;
     VoxelBox window_;
     glm::ivec3 extent_{0};
     bool whole_ = false;
     size_t count_ = 0;
-    std::vector<PackedVoxel, LargeBlockAllocator<PackedVoxel>> voxels_;
+    std::vector<PackedVoxel, UnsetAllocator<PackedVoxel>> voxels_;
 };
 
 // The 8 voxels and weights of one trilinear lookup, as the 4 rows (along y and z) of two x-neighbours each,
@@ -510,7 +548,7 @@ VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within) {
 }
 
 inline PackedGrid3::PackedGrid3(const Grid3& grid, const VoxelBox& window)
-    : PackedGrid3(grid.resolution(), window) {
+    : PackedGrid3(grid.resolution(), window, Unset{}) {
     if (whole_) {
         parallelFor(0, static_cast<int64_t>(count_), 1 << 14,
                     [&](int64_t i) { voxels_[i] = packVoxel(grid[i]); });
@@ -519,6 +557,14 @@ inline PackedGrid3::PackedGrid3(const Grid3& grid, const VoxelBox& window)
     forEachRow(window_, [&](int y, int z) {
         for (int x = window_.lo.x; x < window_.hi.x; ++x) set(x, y, z, grid.at(x, y, z));
     });
+}
+
+template <typename Value>
+PackedGrid3 PackedGrid3::fromEach(int n, Value&& value) {
+    PackedGrid3 grid(n, VoxelBox::all(n), Unset{});
+    parallelFor(0, static_cast<int64_t>(grid.count_), 1 << 14,
+                [&](int64_t i) { grid.voxels_[i] = packVoxel(glm::vec4(value(static_cast<size_t>(i)))); });
+    return grid;
 }
 
 }  // namespace deltagi

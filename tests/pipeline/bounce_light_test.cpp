@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <vector>
 
 #include "core/ray_scene.h"
@@ -124,6 +125,40 @@ TEST(BounceLight, AddsOnlyAtTheSurfaceVoxelsWhereAllTheBounceIs) {
         nonZero += bounced[i] != glm::vec4(0.0f);
     }
     EXPECT_GT(nonZero, 1000u);
+}
+
+// A grid reused from an earlier light's bounce over the same geometry (its surface voxels written, as a new
+// light leaves them; the rest zero) gives the same grid bit for bit as a fresh one, with one bounce and two;
+// one of another size, or moved from, is not used.
+TEST(BounceLight, AReusedGridGivesTheSameBounceBitForBit) {
+    const Furnace f = furnace(0.5f, true);
+    Options options;
+    Grid3 brighter = f.direct.clone();
+    for (size_t i = 0; i < brighter.size(); ++i) brighter[i] *= glm::vec4(3.0f, 2.0f, 1.0f, 1.0f);
+    for (const int bounces : {1, 2}) {
+        SCOPED_TRACE(bounces);
+        const Grid3 fresh = bounceLight(f.direct, f.geometry, f.visibility, options, bounces, kCentre);
+        Grid3 earlier = bounceLight(brighter, f.geometry, f.visibility, options, bounces, kCentre);
+        size_t stale = 0;  // the earlier light's values the reused grid starts with
+        for (size_t i = 0; i < fresh.size(); ++i) stale += earlier[i] != fresh[i];
+        ASSERT_GT(stale, 1000u);
+        const Grid3 reused =
+            bounceLight(f.direct, f.geometry, f.visibility, options, bounces, kCentre, std::move(earlier));
+        ASSERT_EQ(reused.size(), fresh.size());
+        size_t differing = 0;
+        for (size_t i = 0; i < fresh.size(); ++i)
+            differing += std::memcmp(&reused[i], &fresh[i], sizeof(glm::vec4)) != 0;
+        EXPECT_EQ(differing, 0u);
+    }
+    // A grid whose memory was moved out keeps its resolution but not its voxels: a fresh one is made.
+    Grid3 taken = bounceLight(f.direct, f.geometry, f.visibility, options, 1, kCentre);
+    const Grid3 holder = std::move(taken);
+    const Grid3 again =
+        bounceLight(f.direct, f.geometry, f.visibility, options, 1, kCentre, std::move(taken));
+    EXPECT_EQ(again.size(), holder.size());
+    Grid3 small(f.region.resolution / 2);
+    EXPECT_EQ(bounceLight(f.direct, f.geometry, f.visibility, options, 1, kCentre, std::move(small)).size(),
+              holder.size());
 }
 
 TEST(BounceLight, BlackWallsReflectNothing) {
