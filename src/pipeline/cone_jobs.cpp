@@ -27,7 +27,8 @@ namespace {
 // Cone results `trace(pixels)` (perPixel values of T per pixel of `points`, for the listed pixels) at every
 // stride-th pixel of every stride-th row, then filtered: the edge-aware filter interpolates the pixels
 // between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),
-// and the pixels that have none are traced as well. With stride 1 every pixel is traced and filtered.
+// and the pixels that have none are traced as well, or blended from a finer grid of them (fillHoles). With
+// stride 1 every pixel is traced and filtered.
 // `bounds` holds all valid points.
 template <typename T, typename Trace>
 std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect& bounds,
@@ -53,11 +54,7 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect
     fill.stride = stride;
     std::vector<size_t> holes;
     denoiseInPlace(values, perPixel, points, camera, fill, &holes, &bounds);
-    if (holes.empty()) return values;
-    const std::vector<uint32_t> holePixels(holes.begin(), holes.end());
-    const std::vector<T> filled = trace(std::span<const uint32_t>(holePixels));
-    for (size_t i : holes)
-        std::copy_n(filled.begin() + i * perPixel, perPixel, values.begin() + i * perPixel);
+    fillHoles(values, perPixel, points, camera, fill, holes, trace);
     return values;
 }
 

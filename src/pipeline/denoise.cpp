@@ -281,6 +281,61 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
 
 }  // namespace
 
+float surfaceWeight(const SurfacePoint& p, const SurfacePoint& q, glm::vec2 offset, glm::vec3 eye,
+                    float pixelAngle, const DenoiseSettings& settings) {
+    if (!p.valid() || !q.valid()) return 0.0f;
+    const float cosN = glm::dot(p.normal, q.normal);
+    if (cosN <= 0.0f) return 0.0f;
+    const float allowance = settings.planeDistance * pixelAngle * glm::length(p.position - eye) *
+                            std::sqrt(offset.x * offset.x + offset.y * offset.y + 1.0f);
+    if (std::abs(glm::dot(p.normal, q.position - p.position)) > allowance) return 0.0f;
+    return powInt(cosN, settings.normalPower);
+}
+
+std::vector<uint32_t> blendHolesFromGrid(std::span<float> values, int channels,
+                                         std::span<const SurfacePoint> points, int width, int height,
+                                         glm::vec3 eye, float pixelAngle, const DenoiseSettings& settings,
+                                         int step, std::span<const size_t> holes,
+                                         std::span<const uint8_t> traced) {
+    // Each hole writes only its own values and reads only traced ones: in parallel.
+    std::vector<uint8_t> blended(holes.size(), 0);
+    parallelFor(0, static_cast<int64_t>(holes.size()), 256, [&](int64_t h) {
+        const size_t i = holes[h];
+        if (traced[i]) return;
+        const int x = static_cast<int>(i % width), y = static_cast<int>(i / width);
+        const int cx = x / step * step, cy = y / step * step;
+        const float fx = static_cast<float>(x - cx) / static_cast<float>(step);
+        const float fy = static_cast<float>(y - cy) / static_cast<float>(step);
+        std::array<float, 4> weights{};
+        std::array<size_t, 4> corners{};
+        float sum = 0.0f;
+        for (int n = 0; n < 4; ++n) {
+            const int qx = cx + (n & 1) * step, qy = cy + (n >> 1) * step;
+            if (qx >= width || qy >= height) continue;
+            const size_t q = static_cast<size_t>(qy) * width + qx;
+            if (!traced[q]) continue;
+            weights[n] =
+                surfaceWeight(points[i], points[q], glm::vec2(qx - x, qy - y), eye, pixelAngle, settings) *
+                ((n & 1) ? fx : 1.0f - fx) * ((n >> 1) ? fy : 1.0f - fy);
+            corners[n] = q;
+            sum += weights[n];
+        }
+        if (!(sum > 0.0f)) return;
+        float* out = &values[i * channels];
+        std::fill_n(out, channels, 0.0f);
+        for (int n = 0; n < 4; ++n) {
+            if (weights[n] == 0.0f) continue;
+            const float* v = &values[corners[n] * channels];
+            for (int c = 0; c < channels; ++c) out[c] += v[c] * (weights[n] / sum);
+        }
+        blended[h] = 1;
+    });
+    std::vector<uint32_t> rest;
+    for (size_t h = 0; h < holes.size(); ++h)
+        if (!traced[holes[h]] && !blended[h]) rest.push_back(static_cast<uint32_t>(holes[h]));
+    return rest;
+}
+
 std::vector<float> denoise(std::span<const float> values, int channels, std::span<const SurfacePoint> points,
                            int width, int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& s,
                            std::vector<size_t>* holes) {

@@ -7,7 +7,9 @@
 // or the photo, so textures and highlights are untouched.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cstdint>
 #include <span>
 #include <type_traits>
 #include <vector>
@@ -65,6 +67,65 @@ std::vector<float> denoise(std::span<const float> values, int channels, std::spa
 void denoiseInto(std::span<float> values, int channels, std::span<const SurfacePoint> points, int width,
                  int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& settings,
                  std::vector<size_t>* holes = nullptr, const PixelRect* bounds = nullptr);
+
+// The filter's weight of q as a neighbour of p, q `offset` pixels away in the image (without the window's
+// spatial factor): dot(normals)^settings.normalPower where q lies on p's side and within
+// settings.planeDistance pixel sizes per pixel of offset of p's tangent plane; 0 on another surface.
+float surfaceWeight(const SurfacePoint& p, const SurfacePoint& q, glm::vec2 offset, glm::vec3 eye,
+                    float pixelAngle, const DenoiseSettings& settings);
+
+// Sparse passes whose filter left holes (valid pixels without a usable sample, denoise's `holes`) trace
+// them: at strides of 2 x kHoleStepDivisor and more only the holes on a finer grid, every step-th pixel of
+// every step-th row (step = stride / kHoleStepDivisor), and the others take the blend of those at their
+// step x step cell's corners that lie on their surface (bilinear weights times surfaceWeight, as the
+// filter's interpolation between samples); a hole with none is traced itself. Holes gather on surfaces
+// narrower than the stride (a box's side seen nearly edge on, a strip of floor under an object), where the
+// light the finer grid misses varies no faster than it does between the stride's samples elsewhere.
+inline constexpr int kHoleStepDivisor = 4;
+
+// The blending of fillHoles: each of `holes` (indices of valid points, width x height) that is not
+// `traced` blends the traced pixels at its cell's corners in `values` (`channels` floats per pixel). The
+// holes it could not blend are returned, in the order given.
+std::vector<uint32_t> blendHolesFromGrid(std::span<float> values, int channels,
+                                         std::span<const SurfacePoint> points, int width, int height,
+                                         glm::vec3 eye, float pixelAngle, const DenoiseSettings& settings,
+                                         int step, std::span<const size_t> holes,
+                                         std::span<const uint8_t> traced);
+
+// fillHoles for the cone passes' results (as denoiseInPlace): `trace(pixels)` gives `perPixel` values of T
+// per pixel of the image for the listed pixels; settings.stride is the pass's.
+template <typename T, typename Trace>
+void fillHoles(std::vector<T>& values, int perPixel, std::span<const SurfacePoint> points,
+               const Camera& camera, const DenoiseSettings& settings, std::span<const size_t> holes,
+               Trace&& trace) {
+    if (holes.empty()) return;
+    auto traceInto = [&](const std::vector<uint32_t>& pixels) {
+        if (pixels.empty()) return;
+        const std::vector<T> traced = trace(std::span<const uint32_t>(pixels));
+        for (uint32_t i : pixels)
+            std::copy_n(traced.begin() + static_cast<size_t>(i) * perPixel, perPixel,
+                        values.begin() + static_cast<size_t>(i) * perPixel);
+    };
+    const int step = settings.stride / kHoleStepDivisor;
+    if (step < 2) {
+        traceInto(std::vector<uint32_t>(holes.begin(), holes.end()));
+        return;
+    }
+    std::vector<uint32_t> coarse;
+    std::vector<uint8_t> traced(points.size(), 0);
+    for (size_t i : holes)
+        if (static_cast<int>(i % camera.width) % step == 0 &&
+            static_cast<int>(i / camera.width) % step == 0) {
+            coarse.push_back(static_cast<uint32_t>(i));
+            traced[i] = 1;
+        }
+    traceInto(coarse);
+    const int channels = perPixel * static_cast<int>(sizeof(T) / sizeof(float));
+    const std::span<float> flat(reinterpret_cast<float*>(values.data()),
+                                values.size() * sizeof(T) / sizeof(float));
+    traceInto(blendHolesFromGrid(flat, channels, points, camera.width, camera.height, camera.position(),
+                                 1.0f / camera.fy, settings, step, holes, traced));
+}
 
 // In place, for the cone passes' per-pixel results: `perPixel` values of T (made of floats: glm::vec3,
 // ShadowOcclusion) per pixel of the camera's image. Empty vectors are left alone.

@@ -190,3 +190,77 @@ TEST(Denoise, InterpolationPlanGivesTheSameBits) {
 
 }  // namespace
 }  // namespace deltagi
+
+namespace deltagi {
+namespace {
+
+// fillHoles at stride 16 (a finer grid every 4 pixels) on a strip of wall 12 pixels wide between two parts of
+// a floor, all of the strip's pixels holes: only the finer grid's are traced; the others blend them (a linear
+// ramp stays linear where a cell's four corners are traced); a hole whose cell has no traced corner on its
+// surface is traced itself. At stride 4 every hole is traced.
+TEST(Denoise, HolesAreTracedOnAFinerGridAndBlendedBetween) {
+    constexpr int kW = 64, kH = 32, kStripX0 = 40, kStripX1 = 52;
+    Material material;
+    std::vector<SurfacePoint> points;
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            SurfacePoint p;
+            p.material = &material;
+            p.surface = constantSurfaceMaterial(material);
+            p.toEye = {0, 0, 1};
+            const bool wall = x >= kStripX0 && x < kStripX1;
+            p.position = wall ? glm::vec3(0.3f, 0.01f * (x - kStripX0), 0.01f * y)
+                              : glm::vec3(0.01f * x, 0.0f, 0.01f * y);
+            p.normal = wall ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+            points.push_back(p);
+        }
+    Camera camera;
+    camera.width = kW, camera.height = kH;
+    camera.fx = camera.fy = 100.0f;
+    camera.worldFromCamera = glm::translate(glm::mat4(1.0f), glm::vec3(0.1f, 1.0f, 0.1f));
+    auto ramp = [&](size_t i) {
+        return 0.5f + 0.01f * static_cast<float>(i % kW) + 0.02f * static_cast<float>(i / kW);
+    };
+    std::vector<size_t> holes;
+    for (size_t i = 0; i < points.size(); ++i)
+        if (static_cast<int>(i % kW) >= kStripX0 && static_cast<int>(i % kW) < kStripX1) holes.push_back(i);
+    const size_t lonely = 5 * kW + 10;  // on the floor, in a cell whose corners are not holes
+    holes.insert(std::upper_bound(holes.begin(), holes.end(), lonely), lonely);
+    for (const int stride : {16, 4}) {
+        SCOPED_TRACE(stride);
+        DenoiseSettings settings;
+        settings.stride = stride;
+        std::vector<uint32_t> traced;
+        std::vector<glm::vec3> values(points.size(), glm::vec3(-1.0f));
+        fillHoles(values, 1, points, camera, settings, holes, [&](std::span<const uint32_t> pixels) {
+            std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
+            for (uint32_t i : pixels) {
+                traced.push_back(i);
+                out[i] = glm::vec3(ramp(i), 2.0f * ramp(i), 1.0f);
+            }
+            return out;
+        });
+        std::sort(traced.begin(), traced.end());
+        if (stride == 4) {
+            EXPECT_EQ(traced, std::vector<uint32_t>(holes.begin(), holes.end()));
+            continue;
+        }
+        // The finer grid's holes (x = 40, 44, 48; every 4th row) and the lonely one.
+        EXPECT_EQ(traced.size(), 3u * (kH / 4) + 1);
+        EXPECT_TRUE(std::binary_search(traced.begin(), traced.end(), static_cast<uint32_t>(lonely)));
+        for (size_t i : holes) {
+            const int x = static_cast<int>(i % kW), y = static_cast<int>(i / kW);
+            ASSERT_NE(values[i].x, -1.0f) << x << "," << y;  // every hole has its value
+            EXPECT_EQ(values[i].z, 1.0f);                    // blends of ones
+            if (x >= kStripX0 && x < kStripX0 + 8 && y < 28) {
+                EXPECT_NEAR(values[i].x, ramp(i), 1e-5f) << x << "," << y;
+                EXPECT_NEAR(values[i].y, 2.0f * ramp(i), 1e-5f) << x << "," << y;
+            }
+        }
+        // Pixels that are not holes are left alone.
+        EXPECT_EQ(values[0], glm::vec3(-1.0f));
+    }
+}
+
+}  // namespace
+}  // namespace deltagi
