@@ -195,7 +195,8 @@ uint8_t exactSrgb8(float linear) {
 
 // Where each 8-bit code begins: the smallest float in [0, 1] that exactSrgb8 rounds to it or above (the
 // encoding is non-decreasing, so a bisection over the floats' bit patterns, which are ordered like the
-// floats, finds it); and the code at the start of each of kSrgb8Bins equal bins of [0, 1].
+// floats, finds it; checked over every float in [0, 1]); and the code at the start of each of kBins equal
+// bins of [0, 1].
 struct Srgb8Table {
     static constexpr int kBins = 4096;
     std::array<float, 257> codeStart{};  // codeStart[256] = infinity, a guard

@@ -509,20 +509,6 @@ Image reducedImage(const Image& image, int scale) {
 
 namespace {
 
-// Linear [0, 1] to 8-bit sRGB by a table (4096 steps: within one 8-bit level of the exact encoding).
-uint8_t srgb8(float linear) {
-    static const std::array<uint8_t, 4097> table = [] {
-        std::array<uint8_t, 4097> t{};
-        for (int i = 0; i <= 4096; ++i)
-            t[i] = static_cast<uint8_t>(
-                std::lround(linearToSrgbValue(static_cast<float>(i) / 4096.0f) * 255.0f));
-        return t;
-    }();
-    if (!(linear > 0.0f)) return 0;  // NaN too
-    if (linear >= 1.0f) return 255;
-    return table[static_cast<int>(linear * 4096.0f + 0.5f)];
-}
-
 uint8_t linear8(float v) {
     if (!(v > 0.0f)) return 0;
     if (v >= 1.0f) return 255;
@@ -543,7 +529,7 @@ std::vector<uint8_t> viewPixels(const RenderOutput& output, View view) {
     };
     auto colour = [&](const Image& image) {
         each(image, [&](size_t i, const float* p) {
-            for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = srgb8(p[image.channels() >= 3 ? c : 0]);
+            for (int c = 0; c < 3; ++c) rgb[i * 3 + c] = linearToSrgb8(p[image.channels() >= 3 ? c : 0]);
         });
     };
     auto change = [&](const Image& image) {  // grey 0.5 + 4 x the change, as the README's delta pictures

@@ -11,6 +11,17 @@
 namespace deltagi {
 namespace {
 
+// A point of `material` seen from +z.
+SurfacePoint pointOf(const Material& material, glm::vec3 position, glm::vec3 normal) {
+    SurfacePoint p;
+    p.material = &material;
+    p.surface = constantSurfaceMaterial(material);
+    p.toEye = {0, 0, 1};
+    p.position = position;
+    p.normal = normal;
+    return p;
+}
+
 // A 32 x 16 view of two surfaces: the left half a floor (normal +y), the right half a wall (normal +x).
 struct Fixture {
     static constexpr int kW = 32, kH = 16;
@@ -18,20 +29,10 @@ struct Fixture {
     std::vector<SurfacePoint> points;
     Fixture() {
         for (int y = 0; y < kH; ++y)
-            for (int x = 0; x < kW; ++x) {
-                SurfacePoint p;
-                p.material = &material;
-                p.surface = constantSurfaceMaterial(material);
-                p.toEye = {0, 0, 1};
-                if (x < kW / 2) {
-                    p.position = {0.01f * x, 0.0f, 0.01f * y};
-                    p.normal = {0, 1, 0};
-                } else {
-                    p.position = {0.16f, 0.01f * (x - kW / 2), 0.01f * y};
-                    p.normal = {1, 0, 0};
-                }
-                points.push_back(p);
-            }
+            for (int x = 0; x < kW; ++x)
+                points.push_back(
+                    x < kW / 2 ? pointOf(material, {0.01f * x, 0.0f, 0.01f * y}, {0, 1, 0})
+                               : pointOf(material, {0.16f, 0.01f * (x - kW / 2), 0.01f * y}, {1, 0, 0}));
     }
 };
 
@@ -188,12 +189,6 @@ TEST(Denoise, InterpolationPlanGivesTheSameBits) {
     }
 }
 
-}  // namespace
-}  // namespace deltagi
-
-namespace deltagi {
-namespace {
-
 // fillHoles at stride 16 (a finer grid every 4 pixels) on a strip of wall 12 pixels wide between two parts of
 // a floor, all of the strip's pixels holes: only the finer grid's are traced; the others blend them (a linear
 // ramp stays linear where a cell's four corners are traced); a hole whose cell has no traced corner on its
@@ -203,17 +198,10 @@ TEST(Denoise, HolesAreTracedOnAFinerGridAndBlendedBetween) {
     Material material;
     std::vector<SurfacePoint> points;
     for (int y = 0; y < kH; ++y)
-        for (int x = 0; x < kW; ++x) {
-            SurfacePoint p;
-            p.material = &material;
-            p.surface = constantSurfaceMaterial(material);
-            p.toEye = {0, 0, 1};
-            const bool wall = x >= kStripX0 && x < kStripX1;
-            p.position = wall ? glm::vec3(0.3f, 0.01f * (x - kStripX0), 0.01f * y)
-                              : glm::vec3(0.01f * x, 0.0f, 0.01f * y);
-            p.normal = wall ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
-            points.push_back(p);
-        }
+        for (int x = 0; x < kW; ++x)
+            points.push_back(x >= kStripX0 && x < kStripX1
+                                 ? pointOf(material, {0.3f, 0.01f * (x - kStripX0), 0.01f * y}, {1, 0, 0})
+                                 : pointOf(material, {0.01f * x, 0.0f, 0.01f * y}, {0, 1, 0}));
     Camera camera;
     camera.width = kW, camera.height = kH;
     camera.fx = camera.fy = 100.0f;
