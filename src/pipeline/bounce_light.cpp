@@ -104,7 +104,7 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     const int level = gatherLevel(visibility);
     if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= level) return Grid3(n);
     // Every pass below writes each surface voxel of `indirect` before it reads it; the others stay zero.
-    Grid3 indirect = reuse.resolution() == n && reuse.size() == direct.size() ? std::move(reuse) : Grid3(n);
+    Grid3 indirect = reuse.size() == direct.size() ? std::move(reuse) : Grid3(n);
     // Only the surface voxels (VoxelGeometry::surfaceVoxels) reflect light: the passes below visit them
     // alone.
     const int nn = n * n;

@@ -50,13 +50,17 @@ struct FilterPass {
 
 // Whether sample k is a usable neighbour of pixel p: on the same side, near p's tangent plane. Returns its
 // weight (0: not usable) without the spatial factor.
-inline float neighbourWeight(const FilterPass& f, const SurfacePoint& p, const Sample& q, float allowance) {
-    if (!q.valid) return 0.0f;
-    const float cosN = glm::dot(p.normal, q.normal);
+// The test of both (surfaceWeight too): a point at `position` with `normal` against p.
+inline float sameSurfaceWeight(const SurfacePoint& p, glm::vec3 position, glm::vec3 normal, float allowance,
+                               int normalPower) {
+    const float cosN = glm::dot(p.normal, normal);
     if (cosN <= 0.0f) return 0.0f;
     // Off the tangent plane by more than the allowance: another surface (a depth edge).
-    if (std::abs(glm::dot(p.normal, q.position - p.position)) > allowance) return 0.0f;
-    return powInt(cosN, f.s.normalPower);
+    if (std::abs(glm::dot(p.normal, position - p.position)) > allowance) return 0.0f;
+    return powInt(cosN, normalPower);
+}
+inline float neighbourWeight(const FilterPass& f, const SurfacePoint& p, const Sample& q, float allowance) {
+    return q.valid ? sameSurfaceWeight(p, q.position, q.normal, allowance, f.s.normalPower) : 0.0f;
 }
 
 // The edge-aware filter at pixel (x, y), whose surface is p, from the samples of its window, into `dst`.
@@ -284,12 +288,10 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
 float surfaceWeight(const SurfacePoint& p, const SurfacePoint& q, glm::vec2 offset, glm::vec3 eye,
                     float pixelAngle, const DenoiseSettings& settings) {
     if (!p.valid() || !q.valid()) return 0.0f;
-    const float cosN = glm::dot(p.normal, q.normal);
-    if (cosN <= 0.0f) return 0.0f;
+    // The filter's allowance (its planeAllowance times offsetLength).
     const float allowance = settings.planeDistance * pixelAngle * glm::length(p.position - eye) *
                             std::sqrt(offset.x * offset.x + offset.y * offset.y + 1.0f);
-    if (std::abs(glm::dot(p.normal, q.position - p.position)) > allowance) return 0.0f;
-    return powInt(cosN, settings.normalPower);
+    return sameSurfaceWeight(p, q.position, q.normal, allowance, settings.normalPower);
 }
 
 std::vector<uint32_t> blendHolesFromGrid(std::span<float> values, int channels,

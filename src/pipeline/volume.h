@@ -165,13 +165,9 @@ class PackedGrid3 {
   public:
     PackedGrid3() = default;
     explicit PackedGrid3(int n) : PackedGrid3(n, VoxelBox::all(n)) {}
-    PackedGrid3(int n, const VoxelBox& window)
-        : n_(n),
-          window_(window.intersection(VoxelBox::all(n))),
-          extent_(window_.hi - window_.lo),
-          whole_(window_.count() == static_cast<size_t>(n) * n * n),
-          count_(window_.count()),
-          voxels_(count_ + (extent_.x == 1 ? 1 : 0), PackedVoxel(0)) {}
+    PackedGrid3(int n, const VoxelBox& window) : PackedGrid3(n, window, Unset{}) {
+        std::fill(voxels_.begin(), voxels_.end(), PackedVoxel(0));
+    }
     // `grid` rounded to bfloat16, inside `window` (zero outside it is the caller's promise).
     explicit PackedGrid3(const Grid3& grid) : PackedGrid3(grid, VoxelBox::all(grid.resolution())) {}
     PackedGrid3(const Grid3& grid, const VoxelBox& window);
@@ -213,8 +209,8 @@ class PackedGrid3 {
     PackedVoxel packed(size_t i) const { return voxels_[i]; }
 
   private:
-    // Its voxels left as the allocator gives them (uninitialized): every one is written next. The guard voxel
-    // of a level one voxel wide is zeroed.
+    // Its voxels left as the allocator gives them (uninitialized): every one is written next (or zeroed). The
+    // guard voxel of a level one voxel wide is zeroed.
     struct Unset {};
     PackedGrid3(int n, const VoxelBox& window, Unset)
         : n_(n),
