@@ -352,6 +352,45 @@ BENCHMARK_DEFINE_F(ConeFixture, DiffuseConesAllThreads)(benchmark::State& state)
 }
 BENCHMARK_REGISTER_F(ConeFixture, DiffuseConesAllThreads)->UseRealTime();
 
+// The same cones traced eight at a time in SIMD lanes (traceLightCones): what the pipeline's passes use.
+BENCHMARK_F(ConeFixture, DiffuseConeLanes)(benchmark::State& state) {
+    int64_t steps = 0;
+    std::vector<glm::vec3> light(diffuse.size());
+    for (auto _ : state) {
+        traceLightCones(diffuse, volumes[2], visibility(), settings, light, &steps);
+        benchmark::DoNotOptimize(light.data());
+    }
+    state.SetItemsProcessed(steps);
+    state.counters["cones/s"] = benchmark::Counter(static_cast<double>(state.iterations() * diffuse.size()),
+                                                   benchmark::Counter::kIsRate);
+}
+
+// The lanes over the pipeline's threads, 64 cones a task, timed by the wall clock.
+BENCHMARK_DEFINE_F(ConeFixture, DiffuseConeLanesAllThreads)(benchmark::State& state) {
+    constexpr int64_t kConesPerTask = 64;
+    const int64_t tasks = (static_cast<int64_t>(diffuse.size()) + kConesPerTask - 1) / kConesPerTask;
+    std::vector<int64_t> steps(static_cast<size_t>(tasks), 0);
+    std::vector<glm::vec3> light(diffuse.size());
+    int64_t total = 0;
+    for (auto _ : state) {
+        parallelFor(0, tasks, 1, [&](int64_t k) {
+            const size_t begin = static_cast<size_t>(k * kConesPerTask);
+            const size_t count = std::min<size_t>(kConesPerTask, diffuse.size() - begin);
+            int64_t s = 0;
+            traceLightCones(std::span(diffuse).subspan(begin, count), volumes[2], visibility(), settings,
+                            std::span(light).subspan(begin, count), &s);
+            steps[static_cast<size_t>(k)] = s;
+        });
+        benchmark::DoNotOptimize(light.data());
+        for (int64_t s : steps) total += s;
+    }
+    state.SetItemsProcessed(total);
+    state.counters["cones/s"] = benchmark::Counter(static_cast<double>(state.iterations() * diffuse.size()),
+                                                   benchmark::Counter::kIsRate);
+    state.SetLabel(std::to_string(tbb::this_task_arena::max_concurrency()) + " threads");
+}
+BENCHMARK_REGISTER_F(ConeFixture, DiffuseConeLanesAllThreads)->UseRealTime();
+
 BENCHMARK_F(ConeFixture, ShadowCones)(benchmark::State& state) {
     int64_t steps = 0;
     for (auto _ : state)

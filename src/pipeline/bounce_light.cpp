@@ -37,24 +37,49 @@ bool facesAway(glm::vec3 meanNormal, glm::vec3 centre, glm::vec3 viewpoint) {
     return glm::dot(meanNormal, viewpoint - centre) < 0.0f;
 }
 
-// The diffuse cones' light (cosine-weighted, so that albedo times it is the reflected radiance) gathered at a
-// coarse voxel of `size` (world units) around `normal`, from the voxel's face along the normal so that its
-// own surfaces do not occlude; jittered by the voxel's `index`.
+// A coarse voxel to gather at: its centre, the normal it gathers around, its index (the cones' jitter).
+struct VoxelGather {
+    glm::vec3 centre{0.0f}, normal{0.0f};
+    size_t index = 0;
+};
+
+// The diffuse cones' light (cosine-weighted, so that albedo times it is the reflected radiance) gathered at
+// coarse voxels of `size` (world units) around their normals, from each voxel's face along the normal so that
+// its own surfaces do not occlude; jittered by the voxel's index. The cones of all the voxels are traced
+// together (in SIMD lanes).
+void gatherAtVoxels(std::span<const VoxelGather> voxels, float size, const MipVolume& light,
+                    const VisibilityVolumes& occluders, const DiffuseConeSet& cones,
+                    const ConeTraceSettings& settings, std::span<glm::vec3> out) {
+    const size_t perVoxel = cones.directions.size();
+    std::vector<Cone> batch;
+    batch.reserve(voxels.size() * perVoxel);
+    for (const VoxelGather& v : voxels) {
+        const glm::mat3 frame = frameAround(v.normal);
+        for (size_t k = 0; k < perVoxel; ++k) {
+            Cone& cone = batch.emplace_back();
+            cone.direction = frame * cones.directions[k];
+            cone.origin = coneOrigin(v.centre + (0.5f * size) * v.normal, v.normal, cone.direction,
+                                     light.region(), settings);
+            cone.tanHalfAngle = cones.tanHalfAngle;
+            cone.jitter = hashToUnit(v.index, kBounceStream + static_cast<uint32_t>(k));
+        }
+    }
+    std::vector<glm::vec3> arriving(batch.size());
+    traceLightCones(batch, light, occluders, settings, arriving);
+    for (size_t j = 0; j < voxels.size(); ++j) {
+        glm::vec3 sum(0.0f);
+        for (size_t k = 0; k < perVoxel; ++k) sum += cones.weights[k] * arriving[j * perVoxel + k];
+        out[j] = sum;
+    }
+}
+
 glm::vec3 gatherAtVoxel(glm::vec3 centre, glm::vec3 normal, float size, size_t index, const MipVolume& light,
                         const VisibilityVolumes& occluders, const DiffuseConeSet& cones,
                         const ConeTraceSettings& settings) {
-    const glm::mat3 frame = frameAround(normal);
-    glm::vec3 sum(0.0f);
-    for (size_t k = 0; k < cones.directions.size(); ++k) {
-        Cone cone;
-        cone.direction = frame * cones.directions[k];
-        cone.origin =
-            coneOrigin(centre + (0.5f * size) * normal, normal, cone.direction, light.region(), settings);
-        cone.tanHalfAngle = cones.tanHalfAngle;
-        cone.jitter = hashToUnit(index, kBounceStream + static_cast<uint32_t>(k));
-        sum += cones.weights[k] * traceLightCone(cone, light, occluders, settings);
-    }
-    return sum;
+    const VoxelGather voxel{centre, normal, index};
+    glm::vec3 gathered;
+    gatherAtVoxels(std::span(&voxel, 1), size, light, occluders, cones, settings, std::span(&gathered, 1));
+    return gathered;
 }
 
 // The cones of a further bounce's gathers (options.render.bounce_cones, with the diffuse cones' aperture).
@@ -134,6 +159,7 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
         // Gather at each surface voxel of the coarse level.
         parallelFor(0, static_cast<int64_t>(m) * m, 4, [&](int64_t row) {
             const int z = static_cast<int>(row / m), y = static_cast<int>(row % m);
+            std::vector<VoxelGather> voxels;
             for (int x = 0; x < m; ++x) {
                 const size_t i = coarse.index(x, y, z);
                 const glm::vec4 v = coarse[i];
@@ -145,8 +171,11 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
                 const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
                 const glm::vec3 normal =
                     (facesAway(meanNormal, centre, viewpoint) ? -1.0f : 1.0f) * meanNormal / coherence;
-                gathered[i] = gatherAtVoxel(centre, normal, coarseSize, i, light, occluders, cones, settings);
+                voxels.push_back({centre, normal, i});
             }
+            std::vector<glm::vec3> rowLight(voxels.size());
+            gatherAtVoxels(voxels, coarseSize, light, occluders, cones, settings, rowLight);
+            for (size_t j = 0; j < voxels.size(); ++j) gathered[voxels[j].index] = rowLight[j];
         });
         // Reflect it at every surface voxel of level 0 by the voxel's albedo.
         forEachSurfaceVoxel(geometry, [&](size_t, size_t i) {

@@ -1,5 +1,7 @@
 #include "pipeline/cone_trace.h"
 
+#include "pipeline/cone_march.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -31,22 +33,7 @@ glm::vec3 coneOrigin(glm::vec3 position, glm::vec3 normal, glm::vec3 direction, 
 
 namespace {
 
-// The part [tEnter, tExit] of a ray inside the volume [0, n]^3 (voxel units); empty when tEnter >= tExit.
-std::pair<float, float> clipToVolume(glm::vec3 origin, glm::vec3 dir, float n) {
-    float tEnter = 0.0f, tExit = std::numeric_limits<float>::infinity();
-    for (int a = 0; a < 3; ++a) {
-        if (std::abs(dir[a]) < 1e-12f) {
-            if (origin[a] < 0.0f || origin[a] > n) return {1.0f, 0.0f};
-            continue;
-        }
-        float inv = 1.0f / dir[a];
-        float t0 = (0.0f - origin[a]) * inv, t1 = (n - origin[a]) * inv;
-        if (t0 > t1) std::swap(t0, t1);
-        tEnter = std::max(tEnter, t0);
-        tExit = std::min(tExit, t1);
-    }
-    return {tEnter, tExit};
-}
+using namespace cone_march;
 
 // Occlusion of a visibility sample seen along `dir` at mip `level`.
 //
@@ -62,10 +49,8 @@ std::pair<float, float> clipToVolume(glm::vec3 origin, glm::vec3 dir, float n) {
 //   incoherent normals (both sides of a thin part, a whole small object in one coarse voxel): the mean
 //     projected area of randomly oriented surface, kIsotropicCoverage.
 // normal_weight blends from the isotropic model (0) to the normal-adapted one (1).
-constexpr float kIsotropicCoverage = 0.5f;
-// A back face counts fully as one once cos(back) >= 1/kBackfaceRamp: the neighbours of a point on a convex
-// surface face a grazing cone slightly from behind.
-constexpr float kBackfaceRamp = 16.0f;
+// (kIsotropicCoverage and kBackfaceRamp: cone_march.h. A back face counts fully as one once cos(back) >=
+// 1/kBackfaceRamp: the neighbours of a point on a convex surface face a grazing cone slightly from behind.)
 // A cone's axis in lanes 1-3, lined up with a visibility voxel's mean normal (adaptedOcclusion's `dir`).
 inline Float4 axisOf(const Cone& cone) {
     return Float4{0.0f, cone.direction.x, cone.direction.y, cone.direction.z};
@@ -74,7 +59,7 @@ inline Float4 axisOf(const Cone& cone) {
 inline float adaptedOcclusion(Float4 v, Float4 dir, float levelScale, const ConeTraceSettings& s,
                               float backfaceWeight) {
     const float occupancy = v[0];
-    if (occupancy <= 1e-6f) return 0.0f;
+    if (occupancy <= kEmpty) return 0.0f;
     const Float4 n = v / occupancy;  // lanes 1-3: the mean normal
     const Float4 squares = n * n, cosines = n * dir;
     const float coherence = std::min(std::sqrt(squares[1] + squares[2] + squares[3]), 1.0f);
@@ -87,60 +72,27 @@ inline float adaptedOcclusion(Float4 v, Float4 dir, float levelScale, const Cone
     return std::clamp(occupancy * levelScale * weight, 0.0f, 1.0f);
 }
 
-// log2 of x >= 1 to within 3e-5 (the exponent, and a quintic in the mantissa m - 1, a least-squares fit over
-// [1, 2] that is 0 at m = 1): std::log2 is a noticeable share of a cone step.
-inline float fastLog2(float x) {
-    uint32_t bits;
-    std::memcpy(&bits, &x, sizeof(bits));
-    const float exponent = static_cast<float>(static_cast<int>(bits >> 23) - 127);
-    bits = (bits & 0x007FFFFFu) | 0x3F800000u;
-    float m;
-    std::memcpy(&m, &bits, sizeof(m));
-    const float u = m - 1.0f;
-    const float p =
-        ((((0.04587075f * u - 0.19439043f) * u + 0.41539777f) * u - 0.70867494f) * u + 1.44182512f) * u;
-    return exponent + p;
-}
-
-// Opacity of a sample that covers a segment as long as the cone is wide, applied over a shorter step.
-inline float stepOpacity(float alpha, float stepScale) {
-    const float transmittance = std::max(1.0f - alpha, 0.0f);
-    if (stepScale == 0.5f) return 1.0f - std::sqrt(transmittance);  // the default, without pow
-    return stepScale == 1.0f ? alpha : 1.0f - std::pow(transmittance, stepScale);
-}
-
 // Marches the cone through the region of `reference` and calls visit(position, level, levelScale) at each
 // step until visit returns false: the position in level-0 voxel units, the fractional mip level, 2^level.
 template <typename Visit>
 void marchCone(const Cone& cone, const MipVolume& reference, const ConeTraceSettings& settings,
                Visit&& visit) {
     const VolumeRegion& region = reference.region();
-    const float invVoxel = 1.0f / region.voxelSize();
-    const glm::vec3 origin = (cone.origin - region.origin) * invVoxel;
+    const ConeSpan span = coneSpan(cone, region, settings);
     const float n = static_cast<float>(region.resolution);
-    auto [tEnter, tExit] = clipToVolume(origin, cone.direction, n);
-    tExit = std::min(tExit, cone.maxDistance * invVoxel);
     const float maxLevel = std::log2(n);
-    // The first step is jittered: regular steps would alias into bands across neighbouring pixels.
-    const float firstDiameter = std::max(1.0f, 2.0f * tEnter * cone.tanHalfAngle);
-    for (float t = tEnter + cone.jitter * settings.jitter * firstDiameter * settings.stepScale; t < tExit;) {
+    for (float t = span.first; t < span.end;) {
         const float diameter = std::max(1.0f, 2.0f * t * cone.tanHalfAngle);
         const float level = std::min(fastLog2(diameter), maxLevel);
         // 2^level, the level's voxel width in level-0 voxels.
         const float levelScale = std::min(diameter, n);
-        if (!visit(origin + t * cone.direction, level, levelScale)) return;
+        if (!visit(span.origin + t * cone.direction, level, levelScale)) return;
         t += diameter * settings.stepScale;
     }
 }
 
 const MipVolume& referenceOf(const MipVolume* a, const MipVolume* b) {
     return a ? *a : *b;
-}
-
-// The back-face weights of the scene and the object volume: only the starting surface's own volume gets one.
-std::pair<float, float> backfaceWeights(const VisibilityVolumes& v, const ConeTraceSettings& s) {
-    const bool sceneIsSelf = v.self == VisibilityVolumes::Self::Scene;
-    return {sceneIsSelf ? s.backfaceWeight : 0.0f, sceneIsSelf ? 0.0f : s.backfaceWeight};
 }
 
 }  // namespace

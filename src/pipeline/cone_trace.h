@@ -7,6 +7,7 @@
 #pragma once
 
 #include <limits>
+#include <span>
 #include <vector>
 
 #include "deltagi/options.h"
@@ -77,6 +78,17 @@ glm::vec3 traceLightCone(const Cone& cone, const MipVolume& light, const Visibil
 glm::vec3 traceLightChangeCone(const Cone& cone, const MipVolume& fullLight, const MipVolume& deltaLight,
                                const VisibilityVolumes& visibility, const ConeTraceSettings& settings,
                                const MipVolume* objectLight = nullptr);
+
+// traceLightCone and traceLightChangeCone of every cone of a batch: out[i] is cone i's light. The cones are
+// marched eight at a time in SIMD lanes (cone_lanes.cpp): the same light to within float rounding, several
+// times faster. Where a volume the lookups share is not stored whole (none of the pipeline's), each cone is
+// traced alone. `out` has a place for every cone.
+void traceLightCones(std::span<const Cone> cones, const MipVolume& light, const VisibilityVolumes& visibility,
+                     const ConeTraceSettings& settings, std::span<glm::vec3> out, int64_t* steps = nullptr);
+void traceLightChangeCones(std::span<const Cone> cones, const MipVolume& fullLight,
+                           const MipVolume& deltaLight, const VisibilityVolumes& visibility,
+                           const ConeTraceSettings& settings, const MipVolume* objectLight,
+                           std::span<glm::vec3> out);
 
 // Occlusion accumulated along a shadow cone, by the scene volume alone, the object volume alone and both.
 struct ShadowOcclusion {

@@ -44,6 +44,24 @@ void forEachValidPoint(std::span<const SurfacePoint> points, std::span<const uin
     });
 }
 
+// Calls body(indices) in parallel for consecutive groups of the valid points among `pixels` (or all points),
+// the valid ones of `grain` candidates a group (never empty): for passes that trace the points of a group
+// together (the cones in SIMD lanes).
+template <typename Body>
+void forEachValidPointGroup(std::span<const SurfacePoint> points, std::span<const uint32_t> pixels,
+                            int64_t grain, Body&& body) {
+    const int64_t count = static_cast<int64_t>(pixels.empty() ? points.size() : pixels.size());
+    parallelFor(0, (count + grain - 1) / grain, 1, [&](int64_t group) {
+        std::vector<int64_t> valid;
+        valid.reserve(static_cast<size_t>(grain));
+        for (int64_t k = group * grain; k < std::min(count, (group + 1) * grain); ++k) {
+            const int64_t i = pixels.empty() ? k : pixels[k];
+            if (points[i].valid()) valid.push_back(i);
+        }
+        if (!valid.empty()) body(std::span<const int64_t>(valid));
+    });
+}
+
 // The surfaces seen through a k x k grid of sub-pixel positions in every pixel of a rectangle: what the
 // objects' direct light is shaded over, so that a pixel shows the mean of its area as the path tracer's
 // does (a shadow edge or a fold inside a pixel), not the light at its centre alone.

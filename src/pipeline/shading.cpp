@@ -104,6 +104,21 @@ std::vector<ShadowOcclusion> traceShadowCones(std::span<const SurfacePoint> poin
     return out;
 }
 
+namespace {
+
+// The light of `cones` (relit: the change of the incoming light with the objects, traceLightChangeCones;
+// otherwise the light, traceLightCones), traced together in SIMD lanes.
+void traceBatch(std::span<const Cone> cones, const MipVolume& light, const VisibilityVolumes& visibility,
+                const ConeTraceSettings& settings, const MipVolume* fullLight, const MipVolume* objectLight,
+                std::span<glm::vec3> out) {
+    if (fullLight)
+        traceLightChangeCones(cones, *fullLight, light, visibility, settings, objectLight, out);
+    else
+        traceLightCones(cones, light, visibility, settings, out);
+}
+
+}  // namespace
+
 std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, const MipVolume& light,
                                          const VisibilityVolumes& visibility, const Options& options,
                                          std::span<const uint32_t> pixels, const MipVolume* fullLight,
@@ -114,22 +129,32 @@ std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, c
     settings.objectLightByRays = objectLightByRays;
     const DiffuseConeSet cones =
         makeDiffuseCones(options.diffuse.count, apertureDeg.value_or(options.diffuse.apertureDeg));
-    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
-        const SurfacePoint& p = points[i];
-        if (p.surface.diffuse == glm::vec3(0.0f)) return;
-        const glm::mat3 frame = frameAround(p.normal);
-        glm::vec3 sum(0.0f);
-        for (size_t k = 0; k < cones.directions.size(); ++k) {
-            Cone cone;
-            cone.direction = frame * cones.directions[k];
-            cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
-            cone.tanHalfAngle = cones.tanHalfAngle;
-            cone.jitter = hashToUnit(i, static_cast<uint32_t>(1000 + k));
-            sum += cones.weights[k] * (fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility,
-                                                                        settings, objectLight)
-                                                 : traceLightCone(cone, light, visibility, settings));
+    const size_t perPoint = cones.directions.size();
+    forEachValidPointGroup(points, pixels, kPointGrain, [&](std::span<const int64_t> group) {
+        // Every cone of the group's points, traced together.
+        std::vector<int64_t> traced;
+        std::vector<Cone> batch;
+        batch.reserve(group.size() * perPoint);
+        for (const int64_t i : group) {
+            const SurfacePoint& p = points[i];
+            if (p.surface.diffuse == glm::vec3(0.0f)) continue;
+            traced.push_back(i);
+            const glm::mat3 frame = frameAround(p.normal);
+            for (size_t k = 0; k < perPoint; ++k) {
+                Cone& cone = batch.emplace_back();
+                cone.direction = frame * cones.directions[k];
+                cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
+                cone.tanHalfAngle = cones.tanHalfAngle;
+                cone.jitter = hashToUnit(i, static_cast<uint32_t>(1000 + k));
+            }
         }
-        out[i] = sum;
+        std::vector<glm::vec3> arriving(batch.size());
+        traceBatch(batch, light, visibility, settings, fullLight, objectLight, arriving);
+        for (size_t j = 0; j < traced.size(); ++j) {
+            glm::vec3 sum(0.0f);
+            for (size_t k = 0; k < perPoint; ++k) sum += cones.weights[k] * arriving[j * perPoint + k];
+            out[traced[j]] = sum;
+        }
     });
     return out;
 }
@@ -140,17 +165,23 @@ std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, 
                                           const MipVolume* objectLight) {
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
-    forEachValidPoint(points, pixels, kPointGrain, [&](int64_t i) {
-        const SurfacePoint& p = points[i];
-        if (p.surface.specular == glm::vec3(0.0f)) return;
-        Cone cone;
-        cone.direction = glm::normalize(glm::reflect(-p.toEye, p.normal));
-        cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
-        cone.tanHalfAngle = specularConeTanHalfAngle(
-            p.surface.phongExponent(), options.specular.minApertureDeg, options.specular.maxApertureDeg);
-        cone.jitter = hashToUnit(i, 2000u);
-        out[i] = fullLight ? traceLightChangeCone(cone, *fullLight, light, visibility, settings, objectLight)
-                           : traceLightCone(cone, light, visibility, settings);
+    forEachValidPointGroup(points, pixels, kPointGrain, [&](std::span<const int64_t> group) {
+        std::vector<int64_t> traced;
+        std::vector<Cone> batch;
+        for (const int64_t i : group) {
+            const SurfacePoint& p = points[i];
+            if (p.surface.specular == glm::vec3(0.0f)) continue;
+            traced.push_back(i);
+            Cone& cone = batch.emplace_back();
+            cone.direction = glm::normalize(glm::reflect(-p.toEye, p.normal));
+            cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
+            cone.tanHalfAngle = specularConeTanHalfAngle(
+                p.surface.phongExponent(), options.specular.minApertureDeg, options.specular.maxApertureDeg);
+            cone.jitter = hashToUnit(i, 2000u);
+        }
+        std::vector<glm::vec3> arriving(batch.size());
+        traceBatch(batch, light, visibility, settings, fullLight, objectLight, arriving);
+        for (size_t j = 0; j < traced.size(); ++j) out[traced[j]] = arriving[j];
     });
     return out;
 }
