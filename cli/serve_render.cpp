@@ -114,10 +114,13 @@ void Server::renderLoop() {
             wanted.render.layers = layers;
             Options own = scene.options;
             own.render.layers = layers;
-            // An interactive frame with temporal reuse averages the frames before it: it is not render()'s
-            // image even with the scene's own options, so the idle refinement renders that one.
-            sameOptions =
-                scale == 1 && optionsToJson(wanted) == optionsToJson(own) && own.render.temporalFrames <= 1;
+            // An interactive frame with temporal reuse averages the frames before it, and one with "auto"
+            // refine_budget refines nothing (a session's frames keep their time): it is not render()'s image
+            // even with the scene's own options, so the idle refinement renders that one.
+            sameOptions = scale == 1 && optionsToJson(wanted) == optionsToJson(own) &&
+                          own.render.temporalFrames <= 1 && own.render.refineBudget >= 0.0f;
+            // The refined frame is the still `deltagi render` gives: a single render's refinement too.
+            if (own.render.refineBudget < 0.0f) own.render.refineBudget = kAutoRefineBudget;
             if (session_.version() != interactiveVersion || cameraInput || newLight) {
                 if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
                     live::interactiveScene(scene, wanted, scale, interactive);

@@ -106,6 +106,10 @@ struct RenderOptions {
     int bounceCones = 5;     // the diffuse cones of each further bounce's gather (bounce_light.h)
     int denoiseRadius = 2;
     int relightDenoiseRadius = 1;  // the same for the real surfaces' change (the relit passes)
+    // The share of the image's pixels that the relit passes of the environment's and the objects' light by
+    // rays may trace again where their sparse samples change sharply (cone_jobs.cpp, refineSparse); < 0:
+    // "auto" (kAutoRefineBudget for a single render, 0 for the frames of a session).
+    float refineBudget = -1.0f;
 
     bool operator==(const RenderOptions&) const = default;
 };
@@ -141,6 +145,11 @@ inline constexpr int kAutoRelightSpecularStride = 4;
 // 320x240 over the quality suite and its independent scenes, 4 (8 at 640x480) gives delta_rel_error within
 // 0.03 of every pixel's rays, at an eighth of their time (docs/design.md).
 inline constexpr int kAutoObjectRayStride = 8;
+// The "auto" refine budget of a single render: 1 % of the image's pixels traced again. A session's frames
+// keep their time (temporal reuse averages them instead): the field photo's delta_rel_error 0.347 -> 0.239
+// for 15-35 ms more a live frame there, 13 ms more a benchmark frame (docs/design.md).
+inline constexpr float kAutoRefineBudget = 0.01f;
+
 // The "auto" RSM resolution. A point or spot light's map: kAutoRsmTexelsPerVoxel texels per voxel along the
 // volume's side, in [kAutoRsmMinResolution, kAutoRsmMaxResolution]. At 128^3, 3 (384) against 4 (512): every
 // quality-suite delta_rel_error within 0.006 (0.003-0.006 higher on the 640x480 boxes, under 0.001 on the

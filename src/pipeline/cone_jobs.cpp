@@ -9,6 +9,7 @@
 #include "pipeline/diffuse_rays.h"
 #include "pipeline/object_bounce_rays.h"
 #include "pipeline/sky_light.h"
+#include "pipeline/sparse_pass.h"
 
 namespace deltagi {
 
@@ -23,40 +24,6 @@ void addInto(std::vector<glm::vec3>& a, std::vector<glm::vec3>&& b) {
 }
 
 namespace {
-
-// Cone results `trace(pixels)` (perPixel values of T per pixel of `points`, for the listed pixels) at every
-// stride-th pixel of every stride-th row, then filtered: the edge-aware filter interpolates the pixels
-// between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),
-// and the pixels that have none are traced as well, or blended from a finer grid of them (fillHoles). With
-// stride 1 every pixel is traced and filtered.
-// `bounds` holds all valid points.
-template <typename T, typename Trace>
-std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect& bounds,
-                           const Camera& camera, int stride, int perPixel, const DenoiseSettings& filter,
-                           Trace&& trace) {
-    if (stride <= 1) {
-        std::vector<T> values = trace(std::span<const uint32_t>{});
-        denoiseInPlace(values, perPixel, points, camera, filter, nullptr, &bounds);
-        return values;
-    }
-    std::vector<uint32_t> samples;
-    for (int y = (bounds.y0 + stride - 1) / stride * stride; y < bounds.y1; y += stride)
-        for (int x = (bounds.x0 + stride - 1) / stride * stride; x < bounds.x1; x += stride) {
-            const size_t i = static_cast<size_t>(y) * camera.width + x;
-            if (points[i].valid()) samples.push_back(static_cast<uint32_t>(i));
-        }
-    // An empty list would mean every pixel. Pixel 0 is a sample position, so here it is invalid: nothing.
-    if (samples.empty()) samples.push_back(0);
-    std::vector<T> values = trace(std::span<const uint32_t>(samples));
-    // The same number of samples as the filter at stride 1 (at least the 3x3 around each pixel), spaced out.
-    DenoiseSettings fill = filter;
-    fill.radius = std::max(filter.radius, 1);
-    fill.stride = stride;
-    std::vector<size_t> holes;
-    denoiseInPlace(values, perPixel, points, camera, fill, &holes, &bounds);
-    fillHoles(values, perPixel, points, camera, fill, holes, trace);
-    return values;
-}
 
 // The 2 x 2 points of pixel i's area on the plane of its point (where the camera's rays through the
 // quarters of the pixel meet it), for the surfaces that have no sub-samples of their own.
@@ -154,6 +121,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                                     std::span<const Light> directLights, StageTimer& timer) {
     const int lights = static_cast<int>(directLights.size());
     std::vector<ConeResults> results(jobs.size());
+
     forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
         results[j].shadows = traceSparse<ShadowOcclusion>(
@@ -180,13 +148,15 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
         if (!job.environment) return;
-        addInto(
-            results[j].areaLight,
-            traceSparse<glm::vec3>(
-                job.points, job.bounds, scene.camera, job.environmentStride(o, scene.camera), 1,
-                job.filter(o, job.environmentStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
-                    return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode, pixels);
-                }));
+        addInto(results[j].areaLight,
+                traceSparse<glm::vec3>(
+                    job.points, job.bounds, scene.camera, job.environmentStride(o, scene.camera), 1,
+                    job.filter(o, job.environmentStride(o, scene.camera)),
+                    [&](std::span<const uint32_t> pixels) {
+                        return traceEnvironmentRays(job.points, *job.environment, job.rays, o, job.mode,
+                                                    pixels);
+                    },
+                    SparseRefinement{job.refineBudget}));
     });
     timer.lap("shadow");
     forEachJob(jobs.size(), [&](size_t j) {
@@ -208,7 +178,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                         [&](std::span<const uint32_t> pixels) {
                             return traceObjectBounceRays(job.points, *job.objectLight, job.rays, o, pixels,
                                                          {job.fullLight, job.light});
-                        }));
+                        },
+                        SparseRefinement{job.refineBudget}));
     });
     timer.lap("diffuse");
     forEachJob(jobs.size(), [&](size_t j) {

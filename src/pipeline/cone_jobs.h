@@ -46,6 +46,9 @@ struct ConeJob {
     const EnvironmentSampler* environment = nullptr;
     // Rendered objects: the sub-samples of their pixels, whose area the shadow rays sample; or none.
     const PixelSamples* pixelSamples = nullptr;
+    // Relit: the share of the image's pixels its environment and objects' light passes may trace again where
+    // they change sharply (options.render.refine_budget, resolved); 0: none.
+    float refineBudget = 0.0f;
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }

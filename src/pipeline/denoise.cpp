@@ -259,6 +259,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
             const size_t k00 = static_cast<size_t>(sy) * f.sw + sx;
             for (; x < cellEnd; ++x) {
                 const size_t i = static_cast<size_t>(y) * f.width + x;
+                if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
                 bool ok;
                 if (cellPlan) {
                     const std::array<float, 4>& w = plan->weights[i];
@@ -392,7 +393,8 @@ void denoiseInto(std::span<float> values, int channels, std::span<const SurfaceP
         for (int sx = sx0; sx < sx1; ++sx) {
             const size_t j = static_cast<size_t>(sy) * stride * width + static_cast<size_t>(sx) * stride;
             const size_t k = static_cast<size_t>(sy) * sw + sx;
-            f.samples[k] = {points[j].position, points[j].normal, points[j].valid()};
+            f.samples[k] = {points[j].position, points[j].normal,
+                            points[j].valid() && (s.traced.empty() || s.traced[j] != 0)};
             const float* v = &values[j * channels];
             std::copy_n(v, channels, &f.sampleValues[k * channels]);
             nonZero[k] =

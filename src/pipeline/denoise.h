@@ -39,6 +39,11 @@ struct DenoiseSettings {
     // The pixels whose points may differ from the plan's surfaces (made invalid): they, and the pixels whose
     // samples lie in it, are computed without the plan. Empty: none.
     PixelRect planChanged;
+    // Per pixel of the image, whether it holds a value (a sparse pass that traced only some of the stride's
+    // samples); the samples at the others are not used. Empty: every valid point's.
+    std::span<const uint8_t> traced;
+    // Per pixel of the image, whether to filter it (the others are left as they are). Empty: every one.
+    std::span<const uint8_t> filtered;
 };
 
 // The interpolation weights (DenoiseSettings::interpolate) of every pixel of a fixed set of surfaces, such as

@@ -408,7 +408,11 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
          .fullLight = o.render.relightCones == RelightCones::Differential ? volumes.fullLight : nullptr,
          .objectLight = volumes.objectLight,
          .emitters = &emitters,
-         .environment = environment}};
+         .environment = environment,
+         // A session's frames (those with temporal reuse) keep their time; a single render refines.
+         .refineBudget = o.render.refineBudget >= 0.0f ? o.render.refineBudget
+                         : temporal                    ? 0.0f
+                                                       : kAutoRefineBudget}};
     std::vector<ConeResults> cones = traceCones(jobs, scene, o, direct, timer);
     ConeResults& object = cones[0];
     ConeResults& real = cones[1];

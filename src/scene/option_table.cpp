@@ -106,6 +106,21 @@ ValueKind<float> numbers(Interval range) {
             [](const float& v) { return json(v); }};
 }
 
+// A number in `range` or "auto" (a negative number here).
+ValueKind<float> numbersOrAuto(Interval range) {
+    const ValueKind<float> number = numbers(range);
+    return {"`\"auto\"` or " + number.type,
+            [range, type = "\"auto\" or " + number.type](const JsonNode& node) {
+                if (node.value().is_string()) {
+                    if (node.string() != "auto")
+                        node.fail(fmt::format("expected {}, got {}", type, describeValue(node.value())));
+                    return -1.0f;
+                }
+                return node.floatNumber(range);
+            },
+            [](const float& v) { return v < 0.0f ? json("auto") : json(v); }};
+}
+
 ValueKind<bool> boolean() {
     return {"boolean", [](const JsonNode& node) { return node.boolean(); },
             [](const bool& v) { return json(v); }};
@@ -487,6 +502,17 @@ OptionGroup renderGroup() {
                 "(quality suite: every delta_rel_error lower with 1). 2 gives steadier frames: the noise "
                 "of the objects' light by rays, averaged over fewer samples, flickers about a quarter more "
                 "with 1 ([quality-notes.md](quality-notes.md#stable-frames))"),
+            option(
+                "refine_budget", &R::refineBudget, numbersOrAuto({0.0, 0.25}), "of the pixels",
+                "the relit passes of the environment map's light and of the objects' light by rays trace "
+                "their samples sparsely (`options.shadow.relight_pixel_stride`, "
+                "`options.diffuse.object_ray_pixel_stride`) and interpolate between them; where the samples "
+                "around a cell differ by more than a tenth of the pass's largest value (a contact shadow's "
+                "core, the objects' glow at their feet, a silhouette), the sharpest cells are traced again "
+                "at a quarter of the stride, up to this share of the image's pixels a pass. `\"auto\"`: "
+                "0.01 for a single render, 0 for the frames of a session (`serve`, `live`, `bench`, a "
+                "`\"sequence\"`), which keep their time. 0 turns it off "
+                "([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))"),
             option(
                 "temporal_frames", &R::temporalFrames, integers(1, 8), "frames",
                 "frames of a sequence (`deltagi render` over a `\"sequence\"`, `stability`, `bench`, "

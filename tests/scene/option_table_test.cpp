@@ -72,7 +72,8 @@ Options everyOptionChanged() {
                 .bounceTail = false,
                 .bounceCones = 7,
                 .denoiseRadius = 0,
-                .relightDenoiseRadius = 3};
+                .relightDenoiseRadius = 3,
+                .refineBudget = 0.05f};
     o.environment = {.lightCount = 0,
                      .extraction = ExtractionMethod::VarianceMinimization,
                      .sky = false,
@@ -109,7 +110,21 @@ TEST(OptionTable, EachOptionIsDescribedOnce) {
             ++count;
         }
     }
-    EXPECT_EQ(count, 48u);  // the fields of the 8 structs of options.h
+    EXPECT_EQ(count, 49u);  // the fields of the 8 structs of options.h
+}
+
+// options.render.refine_budget: "auto" (written as such) or a share of the pixels in [0, 0.25]; anything else
+// is refused with the key and what it takes.
+TEST(OptionTable, TheRefineBudgetIsAutoOrAShareOfThePixels) {
+    EXPECT_LT(readBack({{"render", {{"refine_budget", "auto"}}}}).render.refineBudget, 0.0f);
+    EXPECT_EQ(optionsToJson(Options{})["render"]["refine_budget"], "auto");
+    EXPECT_EQ(readBack({{"render", {{"refine_budget", 0.02}}}}).render.refineBudget, 0.02f);
+    EXPECT_EQ(readBack({{"render", {{"refine_budget", 0}}}}).render.refineBudget, 0.0f);
+    for (const json& bad : {json("more"), json(-0.1), json(0.5), json(true)})
+        expectContains(inputErrorOf([&] {
+                           readBack({{"render", {{"refine_budget", bad}}}});
+                       }),
+                       {"written: options.render.refine_budget: expected"});
 }
 
 // Each name of `names` reads back as its value and is written as itself, and each value of the enum (in
