@@ -120,7 +120,7 @@ void Server::renderLoop() {
             sameOptions = scale == 1 && optionsToJson(wanted) == optionsToJson(own) &&
                           own.render.temporalFrames <= 1 && own.render.refineBudget >= 0.0f;
             // The refined frame is the still `deltagi render` gives: a single render's refinement too.
-            if (own.render.refineBudget < 0.0f) own.render.refineBudget = kAutoRefineBudget;
+            own.render.refineBudget = refineBudgetFor(own.render, true);
             if (session_.version() != interactiveVersion || cameraInput || newLight) {
                 if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
                     live::interactiveScene(scene, wanted, scale, interactive);

@@ -149,6 +149,11 @@ inline constexpr int kAutoObjectRayStride = 8;
 // keep their time (temporal reuse averages them instead): the field photo's delta_rel_error 0.347 -> 0.239
 // for 15-35 ms more a live frame there, 13 ms more a benchmark frame (docs/design.md).
 inline constexpr float kAutoRefineBudget = 0.01f;
+// The refine budget a render uses: the option's, or for "auto" kAutoRefineBudget for a still (a single
+// render, a live session's idle still) and 0 for a session's frame.
+inline float refineBudgetFor(const RenderOptions& render, bool still) {
+    return render.refineBudget >= 0.0f ? render.refineBudget : still ? kAutoRefineBudget : 0.0f;
+}
 
 // The "auto" RSM resolution. A point or spot light's map: kAutoRsmTexelsPerVoxel texels per voxel along the
 // volume's side, in [kAutoRsmMinResolution, kAutoRsmMaxResolution]. At 128^3, 3 (384) against 4 (512): every

@@ -53,24 +53,12 @@ void gatherAtVoxels(std::span<const VoxelGather> voxels, float size, const MipVo
     const size_t perVoxel = cones.directions.size();
     std::vector<Cone> batch;
     batch.reserve(voxels.size() * perVoxel);
-    for (const VoxelGather& v : voxels) {
-        const glm::mat3 frame = frameAround(v.normal);
-        for (size_t k = 0; k < perVoxel; ++k) {
-            Cone& cone = batch.emplace_back();
-            cone.direction = frame * cones.directions[k];
-            cone.origin = coneOrigin(v.centre + (0.5f * size) * v.normal, v.normal, cone.direction,
-                                     light.region(), settings);
-            cone.tanHalfAngle = cones.tanHalfAngle;
-            cone.jitter = hashToUnit(v.index, kBounceStream + static_cast<uint32_t>(k));
-        }
-    }
+    for (const VoxelGather& v : voxels)
+        appendDiffuseCones(batch, cones, v.centre + (0.5f * size) * v.normal, v.normal, light.region(),
+                           settings, v.index, kBounceStream);
     std::vector<glm::vec3> arriving(batch.size());
     traceLightCones(batch, light, occluders, settings, arriving);
-    for (size_t j = 0; j < voxels.size(); ++j) {
-        glm::vec3 sum(0.0f);
-        for (size_t k = 0; k < perVoxel; ++k) sum += cones.weights[k] * arriving[j * perVoxel + k];
-        out[j] = sum;
-    }
+    for (size_t j = 0; j < voxels.size(); ++j) out[j] = diffuseConesLight(cones, &arriving[j * perVoxel]);
 }
 
 glm::vec3 gatherAtVoxel(glm::vec3 centre, glm::vec3 normal, float size, size_t index, const MipVolume& light,

@@ -121,7 +121,6 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                                     std::span<const Light> directLights, StageTimer& timer) {
     const int lights = static_cast<int>(directLights.size());
     std::vector<ConeResults> results(jobs.size());
-
     forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
         results[j].shadows = traceSparse<ShadowOcclusion>(

@@ -1,11 +1,12 @@
 #include "pipeline/cone_trace.h"
 
-#include "pipeline/cone_march.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
+
+#include "core/sampling.h"
+#include "pipeline/cone_march.h"
 
 namespace deltagi {
 
@@ -298,6 +299,25 @@ DiffuseConeSet makeDiffuseCones(int count, float apertureDeg) {
     }
     for (float& w : set.weights) w /= weightSum;
     return set;
+}
+
+void appendDiffuseCones(std::vector<Cone>& batch, const DiffuseConeSet& set, glm::vec3 position,
+                        glm::vec3 normal, const VolumeRegion& region, const ConeTraceSettings& settings,
+                        uint64_t jitterIndex, uint32_t firstStream) {
+    const glm::mat3 frame = frameAround(normal);
+    for (size_t k = 0; k < set.directions.size(); ++k) {
+        Cone& cone = batch.emplace_back();
+        cone.direction = frame * set.directions[k];
+        cone.origin = coneOrigin(position, normal, cone.direction, region, settings);
+        cone.tanHalfAngle = set.tanHalfAngle;
+        cone.jitter = hashToUnit(jitterIndex, firstStream + static_cast<uint32_t>(k));
+    }
+}
+
+glm::vec3 diffuseConesLight(const DiffuseConeSet& set, const glm::vec3* light) {
+    glm::vec3 sum(0.0f);
+    for (size_t k = 0; k < set.weights.size(); ++k) sum += set.weights[k] * light[k];
+    return sum;
 }
 
 float specularConeTanHalfAngle(float phongExponent, float minApertureDeg, float maxApertureDeg) {

@@ -122,6 +122,14 @@ struct DiffuseConeSet {
 };
 DiffuseConeSet makeDiffuseCones(int count, float apertureDeg);
 
+// The cones of `set` around `normal` from `position` (coneOrigin's offset applied), appended to `batch`, each
+// jittered by hashToUnit(jitterIndex, firstStream + its index); diffuseConesLight gives their light back as
+// one value, weighted by the set's weights (`light`: theirs, in order).
+void appendDiffuseCones(std::vector<Cone>& batch, const DiffuseConeSet& set, glm::vec3 position,
+                        glm::vec3 normal, const VolumeRegion& region, const ConeTraceSettings& settings,
+                        uint64_t jitterIndex, uint32_t firstStream);
+glm::vec3 diffuseConesLight(const DiffuseConeSet& set, const glm::vec3* light);
+
 // Half-angle tangent of the specular cone for a Phong exponent: the lobe falls to half its peak at the cone's
 // edge; clamped to the options' aperture range.
 float specularConeTanHalfAngle(float phongExponent, float minApertureDeg, float maxApertureDeg);

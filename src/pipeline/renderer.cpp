@@ -410,9 +410,7 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
          .emitters = &emitters,
          .environment = environment,
          // A session's frames (those with temporal reuse) keep their time; a single render refines.
-         .refineBudget = o.render.refineBudget >= 0.0f ? o.render.refineBudget
-                         : temporal                    ? 0.0f
-                                                       : kAutoRefineBudget}};
+         .refineBudget = refineBudgetFor(o.render, temporal == nullptr)}};
     std::vector<ConeResults> cones = traceCones(jobs, scene, o, direct, timer);
     ConeResults& object = cones[0];
     ConeResults& real = cones[1];

@@ -139,22 +139,13 @@ std::vector<glm::vec3> traceDiffuseCones(std::span<const SurfacePoint> points, c
             const SurfacePoint& p = points[i];
             if (p.surface.diffuse == glm::vec3(0.0f)) continue;
             traced.push_back(i);
-            const glm::mat3 frame = frameAround(p.normal);
-            for (size_t k = 0; k < perPoint; ++k) {
-                Cone& cone = batch.emplace_back();
-                cone.direction = frame * cones.directions[k];
-                cone.origin = coneOrigin(p.position, p.normal, cone.direction, light.region(), settings);
-                cone.tanHalfAngle = cones.tanHalfAngle;
-                cone.jitter = hashToUnit(i, static_cast<uint32_t>(1000 + k));
-            }
+            appendDiffuseCones(batch, cones, p.position, p.normal, light.region(), settings,
+                               static_cast<uint64_t>(i), 1000u);
         }
         std::vector<glm::vec3> arriving(batch.size());
         traceBatch(batch, light, visibility, settings, fullLight, objectLight, arriving);
-        for (size_t j = 0; j < traced.size(); ++j) {
-            glm::vec3 sum(0.0f);
-            for (size_t k = 0; k < perPoint; ++k) sum += cones.weights[k] * arriving[j * perPoint + k];
-            out[traced[j]] = sum;
-        }
+        for (size_t j = 0; j < traced.size(); ++j)
+            out[traced[j]] = diffuseConesLight(cones, &arriving[j * perPoint]);
     });
     return out;
 }
