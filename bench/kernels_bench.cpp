@@ -144,7 +144,7 @@ void BM_RealSurfaces(benchmark::State& state) {
     Camera camera;
     camera.setFieldOfView(60.0);
     camera.worldFromCamera = lookAtPose({0.0f, 0.0f, 0.45f}, {0.0f, 0.0f, 0.0f});
-    std::vector<SurfacePoint> real;  // reused, as FrameRenderer does
+    SurfacePoints real;  // reused, as FrameRenderer does
     for (auto _ : state) {
         renderRealSurfaces(camera, realOnly, real);
         benchmark::DoNotOptimize(real.data());

@@ -99,12 +99,12 @@ struct ViewWork {
     // The camera is the last frame's: the filter's weights over the real surfaces are worth keeping (a
     // camera that moves every frame would build them for one use; its passes compute only those they need).
     bool steady = false;
-    std::vector<SurfacePoint> realSurfaces;  // the G-buffer's real half, when realSurfacesMade
+    SurfacePoints realSurfaces;  // the G-buffer's real half, when realSurfacesMade
     bool realSurfacesMade = false;
     std::array<InterpolationPlan, 5> relitPlans;  // the relit passes' filter weights over realSurfaces
     GBuffer gbuffer;                              // the objects' half, redone where they were and are
     // realSurfaces without the pixels the objects cover (the last frame's `hidden`), when relitSurfacesMade.
-    std::vector<SurfacePoint> relitSurfaces;
+    SurfacePoints relitSurfaces;
     bool relitSurfacesMade = false;
     std::vector<uint32_t> hidden;
     // Empties it for another camera. The large buffers keep their memory and their size (29 MiB each at 640 x

@@ -180,13 +180,13 @@ std::array<int, 4> pixelsCovering(const Camera& camera, const Bounds3f& b) {
 
 }  // namespace
 
-std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly) {
-    std::vector<SurfacePoint> real;
+SurfacePoints renderRealSurfaces(const Camera& camera, const RayScene& realOnly) {
+    SurfacePoints real;
     renderRealSurfaces(camera, realOnly, real);
     return real;
 }
 
-void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vector<SurfacePoint>& real) {
+void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, SurfacePoints& real) {
     real.resize(static_cast<size_t>(camera.width) * camera.height);  // each point written in full below
     const glm::vec3 eye = camera.position();
     parallelFor(0, camera.height, 2, [&](int64_t y) {
@@ -269,6 +269,7 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     if (k == 1 || g.written.empty()) {
         samples.perPixel = k == 1 ? 0 : k * k;
         samples.rect = g.written;
+        samples.slot.clear();
         samples.points.clear();
         return;
     }
@@ -279,10 +280,15 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
     samples.fine.clear();
 
     // Then the sub-samples of silhouette pixels (decided from the centres alone, so the pass is
-    // deterministic), over the rectangle [x0, x1] x [y0, y1].
+    // deterministic), over the rectangle [x0, x1] x [y0, y1]. Every pixel that shows an object or lies on a
+    // silhouette takes k x k sub-samples: the coverage, and the surfaces its direct light is shaded over.
+    // They get slots in pixel order: each row counts its pixels here, and its slots start after the rows'
+    // above.
     std::vector<uint8_t> silhouette(deferred.size());
     auto onSilhouette = [&](int64_t y, int x) -> uint8_t& { return silhouette[inRect(y, x)]; };
+    std::vector<uint32_t> rowStart(static_cast<size_t>(y1 - y0) + 2, 0);
     parallelFor(y0, y1 + 1, 8, [&](int64_t y) {
+        uint32_t count = 0;
         for (int x = x0; x <= x1; ++x) {
             const bool centre = g.object[static_cast<size_t>(y) * width + x].valid();
             for (int dy = -1; dy <= 1; ++dy)
@@ -292,19 +298,21 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                     if (g.object[static_cast<size_t>(yy) * width + xx].valid() != centre)
                         onSilhouette(y, x) = 1;
                 }
+            count += centre || onSilhouette(y, x);
         }
+        rowStart[y - y0 + 1] = count;
     });
-    // Every pixel that shows an object or lies on a silhouette takes k x k sub-samples: the coverage, and
-    // the surfaces its direct light is shaded over.
-    // Sized only, keeping the memory of the frame before: a row's slots are cleared by the row's task, in
-    // parallel (38 MiB for an object over a third of the image).
-    samples.points.resize(deferred.size() * k * k);
+    for (size_t r = 1; r < rowStart.size(); ++r) rowStart[r] += rowStart[r - 1];
+    // Sized only, keeping the memory of the frame before: a row's samples are cleared by the row's task, in
+    // parallel (a few MiB for an object over a third of the image).
+    samples.slot.resize(deferred.size());
+    samples.points.resize(static_cast<size_t>(rowStart.back()) * k * k);
     // The pixels that ask for the finer grid (needsFinerGrid; at k = 2 only: the shadow rays spread over at
     // most 16 samples).
     std::vector<uint8_t> finer(k == 2 ? deferred.size() : 0);
     parallelFor(y0, y1 + 1, 2, [&](int64_t y) {
-        SurfacePoint* const row = samples.points.data() + inRect(y, x0) * k * k;
-        std::fill(row, row + rectWidth * k * k, SurfacePoint{});
+        std::fill(samples.points.data() + static_cast<size_t>(rowStart[y - y0]) * k * k,
+                  samples.points.data() + static_cast<size_t>(rowStart[y - y0 + 1]) * k * k, SurfacePoint{});
         // The row's sub-sample rays, in packets.
         thread_local std::vector<glm::vec3> directions;
         thread_local std::vector<RayHit> hits;
@@ -322,11 +330,16 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
         hits.resize(directions.size());
         visibleObjectHits(all, eye, directions, hits);
         size_t next = 0;
+        int32_t slot = static_cast<int32_t>(rowStart[y - y0]);
         for (int x = x0; x <= x1; ++x) {
             const size_t i = static_cast<size_t>(y) * width + x;
             const bool edge = onSilhouette(y, x);
-            if (!edge && !g.object[i].valid()) continue;
-            SurfacePoint* out = row + static_cast<size_t>(x - x0) * k * k;
+            if (!edge && !g.object[i].valid()) {
+                samples.slot[inRect(y, x)] = -1;
+                continue;
+            }
+            samples.slot[inRect(y, x)] = slot;
+            SurfacePoint* out = samples.points.data() + static_cast<size_t>(slot++) * k * k;
             int virtualCount = 0;
             for (int s = 0; s < k * k; ++s, ++next) {
                 if (!hits[next].hit()) continue;

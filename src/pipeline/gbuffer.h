@@ -7,6 +7,7 @@
 #include <span>
 #include <vector>
 
+#include "core/large_blocks.h"
 #include "core/parallel.h"
 #include "core/ray_scene.h"
 #include "deltagi/scene.h"
@@ -62,6 +63,10 @@ void forEachValidPointGroup(std::span<const SurfacePoint> points, std::span<cons
     });
 }
 
+// Per-pixel surfaces (29 MiB at 640 x 480) in large blocks: a first render faults their pages in at once,
+// in huge pages where the kernel has them (core/large_blocks.h), not one 4 KiB page at a time.
+using SurfacePoints = std::vector<SurfacePoint, LargeBlockAllocator<SurfacePoint>>;
+
 // The surfaces seen through a k x k grid of sub-pixel positions in every pixel of a rectangle: what the
 // objects' direct light is shaded over, so that a pixel shows the mean of its area as the path tracer's
 // does (a shadow edge or a fold inside a pixel), not the light at its centre alone.
@@ -70,14 +75,17 @@ void forEachValidPointGroup(std::span<const SurfacePoint> points, std::span<cons
 // samples miss or count twice (quality suite's cornell-textured, a gilded vase: object_rel_rmse 0.459 ->
 // 0.293, with shading's disk quadrature 0.243; 839 of its 14,700 object pixels).
 struct PixelSamples {
-    int perPixel = 0;                  // k * k; 0: none
-    PixelRect rect;                    // the pixels that have them
-    std::vector<SurfacePoint> points;  // perPixel per pixel of `rect`, row by row; invalid: no object there
-    int finePerPixel = 0;              // (2k)^2; 0: none
-    std::vector<int32_t> fineSlot;     // per pixel of `rect`: its slot in `fine`, or -1 (empty: none)
-    std::vector<SurfacePoint> fine;    // finePerPixel per slot
+    int perPixel = 0;  // k * k; 0: none
+    PixelRect rect;    // the pixels that may have them
+    // Per pixel of `rect`, row by row: its slot in `points`, or -1 (none: it shows no object and lies on no
+    // silhouette). Empty: pixel k of `rect` has slot k.
+    std::vector<int32_t> slot;
+    SurfacePoints points;           // perPixel per slot; invalid: no object there
+    int finePerPixel = 0;           // (2k)^2; 0: none
+    std::vector<int32_t> fineSlot;  // per pixel of `rect`: its slot in `fine`, or -1 (empty: none)
+    SurfacePoints fine;             // finePerPixel per slot
     // The samples of image pixel `i` (of an image `width` wide): its fine ones where it has them; empty
-    // outside the rectangle.
+    // where it has none (outside the rectangle among them).
     std::span<const SurfacePoint> of(size_t i, int width) const {
         if (perPixel == 0) return {};
         const int x = static_cast<int>(i % static_cast<size_t>(width)), y = static_cast<int>(i / width);
@@ -86,7 +94,9 @@ struct PixelSamples {
         if (!fineSlot.empty() && fineSlot[k] >= 0)
             return std::span<const SurfacePoint>(fine).subspan(
                 static_cast<size_t>(fineSlot[k]) * finePerPixel, finePerPixel);
-        return std::span<const SurfacePoint>(points).subspan(k * perPixel, perPixel);
+        const int64_t s = slot.empty() ? static_cast<int64_t>(k) : slot[k];
+        if (s < 0) return {};
+        return std::span<const SurfacePoint>(points).subspan(static_cast<size_t>(s) * perPixel, perPixel);
     }
 };
 
@@ -102,9 +112,11 @@ struct SurfaceId {
 
 struct GBuffer {
     int width = 0, height = 0;
-    std::vector<SurfacePoint> object;  // the virtual surface seen in the pixel, where coverage > 0
-    std::vector<SurfaceId> objectIds;  // the virtual surface at the pixel's centre (per pixel, like object)
-    std::vector<float> coverage;       // fraction of sub-samples that see a virtual object first
+    SurfacePoints object;  // the virtual surface seen in the pixel, where coverage > 0
+    // The virtual surface at the pixel's centre (per pixel, like object).
+    std::vector<SurfaceId, LargeBlockAllocator<SurfaceId>> objectIds;
+    std::vector<float, LargeBlockAllocator<float>>
+        coverage;  // fraction of sub-samples that see an object first
     // The pixels that renderObjectSurfaces wrote: outside them object and coverage are empty, so they hold
     // every virtual point, and a G-buffer kept from frame to frame is cleared there only.
     PixelRect written;
@@ -114,9 +126,9 @@ struct GBuffer {
 
 // The real surfaces behind the pixel centres (what the photo shows): rays against the real scene alone. They
 // do not change while only the virtual objects move, so FrameRenderer keeps them between frames.
-std::vector<SurfacePoint> renderRealSurfaces(const Camera& camera, const RayScene& realOnly);
+SurfacePoints renderRealSurfaces(const Camera& camera, const RayScene& realOnly);
 // The same into `real` (resized; its memory is reused from frame to frame as the camera moves).
-void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, std::vector<SurfacePoint>& real);
+void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, SurfacePoints& real);
 
 // The virtual half of `g` (object, coverage): `all` holds the real and the virtual surfaces (the virtual
 // objects' layer over the real scene's, see RayScene), whose virtual objects lie inside `objectBounds`: only

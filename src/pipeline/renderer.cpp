@@ -116,7 +116,7 @@ std::vector<Light> rsmLights(const Scene& scene, const RayScene& realOnly) {
 }
 
 // Makes the pixels the objects cover fully invalid in `points`, listing them in `hidden`.
-void hideCovered(const GBuffer& gbuffer, std::vector<SurfacePoint>& points, std::vector<uint32_t>& hidden) {
+void hideCovered(const GBuffer& gbuffer, SurfacePoints& points, std::vector<uint32_t>& hidden) {
     const PixelRect& w = gbuffer.written;
     // The records cleared in parallel (96 bytes each), the list made in pixel order.
     parallelFor(w.y0, w.y1, 8, [&](int64_t y) {
@@ -134,9 +134,8 @@ void hideCovered(const GBuffer& gbuffer, std::vector<SurfacePoint>& points, std:
 
 // The real surfaces that show through (coverage < 1), to be relit: `real` without the pixels the objects
 // cover, kept in `kept` and changed only where the covered pixels were or are.
-const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePoint>& real,
-                                                     const GBuffer& gbuffer, ViewWork& kept) {
-    std::vector<SurfacePoint>& points = kept.relitSurfaces;
+const SurfacePoints& hideCoveredSurfaces(const SurfacePoints& real, const GBuffer& gbuffer, ViewWork& kept) {
+    SurfacePoints& points = kept.relitSurfaces;
     if (!kept.relitSurfacesMade || points.size() != real.size()) {  // a new camera: copied in parallel
         points.resize(real.size());
         kept.relitSurfacesMade = true;
@@ -157,9 +156,9 @@ const std::vector<SurfacePoint>& hideCoveredSurfaces(const std::vector<SurfacePo
 // hideCoveredSurfaces for a camera that moved: the real surfaces rendered straight into the relit ones (the
 // whole real G-buffer is needed only by a steady camera's kept filter weights, the depth layer and a rendered
 // background; a camera that stays computes it next frame, and the relit surfaces stay valid).
-const std::vector<SurfacePoint>& renderRelitSurfaces(const Camera& camera, const RayScene& realOnly,
-                                                     const GBuffer& gbuffer, ViewWork& kept) {
-    std::vector<SurfacePoint>& points = kept.relitSurfaces;
+const SurfacePoints& renderRelitSurfaces(const Camera& camera, const RayScene& realOnly,
+                                         const GBuffer& gbuffer, ViewWork& kept) {
+    SurfacePoints& points = kept.relitSurfaces;
     renderRealSurfaces(camera, realOnly, points);
     kept.relitSurfacesMade = true;
     kept.hidden.clear();
@@ -320,7 +319,7 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
     const RayScene* all = scene.virtuals.empty() ? nullptr : objectRays.get();
     timer.lap("bvh");
 
-    auto realSurfaces = [&]() -> const std::vector<SurfacePoint>& {
+    auto realSurfaces = [&]() -> const SurfacePoints& {
         if (!view.realSurfacesMade) renderRealSurfaces(camera, realOnly, view.realSurfaces);
         view.realSurfacesMade = true;
         return view.realSurfaces;
@@ -357,9 +356,9 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
     GBuffer& gbuffer = view.gbuffer;
     renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer);
     const bool wholeRealSurfaces = view.steady || !scene.background || o.render.layers;
-    const std::vector<SurfacePoint>& realPoints = wholeRealSurfaces
-                                                      ? hideCoveredSurfaces(realSurfaces(), gbuffer, view)
-                                                      : renderRelitSurfaces(camera, realOnly, gbuffer, view);
+    const SurfacePoints& realPoints = wholeRealSurfaces
+                                          ? hideCoveredSurfaces(realSurfaces(), gbuffer, view)
+                                          : renderRelitSurfaces(camera, realOnly, gbuffer, view);
     timer.lap("gbuffer");
 
     // 6. Cone tracing (§3.3): virtual surfaces read the full light volume, real ones the delta volume; both

@@ -228,7 +228,7 @@ TEST(SurfaceMaterial, GBufferFiltersTexturesOverThePixel) {
     scene.real.push_back(test::placed(makeQuad({2.0f, 2.0f}), {0, 0, 0}, m, "floor"));
     scene.camera = test::lookAtCamera({0, 3, 0.01f}, {0, 0, 0}, 16, 16, 40.0f);
     const RayScene rays(scene, SceneContent::RealOnly);
-    const std::vector<SurfacePoint> points = renderRealSurfaces(scene.camera, rays);
+    const SurfacePoints points = renderRealSurfaces(scene.camera, rays);
     // 16 pixels over about 2.2 world units: each pixel covers ~18 texels of the 256 over 2.
     for (const SurfacePoint& p : points) {
         if (!p.valid()) continue;

@@ -49,6 +49,13 @@ TEST(GBuffer, PixelsThatShowAnObjectKeepTheirSubSamplesSurfaces) {
         }
     EXPECT_GT(inside, 20);
     EXPECT_GT(edges, 8);
+    // Only they keep samples: the pixels of the objects' rectangle that show none and lie on no silhouette
+    // take no memory.
+    size_t kept = 0;
+    for (size_t i = 0; i < g.object.size(); ++i) kept += g.objectSamples.of(i, w).size();
+    EXPECT_EQ(g.objectSamples.points.size(), kept);
+    const PixelRect& r = g.written;
+    EXPECT_LT(kept, static_cast<size_t>(r.x1 - r.x0) * (r.y1 - r.y0) * 4);
     // One sample per pixel keeps none.
     renderObjectSurfaces(scene.camera, all, scene.virtuals[0].bounds(), 1, g);
     EXPECT_EQ(g.objectSamples.perPixel, 0);

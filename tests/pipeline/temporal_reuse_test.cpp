@@ -33,7 +33,7 @@ Scene ballOverFloor(int width = 64, int height = 48) {
 // One frame's surfaces, rendered as the pipeline renders them.
 struct Surfaces {
     std::unique_ptr<RayScene> real, all;
-    std::vector<SurfacePoint> realPoints;
+    SurfacePoints realPoints;
     GBuffer gbuffer;
     Surfaces(const Scene& s) {
         real = std::make_unique<RayScene>(s, SceneContent::RealOnly);
