@@ -286,7 +286,7 @@ class ConeFixture : public benchmark::Fixture {
         const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
         const VoxelGeometry* sceneOnly[] = {&sceneGeometry};
         Grid3 fullLight = injectLight(full, region, both);
-        Grid3 delta = deltaVolume(fullLight, injectLight(alone, region, sceneOnly));
+        PackedGrid3 delta = deltaVolume(fullLight, injectLight(alone, region, sceneOnly));
         volumes.push_back(buildMipChain(region, std::move(sceneGeometry.visibility)));
         volumes.push_back(buildMipChain(region, std::move(objectGeometry.visibility)));
         volumes.push_back(buildMipChain(region, std::move(delta)));

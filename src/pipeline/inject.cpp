@@ -184,11 +184,9 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     return light;
 }
 
-Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {
-    Grid3 delta(full.resolution());
-    parallelFor(0, static_cast<int64_t>(delta.size()), 1 << 14,
-                [&](int64_t i) { delta[i] = deltaVoxel(full[i], sceneOnly[i]); });
-    return delta;
+PackedGrid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {
+    return PackedGrid3::fromEach(full.resolution(),
+                                 [&](size_t i) { return deltaVoxel(full[i], sceneOnly[i]); });
 }
 
 VoxelRows::VoxelRows(int resolution)

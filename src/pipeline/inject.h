@@ -23,8 +23,9 @@ namespace deltagi {
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
                   std::span<const VoxelGeometry* const> geometry);
 
-// full - sceneOnly in the radiance channels; the occupancy of `full` (which covers both).
-Grid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly);
+// full - sceneOnly in the radiance channels; the occupancy of `full` (which covers both). Packed as it is
+// made (no float grid in between: 32 MiB at 128^3 that a first frame would fault in for nothing).
+PackedGrid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly);
 
 // The level-0 voxel that a texel at a position is injected into (the region's far faces count to the last
 // voxel).

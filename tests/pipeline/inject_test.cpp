@@ -326,7 +326,7 @@ TEST(Inject, DeltaVolumeIsNegativeInTheShadowAndPositiveOnTheObject) {
     VoxelGeometry sceneGeometry = voxelize(s.real, kRegion), objectGeometry = voxelize(s.virtuals, kRegion);
     const VoxelGeometry* both[] = {&sceneGeometry, &objectGeometry};
     const VoxelGeometry* sceneOnly[] = {&sceneGeometry};
-    Grid3 delta = deltaVolume(injectLight(full, kRegion, both), injectLight(alone, kRegion, sceneOnly));
+    PackedGrid3 delta = deltaVolume(injectLight(full, kRegion, both), injectLight(alone, kRegion, sceneOnly));
     EXPECT_LT(delta.at(8, 8, 8).x, -0.1f);  // floor under the box
     EXPECT_EQ(delta.at(2, 8, 2).x, 0.0f);   // floor far from the box: unchanged
     EXPECT_GT(delta.at(8, 14, 8).x, 0.1f);  // the lit top of the box, y = 0.75: layer 14

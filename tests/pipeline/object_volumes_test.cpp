@@ -96,7 +96,7 @@ size_t frameEqualsScratch(ObjectVolumes& kept, const RealScene& real, const Scen
     VoxelGeometry objects = voxelize(s.virtuals, kRegion);
     const VoxelGeometry* geometry[] = {&real.geometry, &objects};
     Grid3 full = injectLight(withObjects, kRegion, geometry);
-    Grid3 delta = deltaVolume(full, real.light);
+    PackedGrid3 delta = deltaVolume(full, real.light);
     Grid3 objectLight(kRegion.resolution);
     for (size_t i = 0; i < objectLight.size(); ++i)
         if (objects.visibility[i].x > 0.0f) objectLight[i] = full[i];
