@@ -25,10 +25,23 @@ struct TexelSum {
     }
 };
 
-// The surface area of `geometry` in voxel i (world units^2).
-[[gnu::always_inline]] inline float geometryArea(std::span<const VoxelGeometry* const> geometry, size_t i) {
+// Where a voxel is in a geometry's arrays (VoxelGeometry::indexOf), by its index in the whole grid or by its
+// coordinates.
+struct AtGridIndex {
+    size_t voxel;
+    size_t operator()(const VoxelGeometry& g) const { return g.indexOf(voxel); }
+};
+struct AtVoxel {
+    int x, y, z;
+    size_t operator()(const VoxelGeometry& g) const { return g.indexOf(x, y, z); }
+};
+
+// The surface area of `geometry` in a voxel (world units^2).
+template <typename At>
+[[gnu::always_inline]] inline float geometryArea(std::span<const VoxelGeometry* const> geometry, At at) {
     float area = 0.0f;
-    for (const VoxelGeometry* g : geometry) area += g->area[i];
+    for (const VoxelGeometry* g : geometry)
+        if (const size_t j = at(*g); j != VoxelGeometry::kOutside) area += g->area[j];
     return area;
 }
 
@@ -81,16 +94,19 @@ struct VoxelTexels {
     }
 };
 
-// Voxel i of the light volume from its texels' radiance (`lit`: any texel landed in it) and the geometry in
+// A voxel of the light volume from its texels' radiance (`lit`: any texel landed in it) and the geometry in
 // it.
+template <typename At>
 [[gnu::always_inline]] inline glm::vec4 voxelLight(glm::vec3 reflected, bool lit,
-                                                   std::span<const VoxelGeometry* const> geometry, size_t i) {
+                                                   std::span<const VoxelGeometry* const> geometry, At at) {
     float occupancy = 0.0f, area = 0.0f;
     glm::vec3 emitted(0.0f);  // radiance times area
     for (const VoxelGeometry* g : geometry) {
-        occupancy = std::max(occupancy, g->visibility[i].x);
-        area += g->area[i];
-        if (!g->emission.empty()) emitted += g->emission[i];
+        const size_t j = at(*g);
+        if (j == VoxelGeometry::kOutside) continue;
+        occupancy = std::max(occupancy, g->visibility[j].x);
+        area += g->area[j];
+        if (!g->emission.empty()) emitted += g->emission[j];
     }
     glm::vec3 radiance(0.0f);
     if (lit) {
@@ -106,10 +122,11 @@ struct VoxelTexels {
     return glm::vec4(full.x - sceneOnly.x, full.y - sceneOnly.y, full.z - sceneOnly.z, full.w);
 }
 
-// Whether voxel i is on a surface of `geometry` (VoxelGeometry::surfaceVoxels).
+// Whether voxel i (of the whole grid) is on a surface of `geometry` (VoxelGeometry::surfaceVoxels).
 [[gnu::always_inline]] inline bool onASurface(std::span<const VoxelGeometry* const> geometry, size_t i) {
     for (const VoxelGeometry* g : geometry)
-        if (g->visibility[i].x > 0.0f) return true;
+        if (const size_t j = g->indexOf(i); j != VoxelGeometry::kOutside && g->visibility[j].x > 0.0f)
+            return true;
     return false;
 }
 
@@ -157,7 +174,7 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
                 TexelSum& sum = accum[voxels[t] - first];
                 if (sum.area > 0.0f) {
                     const uint32_t v = voxels[t];
-                    light[v] += glm::vec4(lightRadiance(sum, geometryArea(geometry, v)), 0.0f);
+                    light[v] += glm::vec4(lightRadiance(sum, geometryArea(geometry, AtGridIndex{v})), 0.0f);
                     if (listed && light[v].w == 0.0f && !onASurface(geometry, v)) offSurfaces[s].push_back(v);
                     light[v].w = 1.0f;
                 }
@@ -167,10 +184,15 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     }
 
     auto finish = [&](size_t i) {
-        light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, i);
+        light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, AtGridIndex{i});
     };
     if (!listed) {
-        parallelFor(0, static_cast<int64_t>(light.size()), 1 << 14, [&](int64_t i) { finish(i); });
+        forEachRow(VoxelBox::all(n), [&](int y, int z) {
+            for (int x = 0; x < n; ++x) {
+                const size_t i = light.index(x, y, z);
+                light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, AtVoxel{x, y, z});
+            }
+        });
         return light;
     }
     // Each surface voxel once: the first geometry's, then each next one's off the ones before.
@@ -392,7 +414,7 @@ std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelB
                               [](const RsmChanges::Texel& t, uint32_t v) { return t.voxel < v; });
     std::vector<VoxelTexels> sums(x1 - x0);
     for (int x = x0; x < x1; ++x)
-        sums[x - x0].area = geometryArea(geometry, rowVoxel + static_cast<uint32_t>(x));
+        sums[x - x0].area = geometryArea(geometry, AtVoxel{x, y, z});
     while (true) {
         const bool eIn = e != eEnd && e->x < x1;
         const bool aIn = a != changes.added.end() && a->voxel < rowVoxel + x1;
@@ -428,7 +450,7 @@ void reinjectLight(const VoxelRows& voxels, const TexelBins& sceneTexels,
         for (int x = x0; x < x1; ++x) {
             const size_t i = fullLight.index(x, y, z);
             const VoxelTexels& texels = sums[x - x0];
-            glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, i);
+            glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, AtVoxel{x, y, z});
             if (bounce) light += (*bounce)[i];
             fullLight.set(i, light);
             deltaLight.set(i, deltaVoxel(light, sceneLight[i]));

@@ -12,14 +12,9 @@ namespace {
 // box's share of the texels would then cost more to gather than to scatter them all.
 constexpr size_t kFreshInjectionFraction = 4;  // 1/4
 
-// The window of the objects' own volumes: their box and this many voxels around it, so that an object that
-// moves a little stays inside.
+// The window of the objects' voxels and their own volumes: their box and this many voxels around it, so that
+// an object that moves a little stays inside.
 constexpr int kWindowMargin = 4;
-
-VoxelBox windowAround(const VoxelBox& bounds, int n) {
-    if (bounds.empty()) return {};
-    return VoxelBox{bounds.lo - kWindowMargin, bounds.hi + kWindowMargin}.intersection(VoxelBox::all(n));
-}
 
 bool sameRegion(const VolumeRegion& a, const VolumeRegion& b) {
     return a.origin == b.origin && a.size == b.size && a.resolution == b.resolution;
@@ -37,16 +32,16 @@ void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const Volume
     if (fresh) {
         *this = ObjectVolumes{};
         region_ = region;
-        objects_ = deltagi::voxelize(objects, region, withEmission, withAlbedo);
+        objects_ = deltagi::voxelize(objects, region, withEmission, withAlbedo, kWindowMargin);
         objectsChanged_ = VoxelBox::all(region.resolution);
-        window_ = windowAround(objects_.bounds, region.resolution);
+        window_ = objects_.visibility.window();
         return;
     }
     objectsChanged_ = revoxelize(objects_, objects, region, withEmission);
     objectsChanged_.extend(objects_.bounds);
-    if (!window_.contains(objects_.bounds)) {
-        // The objects left the window: their volumes start afresh over a new one.
-        window_ = windowAround(objects_.bounds, region.resolution);
+    if (objects_.visibility.window() != window_) {
+        // The objects left the window: their voxels start over a new one, and their volumes afresh there.
+        window_ = objects_.visibility.window();
         objectVisibility_ = MipVolume{};
         objectLight_ = MipVolume{};
     }
@@ -125,8 +120,9 @@ void ObjectVolumes::updateObjectLight(const VoxelBox& box) {
     const VoxelBox rewrite = fresh ? level0.window() : box.intersection(level0.window());
     forEachRow(rewrite, [&](int y, int z) {
         for (int x = rewrite.lo.x; x < rewrite.hi.x; ++x) {
-            const size_t i = objects_.visibility.index(x, y, z);
-            level0.set(x, y, z, objects_.visibility[i].x > 0.0f ? full[i] : glm::vec4(0.0f));
+            const size_t i = objects_.indexOf(x, y, z);
+            const bool occupied = i != VoxelGeometry::kOutside && objects_.visibility[i].x > 0.0f;
+            level0.set(x, y, z, occupied ? full[full.index(x, y, z)] : glm::vec4(0.0f));
         }
     });
     if (fresh)

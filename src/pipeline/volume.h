@@ -65,11 +65,18 @@ struct VoxelBox {
     }
 };
 
-// One level in floats: n^3 voxels, x fastest. Move-only: volumes are large.
+// One level in floats: n^3 voxels, x fastest, zero-initialized; or only those of a window of them (the rest
+// zero, which the accessors do not reach). Move-only: volumes are large.
 class Grid3 {
   public:
     Grid3() = default;
-    explicit Grid3(int n) : n_(n), voxels_(static_cast<size_t>(n) * n * n, glm::vec4(0.0f)) {}
+    explicit Grid3(int n) : Grid3(n, VoxelBox::all(n)) {}
+    Grid3(int n, const VoxelBox& window)
+        : n_(n),
+          window_(window.intersection(VoxelBox::all(n))),
+          extent_(window_.hi - window_.lo),
+          whole_(window_.count() == static_cast<size_t>(n) * n * n),
+          voxels_(window_.count(), glm::vec4(0.0f)) {}
     Grid3(Grid3&&) noexcept = default;
     Grid3& operator=(Grid3&&) noexcept = default;
     Grid3(const Grid3&) = delete;
@@ -78,12 +85,23 @@ class Grid3 {
     Grid3 clone() const {
         Grid3 g;
         g.n_ = n_;
+        g.window_ = window_;
+        g.extent_ = extent_;
+        g.whole_ = whole_;
         g.voxels_ = voxels_;
         return g;
     }
     int resolution() const { return n_; }
+    const VoxelBox& window() const { return window_; }
+    // Whether every voxel is stored: then index(x, y, z) is (z * n + y) * n + x.
+    bool whole() const { return whole_; }
+    // Voxels stored.
     size_t size() const { return voxels_.size(); }
-    size_t index(int x, int y, int z) const { return (static_cast<size_t>(z) * n_ + y) * n_ + x; }
+    // The place of voxel (x, y, z) of the window.
+    size_t index(int x, int y, int z) const {
+        return (static_cast<size_t>(z - window_.lo.z) * extent_.y + (y - window_.lo.y)) * extent_.x +
+               (x - window_.lo.x);
+    }
     glm::vec4& at(int x, int y, int z) { return voxels_[index(x, y, z)]; }
     const glm::vec4& at(int x, int y, int z) const { return voxels_[index(x, y, z)]; }
     glm::vec4& operator[](size_t i) { return voxels_[i]; }
@@ -92,6 +110,9 @@ class Grid3 {
 
   private:
     int n_ = 0;
+    VoxelBox window_;
+    glm::ivec3 extent_{0};
+    bool whole_ = true;
     std::vector<glm::vec4, LargeBlockAllocator<glm::vec4>> voxels_;
 };
 
@@ -545,7 +566,7 @@ VoxelBox nonZeroBounds(const Grid& grid, const VoxelBox& within) {
 
 inline PackedGrid3::PackedGrid3(const Grid3& grid, const VoxelBox& window)
     : PackedGrid3(grid.resolution(), window, Unset{}) {
-    if (whole_) {
+    if (whole_ && grid.whole()) {
         parallelFor(0, static_cast<int64_t>(count_), 1 << 14,
                     [&](int64_t i) { voxels_[i] = packVoxel(grid[i]); });
         return;

@@ -295,21 +295,35 @@ void listSurfaceVoxels(VoxelGeometry& out) {
     for (size_t r = 1; r < out.surfaceRowStart.size(); ++r)
         out.surfaceRowStart[r] += out.surfaceRowStart[r - 1];
     out.surfaceVoxels.resize(out.surfaceRowStart.back());
+    const size_t n = static_cast<size_t>(out.visibility.resolution());
     forEachRow(box, [&](int y, int z) {
         uint32_t* at = out.surfaceVoxels.data() + out.surfaceRowStart[rowOf(y, z)];
-        for (size_t i = out.visibility.index(box.lo.x, y, z), end = i + extent.x; i < end; ++i)
-            if (out.visibility[i].x > 0.0f) *at++ = static_cast<uint32_t>(i);
+        const size_t first = out.visibility.index(box.lo.x, y, z);
+        const size_t firstInGrid = (static_cast<size_t>(z) * n + static_cast<size_t>(y)) * n + box.lo.x;
+        for (size_t i = first, end = i + extent.x; i < end; ++i)
+            if (out.visibility[i].x > 0.0f) *at++ = static_cast<uint32_t>(firstInGrid + (i - first));
     });
+}
+
+// Empty arrays over `window` of an n^3 grid (albedo if asked for; emission is sized by revoxelize).
+void allocateArrays(VoxelGeometry& out, int n, const VoxelBox& window) {
+    out.visibility = Grid3(n, window);
+    out.area.assign(out.visibility.size(), 0.0f);
+    out.albedo.clear();
+    if (out.withAlbedo) out.albedo.assign(out.area.size(), glm::vec3(0.0f));
+    out.emission.clear();
 }
 
 }  // namespace
 
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission,
-                       bool withAlbedo) {
+                       bool withAlbedo, int windowMargin) {
     const int n = region.resolution;
-    VoxelGeometry out{Grid3(n), {}, {}, {}, {}, {}, {}, {}};
-    out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
-    if (withAlbedo) out.albedo.assign(out.area.size(), glm::vec3(0.0f));
+    VoxelGeometry out;
+    out.windowMargin = windowMargin;
+    out.withAlbedo = withAlbedo;
+    // With a margin, an empty window: revoxelize places it around the meshes.
+    allocateArrays(out, n, windowMargin < 0 ? VoxelBox::all(n) : VoxelBox{});
     revoxelize(out, meshes, region, withEmission);
     return out;
 }
@@ -319,21 +333,28 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     const bool emissive =
         withEmission &&
         std::any_of(meshes.begin(), meshes.end(), [](const TriangleMesh& m) { return m.material.emits(); });
-    // Clear the old geometry: the grid is zero everywhere then.
     const VoxelBox old = out.bounds;
-    const bool hadEmission = !out.emission.empty();
-    const bool withAlbedo = !out.albedo.empty();
-    forEachRow(old, [&](int y, int z) {
-        const size_t first = out.visibility.index(old.lo.x, y, z), count = old.hi.x - old.lo.x;
-        std::fill_n(&out.visibility[first], count, glm::vec4(0.0f));
-        std::fill_n(out.area.begin() + first, count, 0.0f);
-        if (hadEmission) std::fill_n(out.emission.begin() + first, count, glm::vec3(0.0f));
-        if (withAlbedo) std::fill_n(out.albedo.begin() + first, count, glm::vec3(0.0f));
-    });
-    if (!emissive) out.emission.clear();
-    if (emissive && !hadEmission) out.emission.assign(out.area.size(), glm::vec3(0.0f));
-
+    const bool withAlbedo = out.withAlbedo;
     const VoxelTriangles voxelTriangles = toVoxelSpace(meshes, region, out.triangleMaterials);
+    const int n = region.resolution;
+    if (out.windowMargin >= 0 && !out.visibility.window().contains(voxelTriangles.bounds)) {
+        // The meshes left the window (or it is the first): empty arrays over a new one around them.
+        const VoxelBox& b = voxelTriangles.bounds;
+        allocateArrays(out, n, VoxelBox{b.lo - out.windowMargin, b.hi + out.windowMargin});
+    } else {
+        // Clear the old geometry: the grid is zero everywhere then.
+        const bool hadEmission = !out.emission.empty();
+        forEachRow(old, [&](int y, int z) {
+            const size_t first = out.visibility.index(old.lo.x, y, z), count = old.hi.x - old.lo.x;
+            std::fill_n(&out.visibility[first], count, glm::vec4(0.0f));
+            std::fill_n(out.area.begin() + first, count, 0.0f);
+            if (hadEmission) std::fill_n(out.emission.begin() + first, count, glm::vec3(0.0f));
+            if (withAlbedo) std::fill_n(out.albedo.begin() + first, count, glm::vec3(0.0f));
+        });
+    }
+    if (!emissive) out.emission.clear();
+    if (emissive && out.emission.empty()) out.emission.assign(out.area.size(), glm::vec3(0.0f));
+
     const auto& tris = voxelTriangles.triangles;
     VoxelBox& box = out.bounds;
     box = voxelTriangles.bounds;

@@ -19,7 +19,10 @@
 namespace deltagi {
 
 struct VoxelGeometry {
-    Grid3 visibility;  // level 0: (occlusion, occlusion * average normal); occlusion is 0 or 1
+    // Level 0: (occlusion, occlusion * average normal); occlusion is 0 or 1. Over the whole grid, or (a
+    // voxelization with a window margin) over a window around the geometry: the other arrays are indexed
+    // alike (visibility.index), and every voxel outside the window is empty.
+    Grid3 visibility;
     std::vector<float, LargeBlockAllocator<float>>
         area;  // surface area of the geometry inside each voxel (world units^2), same indexing
     // Emitted radiance times area of the emissive surfaces in each voxel, summed (same indexing); empty when
@@ -31,9 +34,14 @@ struct VoxelGeometry {
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> albedo;
     // Every voxel outside it is zero in all three: the voxels that the triangles' bounding boxes touch.
     VoxelBox bounds;
-    // With albedo: the voxels any triangle touches (occupancy 1), by index, and where each row of `bounds`
-    // starts among them (row (y, z) at (z - lo.z) * extent.y + (y - lo.y); one entry more for the end), so
-    // that the passes over the surfaces alone (bounceLight) skip the empty grid.
+    bool withAlbedo = false;  // voxelize's: `albedo` is kept
+    // < 0: the arrays cover the whole grid. Else they cover `bounds` grown by this many voxels on each side
+    // (within the grid), and a voxelization again whose bounds leave that window starts over a new one.
+    int windowMargin = -1;
+    // With albedo: the voxels any triangle touches (occupancy 1), by their index in the whole grid
+    // ((z * n + y) * n + x), and where each row of `bounds` starts among them (row (y, z) at (z - lo.z) *
+    // extent.y + (y - lo.y); one entry more for the end), so that the passes over the surfaces alone
+    // (bounceLight) skip the empty grid.
     std::vector<uint32_t> surfaceVoxels;
     std::vector<uint32_t> surfaceRowStart;
     // Textured objects' triangles (meshes placed from an object-space mesh, TriangleMesh::objectSpace): each
@@ -48,6 +56,18 @@ struct VoxelGeometry {
         std::vector<std::array<glm::vec3, 2>> values;  // emission, reflectance
     };
     std::vector<TriangleMaterials> triangleMaterials;
+
+    // The arrays' index of voxel (x, y, z), or kOutside where they do not reach it (an empty voxel).
+    static constexpr size_t kOutside = ~size_t(0);
+    size_t indexOf(int x, int y, int z) const {
+        return visibility.window().contains(x, y, z) ? visibility.index(x, y, z) : kOutside;
+    }
+    // The same for the voxel of index `voxel` in the whole grid.
+    size_t indexOf(size_t voxel) const {
+        if (visibility.whole()) return voxel;
+        const size_t n = static_cast<size_t>(visibility.resolution());
+        return indexOf(static_cast<int>(voxel % n), static_cast<int>(voxel / n % n), static_cast<int>(voxel / n / n));
+    }
 };
 
 // Calls body(row, i) for every surface voxel i of `geometry` (VoxelGeometry::surfaceVoxels) in index order
@@ -65,13 +85,16 @@ inline void forEachSurfaceVoxel(const VoxelGeometry& geometry, Body&& body) {
 // mesh and triangle order).
 // `withEmission` false leaves emitting surfaces' radiance out (VoxelGeometry::emission empty): their light
 // reaches the scene through shadow rays and reflective shadow maps instead (options.shadow.method "rays").
+// `windowMargin` >= 0 keeps the arrays over the meshes' voxels and that many around them only
+// (VoxelGeometry::windowMargin): the virtual objects, small in a large grid (64 MiB less at 128^3).
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region,
-                       bool withEmission = true, bool withAlbedo = false);
+                       bool withEmission = true, bool withAlbedo = false, int windowMargin = -1);
 
 // Voxelizes `meshes` again into `geometry`, a voxelization over the same region (of other or moved meshes):
 // the voxels of its old bounds are cleared and the new geometry is written, so the cost is that of the
-// triangles and the two boxes, not of the grid. Afterwards `geometry` equals voxelize(meshes, region) bit
-// for bit. Returns the old bounds.
+// triangles and the two boxes, not of the grid (with a window margin, a new window when they leave the old
+// one). Afterwards `geometry` equals voxelize(meshes, region) over its window bit for bit. Returns the old
+// bounds.
 VoxelBox revoxelize(VoxelGeometry& geometry, std::span<const TriangleMesh> meshes, const VolumeRegion& region,
                     bool withEmission = true);
 

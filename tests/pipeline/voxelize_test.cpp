@@ -303,6 +303,68 @@ TEST(Voxelize, RevoxelizingChangedMeshesEqualsVoxelizingThemAfresh) {
     expectSame("one fewer, not emissive");
 }
 
+// With a window margin the arrays cover the meshes' voxels and the margin only; voxel for voxel the geometry
+// is the whole grid's, and so it stays as the meshes move within the window, out of it (a new window) and
+// out of the grid.
+TEST(Voxelize, AWindowedVoxelizationEqualsTheWholeGridsInsideAndIsEmptyOutside) {
+    const int n = 32;
+    const VolumeRegion region = unitRegion(n);
+    std::vector<TriangleMesh> meshes = {
+        test::placed(makeSphere(0.2f, 24), {0.1f, 0.0f, -0.2f}, test::diffuse(glm::vec3(0.5f)))};
+    constexpr int kMargin = 2;
+    VoxelGeometry kept = voxelize(meshes, region, true, true, kMargin);
+    auto expectSame = [&](const char* step) {
+        revoxelize(kept, meshes, region);
+        const VoxelGeometry whole = voxelize(meshes, region, true, true);
+        EXPECT_EQ(kept.bounds, whole.bounds) << step;
+        EXPECT_TRUE(kept.visibility.window().contains(whole.bounds)) << step;
+        EXPECT_EQ(kept.surfaceVoxels, whole.surfaceVoxels) << step;  // indices of the whole grid
+        EXPECT_EQ(kept.surfaceRowStart, whole.surfaceRowStart) << step;
+        EXPECT_EQ(kept.area.size(), kept.visibility.size()) << step;
+        EXPECT_EQ(kept.albedo.size(), kept.visibility.size()) << step;
+        ASSERT_EQ(kept.emission.empty(), whole.emission.empty()) << step;
+        for (int z = 0; z < n; ++z)
+            for (int y = 0; y < n; ++y)
+                for (int x = 0; x < n; ++x) {
+                    const size_t w = whole.visibility.index(x, y, z), k = kept.indexOf(x, y, z);
+                    ASSERT_EQ(k, kept.indexOf(w)) << step;
+                    if (k == VoxelGeometry::kOutside) {
+                        ASSERT_EQ(whole.area[w], 0.0f) << step << " " << x << "," << y << "," << z;
+                        continue;
+                    }
+                    ASSERT_EQ(std::memcmp(&kept.visibility[k], &whole.visibility[w], sizeof(glm::vec4)), 0)
+                        << step;
+                    ASSERT_EQ(kept.area[k], whole.area[w]) << step;
+                    ASSERT_EQ(kept.albedo[k], whole.albedo[w]) << step;
+                    if (!whole.emission.empty()) ASSERT_EQ(kept.emission[k], whole.emission[w]) << step;
+                }
+    };
+    expectSame("first");
+    // The sphere's voxels and the margin around them.
+    EXPECT_EQ(kept.visibility.window(),
+              VoxelBox({kept.bounds.lo - kMargin, kept.bounds.hi + kMargin}).intersection(VoxelBox::all(n)));
+    EXPECT_LT(kept.visibility.size() * 4, static_cast<size_t>(n) * n * n);
+    auto move = [&](glm::vec3 offset) {
+        for (TriangleMesh& m : meshes)
+            for (glm::vec3& p : m.positions) p += offset;
+    };
+    const VoxelBox first = kept.visibility.window();
+    move({0.03f, 0.0f, 0.0f});  // one voxel: within the margin
+    expectSame("moved a little");
+    EXPECT_EQ(kept.visibility.window(), first);
+    move({0.3f, 0.1f, 0.0f});
+    expectSame("out of the window");
+    EXPECT_NE(kept.visibility.window(), first);
+    meshes[0].material.emission = glm::vec3(1.0f, 2.0f, 3.0f);
+    move({-0.02f, 0.0f, 0.0f});
+    expectSame("emissive");
+    move({2.0f, 0.0f, 0.0f});
+    expectSame("out of the grid");
+    EXPECT_TRUE(kept.bounds.empty());
+    move({-2.2f, 0.0f, 0.1f});
+    expectSame("back");
+}
+
 }  // namespace
 
 // A textured object keeps its triangles' voxel materials while it moves and turns: revoxelizing it equals
