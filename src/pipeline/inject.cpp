@@ -25,15 +25,18 @@ struct TexelSum {
     }
 };
 
-// Where a voxel is in a geometry's arrays (VoxelGeometry::indexOf), by its index in the whole grid or by its
-// coordinates.
+// Where a voxel is in a geometry's arrays (VoxelGeometry::indexOf), by its index in the whole grid, or by
+// that and its coordinates.
 struct AtGridIndex {
     size_t voxel;
     size_t operator()(const VoxelGeometry& g) const { return g.indexOf(voxel); }
 };
 struct AtVoxel {
+    size_t voxel;
     int x, y, z;
-    size_t operator()(const VoxelGeometry& g) const { return g.indexOf(x, y, z); }
+    size_t operator()(const VoxelGeometry& g) const {
+        return g.visibility.whole() ? voxel : g.indexOf(x, y, z);
+    }
 };
 
 // The surface area of `geometry` in a voxel (world units^2).
@@ -190,7 +193,7 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
         forEachRow(VoxelBox::all(n), [&](int y, int z) {
             for (int x = 0; x < n; ++x) {
                 const size_t i = light.index(x, y, z);
-                light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, AtVoxel{x, y, z});
+                light[i] = voxelLight(glm::vec3(light[i]), light[i].w > 0.0f, geometry, AtVoxel{i, x, y, z});
             }
         });
         return light;
@@ -414,7 +417,7 @@ std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelB
                               [](const RsmChanges::Texel& t, uint32_t v) { return t.voxel < v; });
     std::vector<VoxelTexels> sums(x1 - x0);
     for (int x = x0; x < x1; ++x)
-        sums[x - x0].area = geometryArea(geometry, AtVoxel{x, y, z});
+        sums[x - x0].area = geometryArea(geometry, AtVoxel{rowVoxel + static_cast<size_t>(x), x, y, z});
     while (true) {
         const bool eIn = e != eEnd && e->x < x1;
         const bool aIn = a != changes.added.end() && a->voxel < rowVoxel + x1;
@@ -450,7 +453,7 @@ void reinjectLight(const VoxelRows& voxels, const TexelBins& sceneTexels,
         for (int x = x0; x < x1; ++x) {
             const size_t i = fullLight.index(x, y, z);
             const VoxelTexels& texels = sums[x - x0];
-            glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, AtVoxel{x, y, z});
+            glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, AtVoxel{i, x, y, z});
             if (bounce) light += (*bounce)[i];
             fullLight.set(i, light);
             deltaLight.set(i, deltaVoxel(light, sceneLight[i]));

@@ -66,7 +66,8 @@ struct VoxelGeometry {
     size_t indexOf(size_t voxel) const {
         if (visibility.whole()) return voxel;
         const size_t n = static_cast<size_t>(visibility.resolution());
-        return indexOf(static_cast<int>(voxel % n), static_cast<int>(voxel / n % n), static_cast<int>(voxel / n / n));
+        return indexOf(static_cast<int>(voxel % n), static_cast<int>(voxel / n % n),
+                       static_cast<int>(voxel / n / n));
     }
 };
 
