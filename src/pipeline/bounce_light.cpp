@@ -93,16 +93,16 @@ glm::vec3 tailScale(glm::dvec3 last, glm::dvec3 before) {
     return scale;
 }
 
-// The sum over the voxels of `geometry`'s surfaces of their surface area times value(voxel index): the light
-// of a bounce over the scene's surfaces, up to a constant. Rows are summed in parallel and added in order
-// (the same for any thread count).
+// The sum over the voxels of `geometry`'s surfaces of their surface area times value(k, voxel index), k the
+// voxel's place among them: the light of a bounce over the scene's surfaces, up to a constant. Rows are
+// summed in parallel and added in order (the same for any thread count).
 template <typename Value>
 glm::dvec3 areaWeightedSum(const VoxelGeometry& geometry, Value&& value) {
     if (geometry.surfaceRowStart.empty()) return glm::dvec3(0.0);
     std::vector<glm::dvec3> rows(geometry.surfaceRowStart.size() - 1, glm::dvec3(0.0));
-    forEachSurfaceVoxel(geometry, [&](size_t row, size_t i) {
+    forEachSurfaceVoxel(geometry, [&](size_t row, size_t k, size_t i) {
         const float area = geometry.area[i];
-        if (area > 0.0f) rows[row] += glm::dvec3(value(i)) * static_cast<double>(area);
+        if (area > 0.0f) rows[row] += glm::dvec3(value(k, i)) * static_cast<double>(area);
     });
     glm::dvec3 total(0.0);
     for (const glm::dvec3& r : rows) total += r;
@@ -111,15 +111,14 @@ glm::dvec3 areaWeightedSum(const VoxelGeometry& geometry, Value&& value) {
 
 }  // namespace
 
-Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
-                  const Options& options, int bounces, glm::vec3 viewpoint, Grid3 reuse) {
+SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
+                            const Options& options, int bounces, glm::vec3 viewpoint) {
     const int n = direct.resolution();
     const int level = gatherLevel(visibility);
-    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= level) return Grid3(n);
-    // Every pass below writes each surface voxel of `indirect` before it reads it; the others stay zero.
-    Grid3 indirect = reuse.size() == direct.size() ? std::move(reuse) : Grid3(n);
+    SurfaceRadiance indirect(geometry.surfaceVoxels.size(), glm::vec3(0.0f));
+    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= level) return indirect;
     // Only the surface voxels (VoxelGeometry::surfaceVoxels) reflect light: the passes below visit them
-    // alone.
+    // alone. (`geometry` covers the whole grid: its arrays are indexed as `direct` is.)
     const int nn = n * n;
     const VolumeRegion& region = visibility.region();
     const PackedGrid3& coarse = visibility.level(level);
@@ -133,16 +132,19 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
     const bool tail = options.render.bounceTail;
     // The light the last pass gathered from: the volume's own (emitters' included), then each pass's bounce.
     glm::dvec3 before =
-        tail ? areaWeightedSum(geometry, [&](size_t i) { return glm::vec3(direct[i]); }) : glm::dvec3(0.0);
+        tail ? areaWeightedSum(geometry, [&](size_t, size_t i) { return glm::vec3(direct[i]); })
+             : glm::dvec3(0.0);
     glm::dvec3 gatheredSoFar(0.0);  // the passes' bounces before this one, summed alike
-    Grid3 previous(0);              // indirect before the last pass (tail with bounces > 1)
+    SurfaceRadiance previous;       // indirect before the last pass (tail with bounces > 1)
     for (int bounce = 0; bounce < bounces; ++bounce) {
-        if (tail && bounce == bounces - 1 && bounces > 1) previous = indirect.clone();
-        // The light so far: direct plus the bounces gathered before (none before the first pass, where
-        // `indirect` may still hold the reused grid's values; adding zero keeps the bits the sum had).
-        PackedGrid3 total =
-            bounce == 0 ? PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + glm::vec4(0.0f); })
-                        : PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + indirect[i]; });
+        if (tail && bounce == bounces - 1 && bounces > 1) previous = indirect;
+        // The light so far: direct plus the bounces gathered before (at the surface voxels; adding zero
+        // elsewhere keeps the bits a sum with a zero grid had).
+        PackedGrid3 total = PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + glm::vec4(0.0f); });
+        if (bounce > 0)
+            forEachSurfaceVoxel(geometry, [&](size_t, size_t k, size_t i) {
+                total.set(i, direct[i] + glm::vec4(indirect[k], 0.0f));
+            });
         const MipVolume light = buildMipChain(region, std::move(total));
         // Gather at each surface voxel of the coarse level.
         parallelFor(0, static_cast<int64_t>(m) * m, 4, [&](int64_t row) {
@@ -166,15 +168,15 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
             for (size_t j = 0; j < voxels.size(); ++j) gathered[voxels[j].index] = rowLight[j];
         });
         // Reflect it at every surface voxel of level 0 by the voxel's albedo.
-        forEachSurfaceVoxel(geometry, [&](size_t, size_t i) {
+        forEachSurfaceVoxel(geometry, [&](size_t, size_t k, size_t i) {
             const float occupancy = geometry.visibility[i].x;
             const int z = static_cast<int>(i / nn), y = static_cast<int>(i % nn) / n,
                       x = static_cast<int>(i % n);
             const glm::vec3 g = gathered[coarse.index(x / factor, y / factor, z / factor)];
-            indirect[i] = glm::vec4(geometry.albedo[i] * g * occupancy, 0.0f);
+            indirect[k] = geometry.albedo[i] * g * occupancy;
         });
         if (!tail) continue;
-        const glm::dvec3 sum = areaWeightedSum(geometry, [&](size_t i) { return glm::vec3(indirect[i]); });
+        const glm::dvec3 sum = areaWeightedSum(geometry, [&](size_t k, size_t) { return indirect[k]; });
         const glm::dvec3 last = sum - gatheredSoFar;
         if (bounce < bounces - 1) {
             before = last;
@@ -182,18 +184,19 @@ Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipV
             continue;
         }
         const glm::vec3 scale = tailScale(last, before);
-        const bool lastOnly = previous.size() == indirect.size();
-        forEachSurfaceVoxel(geometry, [&](size_t, size_t i) {  // zero elsewhere
-            glm::vec3 b(indirect[i]);
-            if (lastOnly) b -= glm::vec3(previous[i]);
-            indirect[i] += glm::vec4(b * scale, 0.0f);
+        const bool lastOnly = !previous.empty();
+        forEachSurfaceVoxel(geometry, [&](size_t, size_t k, size_t) {
+            glm::vec3 b = indirect[k];
+            if (lastOnly) b -= previous[k];
+            indirect[k] += b * scale;
         });
     }
     return indirect;
 }
 
-void addBounce(Grid3& light, const Grid3& bounced, const VoxelGeometry& geometry) {
-    forEachSurfaceVoxel(geometry, [&](size_t, size_t i) { light[i] += bounced[i]; });
+void addBounce(Grid3& light, const SurfaceRadiance& bounced, const VoxelGeometry& geometry) {
+    forEachSurfaceVoxel(geometry,
+                        [&](size_t, size_t k, size_t i) { light[i] += glm::vec4(bounced[k], 0.0f); });
 }
 
 std::vector<bool> bounceViewSides(const MipVolume& visibility, glm::vec3 viewpoint) {

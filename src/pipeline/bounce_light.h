@@ -22,22 +22,21 @@
 namespace deltagi {
 
 // The light `bounces` further bounces add to `direct` (level 0 of the real scene's light volume: radiance
-// times occupancy, occupancy) as a grid of the same form with zero occupancy, to be added to it. `geometry`
-// is the scene's voxelization with albedo (voxelize's `withAlbedo`), `visibility` its visibility mip chain.
+// times occupancy, occupancy): radiance at each surface voxel of `geometry`, to be added to it (addBounce).
+// `geometry` is the scene's voxelization with albedo (voxelize's `withAlbedo`), `visibility` its visibility
+// mip chain.
 // The light is gathered at the voxels of the mip level that has 16^3 (level 3 at 128^3: each gathers for its
 // 512 level-0 voxels, whose albedos reflect it), with the bounce cones of `options` around the voxel's mean
 // normal, turned to face `viewpoint` (the camera, which stands in the room it sees: surfaces are two-sided,
 // and a reconstruction's winding does not say which side is the room's). With options.render.bounce_tail the
 // last bounce is added again times r / (1 - r), r the ratio of its light to the one before's over the
 // geometry's surfaces (per colour channel). Deterministic for any thread count; zero for bounces <= 0.
-// `reuse`: an earlier result over the same `geometry` (zero off its surface voxels), whose memory holds the
-// new one (only the surface voxels are written: no 32 MiB grid zeroed at 128^3); any other grid is ignored.
-Grid3 bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
-                  const Options& options, int bounces, glm::vec3 viewpoint, Grid3 reuse = {});
+SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
+                            const Options& options, int bounces, glm::vec3 viewpoint);
 
-// light += bounced, where `bounced` is bounceLight's result over `geometry` (zero but at its surface voxels:
-// only those are added, in parallel).
-void addBounce(Grid3& light, const Grid3& bounced, const VoxelGeometry& geometry);
+// light += bounced at the surface voxels of `geometry` (occupancy unchanged), where `bounced` is
+// bounceLight's result over it; in parallel.
+void addBounce(Grid3& light, const SurfaceRadiance& bounced, const VoxelGeometry& geometry);
 
 // Which side of each gathering voxel faces `viewpoint` (per voxel of bounceLight's gathering level: true
 // where it is the side against the voxel's mean normal): bounceLight's result for two viewpoints is the same

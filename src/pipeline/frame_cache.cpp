@@ -156,18 +156,8 @@ void LightWork::forget() {
         kept.sides = std::move(rsmSides);
         kept.voxels = rsmVoxels;
     }
-    if (bounce) {
-        kept.bounce = std::move(*bounce);
-        kept.bounceVoxels = bounceVoxels;
-    }
     *this = LightWork{};
     spare = std::move(kept);
-}
-
-Grid3 LightWork::spareBounce(uint64_t voxels) {
-    if (spare.bounceVoxels != voxels) return {};
-    spare.bounceVoxels = 0;
-    return std::exchange(spare.bounce, Grid3{});
 }
 
 std::optional<ReflectiveShadowMap> LightWork::spareRsm(const Light& light, int resolution, uint64_t voxels,

@@ -63,9 +63,8 @@ struct LightWork {
     uint64_t rsmVoxels = 0;
     int rsmsKept = 0;  // of them, taken from the spare ones
     std::vector<int8_t> rsmSides;
-    std::optional<Grid3> injected;  // from `rsms`, plus `bounce`
-    std::optional<Grid3> bounce;    // the further bounces (options.render.light_bounces)
-    uint64_t bounceVoxels = 0;      // the voxel part's version `bounce` was gathered over
+    std::optional<Grid3> injected;          // from `rsms`, plus `bounce`
+    std::optional<SurfaceRadiance> bounce;  // the further bounces (options.render.light_bounces)
     std::vector<bool> bounceSides;
     // The maps of the light before, when it changed: a light that did not change (a lamp beside a light
     // camera's environment) takes its map from here as long as the region's voxels and the viewpoint's sides
@@ -75,14 +74,9 @@ struct LightWork {
         std::vector<Light> lights;
         std::vector<int8_t> sides;
         uint64_t voxels = 0;
-        Grid3 bounce;  // the further bounces' grid of the light before, over the voxel part `bounceVoxels`
-        uint64_t bounceVoxels = 0;
     } spare;
-    // Empties it for another light; its maps and its bounces' grid become the spare ones.
+    // Empties it for another light; its maps become the spare ones.
     void forget();
-    // The spare bounces' grid, taken, when it was gathered over the voxel part of version `voxels` (zero off
-    // its surface voxels: bounceLight's `reuse`); an empty grid otherwise.
-    Grid3 spareBounce(uint64_t voxels);
     // The spare map of `light` at `resolution`, over the voxel part of version `voxels` with the viewpoint's
     // sides `sides`, taken out of the spare ones; nullopt when there is none.
     std::optional<ReflectiveShadowMap> spareRsm(const Light& light, int resolution, uint64_t voxels,

@@ -200,7 +200,7 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     }
     // Each surface voxel once: the first geometry's, then each next one's off the ones before.
     for (size_t g = 0; g < geometry.size(); ++g)
-        forEachSurfaceVoxel(*geometry[g], [&](size_t, size_t i) {
+        forEachSurfaceVoxel(*geometry[g], [&](size_t, size_t, size_t i) {
             if (!onASurface(geometry.first(g), i)) finish(i);
         });
     parallelFor(0, slabCount, 1, [&](int64_t s) {
@@ -445,16 +445,24 @@ std::vector<VoxelTexels> rowTexelSums(int y, int z, int x0, int x1, const TexelB
 void reinjectLight(const VoxelRows& voxels, const TexelBins& sceneTexels,
                    std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
                    std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight,
-                   PackedGrid3& fullLight, PackedGrid3& deltaLight, const Grid3* bounce) {
+                   PackedGrid3& fullLight, PackedGrid3& deltaLight, const SurfaceRadiance* bounce) {
     const std::vector<uint32_t> gone = goneEntries(sceneTexels, changes);
     voxels.forEachRow([&](int y, int z, int x0, int x1) {
         const std::vector<VoxelTexels> sums =
             rowTexelSums(y, z, x0, x1, sceneTexels, sceneAlone, gone, changes, geometry);
+        // The row's surface voxels of geometry[0], walked along with x for the bounce.
+        auto [k, kEnd] =
+            bounce ? surfaceVoxelsInRow(*geometry[0], y, z, x0) : std::pair<uint32_t, uint32_t>{};
         for (int x = x0; x < x1; ++x) {
             const size_t i = fullLight.index(x, y, z);
             const VoxelTexels& texels = sums[x - x0];
             glm::vec4 light = voxelLight(texels.radiance, texels.lit, geometry, AtVoxel{i, x, y, z});
-            if (bounce) light += (*bounce)[i];
+            if (bounce) {
+                // Zero off the surface voxels, added all the same: the bits of adding a grid's zero.
+                glm::vec3 b(0.0f);
+                if (k < kEnd && geometry[0]->surfaceVoxels[k] == i) b = (*bounce)[k++];
+                light += glm::vec4(b, 0.0f);
+            }
             fullLight.set(i, light);
             deltaLight.set(i, deltaVoxel(light, sceneLight[i]));
         }

@@ -123,11 +123,12 @@ RsmChanges compareRsms(std::span<const ReflectiveShadowMap> sceneAlone, std::spa
 // injectLight(withObjects, region, geometry) and deltaVolume(it, sceneLight), written into `fullLight` and
 // `deltaLight` in `voxels` only, where withObjects = the maps of `sceneTexels` (binTexels of `sceneAlone`)
 // with `changes`. The result there is bit for bit the same as those functions' rounded to bfloat16.
-// `bounce` (the real scene's further bounces, if any) is added to the full volume, as to the scene's light.
+// `bounce` (the real scene's further bounces at the surface voxels of geometry[0], if any) is added to the
+// full volume, as to the scene's light.
 void reinjectLight(const VoxelRows& voxels, const TexelBins& sceneTexels,
                    std::span<const ReflectiveShadowMap> sceneAlone, const RsmChanges& changes,
                    std::span<const VoxelGeometry* const> geometry, const Grid3& sceneLight,
-                   PackedGrid3& fullLight, PackedGrid3& deltaLight, const Grid3* bounce = nullptr);
+                   PackedGrid3& fullLight, PackedGrid3& deltaLight, const SurfaceRadiance* bounce = nullptr);
 
 template <typename RowBody>
 void VoxelRows::forEachRow(RowBody&& body) const {

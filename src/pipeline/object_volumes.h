@@ -32,9 +32,9 @@ struct RealSceneVolumes {
     const VoxelGeometry& geometry;
     std::span<const ReflectiveShadowMap> rsms;  // of the real scene alone, one per light
     const Grid3& light;                         // injected from rsms, plus `bounce`
-    // The real scene's further bounces of light (bounceLight), added to the full light volume as well; null:
-    // none.
-    const Grid3* bounce = nullptr;
+    // The real scene's further bounces of light (bounceLight, at the surface voxels of `geometry`), added to
+    // the full light volume as well; null: none.
+    const SurfaceRadiance* bounce = nullptr;
     // Another value whenever `rsms`, `light` or `bounce` differ from the last frame's (the real light
     // changed).
     uint64_t lightVersion = 0;

@@ -218,9 +218,8 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
         light.injected = injectLight(*light.rsms, region, sceneAlone);
         if (bounces > 0) {
             timer.lap("inject");
-            light.bounce = bounceLight(*light.injected, *real.geometry, visibility(), scene.options, bounces,
-                                       viewpoint, light.spareBounce(cache.voxels.version));
-            light.bounceVoxels = cache.voxels.version;
+            light.bounce =
+                bounceLight(*light.injected, *real.geometry, visibility(), scene.options, bounces, viewpoint);
             light.bounceSides = bounceViewSides(visibility(), viewpoint);
             addBounce(*light.injected, *light.bounce, *real.geometry);
             timer.lap("bounce");
@@ -265,7 +264,8 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const MipVolume visibility = buildMipChain(region, geometry.visibility);
     Grid3 direct = injectLight(rsms, region, geometries);
     if (bounces > 0) {
-        const Grid3 bounced = bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene));
+        const SurfaceRadiance bounced =
+            bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene));
         addBounce(direct, bounced, geometry);
     }
     const MipVolume light = buildMipChain(region, std::move(direct));

@@ -316,6 +316,19 @@ void allocateArrays(VoxelGeometry& out, int n, const VoxelBox& window) {
 
 }  // namespace
 
+std::pair<uint32_t, uint32_t> surfaceVoxelsInRow(const VoxelGeometry& geometry, int y, int z, int x0) {
+    const VoxelBox& box = geometry.bounds;
+    if (geometry.surfaceRowStart.empty() || y < box.lo.y || y >= box.hi.y || z < box.lo.z || z >= box.hi.z)
+        return {0, 0};
+    const size_t row = static_cast<size_t>(z - box.lo.z) * (box.hi.y - box.lo.y) + (y - box.lo.y);
+    const size_t n = static_cast<size_t>(geometry.visibility.resolution());
+    const uint32_t first = (static_cast<uint32_t>(z) * n + static_cast<uint32_t>(y)) * n + std::max(x0, 0);
+    const auto begin = geometry.surfaceVoxels.begin();
+    const auto at = std::lower_bound(begin + geometry.surfaceRowStart[row],
+                                     begin + geometry.surfaceRowStart[row + 1], first);
+    return {static_cast<uint32_t>(at - begin), geometry.surfaceRowStart[row + 1]};
+}
+
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission,
                        bool withAlbedo, int windowMargin) {
     const int n = region.resolution;

@@ -71,16 +71,27 @@ struct VoxelGeometry {
     }
 };
 
-// Calls body(row, i) for every surface voxel i of `geometry` (VoxelGeometry::surfaceVoxels) in index order
-// within each row of its bounds, rows in parallel (`row` their place in the bounds' rows).
+// Calls body(row, k, i) for every surface voxel i (its index in the whole grid) of `geometry`, the k-th of
+// VoxelGeometry::surfaceVoxels, in index order within each row of its bounds, rows in parallel (`row` their
+// place in the bounds' rows).
 template <typename Body>
 inline void forEachSurfaceVoxel(const VoxelGeometry& geometry, Body&& body) {
     const size_t rows = geometry.surfaceRowStart.empty() ? 0 : geometry.surfaceRowStart.size() - 1;
     parallelFor(0, static_cast<int64_t>(rows), 64, [&](int64_t row) {
         for (uint32_t k = geometry.surfaceRowStart[row]; k < geometry.surfaceRowStart[row + 1]; ++k)
-            body(static_cast<size_t>(row), static_cast<size_t>(geometry.surfaceVoxels[k]));
+            body(static_cast<size_t>(row), static_cast<size_t>(k),
+                 static_cast<size_t>(geometry.surfaceVoxels[k]));
     });
 }
+
+// Radiance at the surface voxels of a geometry, one per entry of its VoxelGeometry::surfaceVoxels, in their
+// order; zero at every other voxel (the real scene's further bounces: a few MiB, where a grid is 32 at
+// 128^3).
+using SurfaceRadiance = std::vector<glm::vec3>;
+
+// The surface voxels of `geometry` in row (y, z) at x0 and after: [first, last) of its surfaceVoxels (empty
+// where the row holds none).
+std::pair<uint32_t, uint32_t> surfaceVoxelsInRow(const VoxelGeometry& geometry, int y, int z, int x0);
 
 // Voxelizes `meshes` over `region`. Deterministic for any thread count (each voxel sums its triangles in
 // mesh and triangle order).
