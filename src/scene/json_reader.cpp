@@ -294,20 +294,22 @@ glm::mat4 JsonNode::matrix4() const {
 namespace {
 
 // Per voxel of the volumes' finest level: the three volumes stored whole with their mip chains take 27 bytes
-// (3 x 4 bfloat16 x 8/7), but a render's peak holds about 225-240 (measured at 128^3 and 256^3: the
-// voxelization's grids, the injection's, the real scene's cached light beside the frame's, all in floats),
-// rounded up.
-constexpr double kBytesPerVoxel = 256.0;
+// (3 x 4 bfloat16 x 8/7), but a render's peak holds about 150-170 (measured at 128^3 and 256^3: the real
+// scene's voxel geometry and injected light in floats, the packed light its bounce gathers from and the
+// packed full and delta volumes beside the volumes), rounded up.
+constexpr double kBytesPerVoxel = 176.0;
 constexpr double kRsmFaces = 6.0;  // a cube map per light (the worst case: point lights)
 // Per light, the map of the scene alone and the update of its texels that meet the objects (in the worst
 // case, all of them): about 155 MB per light at the default 512^2, as measured (issue 11).
 constexpr double kRsmMapsPerLight = 2.0;
 constexpr double kBytesPerRsmTexel = 48.0;  // position, normal, flux (3 floats each) and depth, padded
-// The frame's images, measured as peaks of `deltagi render` (tests/cli/memory_guard_test.cpp): about 485
-// bytes per pixel at 1 sample per pixel, 26-33 more per further sample (the G-buffers of the scene with and
-// without the objects, the cone tracing's and the filters' images, the layers and the outputs), rounded up.
+// The frame's images, measured as peaks of `deltagi render` (tests/cli/memory_guard_test.cpp): about 505
+// bytes per pixel at 1 sample per pixel (the G-buffers of the scene with and without the objects, the cone
+// tracing's and the filters' images, the layers and the outputs), 7-9 more per further sample (the objects'
+// sub-pixel surfaces, 96 bytes each, kept for the pixels that show them: the Cornell box's ball and ring),
+// rounded up.
 constexpr double kBytesPerPixel = 512.0;
-constexpr double kBytesPerSample = 40.0;
+constexpr double kBytesPerSample = 12.0;
 // A triangle as rendered, measured alike (about 250 bytes): the mesh, its object-space copy, Embree's BVH.
 constexpr double kBytesPerTriangle = 256.0;
 // The program, its libraries, its threads and the images of a small frame.

@@ -118,7 +118,7 @@ TEST(RenderMemoryTest, ALargeCameraNamesTheCameraAndTheFrameImages) {
     camera.width = camera.height = 16384;
     constexpr uint64_t kGiB = uint64_t{1} << 30;
     expectContains(inputErrorOf([&] { checkRenderMemory(options, camera, 1, 16 * kGiB, "s.json"); }),
-                   {"s.json: camera: 16384x16384 pixels at 4 samples per pixel", "frame images 168.0 GiB"});
+                   {"s.json: camera: 16384x16384 pixels at 4 samples per pixel", "frame images 140.0 GiB"});
 }
 
 // A shape's triangles count as rendered (256 bytes each): 100 million of them name the meshes.
