@@ -101,7 +101,7 @@ struct ViewWork {
     SurfacePoints relitSurfaces;
     bool relitSurfacesMade = false;
     std::vector<uint32_t> hidden;
-    // Empties it for another camera. The large buffers keep their memory and their size (29 MiB each at 640 x
+    // Empties it for another camera. The large buffers keep their memory and their size (28 MiB each at 640 x
     // 480: allocated afresh, their pages would be faulted in every frame; resized from empty, each element
     // would be set twice, the first time on one thread).
     void forget();

@@ -63,7 +63,7 @@ void forEachValidPointGroup(std::span<const SurfacePoint> points, std::span<cons
     });
 }
 
-// Per-pixel surfaces (29 MiB at 640 x 480) in large blocks: a first render faults their pages in at once,
+// Per-pixel surfaces (28 MiB at 640 x 480) in large blocks: a first render faults their pages in at once,
 // in huge pages where the kernel has them (core/large_blocks.h), not one 4 KiB page at a time.
 using SurfacePoints = std::vector<SurfacePoint, LargeBlockAllocator<SurfacePoint>>;
 
@@ -115,8 +115,8 @@ struct GBuffer {
     SurfacePoints object;  // the virtual surface seen in the pixel, where coverage > 0
     // The virtual surface at the pixel's centre (per pixel, like object).
     std::vector<SurfaceId, LargeBlockAllocator<SurfaceId>> objectIds;
-    std::vector<float, LargeBlockAllocator<float>>
-        coverage;  // fraction of sub-samples that see an object first
+    // The fraction of sub-samples that see a virtual object first.
+    std::vector<float, LargeBlockAllocator<float>> coverage;
     // The pixels that renderObjectSurfaces wrote: outside them object and coverage are empty, so they hold
     // every virtual point, and a G-buffer kept from frame to frame is cleared there only.
     PixelRect written;
