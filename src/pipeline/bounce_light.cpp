@@ -116,7 +116,7 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
     const int n = direct.resolution();
     const int level = gatherLevel(visibility);
     SurfaceRadiance indirect(geometry.surfaceVoxels.size(), glm::vec3(0.0f));
-    if (bounces <= 0 || geometry.albedo.empty() || visibility.levelCount() <= level) return indirect;
+    if (bounces <= 0 || !geometry.withAlbedo || visibility.levelCount() <= level) return indirect;
     // Only the surface voxels (VoxelGeometry::surfaceVoxels) reflect light: the passes below visit them
     // alone. (`geometry` covers the whole grid: its arrays are indexed as `direct` is.)
     const int nn = n * n;
@@ -173,7 +173,7 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
             const int z = static_cast<int>(i / nn), y = static_cast<int>(i % nn) / n,
                       x = static_cast<int>(i % n);
             const glm::vec3 g = gathered[coarse.index(x / factor, y / factor, z / factor)];
-            indirect[k] = geometry.albedo[i] * g * occupancy;
+            indirect[k] = geometry.albedo[k] * g * occupancy;
         });
         if (!tail) continue;
         const glm::dvec3 sum = areaWeightedSum(geometry, [&](size_t k, size_t) { return indirect[k]; });
@@ -231,14 +231,18 @@ std::vector<glm::vec3> reflectAtObjectVoxels(const VoxelGeometry& objects, const
     parallelFor(0, static_cast<int64_t>(extent.y) * extent.z, 4, [&](int64_t row) {
         const int z = box.lo.z + static_cast<int>(row / extent.y),
                   y = box.lo.y + static_cast<int>(row % extent.y);
+        // The row's surface voxels (the occupied ones), walked along with x for their albedo.
+        auto [k, kEnd] = surfaceVoxelsInRow(objects, y, z, box.lo.x);
         for (int x = box.lo.x; x < box.hi.x; ++x) {
-            const size_t i = objects.visibility.index(x, y, z);
+            const size_t i = objects.indexOf(x, y, z);
+            if (i == VoxelGeometry::kOutside) continue;
             const float occupancy = objects.visibility[i].x;
-            if (occupancy <= 0.0f) continue;
+            if (occupancy <= 0.0f || k >= kEnd) continue;
+            const glm::vec3 albedo = objects.albedo[k++];
             const glm::ivec3 c = glm::ivec3(x, y, z) / factor - lo;
             const glm::vec3 g = gathered[(static_cast<size_t>(c.z) * size.y + c.y) * size.x + c.x];
             added[(static_cast<size_t>(z - box.lo.z) * extent.y + (y - box.lo.y)) * extent.x +
-                  (x - box.lo.x)] = objects.albedo[i] * g * occupancy;
+                  (x - box.lo.x)] = albedo * g * occupancy;
         }
     });
     return added;
@@ -249,7 +253,7 @@ std::vector<glm::vec3> reflectAtObjectVoxels(const VoxelGeometry& objects, const
 template <typename Gather>
 std::vector<glm::vec3> gatherAtObjectVoxels(const VoxelGeometry& objects, const MipVolume& objectVisibility,
                                             const VoxelBox& box, int level, Gather&& gather) {
-    if (box.empty() || objects.albedo.empty() || objectVisibility.levelCount() <= level)
+    if (box.empty() || !objects.withAlbedo || objectVisibility.levelCount() <= level)
         return std::vector<glm::vec3>(box.empty() ? 0 : box.count(), glm::vec3(0.0f));
     const VolumeRegion& region = objectVisibility.region();
     const PackedGrid3& coarse = objectVisibility.level(level);

@@ -136,7 +136,7 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
     // The objects' light is non-zero only where they are and were: inside what this frame's injection
     // rewrote.
     updateObjectLight(lightChanged_);
-    if (!sceneVisibility || !options || objects_.albedo.empty()) return;
+    if (!sceneVisibility || !options || !objects_.withAlbedo) return;
     const VoxelBox& box = objects_.bounds;
     if (box.empty()) return;
     const std::vector<glm::vec3> added =

@@ -276,43 +276,20 @@ VoxelTriangles toVoxelSpace(std::span<const TriangleMesh> meshes, const VolumeRe
     return result;
 }
 
-// VoxelGeometry::surfaceVoxels and surfaceRowStart of `out`: each row's count, in parallel, then their
-// places, and each row's voxels written there.
-void listSurfaceVoxels(VoxelGeometry& out) {
-    const VoxelBox& box = out.bounds;
-    out.surfaceVoxels.clear();
-    out.surfaceRowStart.clear();
-    if (box.empty()) return;
-    const glm::ivec3 extent = box.hi - box.lo;
-    auto rowOf = [&](int y, int z) { return static_cast<size_t>(z - box.lo.z) * extent.y + (y - box.lo.y); };
-    out.surfaceRowStart.assign(static_cast<size_t>(extent.y) * extent.z + 1, 0);
-    forEachRow(box, [&](int y, int z) {
-        uint32_t count = 0;
-        for (size_t i = out.visibility.index(box.lo.x, y, z), end = i + extent.x; i < end; ++i)
-            count += out.visibility[i].x > 0.0f;
-        out.surfaceRowStart[rowOf(y, z) + 1] = count;
-    });
-    for (size_t r = 1; r < out.surfaceRowStart.size(); ++r)
-        out.surfaceRowStart[r] += out.surfaceRowStart[r - 1];
-    out.surfaceVoxels.resize(out.surfaceRowStart.back());
-    const size_t n = static_cast<size_t>(out.visibility.resolution());
-    forEachRow(box, [&](int y, int z) {
-        uint32_t* at = out.surfaceVoxels.data() + out.surfaceRowStart[rowOf(y, z)];
-        const size_t first = out.visibility.index(box.lo.x, y, z);
-        const size_t firstInGrid = (static_cast<size_t>(z) * n + static_cast<size_t>(y)) * n + box.lo.x;
-        for (size_t i = first, end = i + extent.x; i < end; ++i)
-            if (out.visibility[i].x > 0.0f) *at++ = static_cast<uint32_t>(firstInGrid + (i - first));
-    });
-}
-
-// Empty arrays over `window` of an n^3 grid (albedo if asked for; emission is sized by revoxelize).
+// Empty arrays over `window` of an n^3 grid (emission is sized by revoxelize).
 void allocateArrays(VoxelGeometry& out, int n, const VoxelBox& window) {
     out.visibility = Grid3(n, window);
     out.area.assign(out.visibility.size(), 0.0f);
-    out.albedo.clear();
-    if (out.withAlbedo) out.albedo.assign(out.area.size(), glm::vec3(0.0f));
     out.emission.clear();
 }
+
+// A slab's surface voxels (VoxelGeometry::surfaceVoxels' entries for its rows, in order), their albedo and
+// each of its rows' count of them.
+struct SlabSurfaces {
+    std::vector<uint32_t> voxels;
+    std::vector<glm::vec3> albedo;
+    std::vector<uint32_t> rowCounts;  // per row (y, z) of the slab, z outer
+};
 
 }  // namespace
 
@@ -362,7 +339,6 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
             std::fill_n(&out.visibility[first], count, glm::vec4(0.0f));
             std::fill_n(out.area.begin() + first, count, 0.0f);
             if (hadEmission) std::fill_n(out.emission.begin() + first, count, glm::vec3(0.0f));
-            if (withAlbedo) std::fill_n(out.albedo.begin() + first, count, glm::vec3(0.0f));
         });
     }
     if (!emissive) out.emission.clear();
@@ -371,12 +347,17 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     const auto& tris = voxelTriangles.triangles;
     VoxelBox& box = out.bounds;
     box = voxelTriangles.bounds;
-    if (box.empty()) {
-        listSurfaceVoxels(out);  // none
-        return old;
-    }
-    // Scatter in slabs of the box's layers.
+    out.surfaceVoxels.clear();
+    out.surfaceRowStart.clear();
+    out.albedo.clear();
+    if (box.empty()) return old;
+    // Scatter in slabs of the box's layers; each slab then finishes its voxels and lists its surface voxels
+    // (a voxel gets pieces from its own slab's task alone).
     const int slabCount = (box.hi.z - box.lo.z + kSlabThickness - 1) / kSlabThickness;
+    const glm::ivec3 extent = box.hi - box.lo;
+    const size_t layerVoxels = static_cast<size_t>(extent.x) * extent.y;
+    std::vector<SlabSurfaces> surfaces(withAlbedo ? slabCount : 0);
+    const float voxelArea = region.voxelSize() * region.voxelSize();
     const SlabBins bins = binBySlab(tris.size(), slabCount, [&](size_t i) {
         if (!tris[i].touchesGrid()) return std::pair{1, 0};  // in no slab
         return std::pair{(tris[i].lo.z - box.lo.z) / kSlabThickness,
@@ -385,6 +366,14 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     parallelFor(0, slabCount, 1, [&](int64_t s) {
         const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
         const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
+        // The slab's albedo sums, over the box's rows of its layers (a thread's buffer, zero between slabs).
+        thread_local std::vector<glm::vec3> albedoSums;
+        if (withAlbedo && albedoSums.size() < layerVoxels * kSlabThickness)
+            albedoSums.assign(layerVoxels * kSlabThickness, glm::vec3(0.0f));
+        auto albedoAt = [&](int x, int y, int z) -> glm::vec3& {
+            return albedoSums[static_cast<size_t>(z - zBegin) * layerVoxels +
+                              static_cast<size_t>(y - box.lo.y) * extent.x + (x - box.lo.x)];
+        };
         // The emission and albedo of a textured triangle's piece `where` (voxel space): its material at the
         // piece's centre, its textures filtered over a voxel (the voxel averages all its pieces anyway; a
         // piece's own, smaller footprint reads finer mip levels, for nothing but cache misses).
@@ -408,11 +397,11 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
                     t.cachedMaterial ? std::pair{mesh.cached[t.index][0], mesh.cached[t.index][1]}
                                      : materialOf(t, mesh, where);
                 if (emissive) out.emission[i] += emission * a;
-                if (withAlbedo) out.albedo[i] += albedo * a;
+                if (withAlbedo) albedoAt(x, y, z) += albedo * a;
                 return;
             }
             if (emissive) out.emission[i] += mesh.emission * a;
-            if (withAlbedo) out.albedo[i] += mesh.albedo * a;
+            if (withAlbedo) albedoAt(x, y, z) += mesh.albedo * a;
         };
         for (uint32_t ti : bins.slab(s)) {
             const VoxelTriangle& t = tris[ti];
@@ -429,24 +418,49 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
                                             : glm::vec3(0.0f));
                                 });
         }
-    });
-    // Normal sums to area-weighted means; areas from voxel units to world units.
-    const float voxelArea = region.voxelSize() * region.voxelSize();
-    forEachRow(box, [&](int y, int z) {
-        for (size_t i = out.visibility.index(box.lo.x, y, z), end = i + (box.hi.x - box.lo.x); i < end; ++i) {
-            glm::vec4& v = out.visibility[i];
-            float a = out.area[i];
-            if (a > 0.0f) {
-                v.y /= a;
-                v.z /= a;
-                v.w /= a;
-                if (withAlbedo) out.albedo[i] /= a;
+        // Normal sums to area-weighted means, areas from voxel units to world units; with albedo, the slab's
+        // surface voxels (occupancy 1) listed row by row with their mean albedo, the sums cleared.
+        SlabSurfaces* list = withAlbedo ? &surfaces[s] : nullptr;
+        const size_t n = static_cast<size_t>(region.resolution);
+        for (int z = zBegin; z < zEnd; ++z)
+            for (int y = box.lo.y; y < box.hi.y; ++y) {
+                const size_t first = out.visibility.index(box.lo.x, y, z);
+                const uint32_t firstInGrid = static_cast<uint32_t>(
+                    (static_cast<size_t>(z) * n + static_cast<size_t>(y)) * n + box.lo.x);
+                uint32_t count = 0;
+                for (int x = box.lo.x; x < box.hi.x; ++x) {
+                    const size_t i = first + (x - box.lo.x);
+                    glm::vec4& v = out.visibility[i];
+                    const float a = out.area[i];
+                    if (a > 0.0f) {
+                        v.y /= a;
+                        v.z /= a;
+                        v.w /= a;
+                    }
+                    out.area[i] = a * voxelArea;
+                    if (emissive) out.emission[i] *= voxelArea;
+                    if (!list) continue;
+                    glm::vec3& sum = albedoAt(x, y, z);
+                    if (v.x > 0.0f) {
+                        list->voxels.push_back(firstInGrid + static_cast<uint32_t>(x - box.lo.x));
+                        list->albedo.push_back(a > 0.0f ? sum / a : sum);
+                        ++count;
+                    }
+                    sum = glm::vec3(0.0f);
+                }
+                if (list) list->rowCounts.push_back(count);
             }
-            out.area[i] = a * voxelArea;
-            if (emissive) out.emission[i] *= voxelArea;
-        }
     });
-    if (withAlbedo) listSurfaceVoxels(out);
+    if (!withAlbedo) return old;
+    // The slabs' lists, in slab order: the rows' order (z outer, then y), each row's voxels by x.
+    out.surfaceRowStart.assign(1, 0);
+    out.surfaceRowStart.reserve(static_cast<size_t>(extent.y) * extent.z + 1);
+    for (const SlabSurfaces& slab : surfaces) {
+        out.surfaceVoxels.insert(out.surfaceVoxels.end(), slab.voxels.begin(), slab.voxels.end());
+        out.albedo.insert(out.albedo.end(), slab.albedo.begin(), slab.albedo.end());
+        for (uint32_t count : slab.rowCounts)
+            out.surfaceRowStart.push_back(out.surfaceRowStart.back() + count);
+    }
     return old;
 }
 

@@ -28,13 +28,14 @@ struct VoxelGeometry {
     // Emitted radiance times area of the emissive surfaces in each voxel, summed (same indexing); empty when
     // no mesh emits. Divided by `area` it is the voxel's mean emitted radiance (light injection).
     std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> emission;
-    // The area-weighted mean reflectance (Material::volumeReflectance) of the surfaces in each voxel (same
-    // indexing); empty unless asked for (voxelize's `withAlbedo`: the multi-bounce light of bounceLight()
-    // reflects by it).
-    std::vector<glm::vec3, LargeBlockAllocator<glm::vec3>> albedo;
+    // With albedo (voxelize's `withAlbedo`: the multi-bounce light of bounceLight() reflects by it): the
+    // area-weighted mean reflectance (Material::volumeReflectance) of the surfaces in each surface voxel, one
+    // per entry of `surfaceVoxels`, in their order (only they have surfaces: 1 MiB for the Cornell box at
+    // 128^3, where a grid of them is 24).
+    std::vector<glm::vec3> albedo;
     // Every voxel outside it is zero in all three: the voxels that the triangles' bounding boxes touch.
     VoxelBox bounds;
-    bool withAlbedo = false;  // voxelize's: `albedo` is kept
+    bool withAlbedo = false;  // voxelize's: `albedo` and `surfaceVoxels` are kept
     // < 0: the arrays cover the whole grid. Else they cover `bounds` grown by this many voxels on each side
     // (within the grid), and a voxelization again whose bounds leave that window starts over a new one.
     int windowMargin = -1;
