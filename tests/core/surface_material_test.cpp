@@ -2,6 +2,7 @@
 // as the G-buffer, the path tracer's hits and voxelization see them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <memory>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -247,7 +248,11 @@ TEST(SurfaceMaterial, VoxelsAverageTheTexturedAlbedo) {
         m.baseColorTexture.sampler.magFilter = TextureFilter::Nearest;
         std::vector<TriangleMesh> meshes{test::placed(makeQuad({2.0f, 2.0f}), {0, 0.25f, 0}, m, "floor")};
         const VoxelGeometry g = voxelize(meshes, region, false, true);
-        return g.albedo[g.visibility.index(x, 2, z)];
+        // The albedo is kept per surface voxel.
+        const auto at = std::find(g.surfaceVoxels.begin(), g.surfaceVoxels.end(),
+                                  static_cast<uint32_t>(g.visibility.index(x, 2, z)));
+        EXPECT_NE(at, g.surfaceVoxels.end());
+        return at == g.surfaceVoxels.end() ? glm::vec3(-1.0f) : g.albedo[at - g.surfaceVoxels.begin()];
     };
     expectNear(voxelAlbedo(64, 1, 2), glm::vec3(1.0f, 0.5f, 0.5f), 0.02f);
     // 4 x 4 checks over the 4 x 4 voxels: each voxel holds one check (voxel (0, 0) the image's top-left).
