@@ -169,7 +169,7 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
         });
         // Reflect it at every surface voxel of level 0 by the voxel's albedo.
         forEachSurfaceVoxel(geometry, [&](size_t, size_t k, size_t i) {
-            const float occupancy = geometry.visibility[i].x;
+            const float occupancy = geometry.occupancy(i);
             const int z = static_cast<int>(i / nn), y = static_cast<int>(i % nn) / n,
                       x = static_cast<int>(i % n);
             const glm::vec3 g = gathered[coarse.index(x / factor, y / factor, z / factor)];
@@ -236,7 +236,7 @@ std::vector<glm::vec3> reflectAtObjectVoxels(const VoxelGeometry& objects, const
         for (int x = box.lo.x; x < box.hi.x; ++x) {
             const size_t i = objects.indexOf(x, y, z);
             if (i == VoxelGeometry::kOutside) continue;
-            const float occupancy = objects.visibility[i].x;
+            const float occupancy = objects.occupancy(i);
             if (occupancy <= 0.0f || k >= kEnd) continue;
             const glm::vec3 albedo = objects.albedo[k++];
             const glm::ivec3 c = glm::ivec3(x, y, z) / factor - lo;

@@ -34,9 +34,7 @@ struct AtGridIndex {
 struct AtVoxel {
     size_t voxel;
     int x, y, z;
-    size_t operator()(const VoxelGeometry& g) const {
-        return g.visibility.whole() ? voxel : g.indexOf(x, y, z);
-    }
+    size_t operator()(const VoxelGeometry& g) const { return g.whole() ? voxel : g.indexOf(x, y, z); }
 };
 
 // The surface area of `geometry` in a voxel (world units^2).
@@ -107,7 +105,7 @@ template <typename At>
     for (const VoxelGeometry* g : geometry) {
         const size_t j = at(*g);
         if (j == VoxelGeometry::kOutside) continue;
-        occupancy = std::max(occupancy, g->visibility[j].x);
+        occupancy = std::max(occupancy, g->occupancy(j));
         area += g->area[j];
         if (!g->emission.empty()) emitted += g->emission[j];
     }
@@ -128,7 +126,7 @@ template <typename At>
 // Whether voxel i (of the whole grid) is on a surface of `geometry` (VoxelGeometry::surfaceVoxels).
 [[gnu::always_inline]] inline bool onASurface(std::span<const VoxelGeometry* const> geometry, size_t i) {
     for (const VoxelGeometry* g : geometry)
-        if (const size_t j = g->indexOf(i); j != VoxelGeometry::kOutside && g->visibility[j].x > 0.0f)
+        if (const size_t j = g->indexOf(i); j != VoxelGeometry::kOutside && g->occupancy(j) > 0.0f)
             return true;
     return false;
 }

@@ -184,7 +184,11 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     ObjectVolumes& objects = keptObjects ? *keptObjects : keptObjects.emplace();
     // 1. Voxelization: one visibility volume for the reconstruction, one for the virtual objects.
     const int bounces = scene.options.render.lightBounces - 1;
-    if (!real.geometry) real.geometry = voxelize(scene.real, region, withEmission, bounces > 0);
+    // The real scene's voxels, packed: its visibility's level 0 goes straight to its mip chain.
+    if (!real.geometry) {
+        real.geometry = voxelizePacked(scene.real, region, withEmission, bounces > 0);
+        real.visibility = buildMipChain(region, std::move(real.geometry->packedVisibility));
+    }
     objects.voxelize(scene.virtuals, region, withEmission, bounces > 0, cache.kept().objects);
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
@@ -208,10 +212,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     for (size_t l = 0; l < lights.size(); ++l)
         updates.push_back(traceRsmUpdate((*light.rsms)[l], all, lights[l], region, objectBounds, viewpoint));
     timer.lap("rsm");
-    auto visibility = [&]() -> const MipVolume& {
-        if (!real.visibility) real.visibility = buildMipChain(region, real.geometry->visibility);
-        return *real.visibility;
-    };
+    auto visibility = [&]() -> const MipVolume& { return *real.visibility; };
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* sceneAlone[] = {&*real.geometry};
     if (!light.injected) {
@@ -253,7 +254,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const VolumeRegion region = cubeAround(boundsOf(scene.real), margin, o.volume.resolution);
     const bool areaRays = o.shadow.method == ShadowMethod::Rays;
     const int bounces = o.render.lightBounces - 1;
-    VoxelGeometry geometry = voxelize(scene.real, region, !areaRays, bounces > 0);
+    VoxelGeometry geometry = voxelizePacked(scene.real, region, !areaRays, bounces > 0);
     const std::vector<ReflectiveShadowMap> rsms =
         renderRsms(realOnly, rsmLights(scene, realOnly), region, o, viewpointOf(scene));
     const AreaLights emitters(scene, SceneContent::RealOnly);
@@ -261,7 +262,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     if (environmentByRays(scene)) environment.emplace(*scene.environment);
     const std::vector<Light> shaded = directLights(scene);
     const VoxelGeometry* geometries[] = {&geometry};
-    const MipVolume visibility = buildMipChain(region, geometry.visibility);
+    const MipVolume visibility = buildMipChain(region, std::move(geometry.packedVisibility));
     Grid3 direct = injectLight(rsms, region, geometries);
     if (bounces > 0) {
         const SurfaceRadiance bounced =

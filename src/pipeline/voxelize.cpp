@@ -1,5 +1,7 @@
 #include "pipeline/voxelize.h"
 
+#include <stdexcept>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -306,20 +308,48 @@ std::pair<uint32_t, uint32_t> surfaceVoxelsInRow(const VoxelGeometry& geometry, 
     return {static_cast<uint32_t>(at - begin), geometry.surfaceRowStart[row + 1]};
 }
 
+namespace {
+VoxelBox voxelizeInto(VoxelGeometry& out, std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                      bool withEmission);
+}  // namespace
+
 VoxelGeometry voxelize(std::span<const TriangleMesh> meshes, const VolumeRegion& region, bool withEmission,
                        bool withAlbedo, int windowMargin) {
     const int n = region.resolution;
     VoxelGeometry out;
     out.windowMargin = windowMargin;
     out.withAlbedo = withAlbedo;
-    // With a margin, an empty window: revoxelize places it around the meshes.
+    // With a margin, an empty window: voxelizeInto places it around the meshes.
     allocateArrays(out, n, windowMargin < 0 ? VoxelBox::all(n) : VoxelBox{});
-    revoxelize(out, meshes, region, withEmission);
+    voxelizeInto(out, meshes, region, withEmission);
+    return out;
+}
+
+VoxelGeometry voxelizePacked(std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                             bool withEmission, bool withAlbedo) {
+    const int n = region.resolution;
+    VoxelGeometry out;
+    out.withAlbedo = withAlbedo;
+    out.packed = true;
+    out.visibility = Grid3(n, VoxelBox{});  // no voxels: the grid's resolution
+    out.area.assign(static_cast<size_t>(n) * n * n, 0.0f);
+    out.packedVisibility = PackedGrid3(n);
+    out.occupied.assign(out.area.size(), 0);
+    voxelizeInto(out, meshes, region, withEmission);
     return out;
 }
 
 VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, const VolumeRegion& region,
                     bool withEmission) {
+    if (out.packed) throw std::logic_error("revoxelize: a packed voxelization is not redone in place");
+    return voxelizeInto(out, meshes, region, withEmission);
+}
+
+namespace {
+
+VoxelBox voxelizeInto(VoxelGeometry& out, std::span<const TriangleMesh> meshes, const VolumeRegion& region,
+                      bool withEmission) {
+    const bool packed = out.packed;
     const bool emissive =
         withEmission &&
         std::any_of(meshes.begin(), meshes.end(), [](const TriangleMesh& m) { return m.material.emits(); });
@@ -366,13 +396,21 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     parallelFor(0, slabCount, 1, [&](int64_t s) {
         const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
         const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
-        // The slab's albedo sums, over the box's rows of its layers (a thread's buffer, zero between slabs).
+        // The slab's albedo sums and (packed) its visibility sums, over the box's rows of its layers (a
+        // thread's buffers, zero between slabs).
         thread_local std::vector<glm::vec3> albedoSums;
+        thread_local std::vector<glm::vec4> visibilitySums;
         if (withAlbedo && albedoSums.size() < layerVoxels * kSlabThickness)
             albedoSums.assign(layerVoxels * kSlabThickness, glm::vec3(0.0f));
-        auto albedoAt = [&](int x, int y, int z) -> glm::vec3& {
-            return albedoSums[static_cast<size_t>(z - zBegin) * layerVoxels +
-                              static_cast<size_t>(y - box.lo.y) * extent.x + (x - box.lo.x)];
+        if (packed && visibilitySums.size() < layerVoxels * kSlabThickness)
+            visibilitySums.assign(layerVoxels * kSlabThickness, glm::vec4(0.0f));
+        auto inSlab = [&](int x, int y, int z) {
+            return static_cast<size_t>(z - zBegin) * layerVoxels +
+                   static_cast<size_t>(y - box.lo.y) * extent.x + static_cast<size_t>(x - box.lo.x);
+        };
+        auto albedoAt = [&](int x, int y, int z) -> glm::vec3& { return albedoSums[inSlab(x, y, z)]; };
+        auto visibilityAt = [&](int x, int y, int z, size_t i) -> glm::vec4& {
+            return packed ? visibilitySums[inSlab(x, y, z)] : out.visibility[i];
         };
         // The emission and albedo of a textured triangle's piece `where` (voxel space): its material at the
         // piece's centre, its textures filtered over a voxel (the voxel averages all its pieces anyway; a
@@ -385,8 +423,8 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
         };
         auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a, glm::vec3 where) {
             const VoxelMesh& mesh = voxelTriangles.meshes[t.mesh];
-            const size_t i = out.visibility.index(x, y, z);
-            glm::vec4& v = out.visibility[i];
+            const size_t i = packed ? out.indexOf(x, y, z) : out.visibility.index(x, y, z);
+            glm::vec4& v = visibilityAt(x, y, z, i);
             v.x = 1.0f;
             v.y += t.normal.x * a;
             v.z += t.normal.y * a;
@@ -424,13 +462,14 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
         const size_t n = static_cast<size_t>(region.resolution);
         for (int z = zBegin; z < zEnd; ++z)
             for (int y = box.lo.y; y < box.hi.y; ++y) {
-                const size_t first = out.visibility.index(box.lo.x, y, z);
+                const size_t first =
+                    packed ? out.indexOf(box.lo.x, y, z) : out.visibility.index(box.lo.x, y, z);
                 const uint32_t firstInGrid = static_cast<uint32_t>(
                     (static_cast<size_t>(z) * n + static_cast<size_t>(y)) * n + box.lo.x);
                 uint32_t count = 0;
                 for (int x = box.lo.x; x < box.hi.x; ++x) {
                     const size_t i = first + (x - box.lo.x);
-                    glm::vec4& v = out.visibility[i];
+                    glm::vec4& v = visibilityAt(x, y, z, i);
                     const float a = out.area[i];
                     if (a > 0.0f) {
                         v.y /= a;
@@ -439,9 +478,15 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
                     }
                     out.area[i] = a * voxelArea;
                     if (emissive) out.emission[i] *= voxelArea;
+                    const bool occupied = v.x > 0.0f;
+                    if (packed && occupied) {
+                        out.packedVisibility.set(x, y, z, v);
+                        out.occupied[i] = 1;
+                    }
+                    if (packed) v = glm::vec4(0.0f);
                     if (!list) continue;
                     glm::vec3& sum = albedoAt(x, y, z);
-                    if (v.x > 0.0f) {
+                    if (occupied) {
                         list->voxels.push_back(firstInGrid + static_cast<uint32_t>(x - box.lo.x));
                         list->albedo.push_back(a > 0.0f ? sum / a : sum);
                         ++count;
@@ -463,5 +508,7 @@ VoxelBox revoxelize(VoxelGeometry& out, std::span<const TriangleMesh> meshes, co
     }
     return old;
 }
+
+}  // namespace
 
 }  // namespace deltagi

@@ -294,10 +294,10 @@ glm::mat4 JsonNode::matrix4() const {
 namespace {
 
 // Per voxel of the volumes' finest level: the three volumes stored whole with their mip chains take 27 bytes
-// (3 x 4 bfloat16 x 8/7), but a render's peak holds about 125-140 (measured at 128^3 and 256^3: the real
-// scene's visibility, area and injected light in floats, the packed light its bounce gathers from and the
+// (3 x 4 bfloat16 x 8/7), but a render's peak holds about 95-105 (measured at 128^3 and 256^3: the real
+// scene's area and injected light in floats, its occupancy, the packed light its bounce gathers from and the
 // packed full and delta volumes beside the volumes), rounded up.
-constexpr double kBytesPerVoxel = 144.0;
+constexpr double kBytesPerVoxel = 112.0;
 constexpr double kRsmFaces = 6.0;  // a cube map per light (the worst case: point lights)
 // Per light, the map of the scene alone and the update of its texels that meet the objects (in the worst
 // case, all of them): about 155 MB per light at the default 512^2, as measured (issue 11).

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -307,6 +308,44 @@ TEST(Voxelize, RevoxelizingChangedMeshesEqualsVoxelizingThemAfresh) {
     expectSame("one more");
     meshes.erase(meshes.begin());
     expectSame("one fewer, not emissive");
+}
+
+// Packed, the visibility's level 0 is the floats' rounded to bfloat16 voxel for voxel, the occupancy the
+// floats' occupancy, and everything else the same bits; a packed voxelization is not redone in place.
+TEST(Voxelize, APackedVoxelizationEqualsTheFloatOne) {
+    const int n = 32;
+    const VolumeRegion region = unitRegion(n);
+    Material glowing = test::diffuse(glm::vec3(0.5f));
+    glowing.emission = glm::vec3(1.0f, 2.0f, 3.0f);
+    const std::vector<TriangleMesh> meshes = {
+        test::placed(makeSphere(0.3f, 24), {0.1f, 0.0f, -0.2f}, test::diffuse(glm::vec3(0.5f))),
+        test::placed(makeBox(glm::vec3(0.2f)), {-0.5f, 0.5f, 0.5f}, glowing)};
+    const VoxelGeometry floats = voxelize(meshes, region, true, true);
+    VoxelGeometry packed = voxelizePacked(meshes, region, true, true);
+    ASSERT_TRUE(packed.packed);
+    EXPECT_EQ(packed.visibility.size(), 0u);
+    EXPECT_TRUE(packed.whole());
+    EXPECT_EQ(packed.bounds, floats.bounds);
+    EXPECT_EQ(packed.surfaceVoxels, floats.surfaceVoxels);
+    EXPECT_EQ(packed.surfaceRowStart, floats.surfaceRowStart);
+    EXPECT_EQ(packed.albedo, floats.albedo);
+    const PackedGrid3 rounded(floats.visibility);
+    ASSERT_EQ(packed.packedVisibility.size(), rounded.size());
+    size_t occupied = 0;
+    for (int z = 0; z < n; ++z)
+        for (int y = 0; y < n; ++y)
+            for (int x = 0; x < n; ++x) {
+                const size_t i = floats.visibility.index(x, y, z);
+                ASSERT_EQ(packed.indexOf(x, y, z), i);
+                ASSERT_EQ(packed.indexOf(i), i);
+                ASSERT_EQ(packed.packedVisibility.packed(i), rounded.packed(i)) << x << "," << y << "," << z;
+                ASSERT_EQ(packed.occupancy(i), floats.occupancy(i));
+                ASSERT_EQ(packed.area[i], floats.area[i]);
+                ASSERT_EQ(packed.emission[i], floats.emission[i]);
+                occupied += packed.occupancy(i) > 0.0f;
+            }
+    EXPECT_EQ(occupied, packed.surfaceVoxels.size());
+    EXPECT_THROW(revoxelize(packed, meshes, region), std::logic_error);
 }
 
 // With a window margin the arrays cover the meshes' voxels and the margin only; voxel for voxel the geometry

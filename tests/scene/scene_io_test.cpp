@@ -729,15 +729,15 @@ TEST(RenderMemoryTest, TooLargeForMemoryNamesTheKeyAndBothSizes) {
     options.volume.resolution = 1024;
     Camera camera;
     constexpr uint64_t kGiB = uint64_t{1} << 30;
-    // 144 bytes per voxel at a render's peak: 144 GiB, with the program and a 640x480 frame.
-    EXPECT_NEAR(static_cast<double>(estimateRenderMemory(options, camera, 0)) / kGiB, 144.35, 0.1);
+    // 112 bytes per voxel at a render's peak: 112 GiB, with the program and a 640x480 frame.
+    EXPECT_NEAR(static_cast<double>(estimateRenderMemory(options, camera, 0)) / kGiB, 112.35, 0.1);
     try {
         checkRenderMemory(options, camera, 1, 16 * kGiB, "scene.json");
         ADD_FAILURE() << "expected an InputError";
     } catch (const InputError& e) {
-        expectContains(e.what(), {"scene.json: options.volume.resolution", "144.", "16.0 GiB"});
+        expectContains(e.what(), {"scene.json: options.volume.resolution", "112.", "16.0 GiB"});
     }
-    EXPECT_NO_THROW(checkRenderMemory(options, camera, 1, 160 * kGiB, "scene.json"));
+    EXPECT_NO_THROW(checkRenderMemory(options, camera, 1, 128 * kGiB, "scene.json"));
     // Large RSMs for many lights dominate: then the RSM resolution is the key to change.
     options.volume.resolution = 64;
     options.rsm.resolution = 8192;
