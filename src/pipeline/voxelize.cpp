@@ -470,6 +470,8 @@ VoxelBox voxelizeInto(VoxelGeometry& out, std::span<const TriangleMesh> meshes, 
                 for (int x = box.lo.x; x < box.hi.x; ++x) {
                     const size_t i = first + (x - box.lo.x);
                     glm::vec4& v = visibilityAt(x, y, z, i);
+                    // Only an occupied voxel got pieces: every sum is zero elsewhere, and stays so.
+                    if (!(v.x > 0.0f)) continue;
                     const float a = out.area[i];
                     if (a > 0.0f) {
                         v.y /= a;
@@ -478,19 +480,16 @@ VoxelBox voxelizeInto(VoxelGeometry& out, std::span<const TriangleMesh> meshes, 
                     }
                     out.area[i] = a * voxelArea;
                     if (emissive) out.emission[i] *= voxelArea;
-                    const bool occupied = v.x > 0.0f;
-                    if (packed && occupied) {
+                    if (packed) {
                         out.packedVisibility.set(x, y, z, v);
                         out.occupied[i] = 1;
+                        v = glm::vec4(0.0f);
                     }
-                    if (packed) v = glm::vec4(0.0f);
                     if (!list) continue;
                     glm::vec3& sum = albedoAt(x, y, z);
-                    if (occupied) {
-                        list->voxels.push_back(firstInGrid + static_cast<uint32_t>(x - box.lo.x));
-                        list->albedo.push_back(a > 0.0f ? sum / a : sum);
-                        ++count;
-                    }
+                    list->voxels.push_back(firstInGrid + static_cast<uint32_t>(x - box.lo.x));
+                    list->albedo.push_back(a > 0.0f ? sum / a : sum);
+                    ++count;
                     sum = glm::vec3(0.0f);
                 }
                 if (list) list->rowCounts.push_back(count);
