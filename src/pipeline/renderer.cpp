@@ -212,16 +212,16 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     for (size_t l = 0; l < lights.size(); ++l)
         updates.push_back(traceRsmUpdate((*light.rsms)[l], all, lights[l], region, objectBounds, viewpoint));
     timer.lap("rsm");
-    auto visibility = [&]() -> const MipVolume& { return *real.visibility; };
+    const MipVolume& sceneVisibility = *real.visibility;
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* sceneAlone[] = {&*real.geometry};
     if (!light.injected) {
         light.injected = injectLight(*light.rsms, region, sceneAlone);
         if (bounces > 0) {
             timer.lap("inject");
-            light.bounce =
-                bounceLight(*light.injected, *real.geometry, visibility(), scene.options, bounces, viewpoint);
-            light.bounceSides = bounceViewSides(visibility(), viewpoint);
+            light.bounce = bounceLight(*light.injected, *real.geometry, sceneVisibility, scene.options,
+                                       bounces, viewpoint);
+            light.bounceSides = bounceViewSides(sceneVisibility, viewpoint);
             addBounce(*light.injected, *light.bounce, *real.geometry);
             timer.lap("bounce");
         }
@@ -232,7 +232,6 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     timer.lap("inject");
     // 4. Mipmaps of all four volumes. With further bounces the objects reflect the room's light they receive
     // too.
-    const MipVolume& sceneVisibility = visibility();
     objects.mipmap(bounces > 0 ? &sceneVisibility : nullptr, &scene.options, &all);
     timer.lap("mipmap");
     return {&sceneVisibility, &objects.objectVisibility(), &objects.fullLight(), &objects.deltaLight(),

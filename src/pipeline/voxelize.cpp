@@ -393,6 +393,10 @@ VoxelBox voxelizeInto(VoxelGeometry& out, std::span<const TriangleMesh> meshes, 
         return std::pair{(tris[i].lo.z - box.lo.z) / kSlabThickness,
                          (tris[i].hi.z - box.lo.z) / kSlabThickness};
     });
+    // The arrays' index of a voxel inside the box (a packed geometry's `visibility` stores none).
+    auto arrayIndex = [&](int x, int y, int z) {
+        return packed ? out.indexOf(x, y, z) : out.visibility.index(x, y, z);
+    };
     parallelFor(0, slabCount, 1, [&](int64_t s) {
         const int zBegin = box.lo.z + static_cast<int>(s) * kSlabThickness;
         const int zEnd = std::min(zBegin + kSlabThickness, box.hi.z);
@@ -423,7 +427,7 @@ VoxelBox voxelizeInto(VoxelGeometry& out, std::span<const TriangleMesh> meshes, 
         };
         auto add = [&](int x, int y, int z, const VoxelTriangle& t, float a, glm::vec3 where) {
             const VoxelMesh& mesh = voxelTriangles.meshes[t.mesh];
-            const size_t i = packed ? out.indexOf(x, y, z) : out.visibility.index(x, y, z);
+            const size_t i = arrayIndex(x, y, z);
             glm::vec4& v = visibilityAt(x, y, z, i);
             v.x = 1.0f;
             v.y += t.normal.x * a;
@@ -462,8 +466,7 @@ VoxelBox voxelizeInto(VoxelGeometry& out, std::span<const TriangleMesh> meshes, 
         const size_t n = static_cast<size_t>(region.resolution);
         for (int z = zBegin; z < zEnd; ++z)
             for (int y = box.lo.y; y < box.hi.y; ++y) {
-                const size_t first =
-                    packed ? out.indexOf(box.lo.x, y, z) : out.visibility.index(box.lo.x, y, z);
+                const size_t first = arrayIndex(box.lo.x, y, z);
                 const uint32_t firstInGrid = static_cast<uint32_t>(
                     (static_cast<size_t>(z) * n + static_cast<size_t>(y)) * n + box.lo.x);
                 uint32_t count = 0;
