@@ -213,7 +213,7 @@ std::optional<RsmTexel> texelFromHit(RayHit hit, const TexelRay& ray, const Boun
         return std::nullopt;
     const float cosTheta = std::max(glm::dot(hit.normal, -ray.dir), kMinCos);
     const float area = (ray.areaConst + ray.areaPerT2 * hit.t * hit.t) / cosTheta;
-    if (variesOverSurface(*hit.mesh))
+    if (hit.varies)
         hit.surface = surfaceMaterialAt(*hit.mesh, hit.triangle, hit.barycentric.x, hit.barycentric.y,
                                         std::sqrt(area), nullptr);
     return RsmTexel{hit.position, hit.normal, hit.surface.volumeReflectance() * ray.fluxIn, area, index};
@@ -307,6 +307,8 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
     Bounds3f reach = regionBounds;
     const glm::vec3 margin(1e-3f * std::max(regionBounds.maxExtent(), 1e-6f));
     reach.min -= margin, reach.max += margin;
+    // A ray from a light inside the box meets it at once.
+    const bool fromInside = !directional && reach.contains(light.position);
     return renderRows(layout, resolution, [&](int face, int j, std::vector<RsmTexel>& row) {
         if (!faceLit[static_cast<size_t>(face)]) return;
         // A thread's row buffers, kept from row to row.
@@ -321,7 +323,7 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
         for (int i = 0; i < resolution; ++i) {
             if (!layout.mayCarryLight(face, i, j)) continue;
             const TexelRay ray = layout.ray(face, i, j);
-            if (!carriesLight(ray) || !rayMeetsBox(ray.origin, ray.dir, reach)) continue;
+            if (!carriesLight(ray) || (!fromInside && !rayMeetsBox(ray.origin, ray.dir, reach))) continue;
             rays.push_back(ray);
             columns.push_back(i);
             if (directional || origins.empty()) origins.push_back(ray.origin);
