@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 
 #include "core/parallel.h"
 
@@ -115,8 +116,12 @@ bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float
 // Stride > 1, the interpolation weights of pixel (x, y), whose surface is p, over the (up to) 4 samples
 // around it: bilinear, and like the filter's only for the samples on the pixel's surface; normalized, in
 // InterpolationPlan's order. All zero when none of them is on its surface.
+// The four samples' weights are worked out side by side in the lanes of 4-float vectors, each lane as
+// neighbourWeight and powInt work one out (the same operations in the same order: the same weights).
 std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const Sample> samples, int x, int y,
                                           const SurfacePoint& p) {
+    using Float4 = float __attribute__((vector_size(16)));
+    using Int4 = int32_t __attribute__((vector_size(16)));
     const int stride = f.stride;
     const int sx0 = x / stride, sy0 = y / stride;
     const float fx = static_cast<float>(x - sx0 * stride) / static_cast<float>(stride);
@@ -125,23 +130,48 @@ std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const S
     // A small floor under the bilinear weight: a pixel on a sample's row still reads the row below when the
     // sample is on another surface.
     constexpr float kMinBilinear = 1e-3f;
-    std::array<float, 4> weights{};
-    float weightSum = 0.0f;
+    // Neighbour n is sample (sx0 + (n & 1), sy0 + (n >> 1)); one past the last row or column is none.
+    Float4 qx{}, qy{}, qz{}, nx{}, ny{}, nz{}, allowance{}, bilinear{};
+    Int4 valid{};
     for (int n = 0; n < 4; ++n) {
         const int dx = n & 1, dy = n >> 1;
         const int sx = sx0 + dx, sy = sy0 + dy;
+        bilinear[n] = (dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy);
         if (sx >= f.sw || sy >= f.sh) continue;
-        const float allowance =
+        const Sample& q = samples[static_cast<size_t>(sy) * f.sw + sx];
+        if (!q.valid) continue;
+        valid[n] = -1;
+        qx[n] = q.position.x, qy[n] = q.position.y, qz[n] = q.position.z;
+        nx[n] = q.normal.x, ny[n] = q.normal.y, nz[n] = q.normal.z;
+        allowance[n] =
             planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
                                             sx * stride - x + f.reach];
-        float w = neighbourWeight(f, p, samples[static_cast<size_t>(sy) * f.sw + sx], allowance);
-        if (w == 0.0f) continue;
-        w *= std::max((dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy), kMinBilinear);
-        weights[n] = w;
-        weightSum += w;
     }
-    if (weightSum > 0.0f)
-        for (float& w : weights) w /= weightSum;
+    // sameSurfaceWeight in each lane: facing the same side, near p's tangent plane, cos^normalPower.
+    const Float4 cosN = (p.normal.x * nx + p.normal.y * ny) + p.normal.z * nz;
+    const Float4 offPlane = (p.normal.x * (qx - p.position.x) + p.normal.y * (qy - p.position.y)) +
+                            p.normal.z * (qz - p.position.z);
+    const Float4 distance = offPlane < 0.0f ? -offPlane : offPlane;
+    const Int4 usable = valid & ~(cosN <= 0.0f) & ~(distance > allowance);
+    Float4 w = cosN;
+    if (f.s.normalPower == 16) {
+        w *= w;
+        w *= w;
+        w *= w;
+        w *= w;
+    } else {
+        Float4 r = Float4{} + 1.0f, base = cosN;
+        for (int n = f.s.normalPower; n > 0; n >>= 1, base *= base)
+            if (n & 1) r *= base;
+        w = r;
+    }
+    w = usable ? w : Float4{};
+    w *= bilinear < kMinBilinear ? Float4{} + kMinBilinear : bilinear;
+    // The sum in the neighbours' order (a zero adds nothing).
+    const float weightSum = ((w[0] + w[1]) + w[2]) + w[3];
+    std::array<float, 4> weights{};
+    if (weightSum > 0.0f) w /= weightSum;  // the four divisions as one
+    if (weightSum > 0.0f || weightSum != weightSum) std::memcpy(weights.data(), &w, sizeof(w));
     return weights;
 }
 
