@@ -11,14 +11,16 @@ namespace deltagi {
 
 namespace {
 
-float powInt(float x, int n) {
+// x^n for a float or, lane by lane, a vector of them (interpolationWeights).
+template <typename T>
+T powInt(T x, int n) {
     if (n == 16) {  // the filter's normal power: the loop's own squarings, unrolled (the same bits)
         x *= x;
         x *= x;
         x *= x;
         return x * x;
     }
-    float r = 1.0f;
+    T r = T{} + 1.0f;
     for (; n > 0; n >>= 1, x *= x)
         if (n & 1) r *= x;
     return r;
@@ -153,19 +155,7 @@ std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const S
                             p.normal.z * (qz - p.position.z);
     const Float4 distance = offPlane < 0.0f ? -offPlane : offPlane;
     const Int4 usable = valid & ~(cosN <= 0.0f) & ~(distance > allowance);
-    Float4 w = cosN;
-    if (f.s.normalPower == 16) {
-        w *= w;
-        w *= w;
-        w *= w;
-        w *= w;
-    } else {
-        Float4 r = Float4{} + 1.0f, base = cosN;
-        for (int n = f.s.normalPower; n > 0; n >>= 1, base *= base)
-            if (n & 1) r *= base;
-        w = r;
-    }
-    w = usable ? w : Float4{};
+    Float4 w = usable ? powInt(cosN, f.s.normalPower) : Float4{};
     w *= bilinear < kMinBilinear ? Float4{} + kMinBilinear : bilinear;
     // The sum in the neighbours' order (a zero adds nothing).
     const float weightSum = ((w[0] + w[1]) + w[2]) + w[3];
