@@ -1,10 +1,9 @@
 #include "pipeline/voxelize.h"
 
-#include <stdexcept>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <stdexcept>
 
 #include <glm/ext/vector_int3_sized.hpp>
 
