@@ -101,9 +101,10 @@ struct RenderOptions {
     RelightCones relightCones = RelightCones::Differential;
     RelightObjectLight relightObjectLight = RelightObjectLight::Rays;
     bool layers = false;     // RenderOutput's compositing layers
-    int lightBounces = 2;    // bounce_light.h
+    int lightBounces = 3;    // bounce_light.h
     bool bounceTail = true;  // the bounces beyond lightBounces, estimated (bounce_light.h)
     int bounceCones = 5;     // the diffuse cones of each further bounce's gather (bounce_light.h)
+    int bounceRays = 16;     // its rays instead (bounce_light.h); 0: the cones
     int denoiseRadius = 2;
     int relightDenoiseRadius = 1;  // the same for the real surfaces' change (the relit passes)
     // The share of the image's pixels that the relit passes of the environment's and the objects' light by

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include "core/brdf_sampling.h"
 #include "core/parallel.h"
@@ -70,6 +71,41 @@ glm::vec3 gatherAtVoxel(glm::vec3 centre, glm::vec3 normal, float size, size_t i
     return gathered;
 }
 
+// How a voxel of `size` gathers by rays: from the surface of `scene` that its normal meets coming in from a
+// voxel away (the outermost one on that side), `side` x `side` cosine-distributed rays that take the light of
+// `light`'s level-0 voxels where they land. Where no surface is met (a voxel whose surfaces lie across its
+// normal), nullopt: the caller gathers by cones.
+struct RayGather {
+    const RayScene& scene;
+    const MipVolume& light;
+    int side;
+    float offset;  // shadowRayOffset(scene)
+    std::optional<glm::vec3> operator()(glm::vec3 centre, glm::vec3 normal, float size, size_t index,
+                                        uint32_t stream) const {
+        const RayLanding surface = scene.landTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
+        if (!surface.hit()) return std::nullopt;
+        return from(surface.position + offset * normal, normal, index, stream, offset);
+    }
+    // The same, from the voxel's face on the normal's side where no surface is met.
+    glm::vec3 fromSurfaceOrFace(glm::vec3 centre, glm::vec3 normal, float size, size_t index,
+                                uint32_t stream) const {
+        if (const auto g = (*this)(centre, normal, size, index, stream)) return *g;
+        return from(centre + 0.5f * size * normal, normal, index, stream, 0.0f);
+    }
+
+  private:
+    glm::vec3 from(glm::vec3 origin, glm::vec3 normal, size_t index, uint32_t stream, float tMin) const {
+        const glm::vec2 jitter(hashToUnit(index, stream), hashToUnit(index, stream + 1));
+        return gatherOverHemisphere(scene, light, origin, normal, side, jitter, tMin);
+    }
+};
+
+// The side of the square grid of `count` rays (rounded down to a square number).
+int raySide(int count) {
+    return static_cast<int>(
+        std::lround(std::sqrt(static_cast<float>(squareSampleCount(std::max(count, 1))))));
+}
+
 // The cones of a further bounce's gathers (options.render.bounce_cones, with the diffuse cones' aperture).
 DiffuseConeSet bounceConeSet(const Options& options) {
     return makeDiffuseCones(options.render.bounceCones, options.diffuse.apertureDeg);
@@ -112,7 +148,7 @@ glm::dvec3 areaWeightedSum(const VoxelGeometry& geometry, Value&& value) {
 }  // namespace
 
 SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
-                            const Options& options, int bounces, glm::vec3 viewpoint) {
+                            const Options& options, int bounces, glm::vec3 viewpoint, const RayScene* rays) {
     const int n = direct.resolution();
     const int level = gatherLevel(visibility);
     SurfaceRadiance indirect(geometry.surfaceVoxels.size(), glm::vec3(0.0f));
@@ -128,6 +164,9 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     const DiffuseConeSet cones = bounceConeSet(options);
     const VisibilityVolumes occluders{&visibility, nullptr, VisibilityVolumes::Self::Scene};
+    const bool byRays = rays && options.render.bounceRays > 0;
+    const int side = raySide(options.render.bounceRays);
+    const float rayOffset = rays ? shadowRayOffset(*rays) : 0.0f;
     std::vector<glm::vec3> gathered(coarse.size());
     const bool tail = options.render.bounceTail;
     // The light the last pass gathered from: the volume's own (emitters' included), then each pass's bounce.
@@ -145,7 +184,11 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
             forEachSurfaceVoxel(geometry, [&](size_t, size_t k, size_t i) {
                 total.set(i, direct[i] + glm::vec4(indirect[k], 0.0f));
             });
-        const MipVolume light = buildMipChain(region, std::move(total));
+        // Rays read level 0 where they land: only the cones need the coarser levels.
+        std::vector<PackedGrid3> levels;
+        levels.push_back(std::move(total));
+        const MipVolume light =
+            byRays ? MipVolume(region, std::move(levels)) : buildMipChain(region, std::move(levels.front()));
         // Gather at each surface voxel of the coarse level.
         parallelFor(0, static_cast<int64_t>(m) * m, 4, [&](int64_t row) {
             const int z = static_cast<int>(row / m), y = static_cast<int>(row % m);
@@ -162,6 +205,14 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
                 const glm::vec3 normal =
                     (facesAway(meanNormal, centre, viewpoint) ? -1.0f : 1.0f) * meanNormal / coherence;
                 voxels.push_back({centre, normal, i});
+            }
+            if (byRays) {
+                // From the surface the voxel's normal meets, or else from its face on that side.
+                const RayGather gather{*rays, light, side, rayOffset};
+                for (const VoxelGather& v : voxels)
+                    gathered[v.index] = gather.fromSurfaceOrFace(v.centre, v.normal, coarseSize, v.index,
+                                                                 kBounceStream + 200);
+                return;
             }
             std::vector<glm::vec3> rowLight(voxels.size());
             gatherAtVoxels(voxels, coarseSize, light, occluders, cones, settings, rowLight);
@@ -303,21 +354,14 @@ std::vector<glm::vec3> gatherObjectBounceByRays(const MipVolume& light, const Vo
     const ConeTraceSettings settings = coneTraceSettings(options.trace);
     const DiffuseConeSet cones = bounceConeSet(options);
     const VisibilityVolumes occluders{&sceneVisibility, &objectVisibility, VisibilityVolumes::Self::Object};
-    const float offset = shadowRayOffset(scene);
-    const int count = squareSampleCount(std::max(options.diffuse.objectRays, 1));
-    const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
+    // The objects' outer surface in the voxel: the first one met coming in along the normal (the objects'
+    // layer of `scene`, landTopLayer).
+    const RayGather gather{scene, light, raySide(options.diffuse.objectRays), shadowRayOffset(scene)};
     return gatherAtObjectVoxels(
         objects, objectVisibility, box, level,
         [&](size_t index, glm::vec3 centre, glm::vec3 normal, float size) {
-            // The objects' outer surface in the voxel: the first one met coming in along the normal. Its hits
-            // and the gathering rays' need only where they land (volumeRadianceAt).
-            const RayLanding surface = scene.landTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
-            if (!surface.hit())
-                return gatherAtVoxel(centre, normal, size, index, light, occluders, cones, settings);
-            const glm::vec2 jitter(hashToUnit(index, kBounceStream + 100),
-                                   hashToUnit(index, kBounceStream + 101));
-            return gatherOverHemisphere(scene, light, surface.position + offset * normal, normal, side,
-                                        jitter, offset);
+            if (const auto g = gather(centre, normal, size, index, kBounceStream + 100)) return *g;
+            return gatherAtVoxel(centre, normal, size, index, light, occluders, cones, settings);
         });
 }
 

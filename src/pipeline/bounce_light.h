@@ -26,13 +26,20 @@ namespace deltagi {
 // `geometry` is the scene's voxelization with albedo (voxelize's `withAlbedo`), `visibility` its visibility
 // mip chain.
 // The light is gathered at the voxels of the mip level that has 16^3 (level 3 at 128^3: each gathers for its
-// 512 level-0 voxels, whose albedos reflect it), with the bounce cones of `options` around the voxel's mean
-// normal, turned to face `viewpoint` (the camera, which stands in the room it sees: surfaces are two-sided,
-// and a reconstruction's winding does not say which side is the room's). With options.render.bounce_tail the
-// last bounce is added again times r / (1 - r), r the ratio of its light to the one before's over the
-// geometry's surfaces (per colour channel). Deterministic for any thread count; zero for bounces <= 0.
+// 512 level-0 voxels, whose albedos reflect it), around the voxel's mean normal, turned to face `viewpoint`
+// (the camera, which stands in the room it sees: surfaces are two-sided, and a reconstruction's winding does
+// not say which side is the room's). With `rays` (the real scene) and options.render.bounce_rays > 0 a voxel
+// gathers by that many rays from the surface its normal meets, or where none is met from its face
+// (gatherOverHemisphere: the light of the level-0 voxels where they land); otherwise by the bounce cones of
+// `options`. The
+// cones read far surfaces through coarse voxels that average them with their surroundings: on the Cornell
+// box's floor under a bare bulb 10 cm below the ceiling they gather a fifth of the ceiling's light. With
+// options.render.bounce_tail the last bounce is added again times r / (1 - r), r the ratio of its light to
+// the one before's over the geometry's surfaces (per colour channel). Deterministic for any thread count;
+// zero for bounces <= 0.
 SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
-                            const Options& options, int bounces, glm::vec3 viewpoint);
+                            const Options& options, int bounces, glm::vec3 viewpoint,
+                            const RayScene* rays = nullptr);
 
 // light += bounced at the surface voxels of `geometry` (occupancy unchanged), where `bounced` is
 // bounceLight's result over it; in parallel.

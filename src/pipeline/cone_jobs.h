@@ -40,6 +40,9 @@ struct ConeJob {
     // Relit with options.render.relight_cones "differential": the full light volume (`light` is the delta).
     const MipVolume* fullLight = nullptr;
     const MipVolume* objectLight = nullptr;  // with fullLight: the objects' share of it
+    // The objects' change of the real surfaces' light around them (ObjectVolumes::roomChange), which the
+    // objects' diffuse rays (diffuseRays) read with `light`; may be null or empty.
+    const MipVolume* lightChange = nullptr;
     // Emitting surfaces lighting the points through shadow rays (options.shadow.method "rays"), or none.
     const AreaLights* emitters = nullptr;
     // The environment map lighting the points through shadow rays (options.shadow.method "rays"), or none.

@@ -33,7 +33,8 @@ float rayFootprintLevel(float distance, int count, float voxelSize, float maxLev
 }
 
 glm::vec3 gatherOverHemisphere(const RayScene& scene, const MipVolume& light, glm::vec3 origin,
-                               glm::vec3 normal, int side, glm::vec2 jitter, float tMin, float footprintTan) {
+                               glm::vec3 normal, int side, glm::vec2 jitter, float tMin, float footprintTan,
+                               const MipVolume* change) {
     const glm::mat3 frame = frameAround(normal);
     const float voxelSize = light.region().voxelSize();
     const float maxLevel = static_cast<float>(light.levelCount() - 1);
@@ -46,14 +47,16 @@ glm::vec3 gatherOverHemisphere(const RayScene& scene, const MipVolume& light, gl
         if (!hit.hit()) continue;
         const float level =
             footprintTan > 0.0f ? footprintLevel(hit.t * footprintTan / voxelSize, maxLevel) : 0.0f;
-        sum += volumeRadianceAt(light, hit, level);
+        sum += change ? volumeRadianceWithChangeAt(light, *change, hit, level)
+                      : volumeRadianceAt(light, hit, level);
     }
     return sum / static_cast<float>(count);
 }
 
 std::vector<glm::vec3> traceDiffuseRays(std::span<const SurfacePoint> points, const MipVolume& light,
                                         const RayScene& scene, const Options& options,
-                                        std::span<const uint32_t> pixels) {
+                                        std::span<const uint32_t> pixels, const MipVolume* lightChange) {
+    if (lightChange && lightChange->empty()) lightChange = nullptr;
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
     const int count = squareSampleCount(std::max(options.diffuse.objectGatherRays, 1));
     const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
@@ -64,7 +67,7 @@ std::vector<glm::vec3> traceDiffuseRays(std::span<const SurfacePoint> points, co
         if (p.surface.diffuse == glm::vec3(0.0f)) return;
         const glm::vec2 jitter(hashToUnit(i, kGatherStream), hashToUnit(i, kGatherStream + 1));
         out[i] = gatherOverHemisphere(scene, light, p.position + offset * p.normal, p.normal, side, jitter,
-                                      0.0f, footprintTan);
+                                      0.0f, footprintTan, lightChange);
     });
     return out;
 }

@@ -28,19 +28,22 @@ namespace deltagi {
 // number) against `scene` (the objects over the real scene), each taking `light`'s radiance where it lands
 // (volumeRadianceAt) at the mip level of its footprint there. Zero for points without a diffuse part; a ray
 // that meets nothing brings nothing (the environment's light comes through its own rays or cones).
-// Deterministic for any thread count: the jitter is seeded by the point's index.
+// Deterministic for any thread count: the jitter is seeded by the point's index. With `lightChange` (the
+// objects' change of the light around them, ObjectVolumes::roomChange) the rays read `light` plus it.
 std::vector<glm::vec3> traceDiffuseRays(std::span<const SurfacePoint> points, const MipVolume& light,
                                         const RayScene& scene, const Options& options,
-                                        std::span<const uint32_t> pixels = {});
+                                        std::span<const uint32_t> pixels = {},
+                                        const MipVolume* lightChange = nullptr);
 
 // The cosine-weighted mean radiance over the hemisphere around `normal` seen from `origin`: side^2 rays on a
 // grid jittered by `jitter` (in [0, 1)^2), cosine-distributed, each taking `light`'s radiance where it lands
 // on `scene` (from `tMin` on; volumeRadianceAt). At level 0, or with `footprintTan` > 0 at the mip level as
-// wide as the distance times it. A ray that meets nothing brings nothing. traceDiffuseRays' points and the
-// objects' coarse voxels (gatherObjectBounceByRays) gather so.
+// wide as the distance times it; with `change`, the radiance of `light` plus it
+// (volumeRadianceWithChangeAt). A ray that meets nothing brings nothing. traceDiffuseRays' points, the
+// objects' coarse voxels (gatherObjectBounceByRays) and the real scene's (bounceLight) gather so.
 glm::vec3 gatherOverHemisphere(const RayScene& scene, const MipVolume& light, glm::vec3 origin,
                                glm::vec3 normal, int side, glm::vec2 jitter, float tMin = 0.0f,
-                               float footprintTan = 0.0f);
+                               float footprintTan = 0.0f, const MipVolume* change = nullptr);
 
 // The tangent of the half-angle of a cone of 2 pi / count steradians: a ray's share of the hemisphere when
 // `count` rays share it.

@@ -33,6 +33,18 @@ glm::vec3 volumeRadianceAt(const MipVolume& light, const RayLanding& hit, float 
     return radianceOf(light.gather(lookupOffSurface(light, hit, level)));
 }
 
+glm::vec3 volumeRadianceWithChangeAt(const MipVolume& light, const MipVolume& change, const RayLanding& hit,
+                                     float level) {
+    assert(light.region().origin == change.region().origin && light.region().size == change.region().size &&
+           light.region().resolution == change.region().resolution &&
+           light.levelCount() == change.levelCount());
+    const VolumeLookup where = lookupOffSurface(light, hit, level);
+    // The change is the light the objects hide from a surface (and theirs) against its light gathered
+    // apart (the room's further bounces, by few rays from farther away): it may take away more than there
+    // is. A surface reflects no less than nothing.
+    return glm::max(radianceOf(light.gather(where) + change.gather(where)), glm::vec3(0.0f));
+}
+
 glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayLanding& hit) {
     assert(a.region().origin == b.region().origin && a.region().size == b.region().size &&
            a.region().resolution == b.region().resolution && a.levelCount() == b.levelCount());

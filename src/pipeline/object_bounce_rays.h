@@ -51,5 +51,9 @@ glm::vec3 volumeRadianceAt(const MipVolume& light, const RayLanding& hit, float 
 // volumeRadianceAt(a, hit) - volumeRadianceAt(b, hit) for two volumes of one region, whose lookup is worked
 // out once (the same values).
 glm::vec3 volumeRadianceDifferenceAt(const MipVolume& a, const MipVolume& b, const RayLanding& hit);
+// volumeRadianceAt(light, hit, level) with `change` added to `light`'s radiance channels (a volume of the
+// same region whose w is 0: ObjectVolumes::roomChange), in the one lookup; at least 0.
+glm::vec3 volumeRadianceWithChangeAt(const MipVolume& light, const MipVolume& change, const RayLanding& hit,
+                                     float level = 0.0f);
 
 }  // namespace deltagi

@@ -3,6 +3,8 @@
 #include <algorithm>
 
 #include "pipeline/bounce_light.h"
+#include "pipeline/object_bounce_rays.h"
+#include "pipeline/shadow_rays.h"
 
 namespace deltagi {
 
@@ -102,6 +104,12 @@ namespace {
 // The mip level at which the objects gather their further bounce: voxels of 4 level-0 voxels, a few hundred
 // for a statue at 128^3 (a few milliseconds a frame).
 constexpr int kObjectBounceLevel = 2;
+// roomChange(): the real surfaces within resolution / kRoomChangeMarginDivisor level-0 voxels of the objects'
+// box (16 at 128^3: 7.5 cm in the Cornell box's volume), at the coarse voxels whose mean normal is at least
+// this coherent (a corner's two faces are not).
+constexpr int kRoomChangeMarginDivisor = 8;
+constexpr int kRoomChangeLevel = 3;
+constexpr float kMinRoomCoherence = 0.2f;
 
 VoxelBox unionOf(VoxelBox a, const VoxelBox& b) {
     if (a.empty()) return b;
@@ -131,19 +139,28 @@ void ObjectVolumes::updateObjectLight(const VoxelBox& box) {
         updateMipChain(objectLight_, rewrite, nonZeroBounds(level0, rewrite));
 }
 
-void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* options, const RayScene* rays) {
+void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* options, const RayScene* rays,
+                           const RoomChangeInputs* room) {
     buildLightMips();
     // The objects' light is non-zero only where they are and were: inside what this frame's injection
     // rewrote.
     updateObjectLight(lightChanged_);
-    if (!sceneVisibility || !options || !objects_.withAlbedo) return;
+    roomChange_ = MipVolume{};
+    if (!sceneVisibility || !options || !objects_.withAlbedo || objects_.bounds.empty()) return;
+    addObjectBounce(*sceneVisibility, *options, rays);
+    if (room && room->rays.scene && room->rays.objects && room->geometry.withAlbedo &&
+        options->diffuse.objectGatherRays > 0)
+        updateRoomChange(*sceneVisibility, *options, *room);
+}
+
+void ObjectVolumes::addObjectBounce(const MipVolume& sceneVisibility, const Options& options,
+                                    const RayScene* rays) {
     const VoxelBox& box = objects_.bounds;
-    if (box.empty()) return;
     const std::vector<glm::vec3> added =
-        rays && options->diffuse.objectRays > 0
-            ? gatherObjectBounceByRays(fullLight_, objects_, objectVisibility_, *sceneVisibility, *rays,
-                                       *options, box, kObjectBounceLevel)
-            : gatherObjectBounce(fullLight_, objects_, objectVisibility_, *sceneVisibility, *options, box,
+        rays && options.diffuse.objectRays > 0
+            ? gatherObjectBounceByRays(fullLight_, objects_, objectVisibility_, sceneVisibility, *rays,
+                                       options, box, kObjectBounceLevel)
+            : gatherObjectBounce(fullLight_, objects_, objectVisibility_, sceneVisibility, options, box,
                                  kObjectBounceLevel);
     PackedGrid3& full = fullLight_.levelForUpdate(0);
     PackedGrid3& delta = deltaLight_.levelForUpdate(0);
@@ -158,6 +175,75 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
     updateMipChain(fullLight_, box, unionOf(fullLight_.occupiedBounds(), box));
     updateMipChain(deltaLight_, box, unionOf(deltaLight_.occupiedBounds(), box));
     updateObjectLight(box);
+}
+
+void ObjectVolumes::updateRoomChange(const MipVolume& sceneVisibility, const Options& options,
+                                     const RoomChangeInputs& room) {
+    const VoxelGeometry& realGeometry = room.geometry;
+    const int n = region_.resolution;
+    const PackedGrid3& coarse =
+        sceneVisibility.level(std::min(kRoomChangeLevel, sceneVisibility.levelCount() - 1));
+    const int factor = n / coarse.resolution();
+    const float voxelSize = region_.voxelSize(), coarseSize = voxelSize * static_cast<float>(factor);
+    const VoxelBox& box = objects_.bounds;
+    const int margin = std::max(1, n / kRoomChangeMarginDivisor);
+    // The coarse voxels within the margin of the objects' box.
+    const glm::ivec3 lo = glm::max(box.lo - margin, glm::ivec3(0)) / factor,
+                     hi = (glm::min(box.hi + margin, glm::ivec3(n)) + factor - 1) / factor;
+    const glm::vec3 objectCentre = room.rays.objectBounds.center();
+    const RayScene& real = *room.rays.scene;
+    // A point on each coherent coarse voxel's real surface, on the side that faces the objects.
+    static const Material kGathering{};
+    std::vector<SurfacePoint> points;
+    std::vector<glm::ivec3> voxels;
+    for (int z = lo.z; z < hi.z; ++z)
+        for (int y = lo.y; y < hi.y; ++y)
+            for (int x = lo.x; x < hi.x; ++x) {
+                const glm::vec4 v = coarse.at(x, y, z);
+                if (v.x <= 0.0f) continue;
+                glm::vec3 normal = glm::vec3(v.y, v.z, v.w) / v.x;
+                const float coherence = glm::length(normal);
+                if (coherence < kMinRoomCoherence) continue;
+                normal /= coherence;
+                const glm::vec3 centre = region_.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
+                if (glm::dot(normal, objectCentre - centre) < 0.0f) normal = -normal;
+                const RayLanding surface =
+                    real.landTopLayer(centre + coarseSize * normal, -normal, 0.0f, 1.5f * coarseSize);
+                if (!surface.hit()) continue;
+                SurfacePoint p;
+                p.position = surface.position;
+                p.normal = normal;
+                p.material = &kGathering;
+                p.surface.diffuse = glm::vec3(1.0f);  // the incoming light's change; the voxels' albedo below
+                points.push_back(p);
+                voxels.push_back({x, y, z});
+            }
+    if (points.empty()) return;
+    const std::vector<glm::vec3> change = traceObjectBounceRays(points, objectLight_, room.rays, options, {},
+                                                                RealLight{&fullLight_, &deltaLight_});
+    // Each coarse voxel's change at its real surface voxels, by their albedo.
+    const VoxelBox window{lo * factor, glm::min(hi * factor, glm::ivec3(n))};
+    PackedGrid3 level0(n, window);
+    VoxelBox written;
+    for (size_t j = 0; j < points.size(); ++j) {
+        const glm::vec3 incoming = change[j];
+        if (incoming == glm::vec3(0.0f)) continue;
+        const glm::ivec3 v0 = voxels[j] * factor, v1 = glm::min(v0 + factor, glm::ivec3(n));
+        for (int z = v0.z; z < v1.z; ++z)
+            for (int y = v0.y; y < v1.y; ++y) {
+                auto [k, kEnd] = surfaceVoxelsInRow(realGeometry, y, z, v0.x);
+                for (; k < kEnd; ++k) {
+                    const uint32_t i = realGeometry.surfaceVoxels[k];
+                    const int x = static_cast<int>(i % static_cast<uint32_t>(n));
+                    if (x >= v1.x) break;
+                    const float occupancy = realGeometry.occupancy(realGeometry.indexOf(i));
+                    level0.set(x, y, z, glm::vec4(realGeometry.albedo[k] * incoming * occupancy, 0.0f));
+                }
+            }
+        written.extend(VoxelBox{v0, v1});
+    }
+    if (written.empty()) return;
+    roomChange_ = buildMipChain(region_, std::move(level0));
 }
 
 void ObjectVolumes::buildLightMips() {

@@ -17,11 +17,14 @@
 
 #include <optional>
 #include <span>
+#include <vector>
 
 #include "core/ray_scene.h"
 #include "deltagi/options.h"
+#include "pipeline/gbuffer.h"
 #include "pipeline/inject.h"
 #include "pipeline/mipmap.h"
+#include "pipeline/shadow_rays.h"
 #include "pipeline/voxelize.h"
 
 namespace deltagi {
@@ -40,6 +43,13 @@ struct RealSceneVolumes {
     uint64_t lightVersion = 0;
 };
 
+// What ObjectVolumes::roomChange is made from: the real scene's voxels with albedo, and the rays of the relit
+// points towards the objects (the real scene alone, the objects over it, their bounds and bounding radius).
+struct RoomChangeInputs {
+    const VoxelGeometry& geometry;
+    ShadowRayScenes rays;
+};
+
 class ObjectVolumes {
   public:
     // Stage 1: the objects' voxels, over `region` (a new region starts afresh). `unchanged`: the objects are
@@ -53,9 +63,10 @@ class ObjectVolumes {
     // albedo, the objects' own further bounce is added to the full and delta volumes (gatherObjectBounce):
     // they reflect the light of the room they receive, not only their direct light.
     // With `rays` (the objects' layer over the real scene) and options.diffuse.object_rays > 0 the bounce is
-    // gathered by rays (gatherObjectBounceByRays).
+    // gathered by rays (gatherObjectBounceByRays). With `room` and options.diffuse.object_gather_rays > 0,
+    // roomChange() too.
     void mipmap(const MipVolume* sceneVisibility = nullptr, const Options* options = nullptr,
-                const RayScene* rays = nullptr);
+                const RayScene* rays = nullptr, const RoomChangeInputs* room = nullptr);
 
     const MipVolume& objectVisibility() const { return objectVisibility_; }
     const MipVolume& fullLight() const { return fullLight_; }
@@ -64,6 +75,16 @@ class ObjectVolumes {
     // objects' own light, which the differential relit cones tell apart from the scene's
     // (traceLightChangeCone).
     const MipVolume& objectLight() const { return objectLight_; }
+    // What the objects change in the light of the real surfaces around them, bounced once more (radiance
+    // times occupancy in rgb, 0 in w; empty: none): at each real surface voxel within kRoomChangeMargin
+    // voxels' reach of the objects, its albedo times the change of its incoming light that the objects make
+    // (traceObjectBounceRays, gathered at the objects' bounce level on the side facing them): their own light
+    // minus the real light they hide. The full light volume's further bounces are the real scene's alone
+    // (bounce_light.h): without this the floor under an object still reflects the light the object hides
+    // from it. Only the objects' own gather rays read it (traceDiffuseRays' `lightChange`): the cones of the
+    // real surfaces' change take the objects' effect on them from the objects themselves, and would count it
+    // twice.
+    const MipVolume& roomChange() const { return roomChange_; }
     // The level-0 voxels of the light volumes that the last inject() wrote (all of them when it injected
     // from scratch): what a frame cost, for tests and measurements.
     const VoxelBox& injectedBox() const { return lightChanged_; }
@@ -74,11 +95,15 @@ class ObjectVolumes {
   private:
     // mipmap() without the objects' bounce.
     void buildLightMips();
+    // mipmap()'s parts: the objects' further bounce, and roomChange_.
+    void addObjectBounce(const MipVolume& sceneVisibility, const Options& options, const RayScene* rays);
+    void updateRoomChange(const MipVolume& sceneVisibility, const Options& options,
+                          const RoomChangeInputs& room);
     // objectLight_ = the full light where the objects are, zero elsewhere, inside `box`, and its mip chain.
     void updateObjectLight(const VoxelBox& box);
     VolumeRegion region_;
     VoxelGeometry objects_;  // the objects' voxels (level 0 of objectVisibility_, copied there by mipmap())
-    MipVolume objectVisibility_, fullLight_, deltaLight_, objectLight_;
+    MipVolume objectVisibility_, fullLight_, deltaLight_, objectLight_, roomChange_;
     // The box over which objectVisibility_ and objectLight_ are stored (zero outside it): the objects' and a
     // margin, fitted anew when they leave it.
     VoxelBox window_;

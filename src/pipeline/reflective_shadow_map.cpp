@@ -201,6 +201,12 @@ class MapLayout {
     std::vector<Face> faces_;
 };
 
+// The viewpoint whose side of real surfaces a light's map keeps (renderReflectiveShadowMap): a directional
+// light's; none for a point or spot light, which stands in the room.
+std::optional<glm::vec3> sideKeptFrom(const Light& light, std::optional<glm::vec3> viewpoint) {
+    return light.type == Light::Type::Directional ? viewpoint : std::nullopt;
+}
+
 // The texel `index` made from its ray's closest hit, if that hit is on a surface inside the region (and, with
 // a viewpoint, on the viewpoint's side of a real surface).
 // The hit's textures are looked up here, filtered over the texel's area on the surface (its rays are cast
@@ -294,6 +300,7 @@ std::optional<FaceRects> retracedRects(const MapLayout& layout, const Reflective
 ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
                                               const VolumeRegion& region, int resolution,
                                               std::optional<glm::vec3> viewpoint) {
+    viewpoint = sideKeptFrom(light, viewpoint);
     const MapLayout layout(scene, light, region, resolution);
     const Bounds3f regionBounds = region.bounds();
     // A row's rays are traced in packets: a point or spot light's all leave its position, a directional
@@ -342,6 +349,7 @@ ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light
 RsmUpdate traceRsmUpdate(const ReflectiveShadowMap& base, const RayScene& scene, const Light& light,
                          const VolumeRegion& region, const Bounds3f& changed,
                          std::optional<glm::vec3> viewpoint) {
+    viewpoint = sideKeptFrom(light, viewpoint);
     const int res = base.resolution;
     const MapLayout layout(scene, light, region, res);
     const std::optional<FaceRects> rects = retracedRects(layout, base, changed);

@@ -40,11 +40,15 @@ struct ReflectiveShadowMap {
 std::vector<int> rsmResolutions(const Options& options, std::span<const Light> lights,
                                 const VolumeRegion& region);
 
-// With a `viewpoint` (the camera), a texel on a real surface is kept only where the surface's lit side faces
-// the viewpoint: a voxel stores one radiance for both sides of its surfaces, and the side the camera sees is
-// the real scene's (a reconstruction's other side is not modelled: the underside of a ground plane lit by an
-// environment map's lower half would light the ground's top in the volume). The rays still stop there.
-// Virtual objects are closed; their texels are all kept.
+// With a `viewpoint` (the camera), a directional light's texel on a real surface is kept only where the
+// surface's lit side faces the viewpoint: a voxel stores one radiance for both sides of its surfaces, and a
+// light from outside the scene reaches sides of it that are not the room's (a reconstruction's other side is
+// not modelled: the underside of a ground plane lit by an environment map's lower half would light the
+// ground's top in the volume). The rays still stop there. A point or spot light stands in the room, so every
+// surface its rays meet first is lit on the room's side: all of its texels are kept, also on the sides of
+// real objects that face away from the camera (the Cornell box's short block lit at a grazing angle on the
+// side that faces the Buddha: before, that light was missing from the volume). Virtual objects are closed;
+// their texels are all kept.
 ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
                                               const VolumeRegion& region, int resolution,
                                               std::optional<glm::vec3> viewpoint = std::nullopt);

@@ -170,7 +170,7 @@ const SurfacePoints& renderRelitSurfaces(const Camera& camera, const RayScene& r
 // scene's share comes from `cache` when it is there; the objects' volumes are kept there too and updated
 // where the objects changed them since the last frame (ObjectVolumes).
 struct DgiVolumes {
-    const MipVolume *sceneVisibility, *objectVisibility, *fullLight, *deltaLight, *objectLight;
+    const MipVolume *sceneVisibility, *objectVisibility, *fullLight, *deltaLight, *objectLight, *roomChange;
 };
 
 DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const VolumeRegion& region,
@@ -220,7 +220,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
         if (bounces > 0) {
             timer.lap("inject");
             light.bounce = bounceLight(*light.injected, *real.geometry, sceneVisibility, scene.options,
-                                       bounces, viewpoint);
+                                       bounces, viewpoint, &realOnly);
             light.bounceSides = bounceViewSides(sceneVisibility, viewpoint);
             addBounce(*light.injected, *light.bounce, *real.geometry);
             timer.lap("bounce");
@@ -232,10 +232,12 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     timer.lap("inject");
     // 4. Mipmaps of all four volumes. With further bounces the objects reflect the room's light they receive
     // too.
-    objects.mipmap(bounces > 0 ? &sceneVisibility : nullptr, &scene.options, &all);
+    const RoomChangeInputs room{
+        *real.geometry, ShadowRayScenes{&realOnly, &all, objectBounds, objectSphereRadius(scene.virtuals)}};
+    objects.mipmap(bounces > 0 ? &sceneVisibility : nullptr, &scene.options, &all, &room);
     timer.lap("mipmap");
-    return {&sceneVisibility, &objects.objectVisibility(), &objects.fullLight(), &objects.deltaLight(),
-            &objects.objectLight()};
+    return {&sceneVisibility,      &objects.objectVisibility(), &objects.fullLight(),
+            &objects.deltaLight(), &objects.objectLight(),      &objects.roomChange()};
 }
 
 // The background without a photo takes this many times the shadow rays of options.shadow.ray_samples and
@@ -265,7 +267,7 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     Grid3 direct = injectLight(rsms, region, geometries);
     if (bounces > 0) {
         const SurfaceRadiance bounced =
-            bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene));
+            bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene), &realOnly);
         addBounce(direct, bounced, geometry);
     }
     const MipVolume light = buildMipChain(region, std::move(direct));
@@ -391,6 +393,7 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
          .mode = ShadowMode::Shaded,
          .bounds = objectPixels,
          .rays = shadowRays,
+         .lightChange = volumes.roomChange,
          .emitters = &emitters,
          .environment = environment,
          .pixelSamples = &gbuffer.objectSamples},

@@ -248,9 +248,11 @@ OptionGroup volumeGroup() {
             option(
                 "viewpoint", &V::viewpoint, orNull(point()), "world units",
                 "the point that says which side of a real surface is the room's: surfaces are two-sided and "
-                "a reconstruction's winding is not reliable, so the reflective shadow maps keep a real "
-                "surface's texels where its lit side faces this point, and the further bounces gather on its "
-                "side. A fixed point lets the camera move without the real scene's volumes being redone "
+                "a reconstruction's winding is not reliable, so the reflective shadow maps of directional "
+                "lights (the environment's among them), which come from outside, keep a real surface's "
+                "texels where its lit side faces this point, and the further bounces gather on its side "
+                "(a point or spot light stands in the room: its maps keep every texel). A fixed point lets "
+                "the camera move without the real scene's volumes being redone "
                 "(`FrameRenderer`); with the camera's position they are kept while the camera stays on the "
                 "same side of every real surface")
                 .withDefaultNote(
@@ -533,11 +535,13 @@ OptionGroup renderGroup() {
                 "light_bounces", &R::lightBounces, integers(1, 8), "bounces",
                 "bounces of indirect light the light volumes carry. 1 is the paper: the reflective shadow "
                 "maps inject the directly lit surfaces and the cones gather one bounce. Each more gathers "
-                "the volume at every surface voxel of the real scene (over 16^3 voxels, with `bounce_cones` "
-                "cones, on the side facing the camera) and adds what it reflects, once while the "
-                "real side stays the same (`src/pipeline/bounce_light.*`); the objects get the room's "
-                "bounced light, and their own voxels gather the full volume every frame (at a quarter of the "
-                "volume's resolution) and add what they reflect "
+                "the volume at every surface voxel of the real scene (over 16^3 voxels, with `bounce_rays` "
+                "rays or `bounce_cones` cones, on the side facing the camera) and adds what it reflects, "
+                "once "
+                "while the real side stays the same (`src/pipeline/bounce_light.*`); the objects get the "
+                "room's bounced light, and their own voxels gather the full volume every frame (at a quarter "
+                "of the volume's resolution) and add what they reflect. 3: the bounces after the second are "
+                "estimated from the first two (`bounce_tail`), where one alone misjudged them "
                 "([design.md](design.md#departures-from-the-paper), with its cost)"),
             option(
                 "bounce_tail", &R::bounceTail, boolean(), "",
@@ -554,7 +558,17 @@ OptionGroup renderGroup() {
                 "objects' at a quarter of the volume's resolution), covering the hemisphere like "
                 "`options.diffuse.count`. The bounce is smooth: 5 against the diffuse cones' 9 moves every "
                 "quality-suite figure by at most 0.003 for half the gather's time "
-                "([design.md](design.md#departures-from-the-paper))"),
+                "([design.md](design.md#departures-from-the-paper)). Only with `bounce_rays` 0 for the "
+                "real scene's voxels"),
+            option(
+                "bounce_rays", &R::bounceRays, integers(0, 256), "rays",
+                "rays (rounded down to a square number) that each voxel of the real scene casts over its "
+                "hemisphere to gather a further bounce, from the surface it holds on the camera's side; each "
+                "takes the light of the level-0 voxels where it lands. Wide cones read far surfaces through "
+                "coarse voxels that average them with their surroundings: under a bare bulb 10 cm below the "
+                "Cornell box's ceiling they gathered a fifth of the bright ceiling's light on the floor "
+                "beneath, rays all of it ([design.md](design.md#departures-from-the-paper)). 0: the cones "
+                "(`bounce_cones`)"),
             option(
                 "relight_cones", &R::relightCones, names(kRelightConesNames), "",
                 "how the real surfaces' indirect change is traced. `\"differential\"`: the full light volume "

@@ -140,6 +140,58 @@ TEST(BounceLight, AddsItsRadianceAtEachSurfaceVoxel) {
               surfaceVoxelsInRow(f.geometry, b.hi.y, b.lo.z, 0).second);  // outside the bounds: none
 }
 
+// A floor under a ceiling whose voxels leave radiance 1 within a disk of radius a over the floor's centre
+// (the spot a bare bulb near the ceiling makes), height h above it: the floor under the disk's centre
+// receives E / pi = a^2 / (a^2 + h^2) of it, and reflects albedo times that. The rays of
+// options.render.bounce_rays find it; the bounce cones read the disk through coarse voxels that average it
+// with the dark ceiling around it and with the empty room, and bring a fraction.
+TEST(BounceLight, AFloorGetsABrightCeilingSpotsLightByRays) {
+    const float floorY = 0.1f, ceilingY = 0.9f, a = 0.25f, albedo = 0.5f;
+    Scene s;
+    s.real.push_back(
+        test::placed(makeQuad({0.98f, 0.98f}), {0.5f, floorY, 0.5f}, test::diffuse(glm::vec3(albedo))));
+    TriangleMesh ceiling = makeQuad({0.98f, 0.98f});
+    for (glm::uvec3& t : ceiling.triangles) std::swap(t.y, t.z);  // facing down, into the room
+    s.real.push_back(
+        test::placed(std::move(ceiling), {0.5f, ceilingY, 0.5f}, test::diffuse(glm::vec3(albedo))));
+    const VolumeRegion region{glm::vec3(0.0f), 1.0f, 32};
+    const VoxelGeometry geometry = voxelize(s.real, region, true, true);
+    Grid3 direct(region.resolution);
+    for (int z = 0; z < 32; ++z)
+        for (int y = 0; y < 32; ++y)
+            for (int x = 0; x < 32; ++x) {
+                const size_t i = direct.index(x, y, z);
+                const float occupancy = geometry.visibility[i].x;
+                const glm::vec3 centre = (glm::vec3(x, y, z) + 0.5f) * region.voxelSize();
+                const bool spot =
+                    centre.y > 0.5f && glm::length(glm::vec2(centre.x, centre.z) - glm::vec2(0.5f)) < a;
+                direct[i] = glm::vec4(glm::vec3(spot ? occupancy : 0.0f), occupancy);
+            }
+    const MipVolume visibility = buildMipChain(region, geometry.visibility.clone());
+    const RayScene rays(s, SceneContent::RealOnly);
+    Options options;
+    options.render.bounceTail = false;
+    options.render.bounceRays = 256;
+    const glm::vec3 viewpoint(0.5f);
+    const SurfaceRadiance byRays = bounceLight(direct, geometry, visibility, options, 1, viewpoint, &rays);
+    const SurfaceRadiance byCones = bounceLight(direct, geometry, visibility, options, 1, viewpoint);
+    // The floor's surface voxels within 0.1 of the centre (two by two gathering voxels).
+    const float h = ceilingY - floorY, expected = albedo * a * a / (a * a + h * h);
+    double sumRays = 0.0, sumCones = 0.0;
+    int count = 0;
+    for (size_t k = 0; k < geometry.surfaceVoxels.size(); ++k) {
+        const uint32_t i = geometry.surfaceVoxels[k];
+        const glm::vec3 centre = (glm::vec3(i % 32, i / 32 % 32, i / 1024) + 0.5f) * region.voxelSize();
+        if (centre.y > 0.5f || glm::length(glm::vec2(centre.x, centre.z) - glm::vec2(0.5f)) > 0.1f) continue;
+        sumRays += byRays[k].x;
+        sumCones += byCones[k].x;
+        ++count;
+    }
+    ASSERT_GT(count, 20);
+    EXPECT_NEAR(sumRays / count, expected, 0.15f * expected);
+    EXPECT_LT(sumCones / count, 0.6f * expected);
+}
+
 TEST(BounceLight, BlackWallsReflectNothing) {
     const Furnace f = furnace(0.0f);
     Options options;

@@ -277,6 +277,32 @@ TEST(Inject, ShadowMapKeepsOnlyTheViewpointsSideOfRealSurfaces) {
               count(renderReflectiveShadowMap(rays, directionalDown(1.0f), kRegion, 64), true));
 }
 
+// A point or spot light stands in the room: every surface its rays meet first is lit on the room's side, so
+// its map keeps the texels of a real surface lit on the side away from the viewpoint (a real block's face the
+// camera does not see), where a directional light's keeps none of them.
+TEST(Inject, ShadowMapOfAPointLightKeepsBothSidesOfRealSurfaces) {
+    Scene s = floorOnly(0.5f);
+    RayScene rays(s, SceneContent::RealOnly);
+    const glm::vec3 above(0.0f, 2.0f, 0.5f);
+    auto onFloor = [](const ReflectiveShadowMap& m) {
+        return std::count_if(m.texels.begin(), m.texels.end(),
+                             [&](const RsmTexel& t) { return std::abs(t.position.y - 0.0625f) < 1e-3f; });
+    };
+    for (const Light::Type type : {Light::Type::Point, Light::Type::Spot}) {
+        Light below = test::pointLight({0.0f, -0.5f, 0.0f}, 1.0f);
+        below.type = type;
+        below.direction = glm::vec3(0, 1, 0);
+        below.outerAngleDeg = 80.0f;
+        below.innerAngleDeg = 60.0f;
+        const ReflectiveShadowMap seen = renderReflectiveShadowMap(rays, below, kRegion, 64, above);
+        EXPECT_GT(onFloor(seen), 1000) << static_cast<int>(type);
+        EXPECT_EQ(onFloor(seen), onFloor(renderReflectiveShadowMap(rays, below, kRegion, 64)));
+    }
+    Light fromBelow = directionalDown(1.0f);
+    fromBelow.direction = glm::vec3(0, 1, 0);
+    EXPECT_EQ(onFloor(renderReflectiveShadowMap(rays, fromBelow, kRegion, 64, above)), 0);
+}
+
 // A point light: the voxel under it holds albedo * I / (pi d^2).
 TEST(Inject, PointLightMatchesInverseSquareIrradiance) {
     Scene s = floorOnly(0.8f);

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "pipeline/bounce_light.h"
+#include "pipeline/object_bounce_rays.h"
 #include "test_scenes.h"
 
 namespace deltagi {
@@ -225,6 +227,64 @@ TEST(ObjectVolumes, WholeMapsRetracedAndLargeJumpsEqualVolumesFromScratch) {
     frameEqualsScratch(kept, real, s);
     moveMesh(s.virtuals[0], {-0.05f, 0.0f, 0.0f});
     frameEqualsScratch(kept, real, s);
+}
+
+// A ball between a floor and a ceiling that a lamp just under it lights brightly: the ball hides the bright
+// ceiling from the floor beneath it, so the floor there reflects less light than the room's own volumes say.
+// roomChange() holds that change (negative under the ball), only near the ball, and the objects' rays read it
+// with the full light volume (the floor under the ball darker); with no gather rays it is not made.
+TEST(ObjectVolumes, TheRoomChangeUnderABallIsTheCeilingLightItHides) {
+    const VolumeRegion region{glm::vec3(0.0f, -0.05f, 0.0f), 1.0f, 32};
+    Scene s;
+    s.real.push_back(placed(makeQuad({0.98f, 0.98f}), {0.5f, 0.0f, 0.5f}, diffuse(glm::vec3(0.5f))));
+    TriangleMesh ceiling = makeQuad({0.98f, 0.98f});
+    for (glm::uvec3& t : ceiling.triangles) std::swap(t.y, t.z);
+    s.real.push_back(placed(std::move(ceiling), {0.5f, 0.8f, 0.5f}, diffuse(glm::vec3(0.8f))));
+    s.virtuals.push_back(placed(makeSphere(0.12f, 32), {0.5f, 0.2f, 0.5f}, diffuse(glm::vec3(0.5f))));
+    s.lights.push_back(test::pointLight({0.5f, 0.7f, 0.5f}, 0.3f));
+    const RayScene realOnly(s, SceneContent::RealOnly);
+    const RayScene all(s, SceneContent::VirtualOnly, &realOnly);
+    const VoxelGeometry real = voxelize(s.real, region, true, true);
+    std::vector<ReflectiveShadowMap> rsms = {renderReflectiveShadowMap(realOnly, s.lights[0], region, 128)};
+    const VoxelGeometry* alone[] = {&real};
+    Grid3 light = injectLight(rsms, region, alone);
+    const MipVolume sceneVisibility = buildMipChain(region, real.visibility.clone());
+    // The room's further bounce, as the renderer adds it: the floor under the ball gets the ceiling's light.
+    Options options;
+    const SurfaceRadiance bounce =
+        bounceLight(light, real, sceneVisibility, options, 1, glm::vec3(0.5f, 0.4f, 0.1f), &realOnly);
+    addBounce(light, bounce, real);
+    Bounds3f objectBounds;
+    for (const TriangleMesh& m : s.virtuals) objectBounds.extend(m.bounds());
+    const std::vector<RsmUpdate> updates = {traceRsmUpdate(rsms[0], all, s.lights[0], region, objectBounds)};
+    auto frame = [&](ObjectVolumes& volumes, const Options& options) {
+        volumes.voxelize(s.virtuals, region, true, true);
+        volumes.inject({real, rsms, light, &bounce, 0}, updates);
+        const RoomChangeInputs room{
+            real, ShadowRayScenes{&realOnly, &all, objectBounds, objectSphereRadius(s.virtuals)}};
+        volumes.mipmap(&sceneVisibility, &options, &all, &room);
+    };
+    ObjectVolumes volumes;
+    frame(volumes, options);
+    const MipVolume& change = volumes.roomChange();
+    ASSERT_FALSE(change.empty());
+    // The floor's voxels (y = 1: the floor at y = 0 lies in it) under the ball, and far from it.
+    const glm::vec4 under = change.level(0).at(16, 1, 16), far = change.level(0).at(1, 1, 1);
+    EXPECT_LT(under.x, 0.0f);
+    EXPECT_EQ(under.w, 0.0f);
+    EXPECT_EQ(far, glm::vec4(0.0f));
+    // What a ray down from the ball's underside reads there: less with the change.
+    const RayLanding hit{0.2f - 0.12f, glm::vec3(0.5f, 0.0f, 0.5f), glm::vec3(0, 1, 0)};
+    const glm::vec3 room = volumeRadianceAt(volumes.fullLight(), hit);
+    const glm::vec3 changed = volumeRadianceWithChangeAt(volumes.fullLight(), change, hit);
+    EXPECT_GT(room.x, 0.0f);
+    EXPECT_LT(changed.x, 0.9f * room.x);
+    EXPECT_GE(changed.x, 0.0f);
+    // Without the objects' gather rays nothing reads it: it is not made.
+    options.diffuse.objectGatherRays = 0;
+    ObjectVolumes withoutRays;
+    frame(withoutRays, options);
+    EXPECT_TRUE(withoutRays.roomChange().empty());
 }
 
 }  // namespace

@@ -71,6 +71,7 @@ Options everyOptionChanged() {
                 .lightBounces = 8,
                 .bounceTail = false,
                 .bounceCones = 7,
+                .bounceRays = 9,
                 .denoiseRadius = 0,
                 .relightDenoiseRadius = 3,
                 .refineBudget = 0.05f};
@@ -110,7 +111,7 @@ TEST(OptionTable, EachOptionIsDescribedOnce) {
             ++count;
         }
     }
-    EXPECT_EQ(count, 49u);  // the fields of the 8 structs of options.h
+    EXPECT_EQ(count, 50u);  // the fields of the 8 structs of options.h
 }
 
 // options.render.refine_budget: "auto" (written as such) or a share of the pixels in [0, 0.25]; anything else

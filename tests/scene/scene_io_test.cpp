@@ -478,7 +478,7 @@ TEST_F(SceneIoTest, WrongTypesNameThePathAndTheExpectedType) {
 TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
     json doc = baseScene();
     doc["options"] = json::parse(R"({"shadow": {"method": "cones", "ray_samples": 9, "area_ray_samples": 25},
-        "render": {"light_bounces": 3, "relight_cones": "differential", "relight_object_light": "rays"},
+        "render": {"light_bounces": 4, "relight_cones": "differential", "relight_object_light": "rays"},
         "diffuse": {"object_rays": 4}, "volume": {"reach_scale": 0}})");
     const Options options = load(doc).options;
     EXPECT_EQ(options.render.relightObjectLight, RelightObjectLight::Rays);
@@ -486,12 +486,12 @@ TEST_F(SceneIoTest, RayBounceAndReachOptionsAreReadAndChecked) {
     EXPECT_EQ(options.shadow.method, ShadowMethod::Cones);
     EXPECT_EQ(options.shadow.raySamples, 9);
     EXPECT_EQ(options.shadow.areaRaySamples, 25);
-    EXPECT_EQ(options.render.lightBounces, 3);
+    EXPECT_EQ(options.render.lightBounces, 4);
     EXPECT_EQ(options.render.relightCones, RelightCones::Differential);
     EXPECT_EQ(options.volume.reachScale, 0.0f);
     const json written = optionsToJson(options);
     EXPECT_EQ(written["shadow"]["method"], "cones");
-    EXPECT_EQ(written["render"]["light_bounces"], 3);
+    EXPECT_EQ(written["render"]["light_bounces"], 4);
     EXPECT_EQ(written["volume"]["reach_scale"], 0.0);
     EXPECT_EQ(written["render"]["relight_object_light"], "rays");
     EXPECT_EQ(written["diffuse"]["object_rays"], 4);
