@@ -76,14 +76,14 @@ class ObjectVolumes {
     // (traceLightChangeCone).
     const MipVolume& objectLight() const { return objectLight_; }
     // What the objects change in the light of the real surfaces around them, bounced once more (radiance
-    // times occupancy in rgb, 0 in w; empty: none): at each real surface voxel within kRoomChangeMargin
-    // voxels' reach of the objects, its albedo times the change of its incoming light that the objects make
-    // (traceObjectBounceRays, gathered at the objects' bounce level on the side facing them): their own light
-    // minus the real light they hide. The full light volume's further bounces are the real scene's alone
-    // (bounce_light.h): without this the floor under an object still reflects the light the object hides
-    // from it. Only the objects' own gather rays read it (traceDiffuseRays' `lightChange`): the cones of the
-    // real surfaces' change take the objects' effect on them from the objects themselves, and would count it
-    // twice.
+    // times occupancy in rgb, 0 in w; empty: none): at each real surface voxel within an eighth of the
+    // volume's side of the objects' box, its albedo times the change of its incoming light that the objects
+    // make (traceObjectBounceRays, gathered over voxels of 8 level-0 voxels, on the side facing the objects):
+    // their own light minus the real light they hide. The full light volume's further bounces are the real
+    // scene's alone (bounce_light.h): without this the floor under an object still reflects the light the
+    // object hides from it. Only the objects' own gather rays read it (traceDiffuseRays' `lightChange`): the
+    // cones of the real surfaces' change take the objects' effect on them from the objects themselves, and
+    // would count it twice.
     const MipVolume& roomChange() const { return roomChange_; }
     // The level-0 voxels of the light volumes that the last inject() wrote (all of them when it injected
     // from scratch): what a frame cost, for tests and measurements.
