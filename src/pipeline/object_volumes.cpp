@@ -106,11 +106,11 @@ namespace {
 constexpr int kObjectBounceLevel = 2;
 // roomChange(): the real surfaces within resolution / kRoomChangeMarginDivisor level-0 voxels of the objects'
 // box (16 at 128^3: 7.5 cm in the Cornell box's volume), gathered at the voxels of mip level kRoomChangeLevel
-// (8 level-0 voxels at 128^3; level 2 moved the quality suite's object_rel_rmse by at most 0.003, for 2 ms
-// more of a warm frame on one thread) whose mean normal is at least kMinRoomCoherence (a corner's two faces
-// are not).
+// (4 level-0 voxels; level 3's 8 took 2 ms less of a warm frame on one thread, with object_rel_rmse up to
+// 0.003 higher and the objects' pixels flickering 3-8 % more as they moved, `deltagi stability`) whose mean
+// normal is at least kMinRoomCoherence (a corner's two faces are not).
 constexpr int kRoomChangeMarginDivisor = 8;
-constexpr int kRoomChangeLevel = 3;
+constexpr int kRoomChangeLevel = 2;
 constexpr float kMinRoomCoherence = 0.2f;
 
 VoxelBox unionOf(VoxelBox a, const VoxelBox& b) {

@@ -78,7 +78,7 @@ class ObjectVolumes {
     // What the objects change in the light of the real surfaces around them, bounced once more (radiance
     // times occupancy in rgb, 0 in w; empty: none): at each real surface voxel within an eighth of the
     // volume's side of the objects' box, its albedo times the change of its incoming light that the objects
-    // make (traceObjectBounceRays, gathered over voxels of 8 level-0 voxels, on the side facing the objects):
+    // make (traceObjectBounceRays, gathered over voxels of 4 level-0 voxels, on the side facing the objects):
     // their own light minus the real light they hide. The full light volume's further bounces are the real
     // scene's alone (bounce_light.h): without this the floor under an object still reflects the light the
     // object hides from it. Only the objects' own gather rays read it (traceDiffuseRays' `lightChange`): the
