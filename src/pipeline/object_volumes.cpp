@@ -51,6 +51,7 @@ void ObjectVolumes::voxelize(std::span<const TriangleMesh> objects, const Volume
 
 void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpdate> updates) {
     const bool newLight = fullLight_.empty() || real.lightVersion != sceneLightVersion_;
+    lightNew_ = newLight;
     if (newLight) {
         sceneLightVersion_ = real.lightVersion;
         sceneTexels_.reset();
@@ -147,12 +148,28 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
     // The objects' light is non-zero only where they are and were: inside what this frame's injection
     // rewrote.
     updateObjectLight(lightChanged_);
-    roomChange_ = MipVolume{};
-    if (!sceneVisibility || !options || !objects_.withAlbedo || objects_.bounds.empty()) return;
+    const bool keepRoomChange = objectsChanged_.empty() && !lightNew_ && roomChangeOptions_ && options &&
+                                *roomChangeOptions_ == *options;
+    if (!keepRoomChange) {
+        roomChange_ = MipVolume{};
+        roomChangeOptions_.reset();
+    }
+    if (!sceneVisibility || !options || !objects_.withAlbedo || objects_.bounds.empty()) {
+        roomChange_ = MipVolume{};
+        roomChangeOptions_.reset();
+        return;
+    }
     addObjectBounce(*sceneVisibility, *options, rays);
     if (room && room->rays.scene && room->rays.objects && room->geometry.withAlbedo &&
-        options->diffuse.objectGatherRays > 0)
-        updateRoomChange(*sceneVisibility, *options, *room);
+        options->diffuse.objectGatherRays > 0) {
+        if (!keepRoomChange) {
+            updateRoomChange(*sceneVisibility, *options, *room);
+            roomChangeOptions_ = *options;
+        }
+    } else {
+        roomChange_ = MipVolume{};
+        roomChangeOptions_.reset();
+    }
 }
 
 void ObjectVolumes::addObjectBounce(const MipVolume& sceneVisibility, const Options& options,

@@ -104,6 +104,10 @@ class ObjectVolumes {
     VolumeRegion region_;
     VoxelGeometry objects_;  // the objects' voxels (level 0 of objectVisibility_, copied there by mipmap())
     MipVolume objectVisibility_, fullLight_, deltaLight_, objectLight_, roomChange_;
+    bool lightNew_ = true;  // the last inject() started from a new real light
+    // The options roomChange_ was made with; none: it is not kept. A frame whose objects and light are the
+    // last frame's (a camera that moves alone) keeps it: its inputs are the same, bit for bit.
+    std::optional<Options> roomChangeOptions_;
     // The box over which objectVisibility_ and objectLight_ are stored (zero outside it): the objects' and a
     // margin, fitted anew when they leave it.
     VoxelBox window_;

@@ -257,8 +257,8 @@ TEST(ObjectVolumes, TheRoomChangeUnderABallIsTheCeilingLightItHides) {
     Bounds3f objectBounds;
     for (const TriangleMesh& m : s.virtuals) objectBounds.extend(m.bounds());
     const std::vector<RsmUpdate> updates = {traceRsmUpdate(rsms[0], all, s.lights[0], region, objectBounds)};
-    auto frame = [&](ObjectVolumes& volumes, const Options& options) {
-        volumes.voxelize(s.virtuals, region, true, true);
+    auto frame = [&](ObjectVolumes& volumes, const Options& options, bool unchanged = false) {
+        volumes.voxelize(s.virtuals, region, true, true, unchanged);
         volumes.inject({real, rsms, light, &bounce, 0}, updates);
         const RoomChangeInputs room{
             real, ShadowRayScenes{&realOnly, &all, objectBounds, objectSphereRadius(s.virtuals)}};
@@ -280,6 +280,19 @@ TEST(ObjectVolumes, TheRoomChangeUnderABallIsTheCeilingLightItHides) {
     EXPECT_GT(room.x, 0.0f);
     EXPECT_LT(changed.x, 0.9f * room.x);
     EXPECT_GE(changed.x, 0.0f);
+    // A frame whose objects and light are the last one's (a camera that moves alone) keeps it, the same as
+    // made again.
+    const MipVolume first =
+        buildMipChain(region, PackedGrid3::fromEach(32, [&](size_t i) {
+                          return change.level(0).at(static_cast<int>(i % 32), static_cast<int>(i / 32 % 32),
+                                                    static_cast<int>(i / 1024));
+                      }));
+    frame(volumes, options, true);
+    frame(volumes, options, false);
+    ObjectVolumes again;
+    frame(again, options);
+    for (const MipVolume* v : {&volumes.roomChange(), &again.roomChange()})
+        expectSameVolume(*v, first, "the room change");
     // Without the objects' gather rays nothing reads it: it is not made.
     options.diffuse.objectGatherRays = 0;
     ObjectVolumes withoutRays;
