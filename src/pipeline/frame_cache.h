@@ -53,9 +53,10 @@ struct VoxelWork {
 };
 
 // The real light in the region: one RSM per light, and the light injected from them plus its further bounces.
-// The RSMs keep a real surface's texels on the viewpoint's side only, and the bounces gather on its side of
-// each voxel: `rsmSides` and `bounceSides` are those sides, and what depends on them is redone where the
-// viewpoint crossed a surface's plane (FrameCache::update).
+// The RSMs of directional lights keep a real surface's texels on the viewpoint's side only (a point or spot
+// light's keep every texel), and the bounces gather on its side of each voxel: `rsmSides` and `bounceSides`
+// are those sides, and what depends on them is redone where the viewpoint crossed a surface's plane
+// (FrameCache::update; for all the lights, also those whose maps do not depend on it).
 struct LightWork {
     // The maps of `rsmLights`, made over the voxel part of version `rsmVoxels`.
     std::optional<std::vector<ReflectiveShadowMap>> rsms;
