@@ -16,9 +16,6 @@ namespace deltagi {
 
 namespace {
 
-// A mean normal shorter than this (surfaces facing several ways in one voxel) gathers nothing: its
-// hemisphere is not defined.
-constexpr float kMinCoherence = 0.2f;
 // The mip level whose voxels gather: the one of kGatherResolution^3 voxels (level 3 at 128^3, each gathering
 // for 8 x 8 x 8 level-0 voxels), or level 0 in smaller volumes. At 128^3 level 2 gathered 8 times as many
 // (the live frame's bounce_ms 42 -> 22, `deltagi bench --live`) for the same quality-suite figures (every
@@ -82,7 +79,7 @@ struct RayGather {
     float offset;  // shadowRayOffset(scene)
     std::optional<glm::vec3> operator()(glm::vec3 centre, glm::vec3 normal, float size, size_t index,
                                         uint32_t stream) const {
-        const RayLanding surface = scene.landTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
+        const RayLanding surface = voxelSurfaceAlong(scene, centre, normal, size);
         if (!surface.hit()) return std::nullopt;
         return from(surface.position + offset * normal, normal, index, stream, offset);
     }
@@ -147,6 +144,20 @@ glm::dvec3 areaWeightedSum(const VoxelGeometry& geometry, Value&& value) {
 
 }  // namespace
 
+std::optional<glm::vec3> gatheringNormal(glm::vec4 voxel) {
+    // A mean normal shorter than this (surfaces facing several ways in one voxel) gathers nothing.
+    constexpr float kMinCoherence = 0.2f;
+    if (voxel.x <= 0.0f) return std::nullopt;
+    const glm::vec3 meanNormal = glm::vec3(voxel.y, voxel.z, voxel.w) / voxel.x;
+    const float coherence = glm::length(meanNormal);
+    if (coherence < kMinCoherence) return std::nullopt;
+    return meanNormal / coherence;
+}
+
+RayLanding voxelSurfaceAlong(const RayScene& scene, glm::vec3 centre, glm::vec3 normal, float size) {
+    return scene.landTopLayer(centre + size * normal, -normal, 0.0f, 1.5f * size);
+}
+
 SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
                             const Options& options, int bounces, glm::vec3 viewpoint, const RayScene* rays) {
     const int n = direct.resolution();
@@ -197,14 +208,11 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
                 const size_t i = coarse.index(x, y, z);
                 const glm::vec4 v = coarse[i];
                 gathered[i] = glm::vec3(0.0f);
-                if (v.x <= 0.0f) continue;
-                const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / v.x;
-                const float coherence = glm::length(meanNormal);
-                if (coherence < kMinCoherence) continue;
+                const std::optional<glm::vec3> meanNormal = gatheringNormal(v);
+                if (!meanNormal) continue;
                 const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
-                const glm::vec3 normal =
-                    (facesAway(meanNormal, centre, viewpoint) ? -1.0f : 1.0f) * meanNormal / coherence;
-                voxels.push_back({centre, normal, i});
+                voxels.push_back(
+                    {centre, (facesAway(*meanNormal, centre, viewpoint) ? -1.0f : 1.0f) * *meanNormal, i});
             }
             if (byRays) {
                 // From the surface the voxel's normal meets, or else from its face on that side.
@@ -318,15 +326,13 @@ std::vector<glm::vec3> gatherAtObjectVoxels(const VoxelGeometry& objects, const 
         const int z = lo.z + static_cast<int>(row / size.y), y = lo.y + static_cast<int>(row % size.y);
         for (int x = lo.x; x < hi.x; ++x) {
             const glm::vec4 v = coarse.at(x, y, z);
-            if (v.x <= 0.0f) continue;
-            const glm::vec3 meanNormal = glm::vec3(v.y, v.z, v.w) / v.x;
-            const float coherence = glm::length(meanNormal);
-            if (coherence < kMinCoherence) continue;
+            const std::optional<glm::vec3> meanNormal = gatheringNormal(v);
+            if (!meanNormal) continue;
             const glm::vec3 centre = region.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
             // The voxel's index in the whole level seeds its jitter (the level is stored over a window).
             const size_t index = (static_cast<size_t>(z) * coarse.resolution() + y) * coarse.resolution() + x;
             gathered[(static_cast<size_t>(z - lo.z) * size.y + (y - lo.y)) * size.x + (x - lo.x)] =
-                gather(index, centre, meanNormal / coherence, coarseSize);
+                gather(index, centre, *meanNormal, coarseSize);
         }
     });
     return reflectAtObjectVoxels(objects, box, factor, lo, size, gathered);

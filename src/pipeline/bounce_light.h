@@ -14,12 +14,23 @@
 // bounced again, and neither is the change they make.
 #pragma once
 
+#include <optional>
+
 #include "core/ray_scene.h"
 #include "deltagi/options.h"
 #include "pipeline/volume.h"
 #include "pipeline/voxelize.h"
 
 namespace deltagi {
+
+// The unit mean normal of a visibility voxel (occupancy, occupancy times the mean normal) to gather around:
+// none where the voxel is empty or its surfaces face several ways (a mean normal shorter than 0.2, a corner's
+// two faces), where a hemisphere is not defined.
+std::optional<glm::vec3> gatheringNormal(glm::vec4 voxel);
+
+// The surface of `scene` (its top layer) that a voxel of `size` about `centre` holds on the side of `normal`:
+// the first one a ray meets coming in along -normal from a voxel away (within one and a half voxels).
+RayLanding voxelSurfaceAlong(const RayScene& scene, glm::vec3 centre, glm::vec3 normal, float size);
 
 // The light `bounces` further bounces add to `direct` (level 0 of the real scene's light volume: radiance
 // times occupancy, occupancy): radiance at each surface voxel of `geometry`, to be added to it (addBounce).

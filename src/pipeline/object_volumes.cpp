@@ -107,12 +107,10 @@ namespace {
 constexpr int kObjectBounceLevel = 2;
 // roomChange(): the real surfaces within resolution / kRoomChangeMarginDivisor level-0 voxels of the objects'
 // box (16 at 128^3: 7.5 cm in the Cornell box's volume), gathered at the voxels of mip level kRoomChangeLevel
-// (4 level-0 voxels; level 3's 8 took 2 ms less of a warm frame on one thread, with object_rel_rmse up to
-// 0.003 higher and the objects' pixels flickering 3-8 % more as they moved, `deltagi stability`) whose mean
-// normal is at least kMinRoomCoherence (a corner's two faces are not).
+// (4 level-0 voxels: coarser ones make the objects' pixels flicker as they move, design.md) that have a
+// gathering normal (bounce_light.h: not a corner's two faces).
 constexpr int kRoomChangeMarginDivisor = 8;
 constexpr int kRoomChangeLevel = 2;
-constexpr float kMinRoomCoherence = 0.2f;
 
 VoxelBox unionOf(VoxelBox a, const VoxelBox& b) {
     if (a.empty()) return b;
@@ -148,28 +146,18 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
     // The objects' light is non-zero only where they are and were: inside what this frame's injection
     // rewrote.
     updateObjectLight(lightChanged_);
-    const bool keepRoomChange = objectsChanged_.empty() && !lightNew_ && roomChangeOptions_ && options &&
-                                *roomChangeOptions_ == *options;
-    if (!keepRoomChange) {
-        roomChange_ = MipVolume{};
-        roomChangeOptions_.reset();
-    }
-    if (!sceneVisibility || !options || !objects_.withAlbedo || objects_.bounds.empty()) {
+    const bool bounces = sceneVisibility && options && objects_.withAlbedo && !objects_.bounds.empty();
+    if (bounces) addObjectBounce(*sceneVisibility, *options, rays);
+    if (!bounces || !room || !room->rays.scene || !room->rays.objects || !room->geometry.withAlbedo ||
+        options->diffuse.objectGatherRays <= 0) {
         roomChange_ = MipVolume{};
         roomChangeOptions_.reset();
         return;
     }
-    addObjectBounce(*sceneVisibility, *options, rays);
-    if (room && room->rays.scene && room->rays.objects && room->geometry.withAlbedo &&
-        options->diffuse.objectGatherRays > 0) {
-        if (!keepRoomChange) {
-            updateRoomChange(*sceneVisibility, *options, *room);
-            roomChangeOptions_ = *options;
-        }
-    } else {
-        roomChange_ = MipVolume{};
-        roomChangeOptions_.reset();
-    }
+    if (objectsChanged_.empty() && !lightNew_ && roomChangeOptions_ == *options) return;  // kept
+    roomChange_ = MipVolume{};
+    updateRoomChange(*sceneVisibility, *options, *room);
+    roomChangeOptions_ = *options;
 }
 
 void ObjectVolumes::addObjectBounce(const MipVolume& sceneVisibility, const Options& options,
@@ -218,16 +206,12 @@ void ObjectVolumes::updateRoomChange(const MipVolume& sceneVisibility, const Opt
     for (int z = lo.z; z < hi.z; ++z)
         for (int y = lo.y; y < hi.y; ++y)
             for (int x = lo.x; x < hi.x; ++x) {
-                const glm::vec4 v = coarse.at(x, y, z);
-                if (v.x <= 0.0f) continue;
-                glm::vec3 normal = glm::vec3(v.y, v.z, v.w) / v.x;
-                const float coherence = glm::length(normal);
-                if (coherence < kMinRoomCoherence) continue;
-                normal /= coherence;
+                const std::optional<glm::vec3> meanNormal = gatheringNormal(coarse.at(x, y, z));
+                if (!meanNormal) continue;
                 const glm::vec3 centre = region_.origin + (glm::vec3(x, y, z) + 0.5f) * coarseSize;
-                if (glm::dot(normal, objectCentre - centre) < 0.0f) normal = -normal;
-                const RayLanding surface =
-                    real.landTopLayer(centre + coarseSize * normal, -normal, 0.0f, 1.5f * coarseSize);
+                const glm::vec3 normal =
+                    glm::dot(*meanNormal, objectCentre - centre) < 0.0f ? -*meanNormal : *meanNormal;
+                const RayLanding surface = voxelSurfaceAlong(real, centre, normal, coarseSize);
                 if (!surface.hit()) continue;
                 SurfacePoint p;
                 p.position = surface.position;

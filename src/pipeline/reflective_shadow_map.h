@@ -46,9 +46,9 @@ std::vector<int> rsmResolutions(const Options& options, std::span<const Light> l
 // not modelled: the underside of a ground plane lit by an environment map's lower half would light the
 // ground's top in the volume). The rays still stop there. A point or spot light stands in the room, so every
 // surface its rays meet first is lit on the room's side: all of its texels are kept, also on the sides of
-// real objects that face away from the camera (the Cornell box's short block lit at a grazing angle on the
-// side that faces the Buddha: before, that light was missing from the volume). Virtual objects are closed;
-// their texels are all kept.
+// real objects that face away from the camera (the Cornell box's short block, lit at a grazing angle on the
+// side that faces the Buddha, lights the statue from there). Virtual objects are closed; their texels are
+// all kept.
 ReflectiveShadowMap renderReflectiveShadowMap(const RayScene& scene, const Light& light,
                                               const VolumeRegion& region, int resolution,
                                               std::optional<glm::vec3> viewpoint = std::nullopt);

@@ -174,7 +174,8 @@ struct DgiVolumes {
 };
 
 DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const VolumeRegion& region,
-                        const RayScene& realOnly, const RayScene& all, FrameCache& cache, StageTimer& timer) {
+                        const RayScene& realOnly, const RayScene& all, const ShadowRayScenes& objectRays,
+                        FrameCache& cache, StageTimer& timer) {
     VoxelWork& real = cache.voxels.work;
     LightWork& light = cache.light.work;
     const glm::vec3 viewpoint = viewpointOf(scene);
@@ -208,9 +209,9 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
         light.spare = {};
     }
     std::vector<RsmUpdate> updates;
-    const Bounds3f objectBounds = boundsOf(scene.virtuals);
     for (size_t l = 0; l < lights.size(); ++l)
-        updates.push_back(traceRsmUpdate((*light.rsms)[l], all, lights[l], region, objectBounds, viewpoint));
+        updates.push_back(
+            traceRsmUpdate((*light.rsms)[l], all, lights[l], region, objectRays.objectBounds, viewpoint));
     timer.lap("rsm");
     const MipVolume& sceneVisibility = *real.visibility;
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
@@ -232,8 +233,7 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     timer.lap("inject");
     // 4. Mipmaps of all four volumes. With further bounces the objects reflect the room's light they receive
     // too.
-    const RoomChangeInputs room{
-        *real.geometry, ShadowRayScenes{&realOnly, &all, objectBounds, objectSphereRadius(scene.virtuals)}};
+    const RoomChangeInputs room{*real.geometry, objectRays};
     objects.mipmap(bounces > 0 ? &sceneVisibility : nullptr, &scene.options, &all, &room);
     timer.lap("mipmap");
     return {&sceneVisibility,      &objects.objectVisibility(), &objects.fullLight(),
@@ -352,7 +352,10 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
     }
 
     const std::vector<Light> lights = rsmLights(scene, realOnly);
-    const DgiVolumes volumes = buildVolumes(scene, lights, region, realOnly, *all, cache, timer);
+    // The rays of the relit points and of the objects' change of the room towards the objects.
+    const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals),
+                                     objectSphereRadius(scene.virtuals)};
+    const DgiVolumes volumes = buildVolumes(scene, lights, region, realOnly, *all, shadowRays, cache, timer);
 
     // 5. G-buffer. Real surfaces are relit only where they show through (coverage < 1).
     GBuffer& gbuffer = view.gbuffer;
@@ -373,8 +376,6 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
     const PixelRect& objectPixels = gbuffer.written;
     if (view.steady)
         for (InterpolationPlan& plan : view.relitPlans) plan.surfaces = realSurfaces();
-    const ShadowRayScenes shadowRays{&realOnly, all, boundsOf(scene.virtuals),
-                                     objectSphereRadius(scene.virtuals)};
     // Emitting surfaces light the scene through shadow rays (with options.shadow.method "rays").
     const AreaLights emitters = o.shadow.method == ShadowMethod::Rays
                                     ? AreaLights(scene, SceneContent::RealAndVirtual)

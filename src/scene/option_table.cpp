@@ -566,7 +566,7 @@ OptionGroup renderGroup() {
                 "hemisphere to gather a further bounce, from the surface it holds on the camera's side; each "
                 "takes the light of the level-0 voxels where it lands. Wide cones read far surfaces through "
                 "coarse voxels that average them with their surroundings: under a bare bulb 10 cm below the "
-                "Cornell box's ceiling they gathered a fifth of the bright ceiling's light on the floor "
+                "Cornell box's ceiling they gather a fifth of the bright ceiling's light on the floor "
                 "beneath, rays all of it ([design.md](design.md#departures-from-the-paper)). 0: the cones "
                 "(`bounce_cones`)"),
             option(
