@@ -71,9 +71,10 @@ using SurfacePoints = std::vector<SurfacePoint, LargeBlockAllocator<SurfacePoint
 // objects' direct light is shaded over, so that a pixel shows the mean of its area as the path tracer's
 // does (a shadow edge or a fold inside a pixel), not the light at its centre alone.
 // Pixels whose glossy surface turns sharply inside them (a gilded rim, a crease, a bead narrower than a
-// pixel) have a grid twice as fine instead (`fine`): a highlight there covers a part of the pixel that k x k
-// samples miss or count twice (quality suite's cornell-textured, a gilded vase: object_rel_rmse 0.459 ->
-// 0.293, with shading's disk quadrature 0.243; 839 of its 14,700 object pixels).
+// pixel) have a finer grid instead (`fine`, 8 x 8 or 2k x 2k): a highlight there covers a part of the pixel
+// that k x k samples miss or count twice (quality suite's cornell-textured, a gilded vase: object_rel_rmse
+// 0.459 -> 0.293 with 4 x 4, with shading's disk quadrature 0.243, now 0.176 with 8 x 8; 839 of its 14,700
+// object pixels).
 struct PixelSamples {
     int perPixel = 0;  // k * k; 0: none
     PixelRect rect;    // the pixels that may have them
@@ -81,7 +82,7 @@ struct PixelSamples {
     // silhouette). Empty: pixel k of `rect` has slot k.
     std::vector<int32_t> slot;
     SurfacePoints points;           // perPixel per slot; invalid: no object there
-    int finePerPixel = 0;           // (2k)^2; 0: none
+    int finePerPixel = 0;           // max(2k, 8)^2; 0: none
     std::vector<int32_t> fineSlot;  // per pixel of `rect`: its slot in `fine`, or -1 (empty: none)
     SurfacePoints fine;             // finePerPixel per slot
     // The samples of image pixel `i` (of an image `width` wide): its fine ones where it has them; empty

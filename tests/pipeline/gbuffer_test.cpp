@@ -63,7 +63,7 @@ TEST(GBuffer, PixelsThatShowAnObjectKeepTheirSubSamplesSurfaces) {
 }
 
 // A glossy box seen obliquely: the pixels across an edge between two of its faces, whose 2 x 2 samples
-// show the normal turn by 90 degrees, take the 4 x 4 grid (a highlight on either face may cover a part of the
+// show the normal turn by 90 degrees, take the 8 x 8 grid (a highlight on either face may cover a part of the
 // pixel the 2 x 2 samples miss); pixels inside a face keep 2 x 2, and a matte box has no finer grids at all.
 TEST(GBuffer, GlossyPixelsWhoseNormalTurnsInsideThemTakeAFinerGrid) {
     Scene scene = test::floorScene();
@@ -80,7 +80,7 @@ TEST(GBuffer, GlossyPixelsWhoseNormalTurnsInsideThemTakeAFinerGrid) {
     };
     GBuffer g;
     render(glossy, g);
-    ASSERT_EQ(g.objectSamples.finePerPixel, 16);
+    ASSERT_EQ(g.objectSamples.finePerPixel, 64);
     int fine = 0, coarse = 0;
     for (size_t i = 0; i < g.object.size(); ++i) {
         const std::span<const SurfacePoint> samples = g.objectSamples.of(i, w);
@@ -90,7 +90,7 @@ TEST(GBuffer, GlossyPixelsWhoseNormalTurnsInsideThemTakeAFinerGrid) {
             for (const SurfacePoint& b : samples)
                 if (a.valid() && b.valid())
                     largestTurn = std::max(largestTurn, glm::length(a.normal - b.normal));
-        if (samples.size() == 16) {
+        if (samples.size() == 64) {
             ++fine;
             EXPECT_NEAR(largestTurn, std::sqrt(2.0f), 1e-3f) << i;  // two faces at right angles
             for (const SurfacePoint& s : samples)
