@@ -115,12 +115,11 @@ void Server::renderLoop() {
             Options own = scene.options;
             own.render.layers = layers;
             // An interactive frame with temporal reuse averages the frames before it, and one with "auto"
-            // refine_budget refines nothing (a session's frames keep their time): it is not render()'s image
-            // even with the scene's own options, so the idle refinement renders that one.
+            // refine_budget or object_gather_rays spends a frame's time, not a still's: it is not render()'s
+            // image even with the scene's own options, so the idle refinement renders that one.
             sameOptions = scale == 1 && optionsToJson(wanted) == optionsToJson(own) &&
-                          own.render.temporalFrames <= 1 && own.render.refineBudget >= 0.0f;
-            // The refined frame is the still `deltagi render` gives: a single render's refinement too.
-            own.render.refineBudget = refineBudgetFor(own.render, true);
+                          own.render.temporalFrames <= 1 && own.render.refineBudget >= 0.0f &&
+                          own.diffuse.objectGatherRays >= 0;
             if (session_.version() != interactiveVersion || cameraInput || newLight) {
                 if (session_.structureVersion() != interactiveStructure || interactiveVersion == 0) {
                     live::interactiveScene(scene, wanted, scale, interactive);
@@ -188,11 +187,11 @@ void Server::renderLoop() {
             }
         }
         try {
-            // The refined frame is a still: nothing of the frames before it is averaged in.
-            if (refining) fullFrames.clearHistory();
+            // The refined frame is the still `deltagi render` gives: nothing of the frames before it is
+            // averaged in, and the options' "auto" is a single render's.
             std::optional<RenderOutput> rendered;
             if (!unregistered)
-                rendered = refining ? fullFrames.render(full) : interactiveFrames.render(interactive);
+                rendered = refining ? fullFrames.renderStill(full) : interactiveFrames.render(interactive);
             const auto encodeStart = Clock::now();
             auto frame = std::make_shared<Frame>();
             frame->number = ++frameNumber;

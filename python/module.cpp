@@ -96,6 +96,18 @@ struct PyFrameRenderer {
     std::mutex busy;  // one frame at a time
 };
 
+// A frame of `r` (a still with `still`), one at a time; the GIL released while it waits and renders.
+py::dict renderFrameLocked(PyFrameRenderer& r, PyScene& s, bool still) {
+    std::unique_lock lock(r.busy, std::defer_lock);
+    {
+        py::gil_scoped_release released;
+        lock.lock();
+    }
+    return renderLocked(s, [&](const Scene& scene) {
+        return still ? r.renderer.renderStill(scene) : r.renderer.render(scene);
+    });
+}
+
 }  // namespace
 }  // namespace deltagi::python
 
@@ -196,31 +208,29 @@ PYBIND11_MODULE(deltagi, m) {
                                 "Renders frames of one scene, keeping the real scene's work between them.")
         .def(py::init<>())
         .def(
-            "render",
-            [](PyFrameRenderer& r, PyScene& s) {
-                std::unique_lock lock(r.busy, std::defer_lock);
-                {
-                    py::gil_scoped_release released;
-                    lock.lock();
-                }
-                return renderLocked(s, [&](const Scene& scene) { return r.renderer.render(scene); });
-            },
+            "render", [](PyFrameRenderer& r, PyScene& s) { return renderFrameLocked(r, s, false); },
             py::arg("scene"),
             "One frame: a dict of composite, background, delta (H x W x 3 float32), object_mask (H x W), "
-            "timings_ms and total_ms. The GIL is released while it renders.")
+            "timings_ms and total_ms. The GIL is released while it renders. The options' \"auto\" "
+            "(refine_budget, object_gather_rays) spends a session frame's time, not a still's.")
+        .def(
+            "render_still", [](PyFrameRenderer& r, PyScene& s) { return renderFrameLocked(r, s, true); },
+            py::arg("scene"),
+            "render()'s image (a still: `deltagi render`'s) with the kept work's speed; the frames temporal "
+            "reuse averages over are forgotten first. As render.")
         .def(
             "clear", [](PyFrameRenderer& r) { r.renderer.clear(); },
             "Forgets everything kept: a cold frame next.")
         .def(
             "clear_history", [](PyFrameRenderer& r) { r.renderer.clearHistory(); },
             "Forgets the frames temporal reuse averages over (options.render.temporal_frames): the next "
-            "frame "
-            "is render()'s image, for a frame that does not follow the ones before it.");
+            "frame is one without reuse, for a frame that does not follow the ones before it.");
 
     m.def(
         "render",
         [](PyScene& s) { return renderLocked(s, [](const Scene& scene) { return render(scene); }); },
-        py::arg("scene"), "One frame from scratch (FrameRenderer.render's result).");
+        py::arg("scene"),
+        "One still from scratch (`deltagi render`'s image; FrameRenderer.render_still's result).");
     m.def(
         "read_image", [](const std::filesystem::path& path) { return toArray(readImage(path)); },
         py::arg("path"), "Reads PNG/JPEG (to linear), EXR, HDR as H x W x 3 float32.");

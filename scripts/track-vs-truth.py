@@ -10,7 +10,8 @@ scene in both. Also the camera position error. Needs the Python module (build/py
 
 With --still instead of the truth file: each frame at the tracked pose rendered as `deltagi live` renders it
 (one renderer over the frames, keeping what they share and averaging frames over time) against a still render
-of the same frame and pose (a renderer of its own), and the objects compared too (object_rel_rmse).
+of the same frame and pose (a renderer of its own: a frame from scratch with the session's settings, not the
+finer still of `deltagi render`), and the objects compared too (object_rel_rmse).
 
     PYTHONPATH=build/python scripts/track-vs-truth.py out/live-capture/scene.json \\
         out/live-capture/tracked/transforms.json --still

@@ -55,7 +55,8 @@ using StageCallback = std::function<void(const StageTiming&)>;
 // scene's meshes are checked where they are made (loadScene, setTransform).
 void checkFrame(const Scene& scene);
 
-// Renders one frame from scratch.
+// Renders one frame from scratch: a still, whose "auto" options spend more time than a session's frames do
+// (options.render.refine_budget, options.diffuse.object_gather_rays; docs/scene-format.md).
 RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 
 // Renders a sequence of frames of one scene whose virtual objects and camera change from frame to frame, as
@@ -71,12 +72,15 @@ RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
 // objects' voxels, the full and delta light volumes and their mipmaps are kept too and redone only where the
 // objects change them (their voxels, and the voxels lit differently because of them); so are the objects'
 // half of the G-buffer (redone where they were and are) and their BVH (refit when only their vertices moved).
-// The RSM texels the objects can change and the cones are redone every frame. With
-// options.render.temporal_frames = 1 the images are the same as render()'s, bit for bit, but for one case: a
-// refit BVH may find the other of two triangles that a ray meets on their shared edge, at the same point to
-// rounding (tests/core/ray_scene_test.cpp). With more (the default, 4) each frame's lighting is the mean of
-// its own and that of the temporal_frames - 1 frames before it, reprojected (pipeline/temporal_reuse.h): the
-// first frame, and every frame once the scene has stood still for temporal_frames frames, is render()'s.
+// The RSM texels the objects can change and the cones are redone every frame. A frame resolves the options'
+// "auto" for a session's frame, render() for a still (options.render.refine_budget,
+// options.diffuse.object_gather_rays): with those set, and options.render.temporal_frames = 1, the images
+// are the same as render()'s, bit for bit, but for one case: a refit BVH may find the other of two triangles
+// that a ray meets on their shared edge, at the same point to rounding (tests/core/ray_scene_test.cpp);
+// renderStill() gives render()'s image with any options. With more temporal frames (the default, 4) each
+// frame's lighting is the mean of its own and that of the temporal_frames - 1 frames before it, reprojected
+// (pipeline/temporal_reuse.h): the first frame, and every frame once the scene has stood still for
+// temporal_frames frames, is the frame without reuse.
 class FrameRenderer {
   public:
     FrameRenderer();
@@ -86,6 +90,10 @@ class FrameRenderer {
 
     // `scene` must stay alive and in place between calls for the kept work to be reused.
     RenderOutput render(const Scene& scene, const StageCallback& onStage = {});
+    // render()'s image (a still: the options' "auto" resolved as a single render does) with the kept work's
+    // speed: forgets the frames temporal reuse averages over first (clearHistory), and the frames after it
+    // average it in. For a session's idle frame.
+    RenderOutput renderStill(const Scene& scene, const StageCallback& onStage = {});
     // Forgets everything kept: the next frame is a cold one.
     void clear();
     // Forgets the frames that temporal reuse averages over (options.render.temporal_frames) and keeps the

@@ -165,7 +165,8 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
             job.points, job.bounds, scene.camera, job.diffuseStride(o, scene.camera), 1,
             job.filter(o, job.diffuseStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
                 if (const RayScene* scene = job.diffuseRays(o))
-                    return traceDiffuseRays(job.points, *job.light, *scene, o, pixels, job.lightChange);
+                    return traceDiffuseRays(job.points, *job.light, *scene, job.gatherRays(o), pixels,
+                                            job.lightChange);
                 return traceDiffuseCones(job.points, *job.light, job.visibility, o, pixels, job.fullLight,
                                          job.objectLight, job.objectBounceByRays(o), job.diffuseAperture(o));
             });

@@ -52,6 +52,10 @@ struct ConeJob {
     // Relit: the share of the image's pixels its environment and objects' light passes may trace again where
     // they change sharply (options.render.refine_budget, resolved); 0: none.
     float refineBudget = 0.0f;
+    // Rendered objects: a still (a single render), whose "auto" gather rays are finer than a session
+    // frame's (objectGatherRaysFor; with them, where options.diffuse.pixel_stride is "auto" too, every pixel
+    // traced: kAutoStillDiffuseRayStride).
+    bool still = false;
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;
     }
@@ -111,14 +115,18 @@ struct ConeJob {
     int diffuseStride(const Options& o, const Camera& c) const {
         if (relit())
             return pixelStrideFor(o.diffuse.relightPixelStride, kAutoRelightDiffuseStride, c.width, c.height);
-        return pixelStrideFor(o.diffuse.pixelStride,
-                              diffuseRays(o) ? kAutoDiffuseRayStride : kAutoDiffuseStride, c.width, c.height);
+        const int rayStride =
+            still && o.diffuse.objectGatherRays < 0 ? kAutoStillDiffuseRayStride : kAutoDiffuseRayStride;
+        return pixelStrideFor(o.diffuse.pixelStride, diffuseRays(o) ? rayStride : kAutoDiffuseStride, c.width,
+                              c.height);
     }
-    // The rendered objects' diffuse light by rays (traceDiffuseRays) rather than cones, cast against this.
+    // The rendered objects' diffuse light by rays (traceDiffuseRays, gatherRays of them) rather than cones,
+    // cast against this.
     const RayScene* diffuseRays(const Options& o) const {
-        if (mode != ShadowMode::Shaded || o.diffuse.objectGatherRays <= 0) return nullptr;
+        if (mode != ShadowMode::Shaded || gatherRays(o) <= 0) return nullptr;
         return rays.objects ? rays.objects : rays.scene;
     }
+    int gatherRays(const Options& o) const { return objectGatherRaysFor(o.diffuse, still); }
 };
 
 // What traceCones gives a job, per point of its surfaces (pixels of the image).

@@ -54,11 +54,11 @@ glm::vec3 gatherOverHemisphere(const RayScene& scene, const MipVolume& light, gl
 }
 
 std::vector<glm::vec3> traceDiffuseRays(std::span<const SurfacePoint> points, const MipVolume& light,
-                                        const RayScene& scene, const Options& options,
-                                        std::span<const uint32_t> pixels, const MipVolume* lightChange) {
+                                        const RayScene& scene, int rays, std::span<const uint32_t> pixels,
+                                        const MipVolume* lightChange) {
     if (lightChange && lightChange->empty()) lightChange = nullptr;
     std::vector<glm::vec3> out(points.size(), glm::vec3(0.0f));
-    const int count = squareSampleCount(std::max(options.diffuse.objectGatherRays, 1));
+    const int count = squareSampleCount(std::max(rays, 1));
     const int side = static_cast<int>(std::lround(std::sqrt(static_cast<float>(count))));
     const float offset = shadowRayOffset(scene);
     const float footprintTan = rayFootprintTan(count);

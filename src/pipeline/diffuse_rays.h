@@ -24,14 +24,15 @@
 namespace deltagi {
 
 // For every point listed in `pixels` (all when empty): the cosine-weighted mean radiance over its hemisphere
-// (the diffuse cones' result, E / pi) from options.diffuse.object_gather_rays rays (rounded down to a square
-// number) against `scene` (the objects over the real scene), each taking `light`'s radiance where it lands
-// (volumeRadianceAt) at the mip level of its footprint there. Zero for points without a diffuse part; a ray
-// that meets nothing brings nothing (the environment's light comes through its own rays or cones).
-// Deterministic for any thread count: the jitter is seeded by the point's index. With `lightChange` (the
-// objects' change of the light around them, ObjectVolumes::roomChange) the rays read `light` plus it.
+// (the diffuse cones' result, E / pi) from `rays` rays (options.diffuse.object_gather_rays resolved, rounded
+// down to a square number) against `scene` (the objects over the real scene), each taking `light`'s radiance
+// where it lands (volumeRadianceAt) at the mip level of its footprint there. Zero for points without a
+// diffuse part; a ray that meets nothing brings nothing (the environment's light comes through its own rays
+// or cones). Deterministic for any thread count: the jitter is seeded by the point's index. With
+// `lightChange` (the objects' change of the light around them, ObjectVolumes::roomChange) the rays read
+// `light` plus it.
 std::vector<glm::vec3> traceDiffuseRays(std::span<const SurfacePoint> points, const MipVolume& light,
-                                        const RayScene& scene, const Options& options,
+                                        const RayScene& scene, int rays,
                                         std::span<const uint32_t> pixels = {},
                                         const MipVolume* lightChange = nullptr);
 

@@ -149,7 +149,7 @@ void ObjectVolumes::mipmap(const MipVolume* sceneVisibility, const Options* opti
     const bool bounces = sceneVisibility && options && objects_.withAlbedo && !objects_.bounds.empty();
     if (bounces) addObjectBounce(*sceneVisibility, *options, rays);
     if (!bounces || !room || !room->rays.scene || !room->rays.objects || !room->geometry.withAlbedo ||
-        options->diffuse.objectGatherRays <= 0) {
+        options->diffuse.objectGatherRays == 0) {
         roomChange_ = MipVolume{};
         roomChangeOptions_.reset();
         return;

@@ -299,8 +299,9 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
 }
 
 // One frame; `cache` holds the work of earlier frames of the same scene that this frame's inputs keep
-// (FrameCache::update), or nothing.
-RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallback& onStage,
+// (FrameCache::update), or nothing. A `still` (render(), FrameRenderer::renderStill) resolves the options'
+// "auto" as a single render does (refineBudgetFor, objectGatherRaysFor); a session's frame keeps its time.
+RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallback& onStage, bool still,
                          TemporalReuse* temporal = nullptr) {
     RenderOutput out;
     const auto start = std::chrono::steady_clock::now();
@@ -397,7 +398,8 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
          .lightChange = volumes.roomChange,
          .emitters = &emitters,
          .environment = environment,
-         .pixelSamples = &gbuffer.objectSamples},
+         .pixelSamples = &gbuffer.objectSamples,
+         .still = still},
         {.points = realPoints,
          .light = volumes.deltaLight,
          .visibility = {volumes.sceneVisibility, volumes.objectVisibility, VisibilityVolumes::Self::Scene},
@@ -412,8 +414,8 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
          .objectLight = volumes.objectLight,
          .emitters = &emitters,
          .environment = environment,
-         // A session's frames (those with temporal reuse) keep their time; a single render refines.
-         .refineBudget = refineBudgetFor(o.render, temporal == nullptr)}};
+         // A session's frames keep their time; a still refines.
+         .refineBudget = refineBudgetFor(o.render, still)}};
     std::vector<ConeResults> cones = traceCones(jobs, scene, o, direct, timer);
     ConeResults& object = cones[0];
     ConeResults& real = cones[1];
@@ -510,7 +512,7 @@ std::vector<ImageLayer> compositingLayers(const RenderOutput& output) {
 RenderOutput render(const Scene& scene, const StageCallback& onStage) {
     checkFrame(scene);
     FrameCache fresh;
-    return renderFrame(scene, fresh, onStage);
+    return renderFrame(scene, fresh, onStage, true);
 }
 
 struct FrameRenderer::State {
@@ -550,7 +552,15 @@ RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onSt
     FrameCache& cache = state_->cache;
     cache.update(scene);
     if (cache.newRealScene()) state_->temporal.clear();  // frames of another scene, lights or options
-    return renderFrame(scene, cache, onStage, &state_->temporal);
+    return renderFrame(scene, cache, onStage, false, &state_->temporal);
+}
+
+RenderOutput FrameRenderer::renderStill(const Scene& scene, const StageCallback& onStage) {
+    clearHistory();
+    checkFrame(scene);
+    FrameCache& cache = state_->cache;
+    cache.update(scene);
+    return renderFrame(scene, cache, onStage, true, &state_->temporal);
 }
 
 }  // namespace deltagi

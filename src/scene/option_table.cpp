@@ -36,11 +36,12 @@ std::string joinWithOr(const std::vector<std::string>& items) {
 }
 
 // The integers an option takes: those in [lo, hi], or only the powers of two or the squares among them;
-// "auto" too (0 here) where `orAuto`.
+// "auto" too (`autoValue` here) where `orAuto`.
 struct Integers {
     int lo, hi;
     enum class Only { All, PowersOfTwo, Squares } only = Only::All;
     bool orAuto = false;
+    int autoValue = 0;  // outside [lo, hi]
 
     bool allows(int64_t v) const {
         if (v < lo || v > hi) return false;
@@ -84,13 +85,13 @@ ValueKind<int> integers(Integers set) {
                     if (node.string() != "auto")
                         node.fail(fmt::format("expected {}, got {}", set.describe(false),
                                               describeValue(node.value())));
-                    return 0;
+                    return set.autoValue;
                 }
                 const int64_t v = node.integer64();
                 if (!set.allows(v)) node.fail(fmt::format("expected {}, got {}", set.describe(false), v));
                 return static_cast<int>(v);
             },
-            [set](const int& v) { return set.orAuto && v == 0 ? json("auto") : json(v); }};
+            [set](const int& v) { return set.orAuto && v == set.autoValue ? json("auto") : json(v); }};
 }
 ValueKind<int> integers(int lo, int hi) {
     return integers(Integers{lo, hi});
@@ -318,8 +319,10 @@ OptionGroup diffuseGroup() {
                     pixelStrideFor(0, kAutoDiffuseStride, 64, 48),
                     pixelStrideFor(0, kAutoDiffuseStride, 1280, 960)))
                 .withDefaultNote(fmt::format("{} at 640x480 for cones, {} for the objects' rays "
-                                             "(`object_gather_rays`)",
-                                             kAutoDiffuseStride, kAutoDiffuseRayStride)),
+                                             "(`object_gather_rays`); {} for a single render's with "
+                                             "`object_gather_rays` \"auto\"",
+                                             kAutoDiffuseStride, kAutoDiffuseRayStride,
+                                             kAutoStillDiffuseRayStride)),
             option(
                 "relight_pixel_stride", &D::relightPixelStride, integers(kStrides), "pixels",
                 "the same for the real surfaces' change (relighting): the light the objects add or take away "
@@ -342,15 +345,21 @@ OptionGroup diffuseGroup() {
                    "([design.md](design.md#sparse-tracing-the-strides-and-the-shadow-rays))")
                 .withDefaultNote(autoStrideNote(kAutoObjectRayStride)),
             option(
-                "object_gather_rays", &D::objectGatherRays, integers(0, 256), "rays",
-                "rays (rounded down to a square number) that each traced pixel of the virtual objects "
-                "casts over its hemisphere for its diffuse light instead of the cones: each takes the "
-                "light volume's radiance where it meets a surface, averaged over its share of the "
-                "hemisphere there (the mip level as wide). The cones read far surfaces through voxels that "
-                "hold their surroundings too: under a bare bulb near the Cornell box's ceiling they bring "
-                "a ball 66-78 % of the first bounce's light, rays 98 % of the first two ([design.md]"
-                "(design.md#departures-from-the-paper)). 0: the diffuse cones of §3.1 "
-                "(`count`, `object_aperture_deg`)"),
+                "object_gather_rays", &D::objectGatherRays,
+                integers(Integers{0, 256, Integers::Only::All, true, -1}), "rays",
+                fmt::format(
+                    "rays (rounded down to a square number) that each traced pixel of the virtual objects "
+                    "casts over its hemisphere for its diffuse light instead of the cones: each takes the "
+                    "light volume's radiance where it meets a surface, averaged over its share of the "
+                    "hemisphere there (the mip level as wide). The cones read far surfaces through voxels "
+                    "that hold their surroundings too: under a bare bulb near the Cornell box's ceiling they "
+                    "bring a ball 66-78 % of the first bounce's light, rays 98 % of the first two "
+                    "([design.md](design.md#departures-from-the-paper)). `\"auto\"`: {} for a single render "
+                    "(a still, traced at every pixel: `pixel_stride` \"auto\"), {} for the frames of a "
+                    "session (`serve`, `live`, `bench`, a `\"sequence\"`), which keep their time "
+                    "([quality-notes.md](quality-notes.md)). 0: the diffuse cones of §3.1 (`count`, "
+                    "`object_aperture_deg`)",
+                    kAutoStillObjectGatherRays, kAutoObjectGatherRays)),
         });
 }
 

@@ -28,11 +28,7 @@ float meanOfCopies(const std::vector<glm::vec3>& values, size_t point) {
     return sum / static_cast<float>(kCopies);
 }
 
-Options manyRays() {
-    Options options;
-    options.diffuse.objectGatherRays = 256;
-    return options;
-}
+constexpr int kManyRays = 256;
 
 TEST(DiffuseRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
     using Bright = test::BrightSphereScene;
@@ -45,7 +41,7 @@ TEST(DiffuseRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
     std::vector<SurfacePoint> points;
     for (const float dx : offsets)
         for (int c = 0; c < kCopies; ++c) points.push_back(test::floorPoint({0.5f + dx, 0.0f, 0.5f}, floor));
-    const std::vector<glm::vec3> got = traceDiffuseRays(points, light, all, manyRays());
+    const std::vector<glm::vec3> got = traceDiffuseRays(points, light, all, kManyRays);
     for (size_t k = 0; k < std::size(offsets); ++k) {
         const glm::vec3 toCentre = glm::vec3(0.5f, Bright::kHeight, 0.5f) - points[k * kCopies].position;
         const float d = glm::length(toCentre);
@@ -56,7 +52,7 @@ TEST(DiffuseRays, ABrightSphereLightsTheFloorUnderItAsItsSolidAngle) {
     // A point without a diffuse part gathers nothing.
     const Material black = test::diffuse(glm::vec3(0.0f));
     const SurfacePoint dark[] = {test::floorPoint({0.5f, 0.0f, 0.5f}, black)};
-    EXPECT_EQ(traceDiffuseRays(dark, light, all, manyRays())[0], glm::vec3(0.0f));
+    EXPECT_EQ(traceDiffuseRays(dark, light, all, kManyRays)[0], glm::vec3(0.0f));
 }
 
 // The form factor from a point to a w x w square centred above it at height h (the sum of four corner
@@ -100,7 +96,7 @@ TEST(DiffuseRays, AFloorPointGetsAFarBrightPatchAsItsFormFactor) {
     const float floorY = 0.5f - 0.5f * kRoom;
     std::vector<SurfacePoint> points(kCopies, test::floorPoint({0.5f, floorY, 0.5f}, floor));
     const float expected = kRadiance * squareFormFactor(kPatch, ceiling - floorY);
-    EXPECT_NEAR(meanOfCopies(traceDiffuseRays(points, light, scene, manyRays()), 0), expected,
+    EXPECT_NEAR(meanOfCopies(traceDiffuseRays(points, light, scene, kManyRays), 0), expected,
                 0.08f * expected);
 }
 

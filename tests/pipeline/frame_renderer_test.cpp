@@ -26,6 +26,8 @@ Scene ballOverFloor() {
     // What is kept must give render()'s image exactly: temporal reuse, which averages frames on purpose, is
     // tested on its own (temporal_reuse_test.cpp).
     s.options.render.temporalFrames = 1;
+    // Given rather than "auto", which a still (render()) resolves finer than a frame.
+    s.options.diffuse.objectGatherRays = kAutoObjectGatherRays;
     return s;
 }
 
@@ -61,6 +63,26 @@ TEST(FrameRenderer, MovingObjectFramesAreExactlyRendersFromScratch) {
 
 // The volumes the cones read: three stored whole in bfloat16 (8 bytes a voxel over the mip chain), the
 // objects' own two over the ball's box.
+// With the options' "auto", a still (render()) gathers the objects' light finer than a session's frame: the
+// frames differ from render() on the objects, and renderStill() between them is render()'s image bit for bit,
+// with the kept work.
+TEST(FrameRenderer, AStillIsRendersImageAndAFrameIsNot) {
+    Scene s = ballOverFloor();
+    s.options.diffuse.objectGatherRays = -1;  // "auto"
+    FrameRenderer frames;
+    const RenderOutput frame = frames.render(s);
+    const RenderOutput still = render(s);
+    ASSERT_EQ(frame.composite.data().size(), still.composite.data().size());
+    size_t differing = 0;
+    for (size_t i = 0; i < frame.composite.data().size(); ++i)
+        differing += frame.composite.data()[i] != still.composite.data()[i];
+    EXPECT_GT(differing, 0u);
+    expectSameImages(frames.renderStill(s), still);
+    EXPECT_TRUE(frames.lastFrameKept().world);
+    moveVirtuals(s, {0.05f, 0.0f, 0.0f});
+    expectSameImages(frames.renderStill(s), render(s));
+}
+
 TEST(FrameRenderer, ReportsTheBytesOfItsVolumes) {
     Scene s = ballOverFloor();
     FrameRenderer frames;

@@ -128,6 +128,27 @@ TEST(OptionTable, TheRefineBudgetIsAutoOrAShareOfThePixels) {
                        {"written: options.render.refine_budget: expected"});
 }
 
+// options.diffuse.object_gather_rays: "auto" (written as such, the default; a still's 36 rays, a session
+// frame's 32), 0 (the cones) or a count up to 256.
+TEST(OptionTable, TheObjectsGatherRaysAreAutoOrACount) {
+    EXPECT_EQ(optionsToJson(Options{})["diffuse"]["object_gather_rays"], "auto");
+    const DiffuseConeOptions automatic = readBack({{"diffuse", {{"object_gather_rays", "auto"}}}}).diffuse;
+    EXPECT_LT(automatic.objectGatherRays, 0);
+    EXPECT_EQ(objectGatherRaysFor(automatic, true), kAutoStillObjectGatherRays);
+    EXPECT_EQ(objectGatherRaysFor(automatic, false), kAutoObjectGatherRays);
+    for (int rays : {0, 64}) {
+        const DiffuseConeOptions given = readBack({{"diffuse", {{"object_gather_rays", rays}}}}).diffuse;
+        EXPECT_EQ(objectGatherRaysFor(given, true), rays);
+        EXPECT_EQ(objectGatherRaysFor(given, false), rays);
+        EXPECT_EQ(optionsToJson(Options{.diffuse = given})["diffuse"]["object_gather_rays"], rays);
+    }
+    for (const json& bad : {json("many"), json(-1), json(257), json(2.5)})
+        expectContains(inputErrorOf([&] {
+                           readBack({{"diffuse", {{"object_gather_rays", bad}}}});
+                       }),
+                       {"written: options.diffuse.object_gather_rays: expected"});
+}
+
 // Each name of `names` reads back as its value and is written as itself, and each value of the enum (in
 // order, 0 to N - 1) has one.
 template <typename Enum, size_t N, typename Member>

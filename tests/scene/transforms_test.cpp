@@ -126,6 +126,7 @@ TEST(CheckFrame, FramesOfObjectsMovedBySetTransformAreRendersFromScratch) {
     s.options.volume.center = glm::vec3(0.0f, 0.3f, 0.0f);
     s.options.volume.size = 1.6f;
     s.options.render.temporalFrames = 1;  // the kept work alone (temporal reuse averages on purpose)
+    s.options.diffuse.objectGatherRays = kAutoObjectGatherRays;  // "auto" is finer for a still (render())
     TriangleMesh ball = makeSphere(0.2f, 16);
     ball.name = "ball";
     s.virtuals.push_back(ball);
