@@ -73,7 +73,7 @@ using SurfacePoints = std::vector<SurfacePoint, LargeBlockAllocator<SurfacePoint
 // Pixels whose glossy surface turns sharply inside them (a gilded rim, a crease, a bead narrower than a
 // pixel) have a finer grid instead (`fine`, 8 x 8 or 2k x 2k): a highlight there covers a part of the pixel
 // that k x k samples miss or count twice (quality suite's cornell-textured, a gilded vase: object_rel_rmse
-// 0.459 -> 0.293 with 4 x 4, with shading's disk quadrature 0.243, now 0.176 with 8 x 8; 839 of its 14,700
+// 0.459 -> 0.293 with 4 x 4, with shading's disk quadrature 0.243; 0.176 with 8 x 8; 839 of its 14,700
 // object pixels).
 struct PixelSamples {
     int perPixel = 0;  // k * k; 0: none
