@@ -26,9 +26,9 @@ constexpr float kShadowConeStopDiameters = 1.5f;
 // highlights alias more over 2 x 2 samples).
 constexpr float kDiskQuadratureSpread = 1.0f;
 constexpr int kDiskSide = 3;
-// A disk across the point's horizon: its part above, a cap as thin as a sliver, by a finer quadrature (few
-// pixels, along the light's terminator). With 3 x 3 a disk half a radius below lit a grazing glaze at a fifth
-// of the truth.
+// A disk across a glossy point's horizon: its part above, a cap as thin as a sliver, by a finer quadrature
+// (pixels along the light's terminator). With 3 x 3 a disk half a radius below lit a grazing glaze at a fifth
+// of the truth. A matte point's takes the exact sum instead (horizonCosine).
 constexpr int kHorizonDiskSide = 12;
 
 // The Phong exponent of a glossy lobe, for the test above at every shaded sample: Phong's own; for GGX the
@@ -39,6 +39,23 @@ float lobeExponent(const SurfaceMaterial& m) {
     if (m.model != MaterialModel::MetallicRoughness) return m.phongExponent();
     const float alpha = std::max(m.roughness * m.roughness, 1e-4f);
     return 0.837f / (alpha * alpha);
+}
+
+// The mean of max(cos, 0) over a sphere light's disk of angular radius asin(sinSigma) whose centre is at
+// cosTheta from the normal, as a fraction of the disk's projected solid angle pi sin^2(sigma): the cosine
+// a matte point takes in place of cosTheta, the disk clipped by its horizon. Over the horizon's reach
+// (|cosTheta| < sinSigma) the integral of the cosine over the part of the cap above the horizon, in closed
+// form (the sphere's clipped form factor, Snyder 1996 and Lagarde & de Rousiers 2014); cosTheta clamped at
+// 0 elsewhere, where it is exact.
+float horizonCosine(float cosTheta, float sinSigma) {
+    const float s2 = sinSigma * sinSigma;
+    if (cosTheta * cosTheta >= s2) return std::max(cosTheta, 0.0f);
+    const float sinTheta = std::sqrt(std::max(1.0f - cosTheta * cosTheta, 1e-12f));
+    const float x = std::sqrt(std::max(1.0f / s2 - 1.0f, 0.0f));
+    const float y = std::clamp(-x * cosTheta / sinTheta, -1.0f, 1.0f);
+    const float r = sinTheta * std::sqrt(1.0f - y * y);
+    const float e = (cosTheta * std::acos(y) - x * r) * s2 + std::atan2(r, x);
+    return std::max(e, 0.0f) / (std::numbers::pi_v<float> * s2);
 }
 
 }  // namespace
@@ -217,7 +234,12 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
     const float horizon = std::sin(lightAngle);
     if (cosTheta <= -horizon || !(cosTheta > 0.0f || horizon > 0.0f)) return glm::vec3(0.0f);
     const SurfaceMaterial& m = point.surface;
-    if (cosTheta < horizon) return directRadianceOverDisk(point, s, lightAngle, kHorizonDiskSide);
+    if (cosTheta < horizon) {
+        if (!m.glossy())
+            return evalBrdf(m, point.normal, point.toEye, s.wi) * s.irradiance *
+                   horizonCosine(cosTheta, horizon);
+        return directRadianceOverDisk(point, s, lightAngle, kHorizonDiskSide);
+    }
     if (m.glossy() && lobeExponent(m) * lightAngle * lightAngle > kDiskQuadratureSpread)
         return directRadianceOverDisk(point, s, lightAngle, kDiskSide);
     return evalBrdf(m, point.normal, point.toEye, s.wi, lightAngle) * s.irradiance * cosTheta;
