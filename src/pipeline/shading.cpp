@@ -232,7 +232,7 @@ glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
     // A disk across the horizon lights the point with its part above it, by quadrature: at grazing
     // incidence, where a glaze reflects most (the textured vase's highlights beside its gilded band).
     const float horizon = std::sin(lightAngle);
-    if (cosTheta <= -horizon || !(cosTheta > 0.0f || horizon > 0.0f)) return glm::vec3(0.0f);
+    if (!(cosTheta > -horizon)) return glm::vec3(0.0f);  // the whole disk below the horizon
     const SurfaceMaterial& m = point.surface;
     if (cosTheta < horizon) {
         if (!m.glossy())
