@@ -120,6 +120,8 @@ class FrameRenderer {
     size_t volumeBytes() const;
 
   private:
+    // A frame (or a still) with what the frames before kept.
+    RenderOutput renderKept(const Scene& scene, const StageCallback& onStage, bool still);
     struct State;
     std::unique_ptr<State> state_;
 };

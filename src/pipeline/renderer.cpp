@@ -548,19 +548,20 @@ size_t FrameRenderer::volumeBytes() const {
 }
 
 RenderOutput FrameRenderer::render(const Scene& scene, const StageCallback& onStage) {
-    checkFrame(scene);
-    FrameCache& cache = state_->cache;
-    cache.update(scene);
-    if (cache.newRealScene()) state_->temporal.clear();  // frames of another scene, lights or options
-    return renderFrame(scene, cache, onStage, false, &state_->temporal);
+    return renderKept(scene, onStage, false);
 }
 
 RenderOutput FrameRenderer::renderStill(const Scene& scene, const StageCallback& onStage) {
     clearHistory();
+    return renderKept(scene, onStage, true);
+}
+
+RenderOutput FrameRenderer::renderKept(const Scene& scene, const StageCallback& onStage, bool still) {
     checkFrame(scene);
     FrameCache& cache = state_->cache;
     cache.update(scene);
-    return renderFrame(scene, cache, onStage, true, &state_->temporal);
+    if (cache.newRealScene()) state_->temporal.clear();  // frames of another scene, lights or options
+    return renderFrame(scene, cache, onStage, still, &state_->temporal);
 }
 
 }  // namespace deltagi

@@ -27,17 +27,15 @@ constexpr float kShadowConeStopDiameters = 1.5f;
 constexpr float kDiskQuadratureSpread = 1.0f;
 constexpr int kDiskSide = 3;
 // A disk across a glossy point's horizon: its part above, a cap as thin as a sliver, by a finer quadrature
-// (pixels along the light's terminator). With 3 x 3 a disk half a radius below lit a grazing glaze at a fifth
-// of the truth. A matte point's takes the exact sum instead (horizonCosine).
+// (pixels along the light's terminator; 3 x 3 light a grazing glaze under a disk half a radius below it at a
+// fifth of the truth). A matte point's takes the exact sum instead (horizonCosine).
 constexpr int kHorizonDiskSide = 12;
 // Where the mirror direction falls on the disk (or within kHighlightReach lobe widths of it), a lobe much
 // narrower than the disk makes a flat-topped highlight with a sharp edge, which 3 x 3 lobes, each widened
 // over a third of the disk, round off (a glaze, GGX alpha 0.0144, under a lamp 0.22 rad wide: 1.2-1.3
 // times the truth at the highlight's centre, 0.5-0.75 near its edge, 0.22 at 75 degrees). There the
-// quadrature takes cells about as wide as the lobe (kDiskCellsPerLobe lobe half-widths each), up to
-// kMaxDiskSide a side.
+// quadrature takes cells about as wide as the lobe (one lobe half-width each), up to kMaxDiskSide a side.
 constexpr float kHighlightReach = 3.0f;
-constexpr float kDiskCellsPerLobe = 1.0f;
 constexpr int kMaxDiskSide = 16;
 
 // The Phong exponent of a glossy lobe, for the test above at every shaded sample: Phong's own; for GGX the
@@ -75,7 +73,7 @@ int diskSide(const SurfacePoint& point, glm::vec3 toLight, float exponent, float
     const glm::vec3 mirror = glm::reflect(-point.toEye, point.normal);
     const float offCentre = std::acos(std::clamp(glm::dot(mirror, toLight), -1.0f, 1.0f));
     if (offCentre > lightAngle + kHighlightReach * halfWidth) return kDiskSide;
-    const int side = static_cast<int>(std::ceil(lightAngle / (kDiskCellsPerLobe * halfWidth)));
+    const int side = static_cast<int>(std::ceil(lightAngle / halfWidth));
     return std::clamp(side, kDiskSide, kMaxDiskSide);
 }
 
@@ -245,14 +243,16 @@ namespace {
 glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
     const LightSample s = sampleLight(light, point.position);
     const float cosTheta = glm::dot(s.wi, point.normal);
-    // A sphere light's glossy highlight is as wide as its disk (the path tracer samples the disk).
-    const float lightAngle = light.type == Light::Type::Directional ? light.angularRadius
-                             : light.radius > 0.0f && s.distance > 0.0f
-                                 ? std::asin(std::min(light.radius / s.distance, 1.0f))
-                                 : 0.0f;
-    // A disk across the horizon lights the point with its part above it, by quadrature: at grazing
-    // incidence, where a glaze reflects most (the textured vase's highlights beside its gilded band).
-    const float horizon = std::sin(lightAngle);
+    // A sphere light's glossy highlight is as wide as its disk (the path tracer samples the disk): its
+    // angular radius, and its sine, how far below the horizon the disk reaches.
+    const bool directional = light.type == Light::Type::Directional;
+    const float horizon = directional ? std::sin(light.angularRadius)
+                          : light.radius > 0.0f && s.distance > 0.0f
+                              ? std::min(light.radius / s.distance, 1.0f)
+                              : 0.0f;
+    const float lightAngle = directional ? light.angularRadius : std::asin(horizon);
+    // A disk across the horizon lights the point with its part above it (horizonCosine, or the quadrature
+    // for a glossy lobe: at grazing incidence a glaze reflects most).
     if (!(cosTheta > -horizon)) return glm::vec3(0.0f);  // the whole disk below the horizon
     const SurfaceMaterial& m = point.surface;
     if (cosTheta < horizon) {

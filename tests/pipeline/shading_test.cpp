@@ -12,6 +12,18 @@
 namespace deltagi {
 namespace {
 
+// The direct light (green) at `p` of a sphere light seen as the disk `s.wi`, `lightAngle` wide: the BRDF
+// times the cosine averaged over the disk (uniform over its solid angle, as the path tracer's light samples)
+// on a side x side grid, by brute force.
+float meanOverDisk(const SurfacePoint& p, const LightSample& s, float lightAngle, int side) {
+    return static_cast<float>(test::meanOverCone(s.wi, lightAngle, side,
+                                                 [&](glm::vec3 wi) {
+                                                     return evalBrdf(p.surface, p.normal, p.toEye, wi).y *
+                                                            std::max(glm::dot(wi, p.normal), 0.0f);
+                                                 })) *
+           s.irradiance.y;
+}
+
 // A gilded floor (GGX alpha 0.04) seen 60 degrees off its normal under a sphere light 4 times as wide as the
 // lobe: directRadiance against the BRDF averaged over the light's disk (uniform over its solid angle, as the
 // path tracer's light samples), with the mirror direction at the disk's centre, halfway out, at its edge and
@@ -37,13 +49,7 @@ TEST(Shading, ANarrowLobeUnderAWideLightIsAveragedOverTheLightsDisk) {
         Light light = test::pointLight(kDistance * centre, 1.0f);
         light.radius = kRadius;
         const LightSample s = sampleLight(light, p.position);
-        const float truth =
-            static_cast<float>(test::meanOverCone(s.wi, lightAngle, 128,
-                                                  [&](glm::vec3 wi) {
-                                                      return evalBrdf(p.surface, p.normal, p.toEye, wi).y *
-                                                             std::max(glm::dot(wi, p.normal), 0.0f);
-                                                  })) *
-            s.irradiance.y;
+        const float truth = meanOverDisk(p, s, lightAngle, 128);
         const float quadrature = directRadiance(p, light).y;
         const float widened = evalBrdf(p.surface, p.normal, p.toEye, s.wi, lightAngle).y * s.irradiance.y *
                               glm::dot(s.wi, p.normal);
@@ -58,8 +64,8 @@ TEST(Shading, ANarrowLobeUnderAWideLightIsAveragedOverTheLightsDisk) {
 
 // A glaze's lobe (GGX alpha 0.0144) under a lamp 15 times as wide, seen 45 degrees off its normal: the
 // highlight is flat-topped as wide as the lamp's disk, with a sharp edge, and the quadrature's cells where
-// the mirror direction falls on the disk are about as wide as the lobe (diskSide). With 3 x 3 cells it was
-// 1.22 times the truth at the centre and 0.69 at 0.9 radii.
+// the mirror direction falls on the disk are about as wide as the lobe (diskSide); 3 x 3 cells give 1.22
+// times the truth at the centre and 0.69 at 0.9 radii.
 TEST(Shading, AGlazesHighlightUnderAWideLampIsFlatTopped) {
     Material glaze;
     glaze.model = MaterialModel::MetallicRoughness;
@@ -77,13 +83,7 @@ TEST(Shading, AGlazesHighlightUnderAWideLampIsFlatTopped) {
         Light light = test::pointLight(kDistance * centre, 1.0f);
         light.radius = kRadius;
         const LightSample s = sampleLight(light, p.position);
-        const float truth =
-            static_cast<float>(test::meanOverCone(s.wi, lightAngle, 400,
-                                                  [&](glm::vec3 wi) {
-                                                      return evalBrdf(p.surface, p.normal, p.toEye, wi).y *
-                                                             std::max(glm::dot(wi, p.normal), 0.0f);
-                                                  })) *
-            s.irradiance.y;
+        const float truth = meanOverDisk(p, s, lightAngle, 400);
         const float got = directRadiance(p, light).y;
         SCOPED_TRACE(::testing::Message() << offset << " radii off: " << got << " vs " << truth);
         EXPECT_NEAR(got, truth, 0.15f * truth);
@@ -92,8 +92,8 @@ TEST(Shading, AGlazesHighlightUnderAWideLampIsFlatTopped) {
 
 // A matte and a glossy floor, seen 60 degrees off their normal, under a sphere light low over their horizon:
 // the part of its disk above the horizon lights them (as the path tracer's samples of the disk do), with its
-// centre above the horizon, on it and below it; once the whole disk is below, nothing. The light at the
-// centre's cosine alone gave 0 with the centre below. The matte floor's clipped cosine is exact (to the
+// centre above the horizon, on it and below it; once the whole disk is below, nothing (the light at the
+// centre's cosine alone is 0 with the centre below). The matte floor's clipped cosine is exact (to the
 // disk's solid angle against its projection, 1 - cos(sigma) against sin^2(sigma) / 2: 0.6 % here); the
 // glossy one's quadrature within a quarter. (Seen at grazing angles, where the mirror direction meets the
 // disk, the lobe widened over each quadrature cell spreads too far: 0.4 times a glaze's truth at 85
@@ -117,13 +117,7 @@ TEST(Shading, ASphereLightAcrossTheHorizonLightsWithItsPartAboveIt) {
             Light light = test::pointLight(kDistance * glm::vec3(std::cos(a), std::sin(a), 0.0f), 1.0f);
             light.radius = kRadius;
             const LightSample s = sampleLight(light, p.position);
-            const float truth = static_cast<float>(test::meanOverCone(
-                                    s.wi, lightAngle, 128,
-                                    [&](glm::vec3 wi) {
-                                        return evalBrdf(p.surface, p.normal, p.toEye, wi).y *
-                                               std::max(glm::dot(wi, p.normal), 0.0f);
-                                    })) *
-                                s.irradiance.y;
+            const float truth = meanOverDisk(p, s, lightAngle, 128);
             const float got = directRadiance(p, light).y;
             if (elevation == 0.5f) scale = truth;
             SCOPED_TRACE(::testing::Message()
