@@ -39,6 +39,35 @@ bool isFinite(glm::vec3 v) {
 
 }  // namespace
 
+namespace {
+
+// The disk a sphere light shows a point p: centred on the light, facing p, of the light's radius; a point q on
+// it brings I / |q - p|^2 when drawn uniformly (sampleLightPoint).
+struct LightDisk {
+    glm::vec3 normal{0.0f};  // unit, from the light towards p
+    float distance = 0.0f;   // from p to the centre
+    float area = 0.0f;
+};
+
+// Whether `light` is a sphere seen from p (a point or spot light with a radius, p outside its centre).
+std::optional<LightDisk> lightDisk(const Light& light, glm::vec3 p) {
+    if (light.type == Light::Type::Directional || !(light.radius > 0.0f) || light.fromEnvironment)
+        return std::nullopt;
+    const glm::vec3 axis = p - light.position;
+    const float d = glm::length(axis);
+    if (!(d > 0.0f)) return std::nullopt;
+    return LightDisk{axis / d, d, std::numbers::pi_v<float> * light.radius * light.radius};
+}
+
+// The density per unit solid angle with which a uniform point of the disk lies in direction wi from p,
+// `distance` away: distance^2 / (area cos), the disk's cosine taken towards wi.
+float diskPdf(const LightDisk& disk, glm::vec3 wi, float distance) {
+    const float cosine = std::abs(glm::dot(wi, disk.normal));
+    return cosine > 0.0f ? distance * distance / (disk.area * cosine) : 0.0f;
+}
+
+}  // namespace
+
 LightSample sampleLightPoint(const Light& light, glm::vec3 p, float u1, float u2) {
     if (light.type == Light::Type::Directional || !(light.radius > 0.0f)) return sampleLight(light, p);
     const glm::vec3 axis = p - light.position;
@@ -59,6 +88,28 @@ LightSample sampleLightPoint(const Light& light, glm::vec3 p, float u1, float u2
     return s;
 }
 
+glm::vec3 PathTracer::lightsAlong(glm::vec3 position, const BrdfSample& s, const RayHit& next) const {
+    glm::vec3 sum(0.0f);
+    for (const Light& light : lights_) {
+        const std::optional<LightDisk> disk = lightDisk(light, position);
+        if (!disk) continue;
+        // Where the ray meets the disk's plane, and whether within its radius and short of the next surface.
+        const float towards = -glm::dot(s.wi, disk->normal);
+        if (!(towards > 0.0f)) continue;
+        const float t = disk->distance / towards;
+        const glm::vec3 offCentre = position + t * s.wi - light.position;
+        if (glm::dot(offCentre, offCentre) > light.radius * light.radius) continue;
+        if (next.hit() && next.t < t - 2.0f * settings_.rayOffset) continue;
+        const float pdfLight = diskPdf(*disk, s.wi, t);
+        if (!(pdfLight > 0.0f) || !std::isfinite(pdfLight)) continue;
+        // The disk's radiance, I / (area cos): what sampleLightPoint's point there brings (I / t^2) per unit
+        // of the density it was drawn with.
+        const glm::vec3 irradiance = light.power() * (spotFalloff(light, disk->normal) / (t * t));
+        sum += irradiance * (pdfLight * powerHeuristic(s.pdf, pdfLight));
+    }
+    return sum;
+}
+
 glm::vec3 PathTracer::offsetOrigin(const RayHit& hit, glm::vec3 towards) const {
     const float side = glm::dot(towards, hit.normal) >= 0.0f ? 1.0f : -1.0f;
     return hit.position + (side * settings_.rayOffset) * hit.normal;
@@ -75,7 +126,13 @@ void PathTracer::sampleLights(const RayHit& hit, glm::vec3 wo, Sampler& sampler,
         const glm::vec3 origin = offsetOrigin(hit, s.wi);
         const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * settings_.rayOffset : s.distance;
         if (tMax <= 0.0f) continue;
-        add(origin, s.wi, tMax, evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.irradiance * cosTheta);
+        // A sphere light's point is weighted against the BRDF sample that could meet it (lightsAlong()).
+        float weight = 1.0f;
+        if (const std::optional<LightDisk> disk = lightDisk(light, hit.position))
+            weight =
+                powerHeuristic(diskPdf(*disk, s.wi, s.distance), brdfPdf(hit.surface, hit.normal, wo, s.wi));
+        add(origin, s.wi, tMax,
+            evalBrdf(hit.surface, hit.normal, wo, s.wi) * s.irradiance * (cosTheta * weight));
     }
     if (!environment_) return;
     const glm::vec2 u = sampler.uniform2();
@@ -145,11 +202,12 @@ float PathTracer::emitterWeight(const RayHit& at, glm::vec3 direction, glm::vec3
 }
 
 glm::vec3 PathTracer::lastBounceLight(const RayHit& hit, const BrdfSample& s, const RayHit& next) const {
+    glm::vec3 light = lightsAlong(hit.position, s, next);
     if (!next.hit() && environment_)
-        return s.weight * environment_->radiance(s.wi) * powerHeuristic(s.pdf, environment_->pdf(s.wi));
+        light += environment_->radiance(s.wi) * powerHeuristic(s.pdf, environment_->pdf(s.wi));
     if (next.hit() && next.surface.emits())
-        return s.weight * next.surface.emission * emitterWeight(next, s.wi, hit.position, s.pdf);
-    return glm::vec3(0.0f);
+        light += next.surface.emission * emitterWeight(next, s.wi, hit.position, s.pdf);
+    return s.weight * light;
 }
 
 bool PathTracer::scatter(PathState& p, const BrdfSample& s, float uRoulette) const {
@@ -207,8 +265,10 @@ void PathTracer::trace(PathState& p, Sampler& sampler) const {
             break;
         }
         const glm::vec3 from = offsetOrigin(hit, s.wi);
+        const glm::vec3 position = hit.position;  // p.hit is replaced below
         if (!scatter(p, s, uRoulette)) break;
         p.hit = rays_.intersect(from, p.direction);
+        p.radiance += p.throughput * lightsAlong(position, s, p.hit);
         // A path that leaves the scene sees the environment, weighted against the light sample of
         // directLight().
         if (!p.hit.hit() && environment_)
@@ -299,6 +359,7 @@ DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 orig
                        without_.lastBounceLight(hit, s, next.isVirtual ? real.intersect(from, s.wi) : next);
             break;
         }
+        const glm::vec3 position = hit.position;  // p.hit is replaced below
         if (!shared.scatter(p, s, uRoulette)) break;
         const RayHit next = with_.rays_.intersect(from, p.direction);
         if (next.isVirtual) {
@@ -306,6 +367,8 @@ DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 orig
             PathState apart = p;
             apart.radiance = without;
             apart.hit = real.intersect(from, p.direction);
+            apart.radiance += apart.throughput * shared.lightsAlong(position, s, apart.hit);
+            p.radiance += p.throughput * shared.lightsAlong(position, s, next);
             if (!apart.hit.hit() && shared.environment_)
                 apart.radiance += apart.throughput * shared.environment_->radiance(apart.direction) *
                                   powerHeuristic(s.pdf, shared.environment_->pdf(apart.direction));
@@ -319,6 +382,9 @@ DifferentialPathTracer::Radiance DifferentialPathTracer::radiance(glm::vec3 orig
             break;
         }
         p.hit = next;
+        const glm::vec3 lamps = p.throughput * shared.lightsAlong(position, s, next);
+        p.radiance += lamps;
+        without += lamps;
         if (!p.hit.hit() && shared.environment_) {
             const glm::vec3 sky = p.throughput * shared.environment_->radiance(p.direction) *
                                   powerHeuristic(s.pdf, shared.environment_->pdf(p.direction));

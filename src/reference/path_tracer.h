@@ -1,9 +1,10 @@
 // The reference path tracer's core: unidirectional paths with next-event estimation towards every light at
-// every vertex, BRDF importance sampling (brdf_sampling.h) and Russian roulette. Emissive surfaces are lit by
-// both strategies, next-event estimation of one point on the emitters (area_lights.h) and the BRDF-sampled
-// ray that hits one, weighted by multiple importance sampling (Veach 1997, the power heuristic).
-// renderReference() (include/deltagi/reference.h) takes two paths per camera sample, with and without the
-// virtual objects (DifferentialPathTracer: one path while they are the same).
+// every vertex, BRDF importance sampling (brdf_sampling.h) and Russian roulette. Sphere lights (a point or
+// spot light with a radius) and emissive surfaces are lit by both strategies, next-event estimation of one
+// point on the emitters (area_lights.h) and the BRDF-sampled ray that hits one, weighted by multiple
+// importance sampling (Veach 1997, the power heuristic). renderReference() (include/deltagi/reference.h)
+// takes two paths per camera sample, with and without the virtual objects (DifferentialPathTracer: one path
+// while they are the same).
 #pragma once
 
 #include <span>
@@ -91,6 +92,12 @@ class PathTracer {
     // What the BRDF sample (s, from `hit`) of a path's last allowed vertex brings from `next`, the surface
     // it meets (or the environment it leaves to), with MIS weights; nothing beyond.
     glm::vec3 lastBounceLight(const RayHit& hit, const BrdfSample& s, const RayHit& next) const;
+    // What the sphere lights bring along a BRDF sample (s, taken at `position`) whose ray meets `next` (or
+    // leaves the scene): the radiance of each light's disk it passes through first, weighted by the power
+    // heuristic against directLight()'s point on that disk. Per unit of the path's throughput after the
+    // sample. A narrow glossy lobe under a wide lamp finds the lamp this way far more often than by points
+    // on the disk.
+    glm::vec3 lightsAlong(glm::vec3 position, const BrdfSample& s, const RayHit& next) const;
     // Carries `path` over the BRDF sample `s` taken at its hit: its throughput, Russian roulette (uRoulette)
     // and the direction and MIS state of the next vertex. False when the roulette ends the path.
     bool scatter(PathState& path, const BrdfSample& s, float uRoulette) const;

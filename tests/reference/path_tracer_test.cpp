@@ -5,8 +5,10 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <string>
 #include <vector>
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
@@ -608,6 +610,71 @@ TEST(Reference, SphereLightSamplesLieOnItsDiskAndKeepTheIntensity) {
         EXPECT_LE(glm::length(q - light.position), 0.5f + 1e-5f);
         EXPECT_NEAR(s.irradiance.x, 3.0f / (s.distance * s.distance), 1e-5f);
     }
+}
+
+// A glossy plane under a wide sphere light, seen where the mirror direction falls on the lamp's disk (at its
+// centre, and near its rim): the path tracer's direct light (one vertex) against a fine quadrature of the
+// disk's points, and the spread of its single-sample estimates. A uniform point on the disk seldom falls in a
+// lobe far narrower than the disk (a relative standard deviation of 1.6-3.9 per sample here, measured); the
+// BRDF's own sample does whenever it points at the disk: with the two weighted by MIS, 0.36-0.61.
+TEST(PathTracer, ANarrowLobeUnderAWideSphereLightFindsItByTheBrdfSample) {
+    Light light = test::pointLight({0.5f, 1.0f, 0.0f}, 2.0f);
+    light.radius = 0.3f;
+    Material phong;
+    phong.albedo = glm::vec3(0.1f);
+    phong.specular = glm::vec3(0.6f);
+    phong.roughness = 0.1f;
+    Material metal;
+    metal.model = MaterialModel::MetallicRoughness;
+    metal.albedo = glm::vec3(0.9f);
+    metal.metallic = 1.0f;
+    metal.roughness = 0.15f;
+    for (const Material& material : {phong, metal})
+        for (const float rim : {0.0f, 0.25f}) {  // the mirror direction's point on the lamp, off its centre
+            Scene s;
+            s.real.push_back(placed(makeQuad({20.0f, 20.0f}), {0, 0, 0}, material, "plane"));
+            s.lights.push_back(light);
+            const glm::vec3 eye(-0.5f - rim, 1.0f, 0.0f), p(0.0f);
+            const glm::vec3 dir = glm::normalize(p - eye);
+            const RayScene rays(s, SceneContent::RealOnly);
+            const AreaLights emitters(s, SceneContent::RealOnly);
+            const RayHit hit = rays.intersect(eye, dir);
+            ASSERT_TRUE(hit.hit());
+            // The truth: the mean over the disk's points of what each brings (I / distance^2, sampleLightPoint)
+            // times the BRDF and the cosine; a 400 x 400 midpoint grid in (sqrt of radius, angle).
+            double expected = 0.0;
+            constexpr int kGrid = 400;
+            for (int i = 0; i < kGrid; ++i)
+                for (int j = 0; j < kGrid; ++j) {
+                    const LightSample l =
+                        sampleLightPoint(light, hit.position, (i + 0.5f) / kGrid, (j + 0.5f) / kGrid);
+                    expected +=
+                        glm::dot(evalBrdf(hit.surface, hit.normal, -dir, l.wi), glm::vec3(1.0f / 3.0f)) *
+                        l.irradiance.x * std::max(glm::dot(l.wi, hit.normal), 0.0f);
+                }
+            expected /= kGrid * kGrid;
+            for (const int maxBounces : {1, 8}) {  // the last vertex's BRDF sample, and a path's that goes on
+                PathSettings settings;
+                settings.maxBounces = maxBounces;
+                const PathTracer tracer(rays, emitters, s.lights, settings);
+                constexpr int kSamples = 8192;
+                double sum = 0.0, squares = 0.0;
+                for (int k = 0; k < kSamples; ++k) {
+                    Sampler sampler(7, k, 3);
+                    const double v = glm::dot(tracer.radiance(eye, dir, sampler), glm::vec3(1.0f / 3.0f));
+                    sum += v;
+                    squares += v * v;
+                }
+                const double mean = sum / kSamples;
+                const double deviation = std::sqrt(std::max(squares / kSamples - mean * mean, 0.0));
+                const std::string what =
+                    fmt::format("{} model, rim {}, max bounces {}",
+                                material.model == MaterialModel::Phong ? "Phong" : "GGX", rim, maxBounces);
+                // Measured: within 0.2 % (8192 samples).
+                EXPECT_NEAR(mean, expected, 0.01 * expected) << what;
+                EXPECT_LT(deviation / mean, 1.0) << what;
+            }
+        }
 }
 
 }  // namespace
