@@ -44,6 +44,9 @@ std::array<SurfacePoint, 4> pixelQuarters(const SurfacePoint& p, size_t i, const
     return out;
 }
 
+// An occlusion strictly between kPart and 1 - kPart is partial: a shadow's edge or penumbra.
+constexpr float kPart = 1e-3f;
+
 // A light without a size casts a shadow whose edge is a pixel wide, but the shadow's sparse samples and the
 // filter (traceSparse) spread it over their stride and radius. The pixels they leave part-shadowed by such a
 // light are traced again, each on its own over its area (its sub-samples where the job has them, else the
@@ -60,7 +63,6 @@ void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& jo
             hardLights.push_back(lights[static_cast<size_t>(l)]);
         }
     if (hard.empty() || shadows.empty()) return;
-    constexpr float kPart = 1e-3f;
     const auto part = [](float v) { return v > kPart && v < 1.0f - kPart; };
     const size_t n = lights.size();
     std::vector<uint32_t> edge;
@@ -103,6 +105,41 @@ void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& jo
         }
 }
 
+// A sphere light's soft shadow on the objects' glossy pixels (glossyShadowOcclusion): the pixels whose
+// occlusion by a sized light is partial take the visible share of their direct light's quadrature over the
+// light's disk, from at most kGlossyShadowRays rays each. Quality suite's cornell-textured, object_rel_rmse:
+// 0.190 without (with the finer grids of the G-buffer's kFineLobeTurns), 0.149, 0.134, 0.125, 0.121 with 16,
+// 64, 128, 256 rays over all of a finer pixel's 64 sub-samples; 0.123 with 64 over 16 of them
+// (kGlossyShadowSamples). Its still's shadow stage 60 ms without, 119 with; the glossy Cornell box's
+// 50-64 -> 64-94 ms (its figures the same to four digits).
+constexpr int kGlossyShadowRays = 64;
+
+void sharpenGlossyShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& job,
+                          std::span<const Light> lights, const Options& o, const Camera& camera) {
+    if (job.mode != ShadowMode::Shaded || !job.rays.scene || shadows.empty()) return;
+    std::vector<size_t> sized;
+    for (size_t l = 0; l < lights.size(); ++l)
+        if (shadowRayCount(lights[l], o.shadow.raySamples) > 1) sized.push_back(l);
+    if (sized.empty()) return;
+    const size_t n = lights.size();
+    const int width = camera.width;
+    parallelFor(job.bounds.y0, job.bounds.y1, 4, [&](int64_t y) {
+        for (int x = job.bounds.x0; x < job.bounds.x1; ++x) {
+            const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
+            const SurfacePoint& p = job.points[i];
+            if (!p.valid() || !p.surface.glossy()) continue;
+            const std::span<const SurfacePoint> area =
+                job.pixelSamples ? job.pixelSamples->of(i, width) : std::span<const SurfacePoint>{};
+            for (const size_t l : sized) {
+                float& combined = shadows[i * n + l].combined;
+                if (combined > kPart && combined < 1.0f - kPart)
+                    combined =
+                        glossyShadowOcclusion(p, area, lights[l], job.rays, combined, kGlossyShadowRays);
+            }
+        }
+    });
+}
+
 // Runs body(j) for the jobs at once (the real surfaces' and the objects'): each job's own passes are
 // parallel, but they end in small tails of work that leave a core idle; the other job fills them. The
 // results do not depend on the order (each job writes only its own).
@@ -132,8 +169,10 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                 return traceShadowCones(job.points, directLights, job.visibility, o,
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
-        if (o.shadow.method == ShadowMethod::Rays)
+        if (o.shadow.method == ShadowMethod::Rays) {
             sharpenHardShadows(results[j].shadows, job, directLights, o, scene.camera);
+            sharpenGlossyShadows(results[j].shadows, job, directLights, o, scene.camera);
+        }
     });
     forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];

@@ -70,21 +70,30 @@ bool centreFromSubSamples(std::span<const SurfacePoint> subSamples, SurfacePoint
 
 // A pixel's k x k samples ask for the finer grid (PixelSamples::fine) when they show a glossy lobe at most
 // about 30 degrees wide (Phong exponent 20) and the normal turns between two neighbouring samples, half a
-// pixel apart at k = 2, by more than about 10 degrees and by more than the lobe is wide: |n_a - n_b|^2 above
-// kFineNormalDifference and above kFineLobeTurns / n (for a Phong exponent n; the mirror direction then
-// turns by about 5 times the lobe's half-width at half maximum, 1.18 / sqrt(n)). The highlight may then lie
-// in a part of the pixel the samples do not see. A smooth glossy ball turns by a fraction of a degree per
-// pixel away from its silhouette. Quality suite's cornell-textured: 839 finer pixels of 14,700 (its glazes'
-// lobes are narrow, n = 4,000, and their normal maps turn by a few degrees: kFineLobeTurns 1 makes 7,658, at
-// the same object_rel_rmse); the textured torus of the benchmark (roughness 0.4, n = 32): 330 of 17,900.
+// pixel apart at k = 2, by more than the lobe is wide. The highlight may then lie in a part of the pixel the
+// samples do not see, or fall on one of them and count for a quarter of the pixel. A narrow lobe (exponent n
+// from kFineNarrowExponent, about 7 degrees wide) asks for it where |n_a - n_b|^2 > kFineLobeTurns / n (the
+// mirror direction turns by about twice the lobe's half-width at half maximum, 1.18 / sqrt(n)); a wider one
+// only where the normal turns by more than about 10 degrees and by four times as much (|n_a - n_b|^2 above
+// kFineNormalDifference and 4 kFineLobeTurns / n): its highlight is smooth, and the finer grid costs more
+// than it brings. A smooth glossy ball turns by a fraction of a degree per pixel away from its silhouette.
+// Quality suite's cornell-textured (its glazes' lobes are narrow, n = 4,000, its gilded bands' about 100-200,
+// and their normal maps turn by a degree or two per pixel), object_rel_rmse with the glossy pixels' shadows
+// of glossyShadowOcclusion: 0.173 with the wide lobes' rule for all (839 finer pixels of 14,700), 0.123 with
+// this, 0.121 with kFineLobeTurns 1; 0.167 with kFineNarrowExponent 200; without those shadows the finer
+// grids alone made it worse (0.190: sharper highlights under a shadow fraction that holds for matte
+// surfaces). Its still's G-buffer 38 -> 83 ms, shading 50 -> 146 (each finer pixel's 64 samples take the
+// disk's quadrature). The narrow lobes' rule for every lobe would cost the textured torus's frame (exponent
+// 33) 16 ms of G-buffer and 40 of shading.
 constexpr float kFineMinExponent = 20.0f;
+constexpr float kFineNarrowExponent = 100.0f;
 // The finer grid's side: at least twice the pixel's k, and 8. A glaze's highlight on a bead or a rim is a
 // line a tenth of a pixel tall, and 4 x 4 samples see it in one row of four or in two: cornell-textured's
-// object_rel_rmse 0.200 with 4 x 4, 0.176 with 8 x 8, 0.174 with 12 x 12 (its direct light alone against
-// the direct-light reference 0.218, 0.188, 0.178 (16 x 16 the same): what is left there is not the grid).
+// object_rel_rmse 0.200 with 4 x 4, 0.176 with 8 x 8, 0.174 with 12 x 12 (when only turns above 10 degrees
+// took them).
 constexpr int kFineGridSide = 8;
 constexpr float kFineNormalDifference = 0.03f;
-constexpr float kFineLobeTurns = 8.0f;
+constexpr float kFineLobeTurns = 2.0f;
 
 bool needsFinerGrid(std::span<const SurfacePoint> samples, int k) {
     // The largest turn first: most pixels have none, and their lobes' exponents are not worked out.
@@ -99,11 +108,13 @@ bool needsFinerGrid(std::span<const SurfacePoint> samples, int k) {
             if (x + 1 < k) pair(samples[y * k + x], samples[y * k + x + 1]);
             if (y + 1 < k) pair(samples[y * k + x], samples[(y + 1) * k + x]);
         }
-    if (!(turn > kFineNormalDifference)) return false;
+    if (!(turn > 0.0f)) return false;
     float exponent = 0.0f;
     for (const SurfacePoint& p : samples)
         if (p.valid() && p.surface.glossy()) exponent = std::max(exponent, p.surface.phongExponent());
-    return exponent >= kFineMinExponent && turn > kFineLobeTurns / exponent;
+    if (exponent >= kFineNarrowExponent) return turn > kFineLobeTurns / exponent;
+    return exponent >= kFineMinExponent &&
+           turn > std::max(kFineNormalDifference, 4.0f * kFineLobeTurns / exponent);
 }
 
 float pixelAngleOf(const Camera& camera) {

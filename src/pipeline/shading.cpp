@@ -219,54 +219,96 @@ std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, 
 
 namespace {
 
-// directRadiance of a lobe narrower than the light's disk: the BRDF times the cosine over the disk, by
-// quadrature (each point's lobe widened over its cell of the disk, a third of its radius). Kept out of line:
-// most points never come here.
-[[gnu::noinline]] glm::vec3 directRadianceOverDisk(const SurfacePoint& point, const LightSample& s,
-                                                   float lightAngle, int side) {
-    const glm::mat3 aroundLight = frameAround(s.wi);
+// The quadrature over a light's disk of a lobe narrower than it: each point's lobe widened over its cell of
+// the disk (its angular radius over `side`). cell(wi, value) for every cell, `value` the BRDF times the
+// cosine (zero below the horizon). Kept out of line: most points never come here.
+template <typename Cell>
+[[gnu::noinline]] void forEachDiskCell(const SurfacePoint& point, glm::vec3 toLight, float lightAngle,
+                                       int side, Cell&& cell) {
+    const glm::mat3 aroundLight = frameAround(toLight);
     const float spread = std::tan(lightAngle);
-    glm::vec3 sum(0.0f);
     for (int a = 0; a < side; ++a)
         for (int b = 0; b < side; ++b) {
             const glm::vec2 onDisk = spread * concentricDisk((a + 0.5f) / side, (b + 0.5f) / side);
             const glm::vec3 wi = glm::normalize(aroundLight * glm::vec3(onDisk, 1.0f));
             const float cosine = glm::dot(wi, point.normal);
-            if (cosine > 0.0f)
-                sum += evalBrdf(point.surface, point.normal, point.toEye, wi, lightAngle / side) * cosine;
+            cell(wi, cosine > 0.0f
+                         ? evalBrdf(point.surface, point.normal, point.toEye, wi, lightAngle / side) * cosine
+                         : glm::vec3(0.0f));
         }
-    return sum * (s.irradiance / static_cast<float>(side * side));
+}
+
+// How directRadiance takes a light at a point.
+struct DirectLightPlan {
+    LightSample sample;
+    float horizon = 0.0f;     // the sine of the light's angular radius: how far below the horizon it reaches
+    float lightAngle = 0.0f;  // its angular radius
+    int diskSide = 0;         // > 0: the glossy lobe by a diskSide x diskSide quadrature over the disk
+    bool dark = false;        // the whole disk below the horizon
+};
+
+DirectLightPlan planDirectLight(const SurfacePoint& point, const Light& light) {
+    DirectLightPlan plan;
+    plan.sample = sampleLight(light, point.position);
+    const LightSample& s = plan.sample;
+    const float cosTheta = glm::dot(s.wi, point.normal);
+    // A sphere light's glossy highlight is as wide as its disk (the path tracer samples the disk): its
+    // angular radius, and its sine, how far below the horizon the disk reaches.
+    const bool directional = light.type == Light::Type::Directional;
+    plan.horizon = directional                                ? std::sin(light.angularRadius)
+                   : light.radius > 0.0f && s.distance > 0.0f ? std::min(light.radius / s.distance, 1.0f)
+                                                              : 0.0f;
+    plan.lightAngle = directional ? light.angularRadius : std::asin(plan.horizon);
+    // A disk across the horizon lights the point with its part above it (horizonCosine, or the quadrature
+    // for a glossy lobe: at grazing incidence a glaze reflects most).
+    if (!(cosTheta > -plan.horizon)) {
+        plan.dark = true;
+        return plan;
+    }
+    const SurfaceMaterial& m = point.surface;
+    if (!m.glossy()) return plan;
+    if (cosTheta < plan.horizon) {
+        plan.diskSide = kHorizonDiskSide;
+        return plan;
+    }
+    const float exponent = lobeExponent(m);
+    if (exponent * plan.lightAngle * plan.lightAngle > kDiskQuadratureSpread)
+        plan.diskSide = diskSide(point, s.wi, exponent, plan.lightAngle);
+    return plan;
 }
 
 }  // namespace
 
 glm::vec3 directRadiance(const SurfacePoint& point, const Light& light) {
-    const LightSample s = sampleLight(light, point.position);
-    const float cosTheta = glm::dot(s.wi, point.normal);
-    // A sphere light's glossy highlight is as wide as its disk (the path tracer samples the disk): its
-    // angular radius, and its sine, how far below the horizon the disk reaches.
-    const bool directional = light.type == Light::Type::Directional;
-    const float horizon = directional ? std::sin(light.angularRadius)
-                          : light.radius > 0.0f && s.distance > 0.0f
-                              ? std::min(light.radius / s.distance, 1.0f)
-                              : 0.0f;
-    const float lightAngle = directional ? light.angularRadius : std::asin(horizon);
-    // A disk across the horizon lights the point with its part above it (horizonCosine, or the quadrature
-    // for a glossy lobe: at grazing incidence a glaze reflects most).
-    if (!(cosTheta > -horizon)) return glm::vec3(0.0f);  // the whole disk below the horizon
+    const DirectLightPlan plan = planDirectLight(point, light);
+    if (plan.dark) return glm::vec3(0.0f);
+    const LightSample& s = plan.sample;
+    if (plan.diskSide > 0) {
+        glm::vec3 sum(0.0f);
+        forEachDiskCell(point, s.wi, plan.lightAngle, plan.diskSide,
+                        [&](glm::vec3, glm::vec3 v) { sum += v; });
+        return sum * (s.irradiance / static_cast<float>(plan.diskSide * plan.diskSide));
+    }
     const SurfaceMaterial& m = point.surface;
-    if (cosTheta < horizon) {
-        if (!m.glossy())
-            return evalBrdf(m, point.normal, point.toEye, s.wi) * s.irradiance *
-                   horizonCosine(cosTheta, horizon);
-        return directRadianceOverDisk(point, s, lightAngle, kHorizonDiskSide);
-    }
-    if (m.glossy()) {
-        const float exponent = lobeExponent(m);
-        if (exponent * lightAngle * lightAngle > kDiskQuadratureSpread)
-            return directRadianceOverDisk(point, s, lightAngle, diskSide(point, s.wi, exponent, lightAngle));
-    }
-    return evalBrdf(m, point.normal, point.toEye, s.wi, lightAngle) * s.irradiance * cosTheta;
+    const float cosTheta = glm::dot(s.wi, point.normal);
+    if (cosTheta < plan.horizon)
+        return evalBrdf(m, point.normal, point.toEye, s.wi) * s.irradiance *
+               horizonCosine(cosTheta, plan.horizon);
+    return evalBrdf(m, point.normal, point.toEye, s.wi, plan.lightAngle) * s.irradiance * cosTheta;
+}
+
+void directLightCells(const SurfacePoint& point, const Light& light, float minLobeSpread,
+                      std::vector<DirectLightCell>& cells) {
+    cells.clear();
+    const DirectLightPlan plan = planDirectLight(point, light);
+    if (plan.dark || plan.diskSide == 0) return;
+    if (lobeExponent(point.surface) * plan.lightAngle * plan.lightAngle < minLobeSpread) return;
+    const LightSample& s = plan.sample;
+    const float share = 1.0f / static_cast<float>(plan.diskSide * plan.diskSide);
+    forEachDiskCell(point, s.wi, plan.lightAngle, plan.diskSide, [&](glm::vec3 wi, glm::vec3 v) {
+        // The disk's plane is s.distance away along s.wi.
+        cells.push_back({wi, s.distance / std::max(glm::dot(wi, s.wi), 1e-3f), v * s.irradiance * share});
+    });
 }
 
 namespace {

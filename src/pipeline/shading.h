@@ -64,6 +64,21 @@ std::vector<glm::vec3> traceSpecularCones(std::span<const SurfacePoint> points, 
 // The BRDF of deltagi::Material times cos(theta_i) times the light's irradiance: unshadowed direct radiance.
 glm::vec3 directRadiance(const SurfacePoint& point, const Light& light);
 
+// One cell of the quadrature over a light's disk that directRadiance takes for a glossy lobe narrower than
+// the disk: the direction of its centre, how far the disk is along it, and the cell's share of the point's
+// unshadowed direct radiance (the shares sum to directRadiance).
+struct DirectLightCell {
+    glm::vec3 wi{0.0f};
+    float distance = 0.0f;
+    glm::vec3 radiance{0.0f};
+};
+// The cells of that quadrature at `point` (into `cells`, cleared first) where the lobe's Phong exponent n and
+// the disk's angular radius R have n R^2 >= minLobeSpread (the disk about sqrt(minLobeSpread) times as wide
+// as the lobe, or wider); none elsewhere, nor where directRadiance takes a closed form (matte points, lobes
+// about as wide as the disk or wider, lights without a size).
+void directLightCells(const SurfacePoint& point, const Light& light, float minLobeSpread,
+                      std::vector<DirectLightCell>& cells);
+
 // How a surface's direct light is shadowed.
 enum class ShadowMode {
     Shaded,       // virtual surface: lit where neither scene nor objects occlude (1 - combined)

@@ -88,4 +88,16 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
                                              std::span<const uint32_t> pixels = {},
                                              const PixelSamples* samples = nullptr, int width = 0);
 
+// A sphere light's shadow over a glossy pixel (ShadowMode::Shaded): combineLighting multiplies the pixel's
+// unshadowed direct light by the fraction of the light that reaches it, which holds where every point of
+// the disk counts alike (a matte surface). A lobe narrower than the disk sees part of it: where a shadow
+// covers part of the disk, the highlight is as bright as the part it sees is visible (a gilded band under
+// the vase's own rim: 0.06 to 1.2 times the plain fraction along one highlight line). This is the occlusion
+// that makes the product right there: 1 - the visible share of the pixel's direct light, from rays towards
+// the cells of the disk's quadrature (directLightCells) over the pixel's sub-samples `area` (or its point
+// `p`), the `maxRays` cells that carry most of that light traced, the rest counted as visible by
+// 1 - `combined`, the plain occlusion. Where no sub-sample takes a quadrature, `combined` as it is.
+float glossyShadowOcclusion(const SurfacePoint& p, std::span<const SurfacePoint> area, const Light& light,
+                            const ShadowRayScenes& rays, float combined, int maxRays);
+
 }  // namespace deltagi

@@ -111,6 +111,39 @@ TEST(GBuffer, GlossyPixelsWhoseNormalTurnsInsideThemTakeAFinerGrid) {
     EXPECT_TRUE(matte.objectSamples.fine.empty());
 }
 
+// A glazed ball seen whole: its normal turns by a few degrees across a pixel, far less than across an edge,
+// but by more than its narrow lobe is wide (Phong exponent 5,000: 0.017 rad), so that a highlight can fall
+// between the 2 x 2 samples or on one of them: its pixels take the finer grid. A rougher ball's (exponent
+// 198) keep their 2 x 2 samples away from its silhouette.
+TEST(GBuffer, ANarrowLobesPixelsTakeTheFinerGridWhereTheNormalTurnsByMoreThanItsWidth) {
+    Scene scene = test::floorScene();
+    scene.camera = test::lookAtCamera({0.0f, 0.3f, 1.2f}, {0, 0.2f, 0}, 64, 48, 50.0f);
+    const int w = scene.camera.width;
+    auto fineShare = [&](float roughness) {
+        Material m = diffuse(glm::vec3(0.1f));
+        m.specular = glm::vec3(0.5f);
+        m.roughness = roughness;
+        scene.virtuals = {placed(makeSphere(0.2f, 256), {0, 0.2f, 0}, m, "ball")};
+        const RayScene realOnly(scene, SceneContent::RealOnly);
+        const RayScene all(scene, SceneContent::VirtualOnly, &realOnly);
+        GBuffer g;
+        renderObjectSurfaces(scene.camera, all, scene.virtuals[0].bounds(), 4, g);
+        int fine = 0, inside = 0;
+        for (size_t i = 0; i < g.object.size(); ++i) {
+            if (!g.object[i].valid() || g.coverage[i] < 1.0f) continue;
+            const std::span<const SurfacePoint> samples = g.objectSamples.of(i, w);
+            // Well inside the silhouette: the normal turns by less than 10 degrees across the pixel.
+            if (glm::dot(g.object[i].normal, g.object[i].toEye) < 0.5f) continue;
+            ++inside;
+            fine += samples.size() == 64 ? 1 : 0;
+        }
+        EXPECT_GT(inside, 150);
+        return static_cast<float>(fine) / static_cast<float>(std::max(inside, 1));
+    };
+    EXPECT_GT(fineShare(0.02f), 0.9f);
+    EXPECT_LT(fineShare(0.1f), 0.1f);
+}
+
 // A red and white checker far finer than a pixel, on a box seen from above: every pixel inside the box shows
 // the checker's mean, pink (1, 0.5, 0.5), at its centre (the mean of its sub-samples, each filtered over its
 // quarter of the pixel) and at each sub-sample; a coarse checker keeps its squares apart.

@@ -5,6 +5,8 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <span>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -133,6 +135,41 @@ TEST(ShadowRays, DiskLightPenumbraFollowsTheChordAreaBehindAnEdge) {
         const float visible = (std::acos(d) - d * std::sqrt(1.0f - d * d)) / std::numbers::pi_v<float>;
         EXPECT_NEAR(1.0f - shadows[i].scene, visible, 0.04f) << "x = " << xs[i];
     }
+}
+
+// A disk light half hidden behind an edge, seen from a glossy floor point whose lobe is far narrower than the
+// disk: where the mirror direction falls on the visible half the point's highlight is unshadowed, where it
+// falls on the hidden half the highlight is gone, though half of the disk reaches the point either way (the
+// plain fraction, which holds for a matte point and is kept for it).
+TEST(ShadowRays, AGlossyPointsShadowIsThatOfThePartOfTheLightItsLobeSees) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(placed(makeQuad({2.0f, 2.0f}), {-1.0f, 0.5f, 0}, diffuse(glm::vec3(0.5f)), "plate"));
+    Light light = test::pointLight({0.0f, 1.0f, 0.0f}, 1.0f);
+    light.radius = 0.1f;
+    const RayScene rays(scene, SceneContent::RealOnly);
+    const ShadowRayScenes scenes{&rays, nullptr, {}};
+    Options options;
+    options.shadow.raySamples = 256;
+    Material glaze = diffuse(glm::vec3(0.05f));
+    glaze.specular = glm::vec3(0.5f);
+    glaze.roughness = 0.02f;  // Phong exponent 5,000: a lobe 0.017 rad wide under a disk 0.1 rad wide
+    const Material matte = diffuse(glm::vec3(0.5f));
+    SurfacePoint p = floorPoint(glm::vec3(0.0f), glaze);
+    const float plain =
+        1.0f - traceShadowRays(std::span(&p, 1), std::span(&light, 1), scenes, options, ShadowMode::Shaded)[0]
+                   .combined;
+    EXPECT_NEAR(plain, 0.5f, 0.03f);
+    for (const float side : {1.0f, -1.0f}) {  // the mirror direction on the visible (x > 0), hidden half
+        p.toEye = glm::normalize(glm::vec3(-0.05f * side, 1.0f, 0.0f));
+        const float occlusion = glossyShadowOcclusion(p, {}, light, scenes, 1.0f - plain, 64);
+        EXPECT_NEAR(occlusion, side > 0.0f ? 0.0f : 1.0f, 0.1f) << side;
+    }
+    SurfacePoint m = floorPoint(glm::vec3(0.0f), matte);
+    EXPECT_EQ(glossyShadowOcclusion(m, {}, light, scenes, 1.0f - plain, 64), 1.0f - plain);
+    // Its sub-samples as the pixel's area: the same.
+    std::vector<SurfacePoint> area(4, p);
+    EXPECT_NEAR(glossyShadowOcclusion(p, area, light, scenes, 1.0f - plain, 64), 1.0f, 0.1f);
 }
 
 // Relighting reads only the change the objects make: where the scene already blocks a sample, the objects
