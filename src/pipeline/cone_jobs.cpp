@@ -110,8 +110,7 @@ void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& jo
 // light's disk, from at most kGlossyShadowRays rays each. Quality suite's cornell-textured, object_rel_rmse:
 // 0.190 without (with the finer grids of the G-buffer's kFineLobeTurns), 0.149, 0.134, 0.125, 0.121 with 16,
 // 64, 128, 256 rays over all of a finer pixel's 64 sub-samples; 0.123 with 64 over 16 of them
-// (kGlossyShadowSamples). Its still's shadow stage 60 ms without, 119 with; the glossy Cornell box's
-// 50-64 -> 64-94 ms (its figures the same to four digits).
+// (kGlossyShadowSamples). Its still's shadow stage 60 ms without, 119 with.
 constexpr int kGlossyShadowRays = 64;
 
 void sharpenGlossyShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& job,
