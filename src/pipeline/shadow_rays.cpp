@@ -311,11 +311,15 @@ float glossyShadowOcclusion(const SurfacePoint& p, std::span<const SurfacePoint>
         const Candidate& c = candidates[k];
         const glm::vec3 origin = c.from->position + offset * c.from->normal;
         const float tMax = std::isfinite(c.cell.distance) ? c.cell.distance - 2.0f * offset : c.cell.distance;
-        if (!(tMax > 0.0f)) continue;
+        if (!(tMax > 0.0f)) {  // the light touches the point: no ray, as pixelAreaOcclusion
+            total -= c.weight;
+            continue;
+        }
         const bool blocked = (objects && objects->occludedTopLayer(origin, c.cell.wi, 0.0f, tMax)) ||
                              rays.scene->occluded(origin, c.cell.wi, 0.0f, tMax);
         if (!blocked) visible += c.weight;
     }
+    if (!(total > 0.0)) return combined;
     return static_cast<float>(std::clamp(1.0 - visible / total, 0.0, 1.0));
 }
 

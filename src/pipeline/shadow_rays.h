@@ -94,9 +94,10 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
 // covers part of the disk, the highlight is as bright as the part it sees is visible (a gilded band under
 // the vase's own rim: 0.06 to 1.2 times the plain fraction along one highlight line). This is the occlusion
 // that makes the product right there: 1 - the visible share of the pixel's direct light, from rays towards
-// the cells of the disk's quadrature (directLightCells) over the pixel's sub-samples `area` (or its point
-// `p`), the `maxRays` cells that carry most of that light traced, the rest counted as visible by
-// 1 - `combined`, the plain occlusion. Where no sub-sample takes a quadrature, `combined` as it is.
+// the cells of the disk's quadrature (directLightCells, for lobes at least about 1.4 times narrower than the
+// disk) over up to 16 of the pixel's sub-samples `area` (or its point `p`), the `maxRays` cells that carry
+// most of that light traced, the rest counted as visible by 1 - `combined`, the plain occlusion. Where no
+// sub-sample has such a lobe, `combined` as it is. Deterministic (the cells' centres).
 float glossyShadowOcclusion(const SurfacePoint& p, std::span<const SurfacePoint> area, const Light& light,
                             const ShadowRayScenes& rays, float combined, int maxRays);
 
