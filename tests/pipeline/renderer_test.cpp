@@ -376,6 +376,13 @@ TEST(Render, ResultDoesNotDependOnTheThreadCount) {
         s.real[0].material.specular = glm::vec3(0.3f);
         s.real[0].material.albedo = glm::vec3(0.5f);
         s.real[0].material.roughness = 0.3f;
+        // A glazed ball in the big one's penumbra under a sphere light: its finer grids and its glossy
+        // pixels' shadows (glossyShadowOcclusion) too.
+        s.lights[0].radius = 0.2f;
+        Material glaze = diffuse(glm::vec3(0.1f));
+        glaze.specular = glm::vec3(0.5f);
+        glaze.roughness = 0.05f;
+        s.virtuals.push_back(placed(makeSphere(0.08f, 64), {0.27f, 0.08f, 0.0f}, glaze, "glaze"));
         return render(s);
     };
     RenderOutput a = run(1), b = run(2);
