@@ -105,17 +105,17 @@ void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& jo
         }
 }
 
-// A sphere light's soft shadow on the objects' glossy pixels (glossyShadowOcclusion): the pixels whose
-// occlusion by a sized light is partial take the visible share of their direct light's quadrature over the
-// light's disk, from at most kGlossyShadowRays rays each. Quality suite's cornell-textured, object_rel_rmse:
-// 0.190 without (with the finer grids of the G-buffer's kFineLobeTurns), 0.149, 0.134, 0.125, 0.121 with 16,
-// 64, 128, 256 rays over all of a finer pixel's 64 sub-samples; 0.123 with 64 over 16 of them
-// (kGlossyShadowSamples). Its still's shadow stage 60 ms without, 119 with.
+// A sphere light's soft shadow on the objects' glossy pixels in a still (glossyShadowOcclusion): the pixels
+// whose occlusion by a sized light is partial take the visible share of their direct light's quadrature over
+// the light's disk, from at most kGlossyShadowRays rays each. Quality suite's cornell-textured,
+// object_rel_rmse: 0.190 without (with the finer grids of the G-buffer's kFineLobeTurns), 0.149, 0.134,
+// 0.125, 0.121 with 16, 64, 128, 256 rays over all of a finer pixel's 64 sub-samples; 0.123 with 64 over 16
+// of them (kGlossyShadowSamples). Its still's shadow stage 60 ms without, 119 with.
 constexpr int kGlossyShadowRays = 64;
 
 void sharpenGlossyShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& job,
                           std::span<const Light> lights, const Options& o, const Camera& camera) {
-    if (job.mode != ShadowMode::Shaded || !job.rays.scene || shadows.empty()) return;
+    if (job.mode != ShadowMode::Shaded || !job.still || !job.rays.scene || shadows.empty()) return;
     std::vector<size_t> sized;
     for (size_t l = 0; l < lights.size(); ++l)
         if (shadowRayCount(lights[l], o.shadow.raySamples) > 1) sized.push_back(l);

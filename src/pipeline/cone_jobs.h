@@ -54,7 +54,8 @@ struct ConeJob {
     float refineBudget = 0.0f;
     // Rendered objects: a still (a single render), whose "auto" gather rays are finer than a session
     // frame's (objectGatherRaysFor; with them, where options.diffuse.pixel_stride is "auto" too, every pixel
-    // traced: kAutoStillDiffuseRayStride).
+    // traced: kAutoStillDiffuseRayStride), and whose glossy pixels in a sphere light's penumbra take the
+    // shadow of the part of the disk their lobe sees (glossyShadowOcclusion).
     bool still = false;
     bool relit() const {
         return mode == ShadowMode::DeltaShadow || mode == ShadowMode::DeltaSingleVisibility;

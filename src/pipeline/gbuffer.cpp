@@ -71,10 +71,12 @@ bool centreFromSubSamples(std::span<const SurfacePoint> subSamples, SurfacePoint
 // A pixel's k x k samples ask for the finer grid (PixelSamples::fine) when they show a glossy lobe at most
 // about 30 degrees wide (Phong exponent 20) and the normal turns between two neighbouring samples, half a
 // pixel apart at k = 2, by more than the lobe is wide. The highlight may then lie in a part of the pixel the
-// samples do not see, or fall on one of them and count for a quarter of the pixel. A narrow lobe (exponent n
-// from kFineNarrowExponent, about 7 degrees wide) asks for it where |n_a - n_b|^2 > kFineLobeTurns / n (the
-// mirror direction turns by about twice the lobe's half-width at half maximum, 1.18 / sqrt(n)); a wider one
-// only where the normal turns by more than about 10 degrees and by four times as much (|n_a - n_b|^2 above
+// samples do not see, or fall on one of them and count for a quarter of the pixel. In a still
+// (`narrowLobeGrids`), a narrow lobe (exponent n from kFineNarrowExponent, about 7 degrees wide) asks for it
+// where |n_a - n_b|^2 > kFineLobeTurns / n (the
+// mirror direction turns by about twice the lobe's half-width at half maximum, 1.18 / sqrt(n)); a wider one,
+// and any in a session's frame, only where the normal turns by more than about 10 degrees and by four times
+// as much (|n_a - n_b|^2 above
 // kFineNormalDifference and 4 kFineLobeTurns / n): its highlight is smooth, and the finer grid costs more
 // than it brings. A smooth glossy ball turns by a fraction of a degree per pixel away from its silhouette.
 // Quality suite's cornell-textured (its glazes' lobes are narrow, n = 4,000, its gilded bands' about 100-200,
@@ -83,8 +85,9 @@ bool centreFromSubSamples(std::span<const SurfacePoint> subSamples, SurfacePoint
 // this, 0.121 with kFineLobeTurns 1; 0.167 with kFineNarrowExponent 200; without those shadows the finer
 // grids alone made it worse (0.190: sharper highlights under a shadow fraction that holds for matte
 // surfaces). Its still's G-buffer 38 -> 83 ms, shading 50 -> 146 (each finer pixel's 64 samples take the
-// disk's quadrature). The narrow lobes' rule for every lobe would cost the textured torus's frame (exponent
-// 33) 16 ms of G-buffer and 40 of shading.
+// disk's quadrature); a frame of the vase would take twice as long (bench: 240 -> 480-520 ms). The narrow
+// lobes' rule for every lobe would cost the textured torus's frame (exponent 33) 16 ms of G-buffer and 40 of
+// shading.
 constexpr float kFineMinExponent = 20.0f;
 constexpr float kFineNarrowExponent = 100.0f;
 // The finer grid's side: at least twice the pixel's k, and 8. A glaze's highlight on a bead or a rim is a
@@ -95,7 +98,7 @@ constexpr int kFineGridSide = 8;
 constexpr float kFineNormalDifference = 0.03f;
 constexpr float kFineLobeTurns = 2.0f;
 
-bool needsFinerGrid(std::span<const SurfacePoint> samples, int k) {
+bool needsFinerGrid(std::span<const SurfacePoint> samples, int k, bool narrowLobeGrids) {
     // The largest turn first: most pixels have none, and their lobes' exponents are not worked out.
     float turn = 0.0f;
     auto pair = [&turn](const SurfacePoint& a, const SurfacePoint& b) {
@@ -112,7 +115,7 @@ bool needsFinerGrid(std::span<const SurfacePoint> samples, int k) {
     float exponent = 0.0f;
     for (const SurfacePoint& p : samples)
         if (p.valid() && p.surface.glossy()) exponent = std::max(exponent, p.surface.phongExponent());
-    if (exponent >= kFineNarrowExponent) return turn > kFineLobeTurns / exponent;
+    if (narrowLobeGrids && exponent >= kFineNarrowExponent) return turn > kFineLobeTurns / exponent;
     return exponent >= kFineMinExponent &&
            turn > std::max(kFineNormalDifference, 4.0f * kFineLobeTurns / exponent);
 }
@@ -226,7 +229,7 @@ void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, SurfaceP
 }
 
 void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
-                          int samplesPerPixel, GBuffer& g) {
+                          int samplesPerPixel, GBuffer& g, bool narrowLobeGrids) {
     const int width = camera.width, height = camera.height;
     const size_t count = static_cast<size_t>(width) * height;
     if (g.object.size() == count && g.coverage.size() == count && g.objectIds.size() == count &&
@@ -393,7 +396,7 @@ void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bound
                 g.object[i] = virtualCount > 0 ? nearest : SurfacePoint{};
                 g.coverage[i] = static_cast<float>(virtualCount) / static_cast<float>(k * k);
             }
-            if (!finer.empty() && needsFinerGrid({out, static_cast<size_t>(k * k)}, k))
+            if (!finer.empty() && needsFinerGrid({out, static_cast<size_t>(k * k)}, k, narrowLobeGrids))
                 finer[inRect(y, x)] = 1;
         }
     });

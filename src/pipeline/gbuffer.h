@@ -137,8 +137,11 @@ void renderRealSurfaces(const Camera& camera, const RayScene& realOnly, SurfaceP
 // pixels on a silhouette (whose 3x3 neighbourhood has both kinds) take `samplesPerPixel` sub-samples on a
 // regular k x k grid for their coverage. The virtual surface nearest the pixel centre represents the pixel.
 // Every pixel with a virtual point keeps the virtual surfaces of its k x k sub-samples (g.objectSamples).
-// `g` may hold an earlier frame's (of the same camera): only its written pixels are cleared.
+// `g` may hold an earlier frame's (of the same camera): only its written pixels are cleared. Glossy pixels
+// whose normal turns by more than their lobe is wide take a finer grid (PixelSamples::fine); with
+// `narrowLobeGrids` (a still) those of narrow lobes do wherever it turns by more than the lobe, not only by
+// more than about 10 degrees (gbuffer.cpp, needsFinerGrid).
 void renderObjectSurfaces(const Camera& camera, const RayScene& all, const Bounds3f& objectBounds,
-                          int samplesPerPixel, GBuffer& g);
+                          int samplesPerPixel, GBuffer& g, bool narrowLobeGrids = false);
 
 }  // namespace deltagi

@@ -360,7 +360,9 @@ RenderOutput renderFrame(const Scene& scene, FrameCache& cache, const StageCallb
 
     // 5. G-buffer. Real surfaces are relit only where they show through (coverage < 1).
     GBuffer& gbuffer = view.gbuffer;
-    renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer);
+    // A still resolves narrow glossy lobes' highlights finer than a session's frames (design.md, "Glossy
+    // highlights narrower than a pixel").
+    renderObjectSurfaces(camera, *all, boundsOf(scene.virtuals), o.render.samplesPerPixel, gbuffer, still);
     const bool wholeRealSurfaces = view.steady || !scene.background || o.render.layers;
     const SurfacePoints& realPoints = wholeRealSurfaces
                                           ? hideCoveredSurfaces(realSurfaces(), gbuffer, view)
