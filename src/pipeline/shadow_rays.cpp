@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include "core/brdf_sampling.h"
@@ -35,32 +36,54 @@ constexpr float kGlossyShadowSpread = 2.0f;
 
 }  // namespace
 
-ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v) {
-    ShadowRaySample s;
-    if (light.type == Light::Type::Directional) {
-        s.distance = std::numeric_limits<float>::infinity();
-        s.wi = -light.direction;
+ShadowRaySampler::ShadowRaySampler(const Light& light, glm::vec3 p)
+    : p_(p), target_(light.position), directional_(light.type == Light::Type::Directional) {
+    if (directional_) {
+        direction_ = -light.direction;
         if (light.angularRadius > 0.0f) {
+            sized_ = true;
+            frame_ = frameAround(direction_);
+            oneMinusCos_ = 1.0f - std::cos(light.angularRadius);
+        }
+        return;
+    }
+    const glm::vec3 axis = p - light.position;
+    const float d = glm::length(axis);
+    if (light.radius > 0.0f && d > 0.0f) {
+        sized_ = true;
+        frame_ = frameAround(axis / d);
+        radius_ = light.radius;
+    }
+}
+
+ShadowRaySample ShadowRaySampler::operator()(float u, float v) const {
+    ShadowRaySample s;
+    if (directional_) {
+        s.distance = std::numeric_limits<float>::infinity();
+        s.wi = direction_;
+        if (sized_) {
             // Uniform over the cone's solid angle.
-            const float cosTheta = 1.0f - u * (1.0f - std::cos(light.angularRadius));
+            const float cosTheta = 1.0f - u * oneMinusCos_;
             const float sinTheta = std::sqrt(std::max(0.0f, 1.0f - cosTheta * cosTheta));
             const float phi = 2.0f * std::numbers::pi_v<float> * v;
-            s.wi = glm::normalize(frameAround(s.wi) *
+            s.wi = glm::normalize(frame_ *
                                   glm::vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta));
         }
         return s;
     }
-    glm::vec3 target = light.position;
-    const glm::vec3 axis = p - light.position;
-    const float d = glm::length(axis);
-    if (light.radius > 0.0f && d > 0.0f) {
-        const glm::vec2 onDisk = light.radius * concentricDisk(u, v);
-        target += frameAround(axis / d) * glm::vec3(onDisk, 0.0f);
+    glm::vec3 target = target_;
+    if (sized_) {
+        const glm::vec2 onDisk = radius_ * concentricDisk(u, v);
+        target += frame_ * glm::vec3(onDisk, 0.0f);
     }
-    const glm::vec3 toLight = target - p;
+    const glm::vec3 toLight = target - p_;
     s.distance = glm::length(toLight);
     s.wi = s.distance > 0.0f ? toLight / s.distance : glm::vec3(0.0f);
     return s;
+}
+
+ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v) {
+    return ShadowRaySampler(light, p)(u, v);
 }
 
 bool segmentMayMeetBox(glm::vec3 p, glm::vec3 target, float radius, const Bounds3f& box) {
@@ -89,6 +112,14 @@ bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::v
     if (distance <= sphereRadius) return true;
     const float angle = std::acos(glm::clamp(glm::dot(toCentre / distance, direction), -1.0f, 1.0f));
     return angle <= halfAngle + std::asin(sphereRadius / distance);
+}
+
+bool rayMayMeetSphere(glm::vec3 origin, glm::vec3 direction, float tMax, glm::vec3 sphereCentre,
+                      float sphereRadius) {
+    const glm::vec3 toCentre = sphereCentre - origin;
+    const float t = std::clamp(glm::dot(toCentre, direction), 0.0f, tMax);
+    const glm::vec3 apart = toCentre - t * direction;
+    return glm::dot(apart, apart) <= sphereRadius * sphereRadius;
 }
 
 float objectSphereRadius(std::span<const TriangleMesh> meshes) {
@@ -143,12 +174,15 @@ ShadowOcclusion pixelAreaOcclusion(std::span<const SurfacePoint* const> points, 
     const int count = std::max(lightCount, n);
     const int first = std::min(static_cast<int>(rotation * static_cast<float>(n)), n - 1);
     const RayScene* objects = rays.objects && !rays.objectBounds.empty() ? rays.objects : nullptr;
+    std::array<std::optional<ShadowRaySampler>, kMaxPixelSamples> samplers;  // per sub-sample, on first use
     float total = 0.0f, byObjects = 0.0f, byScene = 0.0f, byEither = 0.0f;
     for (int k = 0; k < count; ++k) {
         const int stratum = k % lightCount;
-        const SurfacePoint& q = *points[(first + k + stratum / side) % n];
+        const int from = (first + k + stratum / side) % n;
+        const SurfacePoint& q = *points[from];
         const auto [u, v] = jitteredGridPoint(stratum, side, jitterU, jitterV);
-        const ShadowRaySample s = sampleShadowRay(light, q.position, u, v);
+        if (!samplers[from]) samplers[from].emplace(light, q.position);
+        const ShadowRaySample s = (*samplers[from])(u, v);
         const float weight = glm::dot(s.wi, q.normal);
         const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
         if (!(weight > 0.0f) || !(tMax > 0.0f)) continue;
@@ -227,13 +261,18 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
             const float jitterV = hashToUnit(i, kShadowRayStream + 2 * static_cast<uint32_t>(l) + 1);
             // Per sample: blocked by the objects, by the scene; the scene is tested only where needed.
             int byObjects = 0, byScene = 0, byEither = 0;
+            const ShadowRaySampler sample(light, p.position);
             for (int k = 0; k < count; ++k) {
                 const auto [u, v] = jitteredGridPoint(k, side, jitterU, jitterV);
-                const ShadowRaySample s = sampleShadowRay(light, p.position, u, v);
+                const ShadowRaySample s = sample(u, v);
                 const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
                 const bool horizon = glm::dot(s.wi, p.normal) <= 0.0f || !(tMax > 0.0f);
+                // A relit ray that passes the objects' sphere by cannot meet them: no query.
                 const bool object =
-                    horizon || (mayMeetObjects && objects->occludedTopLayer(origin, s.wi, 0.0f, tMax));
+                    horizon ||
+                    (mayMeetObjects &&
+                     (!relit || rayMayMeetSphere(origin, s.wi, tMax, objectCentre, objectRadius)) &&
+                     objects->occludedTopLayer(origin, s.wi, 0.0f, tMax));
                 byObjects += object;
                 // Relit: a sample the objects leave alone does not change.
                 if (relit && !object) continue;

@@ -45,10 +45,28 @@ struct ShadowRaySample {
 };
 ShadowRaySample sampleShadowRay(const Light& light, glm::vec3 p, float u, float v);
 
+// sampleShadowRay for the many samples of one point: what depends on the light and the point alone (the
+// disk's or the cone's frame) worked out once.
+class ShadowRaySampler {
+  public:
+    ShadowRaySampler(const Light& light, glm::vec3 p);
+    ShadowRaySample operator()(float u, float v) const;
+
+  private:
+    glm::vec3 p_, target_, direction_{0.0f};
+    glm::mat3 frame_{1.0f};
+    float radius_ = 0.0f, oneMinusCos_ = 0.0f;
+    bool directional_ = false, sized_ = false;
+};
+
 // The culling tests of the relit rays (conservative: a ray they reject cannot meet the objects). Whether a
 // segment from `p` to any point within `radius` of `target` can meet `box` (every such segment stays within
 // `radius` of the segment p-target, so the box is grown by `radius`; slab test):
 bool segmentMayMeetBox(glm::vec3 p, glm::vec3 target, float radius, const Bounds3f& box);
+// Whether the ray origin + t direction (unit), 0 <= t <= tMax, passes within `sphereRadius` of
+// `sphereCentre`.
+bool rayMayMeetSphere(glm::vec3 origin, glm::vec3 direction, float tMax, glm::vec3 sphereCentre,
+                      float sphereRadius);
 // Whether a ray from `p` within `halfAngle` of `direction` can pass within `sphereRadius` of `sphereCentre`.
 bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
                        float sphereRadius);
