@@ -299,5 +299,18 @@ TEST(ShadowRays, SamplesLieOnTheLightsDiskFacingThePoint) {
         }
 }
 
+// The relit rays' cull: a ray that meets the sphere (or ends inside it) passes; one that passes it by, or
+// ends short of it, does not.
+TEST(ShadowRays, ARayPassesTheSphereCullWhereItCanMeetTheSphere) {
+    const glm::vec3 centre(0.0f, 1.0f, 0.0f), x(1.0f, 0.0f, 0.0f), up(0.0f, 1.0f, 0.0f);
+    EXPECT_TRUE(rayMayMeetSphere({0, 0, 0}, up, 5.0f, centre, 0.3f));       // through it
+    EXPECT_TRUE(rayMayMeetSphere({0, 0, 0}, up, 0.8f, centre, 0.3f));       // ends inside it
+    EXPECT_FALSE(rayMayMeetSphere({0, 0, 0}, up, 0.6f, centre, 0.3f));      // ends short of it
+    EXPECT_TRUE(rayMayMeetSphere({0.29f, 0, 0}, up, 5.0f, centre, 0.3f));   // grazes it
+    EXPECT_FALSE(rayMayMeetSphere({0.31f, 0, 0}, up, 5.0f, centre, 0.3f));  // passes it by
+    EXPECT_FALSE(rayMayMeetSphere({0, 1.0f, 2.0f}, glm::vec3(0, 0, 1), 5.0f, centre, 0.3f));  // away
+    EXPECT_TRUE(rayMayMeetSphere({-2.0f, 1.1f, 0}, x, INFINITY, centre, 0.3f));  // a directional light's
+}
+
 }  // namespace
 }  // namespace deltagi
