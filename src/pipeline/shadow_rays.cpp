@@ -20,6 +20,9 @@ constexpr uint32_t kShadowRayStream = 5000;
 
 // The largest k x k grid of G-buffer sub-samples (options.render.samples_per_pixel 16).
 constexpr int kMaxPixelSamples = 16;
+// A point's shadow rays against the scene alone are traced in packets from this many on (the photo-less
+// background's 64 a light, kBackgroundRayFactor).
+constexpr int kPacketShadowRays = 16;
 // The random stream that rotates which sub-sample each of a pixel's rays starts from (one per light).
 constexpr uint32_t kPixelSampleStream = 5500;
 // The sub-samples of a pixel whose quadratures glossyShadowOcclusion weighs, at most: quality suite's
@@ -262,6 +265,33 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
             // Per sample: blocked by the objects, by the scene; the scene is tested only where needed.
             int byObjects = 0, byScene = 0, byEither = 0;
             const ShadowRaySampler sample(light, p.position);
+            if (!relit && !mayMeetObjects && count >= kPacketShadowRays && !rays.scene->base()) {
+                // Many rays against the scene alone (a background without a photo's): from one point towards
+                // one light they are coherent, traced in packets.
+                thread_local std::vector<glm::vec3> directions;
+                thread_local std::vector<float> reach;
+                thread_local std::vector<uint8_t> blocked;
+                directions.resize(static_cast<size_t>(count));
+                reach.resize(static_cast<size_t>(count));
+                blocked.resize(static_cast<size_t>(count));
+                for (int k = 0; k < count; ++k) {
+                    const auto [u, v] = jitteredGridPoint(k, side, jitterU, jitterV);
+                    const ShadowRaySample s = sample(u, v);
+                    const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
+                    const bool horizon = glm::dot(s.wi, p.normal) <= 0.0f || !(tMax > 0.0f);
+                    directions[k] = s.wi;
+                    reach[k] = horizon ? 0.0f : tMax;  // not traced: blocked below
+                    byObjects += horizon;
+                }
+                rays.scene->occludedCoherent(origin, directions, reach, blocked);
+                for (int k = 0; k < count; ++k) byScene += reach[k] <= 0.0f || blocked[k];
+                byEither = byScene;
+                const float n = static_cast<float>(count);
+                out[i * lights.size() + l] = {static_cast<float>(byScene) / n,
+                                              static_cast<float>(byObjects) / n,
+                                              static_cast<float>(byEither) / n};
+                continue;
+            }
             for (int k = 0; k < count; ++k) {
                 const auto [u, v] = jitteredGridPoint(k, side, jitterU, jitterV);
                 const ShadowRaySample s = sample(u, v);
