@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <vector>
 
 #include "core/brdf.h"
 #include "core/brdf_sampling.h"
@@ -17,6 +18,9 @@ namespace {
 constexpr int64_t kPointGrain = 64;
 constexpr uint32_t kAreaLightStream = 7000;  // hashToUnit streams of the sample grid's offsets
 constexpr uint32_t kEnvironmentStream = 7100;
+// A point's rays against the scene alone are traced in packets from this many on (the photo-less
+// background's, kBackgroundRayFactor times options.shadow.area_ray_samples).
+constexpr int kPacketRays = 16;
 // The widest grid of rays per point (options.shadow.area_ray_samples allows at most 256 = 16 x 16).
 constexpr int kMaxRaySide = 16;
 // Radians beyond a relit point's cull limit before a whole row of the map is passed over: far more than the
@@ -78,6 +82,40 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
         const float jitterU = hashToUnit(i, kAreaLightStream), jitterV = hashToUnit(i, kAreaLightStream + 1);
         const float jitterT = hashToUnit(i, kAreaLightStream + 2);
         glm::vec3 sum(0.0f);
+        if (mode == ShadowMode::SceneOnly && count >= kPacketRays && !rays.scene->base()) {
+            // Many rays against the scene alone (a background without a photo's), from one point: in packets.
+            thread_local std::vector<glm::vec3> directions, light;
+            thread_local std::vector<float> reach;
+            thread_local std::vector<uint8_t> blocked;
+            directions.assign(static_cast<size_t>(count), glm::vec3(0.0f));
+            light.assign(static_cast<size_t>(count), glm::vec3(0.0f));
+            reach.assign(static_cast<size_t>(count), 0.0f);  // 0: no ray
+            blocked.resize(static_cast<size_t>(count));
+            for (int k = 0; k < count; ++k) {
+                const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
+                const float uTriangle =
+                    (static_cast<float>((k * 5 + 3) % count) + jitterT) / static_cast<float>(count);
+                const AreaLightSample s = emitters.sample(uTriangle, u1, u2);
+                const glm::vec3 toLight = s.position - origin;
+                const float d2 = glm::dot(toLight, toLight);
+                if (!(d2 > 0.0f) || !(s.pdfArea > 0.0f) || s.isVirtual) continue;
+                const float d = std::sqrt(d2);
+                const glm::vec3 wi = toLight / d;
+                const float cosSurface = glm::dot(wi, p.normal);
+                const float cosLight = std::abs(glm::dot(wi, s.normal));
+                const float tMax = d - 2.0f * offset;
+                if (cosSurface <= 0.0f || !(cosLight > 0.0f) || !(tMax > 0.0f)) continue;
+                directions[k] = wi;
+                reach[k] = tMax;
+                light[k] = evalBrdf(m, p.normal, p.toEye, wi) * s.radiance *
+                           (cosSurface * cosLight / (d2 * s.pdfArea));
+            }
+            rays.scene->occludedCoherent(origin, directions, reach, blocked);
+            for (int k = 0; k < count; ++k)
+                if (reach[k] > 0.0f && !blocked[k]) sum += light[k];
+            out[i] = sum / static_cast<float>(count);
+            return;
+        }
         for (int k = 0; k < count; ++k) {
             // A jittered grid over the point on the triangle, and a stratified (permuted) triangle choice.
             const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
