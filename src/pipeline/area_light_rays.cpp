@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <vector>
 
 #include "core/brdf.h"
@@ -82,6 +83,29 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
         const float jitterU = hashToUnit(i, kAreaLightStream), jitterV = hashToUnit(i, kAreaLightStream + 1);
         const float jitterT = hashToUnit(i, kAreaLightStream + 2);
         glm::vec3 sum(0.0f);
+        // Sample k: a jittered grid over the point on the triangle, and a stratified (permuted) triangle
+        // choice; nothing where the point cannot see it (behind either, or touching).
+        struct Ray {
+            AreaLightSample s;
+            glm::vec3 wi;
+            float d2, tMax, cosSurface, cosLight;
+        };
+        auto sampleRay = [&](int k) -> std::optional<Ray> {
+            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
+            const float uTriangle =
+                (static_cast<float>((k * 5 + 3) % count) + jitterT) / static_cast<float>(count);
+            const AreaLightSample s = emitters.sample(uTriangle, u1, u2);
+            const glm::vec3 toLight = s.position - origin;
+            const float d2 = glm::dot(toLight, toLight);
+            if (!(d2 > 0.0f) || !(s.pdfArea > 0.0f)) return std::nullopt;
+            const float d = std::sqrt(d2);
+            const glm::vec3 wi = toLight / d;
+            const float cosSurface = glm::dot(wi, p.normal);
+            const float cosLight = std::abs(glm::dot(wi, s.normal));
+            const float tMax = d - 2.0f * offset;
+            if (cosSurface <= 0.0f || !(cosLight > 0.0f) || !(tMax > 0.0f)) return std::nullopt;
+            return Ray{s, wi, d2, tMax, cosSurface, cosLight};
+        };
         if (mode == ShadowMode::SceneOnly && count >= kPacketRays && !rays.scene->base()) {
             // Many rays against the scene alone (a background without a photo's), from one point: in packets.
             thread_local std::vector<glm::vec3> directions, light;
@@ -92,23 +116,12 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
             reach.assign(static_cast<size_t>(count), 0.0f);  // 0: no ray
             blocked.resize(static_cast<size_t>(count));
             for (int k = 0; k < count; ++k) {
-                const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
-                const float uTriangle =
-                    (static_cast<float>((k * 5 + 3) % count) + jitterT) / static_cast<float>(count);
-                const AreaLightSample s = emitters.sample(uTriangle, u1, u2);
-                const glm::vec3 toLight = s.position - origin;
-                const float d2 = glm::dot(toLight, toLight);
-                if (!(d2 > 0.0f) || !(s.pdfArea > 0.0f) || s.isVirtual) continue;
-                const float d = std::sqrt(d2);
-                const glm::vec3 wi = toLight / d;
-                const float cosSurface = glm::dot(wi, p.normal);
-                const float cosLight = std::abs(glm::dot(wi, s.normal));
-                const float tMax = d - 2.0f * offset;
-                if (cosSurface <= 0.0f || !(cosLight > 0.0f) || !(tMax > 0.0f)) continue;
-                directions[k] = wi;
-                reach[k] = tMax;
-                light[k] = evalBrdf(m, p.normal, p.toEye, wi) * s.radiance *
-                           (cosSurface * cosLight / (d2 * s.pdfArea));
+                const std::optional<Ray> r = sampleRay(k);
+                if (!r || r->s.isVirtual) continue;
+                directions[k] = r->wi;
+                reach[k] = r->tMax;
+                light[k] = evalBrdf(m, p.normal, p.toEye, r->wi) * r->s.radiance *
+                           (r->cosSurface * r->cosLight / (r->d2 * r->s.pdfArea));
             }
             rays.scene->occludedCoherent(origin, directions, reach, blocked);
             for (int k = 0; k < count; ++k)
@@ -117,20 +130,9 @@ std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, 
             return;
         }
         for (int k = 0; k < count; ++k) {
-            // A jittered grid over the point on the triangle, and a stratified (permuted) triangle choice.
-            const auto [u1, u2] = jitteredGridPoint(k, side, jitterU, jitterV);
-            const float uTriangle =
-                (static_cast<float>((k * 5 + 3) % count) + jitterT) / static_cast<float>(count);
-            const AreaLightSample s = emitters.sample(uTriangle, u1, u2);
-            const glm::vec3 toLight = s.position - origin;
-            const float d2 = glm::dot(toLight, toLight);
-            if (!(d2 > 0.0f) || !(s.pdfArea > 0.0f)) continue;
-            const float d = std::sqrt(d2);
-            const glm::vec3 wi = toLight / d;
-            const float cosSurface = glm::dot(wi, p.normal);
-            const float cosLight = std::abs(glm::dot(wi, s.normal));
-            const float tMax = d - 2.0f * offset;
-            if (cosSurface <= 0.0f || !(cosLight > 0.0f) || !(tMax > 0.0f)) continue;
+            const std::optional<Ray> r = sampleRay(k);
+            if (!r) continue;
+            const auto& [s, wi, d2, tMax, cosSurface, cosLight] = *r;
             // Whether the objects can be in the way at all; a real emitter's light they cannot block does not
             // change.
             const bool mayMeetObjects =
