@@ -244,6 +244,7 @@ struct DirectLightPlan {
     float horizon = 0.0f;     // the sine of the light's angular radius: how far below the horizon it reaches
     float lightAngle = 0.0f;  // its angular radius
     int diskSide = 0;         // > 0: the glossy lobe by a diskSide x diskSide quadrature over the disk
+    float exponent = 0.0f;    // with one: the lobe's Phong exponent (lobeExponent)
     bool dark = false;        // the whole disk below the horizon
 };
 
@@ -267,13 +268,16 @@ DirectLightPlan planDirectLight(const SurfacePoint& point, const Light& light) {
     }
     const SurfaceMaterial& m = point.surface;
     if (!m.glossy()) return plan;
+    const float exponent = lobeExponent(m);
     if (cosTheta < plan.horizon) {
         plan.diskSide = kHorizonDiskSide;
+        plan.exponent = exponent;
         return plan;
     }
-    const float exponent = lobeExponent(m);
-    if (exponent * plan.lightAngle * plan.lightAngle > kDiskQuadratureSpread)
+    if (exponent * plan.lightAngle * plan.lightAngle > kDiskQuadratureSpread) {
         plan.diskSide = diskSide(point, s.wi, exponent, plan.lightAngle);
+        plan.exponent = exponent;
+    }
     return plan;
 }
 
@@ -302,7 +306,7 @@ void directLightCells(const SurfacePoint& point, const Light& light, float minLo
     cells.clear();
     const DirectLightPlan plan = planDirectLight(point, light);
     if (plan.dark || plan.diskSide == 0) return;
-    if (lobeExponent(point.surface) * plan.lightAngle * plan.lightAngle < minLobeSpread) return;
+    if (plan.exponent * plan.lightAngle * plan.lightAngle < minLobeSpread) return;
     const LightSample& s = plan.sample;
     const float share = 1.0f / static_cast<float>(plan.diskSide * plan.diskSide);
     forEachDiskCell(point, s.wi, plan.lightAngle, plan.diskSide, [&](glm::vec3 wi, glm::vec3 v) {

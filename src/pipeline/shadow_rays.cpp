@@ -265,6 +265,18 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
             // Per sample: blocked by the objects, by the scene; the scene is tested only where needed.
             int byObjects = 0, byScene = 0, byEither = 0;
             const ShadowRaySampler sample(light, p.position);
+            // Sample k: its direction, how far it reaches, and whether it is below the horizon (blocked).
+            struct Ray {
+                glm::vec3 wi;
+                float tMax;
+                bool horizon;
+            };
+            auto place = [&](int k) {
+                const auto [u, v] = jitteredGridPoint(k, side, jitterU, jitterV);
+                const ShadowRaySample s = sample(u, v);
+                const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
+                return Ray{s.wi, tMax, glm::dot(s.wi, p.normal) <= 0.0f || !(tMax > 0.0f)};
+            };
             if (!relit && !mayMeetObjects && count >= kPacketShadowRays && !rays.scene->base()) {
                 // Many rays against the scene alone (a background without a photo's): from one point towards
                 // one light they are coherent, traced in packets.
@@ -275,40 +287,30 @@ std::vector<ShadowOcclusion> traceShadowRays(std::span<const SurfacePoint> point
                 reach.resize(static_cast<size_t>(count));
                 blocked.resize(static_cast<size_t>(count));
                 for (int k = 0; k < count; ++k) {
-                    const auto [u, v] = jitteredGridPoint(k, side, jitterU, jitterV);
-                    const ShadowRaySample s = sample(u, v);
-                    const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
-                    const bool horizon = glm::dot(s.wi, p.normal) <= 0.0f || !(tMax > 0.0f);
-                    directions[k] = s.wi;
-                    reach[k] = horizon ? 0.0f : tMax;  // not traced: blocked below
-                    byObjects += horizon;
+                    const Ray r = place(k);
+                    directions[k] = r.wi;
+                    reach[k] = r.horizon ? 0.0f : r.tMax;  // not traced: blocked below
+                    byObjects += r.horizon;
                 }
                 rays.scene->occludedCoherent(origin, directions, reach, blocked);
                 for (int k = 0; k < count; ++k) byScene += reach[k] <= 0.0f || blocked[k];
                 byEither = byScene;
-                const float n = static_cast<float>(count);
-                out[i * lights.size() + l] = {static_cast<float>(byScene) / n,
-                                              static_cast<float>(byObjects) / n,
-                                              static_cast<float>(byEither) / n};
-                continue;
-            }
-            for (int k = 0; k < count; ++k) {
-                const auto [u, v] = jitteredGridPoint(k, side, jitterU, jitterV);
-                const ShadowRaySample s = sample(u, v);
-                const float tMax = std::isfinite(s.distance) ? s.distance - 2.0f * offset : s.distance;
-                const bool horizon = glm::dot(s.wi, p.normal) <= 0.0f || !(tMax > 0.0f);
-                // A relit ray that passes the objects' sphere by cannot meet them: no query.
-                const bool object =
-                    horizon ||
-                    (mayMeetObjects &&
-                     (!relit || rayMayMeetSphere(origin, s.wi, tMax, objectCentre, objectRadius)) &&
-                     objects->occludedTopLayer(origin, s.wi, 0.0f, tMax));
-                byObjects += object;
-                // Relit: a sample the objects leave alone does not change.
-                if (relit && !object) continue;
-                const bool scene = horizon || rays.scene->occluded(origin, s.wi, 0.0f, tMax);
-                byScene += scene;
-                byEither += scene || object;
+            } else {
+                for (int k = 0; k < count; ++k) {
+                    const auto [wi, tMax, horizon] = place(k);
+                    // A relit ray that passes the objects' sphere by cannot meet them: no query.
+                    const bool object =
+                        horizon ||
+                        (mayMeetObjects &&
+                         (!relit || rayMayMeetSphere(origin, wi, tMax, objectCentre, objectRadius)) &&
+                         objects->occludedTopLayer(origin, wi, 0.0f, tMax));
+                    byObjects += object;
+                    // Relit: a sample the objects leave alone does not change.
+                    if (relit && !object) continue;
+                    const bool scene = horizon || rays.scene->occluded(origin, wi, 0.0f, tMax);
+                    byScene += scene;
+                    byEither += scene || object;
+                }
             }
             if (relit && byObjects == 0) continue;
             const float n = static_cast<float>(count);

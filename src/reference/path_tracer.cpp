@@ -41,8 +41,8 @@ bool isFinite(glm::vec3 v) {
 
 namespace {
 
-// The disk a sphere light shows a point p: centred on the light, facing p, of the light's radius; a point q on
-// it brings I / |q - p|^2 when drawn uniformly (sampleLightPoint).
+// The disk a sphere light shows a point p: centred on the light, facing p, of the light's radius; a point q
+// on it brings I / |q - p|^2 when drawn uniformly (sampleLightPoint).
 struct LightDisk {
     glm::vec3 normal{0.0f};  // unit, from the light towards p
     float distance = 0.0f;   // from p to the centre

@@ -640,8 +640,9 @@ TEST(PathTracer, ANarrowLobeUnderAWideSphereLightFindsItByTheBrdfSample) {
             const AreaLights emitters(s, SceneContent::RealOnly);
             const RayHit hit = rays.intersect(eye, dir);
             ASSERT_TRUE(hit.hit());
-            // The truth: the mean over the disk's points of what each brings (I / distance^2, sampleLightPoint)
-            // times the BRDF and the cosine; a 400 x 400 midpoint grid in (sqrt of radius, angle).
+            // The truth: the mean over the disk's points of what each brings (I / distance^2,
+            // sampleLightPoint) times the BRDF and the cosine; a 400 x 400 midpoint grid in (sqrt of radius,
+            // angle).
             double expected = 0.0;
             constexpr int kGrid = 400;
             for (int i = 0; i < kGrid; ++i)
