@@ -17,6 +17,7 @@
 #include "deltagi/renderer.h"
 #include "deltagi/transforms.h"
 #include "pipeline/cone_trace.h"
+#include "pipeline/denoise.h"
 #include "pipeline/gbuffer.h"
 #include "pipeline/inject.h"
 #include "pipeline/mipmap.h"
@@ -153,6 +154,61 @@ void BM_RealSurfaces(benchmark::State& state) {
     state.SetItemsProcessed(state.iterations() * camera.width * camera.height);
 }
 BENCHMARK(BM_RealSurfaces)->Unit(benchmark::kMillisecond);
+
+// The edge-aware filter (denoiseInto) over the real G-buffer of BM_RealSurfaces's box at 640 x 480, 3
+// channels a pixel: Arg(stride) > 1 is a relit pass of a warm frame (radius 1, the pixels between the samples
+// interpolated with the stride's kept plan, built before timing); Arg(1) the objects' own pass (every pixel,
+// radius 2) over a rectangle of 160 x 150 pixels, about what the benchmark scene's statue covers. Items are
+// the pixels filtered.
+void BM_EdgeAwareFilter(benchmark::State& state) {
+    const int stride = static_cast<int>(state.range(0));
+    Scene scene;
+    TriangleMesh room = makeBox(glm::vec3(1.0f));
+    room.name = "room";
+    scene.real.push_back(std::move(room));
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    Camera camera;
+    camera.setFieldOfView(60.0);
+    camera.worldFromCamera = lookAtPose({0.0f, 0.0f, 0.45f}, {0.0f, 0.0f, 0.0f});
+    const SurfacePoints points = renderRealSurfaces(camera, realOnly);
+    const int w = camera.width, h = camera.height;
+    std::vector<float> input(static_cast<size_t>(w) * h * 3);
+    for (size_t i = 0; i < input.size(); ++i)  // a smooth change with a little noise, zero in a corner
+        input[i] =
+            (i / 3) % w < w / 8 ? 0.0f : 0.1f + 0.05f * std::sin(0.001f * i) + 0.01f * ((i * 7919) % 13);
+    DenoiseSettings s;
+    PixelRect rect{0, 0, w, h};
+    InterpolationPlan plan;
+    plan.surfaces = points;
+    if (stride > 1) {
+        s.radius = 1;
+        s.stride = stride;
+        s.interpolate = true;
+        s.plan = &plan;
+    } else {
+        rect = {240, 160, 400, 310};
+    }
+    const glm::vec3 eye = camera.worldFromCamera[3];
+    const float pixelAngle = 1.0f / camera.fy;
+    std::vector<float> values = input;
+    denoiseInto(values, 3, points, w, h, eye, pixelAngle, s, nullptr, &rect);  // builds the plan
+    for (auto _ : state) {
+        state.PauseTiming();
+        values = input;
+        state.ResumeTiming();
+        denoiseInto(values, 3, points, w, h, eye, pixelAngle, s, nullptr, &rect);
+        benchmark::DoNotOptimize(values.data());
+    }
+    state.SetItemsProcessed(state.iterations() * (rect.x1 - rect.x0) * (rect.y1 - rect.y0));
+}
+BENCHMARK(BM_EdgeAwareFilter)
+    ->Arg(1)
+    ->Arg(2)
+    ->Arg(4)
+    ->Arg(8)
+    ->Arg(16)
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
 
 // The real scene's reflective shadow map, made anew whenever the light changes (a light camera's every
 // frame): a spot light under the ceiling of a closed box of the Cornell box's size pointing down, its cone

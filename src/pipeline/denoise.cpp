@@ -26,12 +26,6 @@ T powInt(T x, int n) {
     return r;
 }
 
-// The samples (every stride-th pixel of every stride-th row) packed together, for the cache.
-struct Sample {
-    glm::vec3 position, normal;
-    bool valid;
-};
-
 // Everything one filter pass reads, shared by its rows.
 struct FilterPass {
     std::span<float> values;
@@ -41,14 +35,23 @@ struct FilterPass {
     glm::vec3 eye;
     float pixelAngle;
     const DenoiseSettings& s;
-    int r, stride, reach, side, sw, sh;
+    int r, stride, reach, side;
+    // The grid of samples the pass keeps: (ox, oy) its first, sw x sh of them. The whole image's without a
+    // rectangle or with a plan (built over the whole image); else the rectangle's samples and one more on
+    // each side, which hold every window centre of its pixels (the samples outside the rectangle are never
+    // valid, so that leaving them out changes no weight).
+    int ox, oy, sw, sh;
     std::vector<float> spatial{};       // (2r+1)^2 window weights
     std::vector<float> offsetLength{};  // sqrt(px^2 + py^2 + 1) for every pixel offset a window can have
-    std::vector<Sample> samples{};
+    std::vector<FilterSample> samples{};
     std::vector<float> sampleValues{};
     // Per window centre ((sw + 1) x (sh + 1): a centre may lie one past the last sample): whether any sample
     // of its window holds a non-zero value. A window of zeros filters to zero, whatever its weights.
     std::vector<uint8_t> windowHasValue{};
+
+    // Sample (sx, sy) of the image's stride grid in the kept grid, and window centre (cx, cy).
+    size_t sampleIndex(int sx, int sy) const { return static_cast<size_t>(sy - oy) * sw + (sx - ox); }
+    size_t centreIndex(int cx, int cy) const { return static_cast<size_t>(cy - oy) * (sw + 1) + (cx - ox); }
 };
 
 // Whether sample k is a usable neighbour of pixel p: on the same side, near p's tangent plane. Returns its
@@ -62,7 +65,8 @@ inline float sameSurfaceWeight(const SurfacePoint& p, glm::vec3 position, glm::v
     if (std::abs(glm::dot(p.normal, position - p.position)) > allowance) return 0.0f;
     return powInt(cosN, normalPower);
 }
-inline float neighbourWeight(const FilterPass& f, const SurfacePoint& p, const Sample& q, float allowance) {
+inline float neighbourWeight(const FilterPass& f, const SurfacePoint& p, const FilterSample& q,
+                             float allowance) {
     return q.valid ? sameSurfaceWeight(p, q.position, q.normal, allowance, f.s.normalPower) : 0.0f;
 }
 
@@ -78,19 +82,18 @@ bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float
     const int r = f.r, stride = f.stride;
     // The samples nearest to the pixel (below and right of it when between two): the window's centre.
     const int xCentre = (x + stride / 2) / stride, yCentre = (y + stride / 2) / stride;
-    const int sxBegin = std::max(xCentre - r, 0), sxEnd = std::min(xCentre + r, f.sw - 1);
-    const int syBegin = std::max(yCentre - r, 0), syEnd = std::min(yCentre + r, f.sh - 1);
+    const int sxBegin = std::max(xCentre - r, f.ox), sxEnd = std::min(xCentre + r, f.ox + f.sw - 1);
+    const int syBegin = std::max(yCentre - r, f.oy), syEnd = std::min(yCentre + r, f.oy + f.sh - 1);
     const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
     auto allowance = [&](int sx, int sy) {
         return planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
                                                sx * stride - x + f.reach];
     };
-    if (!f.windowHasValue[static_cast<size_t>(yCentre) * (f.sw + 1) + xCentre]) {
+    if (!f.windowHasValue[f.centreIndex(xCentre, yCentre)]) {
         // All zeros: the result is zero if any sample is usable, else the pixel is a hole.
         for (int sy = syBegin; sy <= syEnd; ++sy)
             for (int sx = sxBegin; sx <= sxEnd; ++sx)
-                if (neighbourWeight(f, p, f.samples[static_cast<size_t>(sy) * f.sw + sx], allowance(sx, sy)) >
-                    0.0f) {
+                if (neighbourWeight(f, p, f.samples[f.sampleIndex(sx, sy)], allowance(sx, sy)) > 0.0f) {
                     std::fill_n(dst, channels, 0.0f);
                     return true;
                 }
@@ -101,7 +104,7 @@ bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float
     for (int sy = syBegin; sy <= syEnd; ++sy) {
         const float* spatialRow = &f.spatial[static_cast<size_t>(sy - yCentre + r) * (2 * r + 1)];
         for (int sx = sxBegin; sx <= sxEnd; ++sx) {
-            const size_t k = static_cast<size_t>(sy) * f.sw + sx;
+            const size_t k = f.sampleIndex(sx, sy);
             float w = neighbourWeight(f, p, f.samples[k], allowance(sx, sy));
             if (w == 0.0f) continue;
             w *= spatialRow[sx - xCentre + r];
@@ -120,8 +123,8 @@ bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float
 // InterpolationPlan's order. All zero when none of them is on its surface.
 // The four samples' weights are worked out side by side in the lanes of 4-float vectors, each lane as
 // neighbourWeight and powInt work one out (the same operations in the same order: the same weights).
-std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const Sample> samples, int x, int y,
-                                          const SurfacePoint& p) {
+std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const FilterSample> samples, int x,
+                                          int y, const SurfacePoint& p) {
     using Float4 = float __attribute__((vector_size(16)));
     using Int4 = int32_t __attribute__((vector_size(16)));
     const int stride = f.stride;
@@ -139,8 +142,8 @@ std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const S
         const int dx = n & 1, dy = n >> 1;
         const int sx = sx0 + dx, sy = sy0 + dy;
         bilinear[n] = (dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy);
-        if (sx >= f.sw || sy >= f.sh) continue;
-        const Sample& q = samples[static_cast<size_t>(sy) * f.sw + sx];
+        if (sx >= f.ox + f.sw || sy >= f.oy + f.sh) continue;
+        const FilterSample& q = samples[f.sampleIndex(sx, sy)];
         if (!q.valid) continue;
         valid[n] = -1;
         qx[n] = q.position.x, qy[n] = q.position.y, qz[n] = q.position.z;
@@ -172,7 +175,7 @@ std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const S
 bool zeroAround(const FilterPass& f, std::span<const uint8_t> filteredNonZero, int x, int y, size_t k00,
                 const SurfacePoint& p) {
     const int sx0 = x / f.stride, sy0 = y / f.stride;
-    const bool right = sx0 + 1 < f.sw, below = sy0 + 1 < f.sh;
+    const bool right = sx0 + 1 < f.ox + f.sw, below = sy0 + 1 < f.oy + f.sh;
     if (filteredNonZero[k00] || (right && filteredNonZero[k00 + 1]) ||
         (below && filteredNonZero[k00 + f.sw]) || (right && below && filteredNonZero[k00 + f.sw + 1]))
         return false;
@@ -188,9 +191,10 @@ bool zeroAround(const FilterPass& f, std::span<const uint8_t> filteredNonZero, i
 // none of them on its surface (an edge between samples) takes the full filter over its window. Returns false
 // for a hole.
 template <int C>
-bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
-                      std::span<const uint8_t> filteredNonZero, int x, int y, size_t k00,
-                      const SurfacePoint* p, const std::array<float, 4>& weights, float* dst) {
+[[gnu::always_inline]] inline bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
+                                                    std::span<const uint8_t> filteredNonZero, int x, int y,
+                                                    size_t k00, const SurfacePoint* p,
+                                                    const std::array<float, 4>& weights, float* dst) {
     const int channels = C > 0 ? C : f.channels;
     const size_t keys[4] = {k00, k00 + 1, k00 + f.sw, k00 + f.sw + 1};
     bool any = false, anyNonZero = false;
@@ -200,12 +204,25 @@ bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
             anyNonZero = anyNonZero || filteredNonZero[keys[n]];
         }
     if (!any) return filterPixel<C>(f, x, y, p ? *p : f.points[static_cast<size_t>(y) * f.width + x], dst);
-    std::fill_n(dst, channels, 0.0f);
-    if (!anyNonZero) return true;  // zeros all around (most of a shadow's change)
-    for (int n = 0; n < 4; ++n) {
-        if (weights[n] == 0.0f) continue;
-        const float* v = &filtered[keys[n] * channels];
-        for (int c = 0; c < channels; ++c) dst[c] += v[c] * weights[n];
+    if (!anyNonZero) {  // zeros all around (most of a shadow's change)
+        std::fill_n(dst, channels, 0.0f);
+        return true;
+    }
+    if constexpr (C > 0) {  // summed in registers, stored once
+        std::array<float, C> sum{};
+        for (int n = 0; n < 4; ++n) {
+            if (weights[n] == 0.0f) continue;
+            const float* v = &filtered[keys[n] * C];
+            for (int c = 0; c < C; ++c) sum[c] += v[c] * weights[n];
+        }
+        std::copy_n(sum.data(), C, dst);
+    } else {
+        std::fill_n(dst, channels, 0.0f);
+        for (int n = 0; n < 4; ++n) {
+            if (weights[n] == 0.0f) continue;
+            const float* v = &filtered[keys[n] * channels];
+            for (int c = 0; c < channels; ++c) dst[c] += v[c] * weights[n];
+        }
     }
     return true;
 }
@@ -214,7 +231,8 @@ bool interpolatePixel(const FilterPass& f, std::span<const float> filtered,
 void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
     const size_t pixels = static_cast<size_t>(f.width) * f.height;
     if (plan.stride == f.stride && plan.weights.size() == pixels) return;
-    std::vector<Sample> samples(static_cast<size_t>(f.sw) * f.sh);
+    std::vector<FilterSample>& samples = plan.samples;
+    samples.resize(static_cast<size_t>(f.sw) * f.sh);
     parallelFor(0, f.sh, 16, [&](int64_t sy) {
         for (int sx = 0; sx < f.sw; ++sx) {
             const SurfacePoint& q = plan.surfaces[static_cast<size_t>(sy) * f.stride * f.width +
@@ -234,6 +252,12 @@ void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
     });
 }
 
+// The pass's plan, if it has one it can use (built by then: denoiseInto).
+InterpolationPlan* usablePlan(const FilterPass& f) {
+    const bool interpolate = f.stride > 1 && f.s.interpolate;
+    return interpolate && f.s.plan && f.s.plan->surfaces.size() == f.points.size() ? f.s.plan : nullptr;
+}
+
 // The whole pass for C channels: every pixel filtered, or (settings.interpolate) the samples filtered and the
 // pixels between interpolated from them.
 template <int C>
@@ -251,7 +275,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
         const int sy0 = (rect.y0 + f.stride - 1) / f.stride, sy1 = (rect.y1 + f.stride - 1) / f.stride;
         parallelFor(sy0, sy1, 4, [&](int64_t sy) {
             for (int sx = sx0; sx < sx1; ++sx) {
-                const size_t k = static_cast<size_t>(sy) * f.sw + sx;
+                const size_t k = f.sampleIndex(sx, static_cast<int>(sy));
                 if (!f.samples[k].valid) continue;
                 const size_t i =
                     static_cast<size_t>(sy) * f.stride * f.width + static_cast<size_t>(sx) * f.stride;
@@ -261,9 +285,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
             }
         });
     }
-    InterpolationPlan* plan =
-        interpolate && f.s.plan && f.s.plan->surfaces.size() == f.points.size() ? f.s.plan : nullptr;
-    if (plan) buildPlan(f, *plan);
+    InterpolationPlan* plan = usablePlan(f);
     // With a plan: the pixels whose points, or the samples around them, may differ from the plan's surfaces.
     const PixelRect changed = f.s.planChanged;
     const int stride = f.stride;
@@ -276,7 +298,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
         for (int x = rect.x0; x < rect.x1;) {
             const int sx = x / stride, cx = sx * stride, cellEnd = std::min(cx + stride, rect.x1);
             const bool cellPlan = plan && (rowMisses || cx + stride < changed.x0 || cx >= changed.x1);
-            const size_t k00 = static_cast<size_t>(sy) * f.sw + sx;
+            const size_t k00 = f.sampleIndex(sx, sy);
             for (; x < cellEnd; ++x) {
                 const size_t i = static_cast<size_t>(y) * f.width + x;
                 if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
@@ -375,20 +397,16 @@ void denoiseInto(std::span<float> values, int channels, std::span<const SurfaceP
     if (rect.empty()) return;
     const int r = s.radius, stride = std::max(s.stride, 1);
     const int reach = (r + 1) * stride;
-    FilterPass f{values,
-                 channels,
-                 points,
-                 width,
-                 height,
-                 eye,
-                 pixelAngle,
-                 s,
-                 r,
-                 stride,
-                 reach,
-                 2 * reach + 1,
-                 (width + stride - 1) / stride,
-                 (height + stride - 1) / stride};
+    // Only samples inside the rectangle can be valid.
+    const int sx0 = (rect.x0 + stride - 1) / stride, sx1 = (rect.x1 + stride - 1) / stride;
+    const int sy0 = (rect.y0 + stride - 1) / stride, sy1 = (rect.y1 + stride - 1) / stride;
+    const int fullSw = (width + stride - 1) / stride, fullSh = (height + stride - 1) / stride;
+    const bool wholeGrid = s.plan != nullptr;
+    const int ox = wholeGrid ? 0 : std::max(sx0 - 1, 0), oy = wholeGrid ? 0 : std::max(sy0 - 1, 0);
+    const int ex = wholeGrid ? fullSw : std::min(sx1 + 1, fullSw),
+              ey = wholeGrid ? fullSh : std::min(sy1 + 1, fullSh);
+    FilterPass f{values, channels, points, width,         height, eye, pixelAngle, s,
+                 r,      stride,   reach,  2 * reach + 1, ox,     oy,  ex - ox,    ey - oy};
     const int window = 2 * r + 1;
     std::vector<float> spatial1d(window);
     for (int d = -r; d <= r; ++d)
@@ -403,18 +421,39 @@ void denoiseInto(std::span<float> values, int channels, std::span<const SurfaceP
                 std::sqrt(static_cast<float>(px * px + py * py + 1));
 
     const int sw = f.sw, sh = f.sh;
-    f.samples.resize(static_cast<size_t>(sw) * sh);
+    // With a plan over the whole image the samples are the plan's (its surfaces' at every stride-th pixel),
+    // but in planChanged, the only pixels whose points may differ from its surfaces.
+    InterpolationPlan* plan = usablePlan(f);
+    if (plan) buildPlan(f, *plan);
+    const bool planSamples = plan && s.traced.empty() && rect.x0 == 0 && rect.y0 == 0 && rect.x1 == width &&
+                             rect.y1 == height && plan->samples.size() == static_cast<size_t>(sw) * sh;
+    const PixelRect& changed = s.planChanged;
+    auto sampleOfPoint = [&](int sx, int sy) {
+        const size_t j = static_cast<size_t>(sy) * stride * width + static_cast<size_t>(sx) * stride;
+        return FilterSample{points[j].position, points[j].normal,
+                            points[j].valid() && (s.traced.empty() || s.traced[j] != 0)};
+    };
+    if (planSamples) {
+        f.samples = plan->samples;
+        if (!changed.empty())
+            parallelFor(std::max((changed.y0 + stride - 1) / stride, 0),
+                        std::min((changed.y1 + stride - 1) / stride, sh), 16, [&](int64_t sy) {
+                            for (int sx = std::max((changed.x0 + stride - 1) / stride, 0);
+                                 sx < std::min((changed.x1 + stride - 1) / stride, sw); ++sx)
+                                f.samples[f.sampleIndex(sx, static_cast<int>(sy))] =
+                                    sampleOfPoint(sx, static_cast<int>(sy));
+                        });
+    } else {
+        f.samples.resize(static_cast<size_t>(sw) * sh);
+    }
     f.sampleValues.resize(f.samples.size() * channels);
     std::vector<uint8_t> nonZero(f.samples.size());
-    // Only samples inside the rectangle can be valid; the others stay invalid.
-    const int sx0 = (rect.x0 + stride - 1) / stride, sx1 = (rect.x1 + stride - 1) / stride;
-    const int sy0 = (rect.y0 + stride - 1) / stride, sy1 = (rect.y1 + stride - 1) / stride;
+    // The samples outside the rectangle stay invalid.
     parallelFor(sy0, sy1, 16, [&](int64_t sy) {
         for (int sx = sx0; sx < sx1; ++sx) {
             const size_t j = static_cast<size_t>(sy) * stride * width + static_cast<size_t>(sx) * stride;
-            const size_t k = static_cast<size_t>(sy) * sw + sx;
-            f.samples[k] = {points[j].position, points[j].normal,
-                            points[j].valid() && (s.traced.empty() || s.traced[j] != 0)};
+            const size_t k = f.sampleIndex(sx, static_cast<int>(sy));
+            if (!planSamples) f.samples[k] = sampleOfPoint(sx, static_cast<int>(sy));
             const float* v = &values[j * channels];
             std::copy_n(v, channels, &f.sampleValues[k * channels]);
             nonZero[k] =

@@ -21,6 +21,13 @@ namespace deltagi {
 
 struct InterpolationPlan;
 
+// A sample of the filter: the surface at one of the pixels that hold values (every stride-th pixel of every
+// stride-th row).
+struct FilterSample {
+    glm::vec3 position, normal;
+    bool valid;
+};
+
 struct DenoiseSettings {
     int radius = 2;             // samples: a (2r+1)^2 window of them; 0 disables the filter
     float spatialSigma = 1.5f;  // samples
@@ -58,6 +65,9 @@ struct InterpolationPlan {
     // Per pixel, the normalized weights of the samples (sx, sy), (sx + 1, sy), (sx, sy + 1), (sx + 1, sy + 1)
     // with sx = x / stride, sy = y / stride; all zero: none of them lies on the pixel's surface.
     std::vector<std::array<float, 4>> weights;
+    // The samples of `surfaces` at the stride, which a pass over the whole image copies instead of reading
+    // them from its points again (but where its points may differ: DenoiseSettings::planChanged).
+    std::vector<FilterSample> samples;
 };
 
 // Filters `values`, `channels` floats per pixel of `points` (width x height, row-major), returning the

@@ -189,6 +189,39 @@ TEST(Denoise, InterpolationPlanGivesTheSameBits) {
     }
 }
 
+// A pass over a rectangle that holds every valid point (the objects' pixels) keeps only the rectangle's
+// samples and one more on each side: the same bits and holes as over the whole image, for rectangles whose
+// edges fall on samples and between them, at stride 1 and 3, filtered and interpolated.
+TEST(Denoise, ARectanglesPassGivesTheSameBitsAsTheWholeImages) {
+    Fixture f;
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    std::vector<float> values(f.points.size() * 3);
+    for (size_t i = 0; i < values.size(); ++i) values[i] = std::sin(0.37f * static_cast<float>(i));
+    for (const PixelRect rect : {PixelRect{5, 2, 27, 13}, PixelRect{6, 3, 25, 12}, PixelRect{0, 4, 20, 16}}) {
+        std::vector<SurfacePoint> points = f.points;
+        for (int y = 0; y < Fixture::kH; ++y)
+            for (int x = 0; x < Fixture::kW; ++x)
+                if (x < rect.x0 || x >= rect.x1 || y < rect.y0 || y >= rect.y1)
+                    points[static_cast<size_t>(y) * Fixture::kW + x] = {};
+        for (const int stride : {1, 3})
+            for (const bool interpolate : {false, true}) {
+                DenoiseSettings settings;
+                settings.stride = stride;
+                settings.interpolate = interpolate;
+                std::vector<float> whole = values, inRect = values;
+                std::vector<size_t> holesWhole, holesRect;
+                denoiseInto(whole, 3, points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holesWhole);
+                denoiseInto(inRect, 3, points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holesRect,
+                            &rect);
+                EXPECT_EQ(holesRect, holesWhole);
+                for (size_t i = 0; i < whole.size(); ++i)
+                    ASSERT_EQ(std::memcmp(&whole[i], &inRect[i], sizeof(float)), 0)
+                        << "rect " << rect.x0 << "," << rect.y0 << " stride " << stride << " interpolate "
+                        << interpolate << " value " << i;
+            }
+    }
+}
+
 // fillHoles at stride 16 (a finer grid every 4 pixels) on a strip of wall 12 pixels wide between two parts of
 // a floor, all of the strip's pixels holes: only the finer grid's are traced; the others blend them (a linear
 // ramp stays linear where a cell's four corners are traced); a hole whose cell has no traced corner on its
