@@ -250,6 +250,19 @@ void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
                                         : std::array<float, 4>{-1.0f, 0.0f, 0.0f, 0.0f};  // no surface
         }
     });
+    plan.weighted.assign(samples.size(), 0);
+    parallelFor(0, f.sh, 4, [&](int64_t sy) {
+        for (int sx = 0; sx < f.sw; ++sx) {
+            bool all = true;
+            for (int y = static_cast<int>(sy) * f.stride;
+                 all && y < std::min((sy + 1) * f.stride, int64_t{f.height}); ++y)
+                for (int x = sx * f.stride; all && x < std::min((sx + 1) * f.stride, f.width); ++x) {
+                    const std::array<float, 4>& w = plan.weights[static_cast<size_t>(y) * f.width + x];
+                    all = w[0] > 0.0f || w[1] > 0.0f || w[2] > 0.0f || w[3] > 0.0f;
+                }
+            plan.weighted[static_cast<size_t>(sy) * f.sw + sx] = all;
+        }
+    });
 }
 
 // The pass's plan, if it has one it can use (built by then: denoiseInto).
@@ -299,6 +312,19 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
             const int sx = x / stride, cx = sx * stride, cellEnd = std::min(cx + stride, rect.x1);
             const bool cellPlan = plan && (rowMisses || cx + stride < changed.x0 || cx >= changed.x1);
             const size_t k00 = f.sampleIndex(sx, sy);
+            if (cellPlan && f.s.filtered.empty() && plan->weighted[k00]) {
+                // Every pixel of the cell weighs some of its samples: where all of them are zero, so is every
+                // pixel (as interpolatePixel would give it), without reading their weights.
+                const bool right = sx + 1 < f.ox + f.sw, below = sy + 1 < f.oy + f.sh;
+                if (!filteredNonZero[k00] && !(right && filteredNonZero[k00 + 1]) &&
+                    !(below && filteredNonZero[k00 + f.sw]) &&
+                    !(right && below && filteredNonZero[k00 + f.sw + 1])) {
+                    std::fill(&out[(static_cast<size_t>(y) * f.width + x) * channels],
+                              &out[(static_cast<size_t>(y) * f.width + cellEnd) * channels], 0.0f);
+                    x = cellEnd;
+                    continue;
+                }
+            }
             for (; x < cellEnd; ++x) {
                 const size_t i = static_cast<size_t>(y) * f.width + x;
                 if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;

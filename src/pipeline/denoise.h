@@ -68,6 +68,9 @@ struct InterpolationPlan {
     // The samples of `surfaces` at the stride, which a pass over the whole image copies instead of reading
     // them from its points again (but where its points may differ: DenoiseSettings::planChanged).
     std::vector<FilterSample> samples;
+    // Per cell of samples (the pixels whose first sample is (sx, sy)): whether every one of its pixels has a
+    // surface and weighs some sample.
+    std::vector<uint8_t> weighted;
 };
 
 // Filters `values`, `channels` floats per pixel of `points` (width x height, row-major), returning the

@@ -141,6 +141,7 @@ void ViewWork::forget() {
         plan.stride = 0;
         plan.weights.clear();
         plan.samples.clear();
+        plan.weighted.clear();
     }
     // The objects' G-buffer stays: renderObjectSurfaces clears the last frame's pixels of it, wherever the
     // camera was (an image of another size starts afresh). The relit surfaces keep their memory too; they

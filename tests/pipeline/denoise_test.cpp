@@ -222,6 +222,36 @@ TEST(Denoise, ARectanglesPassGivesTheSameBitsAsTheWholeImages) {
     }
 }
 
+// With a plan, a cell all of whose filtered samples are zero is filled with zeros without its weights; a
+// cell with one non-zero sample (whichever of its four) is interpolated: a single value among zeros, radius
+// 1, gives the same bits and holes as without the plan.
+TEST(Denoise, InterpolationPlanFillsCellsOfZerosAsWithoutIt) {
+    Fixture f;
+    const glm::vec3 eye(0.1f, 1.0f, 0.1f);
+    for (int spike = 0; spike < 16; ++spike) {  // the value's sample: column spike / 2, row 1 + spike % 2
+        const size_t pixel = 4 * static_cast<size_t>(1 + spike % 2) * Fixture::kW + 4 * (spike / 2);
+        std::vector<float> values(f.points.size() * 3, 0.0f);
+        for (int c = 0; c < 3; ++c) values[pixel * 3 + c] = 1.0f + c;
+        DenoiseSettings settings;
+        settings.radius = 1;
+        settings.stride = 4;
+        settings.interpolate = true;
+        std::vector<size_t> holesWithout, holesWith;
+        const auto without =
+            denoise(values, 3, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holesWithout);
+        InterpolationPlan plan;
+        plan.surfaces = f.points;
+        settings.plan = &plan;
+        const auto with =
+            denoise(values, 3, f.points, Fixture::kW, Fixture::kH, eye, 0.01f, settings, &holesWith);
+        EXPECT_EQ(holesWith, holesWithout);
+        EXPECT_GT(std::count(plan.weighted.begin(), plan.weighted.end(), 1), 0);
+        for (size_t i = 0; i < with.size(); ++i)
+            ASSERT_EQ(std::memcmp(&with[i], &without[i], sizeof(float)), 0)
+                << "spike " << spike << " value " << i;
+    }
+}
+
 // fillHoles at stride 16 (a finer grid every 4 pixels) on a strip of wall 12 pixels wide between two parts of
 // a floor, all of the strip's pixels holes: only the finer grid's are traced; the others blend them (a linear
 // ramp stays linear where a cell's four corners are traced); a hole whose cell has no traced corner on its
