@@ -354,9 +354,14 @@ std::vector<glm::vec3> combineLighting(std::span<const SurfacePoint> points, std
         }
         glm::vec3& reflected = indirect ? (*indirect)[i] : radiance;
         if (!diffuse.empty()) reflected += p.surface.diffuse * (p.surface.occlusion * diffuse[i]);
-        if (!specular.empty())
-            reflected += p.surface.specularReflectance(glm::dot(p.normal, p.toEye)) *
-                         (p.surface.occlusion * specular[i]);
+        if (!specular.empty()) {
+            // Where the specular light is zero (most of a relit image) its reflectance is not looked up: the
+            // zero, its sign too, is what the product would add.
+            const glm::vec3 light = p.surface.occlusion * specular[i];
+            reflected += light == glm::vec3(0.0f)
+                             ? light
+                             : p.surface.specularReflectance(glm::dot(p.normal, p.toEye)) * light;
+        }
         out[i] = radiance;
     };
     if (!bounds) {
