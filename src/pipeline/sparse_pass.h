@@ -210,7 +210,20 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect
                            const Camera& camera, int stride, int perPixel, const DenoiseSettings& filter,
                            Trace&& trace, const SparseRefinement& refine = {}) {
     if (stride <= 1) {
-        std::vector<T> values = trace(std::span<const uint32_t>{});
+        // Where `bounds` is less than the image (the objects' pixels), its pixels are listed, so that the
+        // pass does not visit every point of the image to find the valid ones.
+        std::vector<uint32_t> listed;
+        if (static_cast<size_t>(bounds.x1 - bounds.x0) * (bounds.y1 - bounds.y0) < points.size()) {
+            for (int y = bounds.y0; y < bounds.y1; ++y)
+                for (int x = bounds.x0; x < bounds.x1; ++x) {
+                    const size_t i = static_cast<size_t>(y) * camera.width + x;
+                    if (points[i].valid()) listed.push_back(static_cast<uint32_t>(i));
+                }
+            // An empty list would mean every pixel: with no valid point in `bounds` there is none at all, and
+            // pixel 0 is an invalid one.
+            if (listed.empty()) listed.push_back(0);
+        }
+        std::vector<T> values = trace(std::span<const uint32_t>(listed));
         denoiseInPlace(values, perPixel, points, camera, filter, nullptr, &bounds);
         return values;
     }
