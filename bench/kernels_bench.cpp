@@ -135,17 +135,25 @@ BENCHMARK_CAPTURE(BM_MovingObjectFrame, Mipmap, FrameStage::Mipmap)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 
-// The real half of the G-buffer, redone every frame while the camera moves: one camera ray per pixel of a
-// 640 x 480 image into a closed box (the Cornell box's shape: every ray hits).
-void BM_RealSurfaces(benchmark::State& state) {
+// A closed box (the Cornell box's shape) seen from inside by a 640 x 480 camera: every camera ray hits.
+struct BoxView {
     Scene scene;
-    TriangleMesh room = makeBox(glm::vec3(1.0f));
-    room.name = "room";
-    scene.real.push_back(std::move(room));
-    const RayScene realOnly(scene, SceneContent::RealOnly);
     Camera camera;
-    camera.setFieldOfView(60.0);
-    camera.worldFromCamera = lookAtPose({0.0f, 0.0f, 0.45f}, {0.0f, 0.0f, 0.0f});
+    BoxView() {
+        TriangleMesh room = makeBox(glm::vec3(1.0f));
+        room.name = "room";
+        scene.real.push_back(std::move(room));
+        camera.setFieldOfView(60.0);
+        camera.worldFromCamera = lookAtPose({0.0f, 0.0f, 0.45f}, {0.0f, 0.0f, 0.0f});
+    }
+};
+
+// The real half of the G-buffer, redone every frame while the camera moves: one camera ray per pixel of
+// BoxView's image.
+void BM_RealSurfaces(benchmark::State& state) {
+    const BoxView view;
+    const RayScene realOnly(view.scene, SceneContent::RealOnly);
+    const Camera& camera = view.camera;
     SurfacePoints real;  // reused, as FrameRenderer does
     for (auto _ : state) {
         renderRealSurfaces(camera, realOnly, real);
@@ -155,21 +163,16 @@ void BM_RealSurfaces(benchmark::State& state) {
 }
 BENCHMARK(BM_RealSurfaces)->Unit(benchmark::kMillisecond);
 
-// The edge-aware filter (denoiseInto) over the real G-buffer of BM_RealSurfaces's box at 640 x 480, 3
-// channels a pixel: Arg(stride) > 1 is a relit pass of a warm frame (radius 1, the pixels between the samples
-// interpolated with the stride's kept plan, built before timing); Arg(1) the objects' own pass (every pixel,
-// radius 2) over a rectangle of 160 x 150 pixels, about what the benchmark scene's statue covers. Items are
-// the pixels filtered.
+// The edge-aware filter (denoiseInto) over the real G-buffer of BoxView at 640 x 480, 3 channels a pixel:
+// Arg(stride) > 1 is a relit pass of a warm frame (radius 1, the pixels between the samples interpolated with
+// the stride's kept plan, built before timing); Arg(1) the objects' own pass (every pixel, radius 2) over a
+// rectangle of 160 x 150 pixels, about what the benchmark scene's statue covers. Items are the pixels
+// filtered.
 void BM_EdgeAwareFilter(benchmark::State& state) {
     const int stride = static_cast<int>(state.range(0));
-    Scene scene;
-    TriangleMesh room = makeBox(glm::vec3(1.0f));
-    room.name = "room";
-    scene.real.push_back(std::move(room));
-    const RayScene realOnly(scene, SceneContent::RealOnly);
-    Camera camera;
-    camera.setFieldOfView(60.0);
-    camera.worldFromCamera = lookAtPose({0.0f, 0.0f, 0.45f}, {0.0f, 0.0f, 0.0f});
+    const BoxView view;
+    const RayScene realOnly(view.scene, SceneContent::RealOnly);
+    const Camera& camera = view.camera;
     const SurfacePoints points = renderRealSurfaces(camera, realOnly);
     const int w = camera.width, h = camera.height;
     std::vector<float> input(static_cast<size_t>(w) * h * 3);
