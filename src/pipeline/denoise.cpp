@@ -302,6 +302,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
     // With a plan: the pixels whose points, or the samples around them, may differ from the plan's surfaces.
     const PixelRect changed = f.s.planChanged;
     const int stride = f.stride;
+    const bool zeroCells = plan && f.s.filtered.empty() && plan->weighted.size() == f.samples.size();
     parallelFor(rect.y0, rect.y1, 4, [&](int64_t y64) {
         const int y = static_cast<int>(y64);
         // Pixels by cell of samples, [cx, cx + stride] x [cy, cy + stride]: with a plan, those whose cell
@@ -312,7 +313,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
             const int sx = x / stride, cx = sx * stride, cellEnd = std::min(cx + stride, rect.x1);
             const bool cellPlan = plan && (rowMisses || cx + stride < changed.x0 || cx >= changed.x1);
             const size_t k00 = f.sampleIndex(sx, sy);
-            if (cellPlan && f.s.filtered.empty() && plan->weighted[k00]) {
+            if (cellPlan && zeroCells && plan->weighted[k00]) {
                 // Every pixel of the cell weighs some of its samples: where all of them are zero, so is every
                 // pixel (as interpolatePixel would give it), without reading their weights.
                 const bool right = sx + 1 < f.ox + f.sw, below = sy + 1 < f.oy + f.sh;
