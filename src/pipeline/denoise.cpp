@@ -320,8 +320,8 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
                 if (!filteredNonZero[k00] && !(right && filteredNonZero[k00 + 1]) &&
                     !(below && filteredNonZero[k00 + f.sw]) &&
                     !(right && below && filteredNonZero[k00 + f.sw + 1])) {
-                    std::fill(&out[(static_cast<size_t>(y) * f.width + x) * channels],
-                              &out[(static_cast<size_t>(y) * f.width + cellEnd) * channels], 0.0f);
+                    std::fill(out.begin() + (static_cast<ptrdiff_t>(y) * f.width + x) * channels,
+                              out.begin() + (static_cast<ptrdiff_t>(y) * f.width + cellEnd) * channels, 0.0f);
                     x = cellEnd;
                     continue;
                 }
