@@ -26,26 +26,35 @@ CompositeImages composite(const Image& background, const GBuffer& gbuffer,
             if (!std::isfinite(v[k])) v[k] = 0.0f;
         return v;
     };
+    // The 3-channel images' pixels written in place (Image::setRgb is a call per pixel).
+    auto set = [](Image& image, size_t i, glm::vec3 v) {
+        float* p = image.data().data() + 3 * i;
+        p[0] = v.x, p[1] = v.y, p[2] = v.z;
+    };
+    const std::span<const float> bgPixels = background.data();
+    const bool bgRgb = background.channels() == 3;
     parallelFor(0, h, 8, [&](int64_t y64) {
         const int y = static_cast<int>(y64);
         for (int x = 0; x < w; ++x) {
             const size_t i = static_cast<size_t>(y) * w + x;
-            const glm::vec3 bg = background.rgb(x, y);
+            const glm::vec3 bg = bgRgb ? glm::vec3(bgPixels[3 * i], bgPixels[3 * i + 1], bgPixels[3 * i + 2])
+                                       : background.rgb(x, y);
             const float coverage = gbuffer.coverage[i];
             const glm::vec3 change = layers ? realChange[i] + realIndirect[i] : realChange[i];
             const glm::vec3 real = glm::max(bg + change, glm::vec3(0.0f));
             const glm::vec3 object = glm::max(objectRadiance[i], glm::vec3(0.0f));
             const glm::vec3 c = finite(glm::mix(real, object, coverage));
-            out.composite.setRgb(x, y, c);
-            out.objectMask.at(x, y, 0) = coverage;
-            out.delta.setRgb(x, y, finite(c - bg));
+            set(out.composite, i, c);
+            out.objectMask.data()[i] = coverage;
+            set(out.delta, i, finite(c - bg));
             if (!layers) continue;
             const glm::vec3 premultiplied = finite(object * coverage);
-            for (int k = 0; k < 3; ++k) out.object.at(x, y, k) = premultiplied[k];
-            out.object.at(x, y, 3) = coverage;
+            float* o = out.object.data().data() + 4 * i;
+            for (int k = 0; k < 3; ++k) o[k] = premultiplied[k];
+            o[3] = coverage;
             const bool realShows = coverage < 1.0f;
-            out.shadow.setRgb(x, y, realShows ? finite(realChange[i]) : glm::vec3(0.0f));
-            out.indirect.setRgb(x, y, realShows ? finite(realIndirect[i]) : glm::vec3(0.0f));
+            set(out.shadow, i, realShows ? finite(realChange[i]) : glm::vec3(0.0f));
+            set(out.indirect, i, realShows ? finite(realIndirect[i]) : glm::vec3(0.0f));
         }
     });
     return out;
