@@ -242,26 +242,21 @@ void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
     });
     plan.stride = f.stride;
     plan.weights.resize(pixels);
-    parallelFor(0, f.height, 4, [&](int64_t y) {
-        for (int x = 0; x < f.width; ++x) {
-            const size_t i = static_cast<size_t>(y) * f.width + x;
-            const SurfacePoint& p = plan.surfaces[i];
-            plan.weights[i] = p.valid() ? interpolationWeights(f, samples, x, static_cast<int>(y), p)
-                                        : std::array<float, 4>{-1.0f, 0.0f, 0.0f, 0.0f};  // no surface
-        }
-    });
-    plan.weighted.assign(samples.size(), 0);
-    parallelFor(0, f.sh, 4, [&](int64_t sy) {
-        for (int sx = 0; sx < f.sw; ++sx) {
-            bool all = true;
-            for (int y = static_cast<int>(sy) * f.stride;
-                 all && y < std::min((sy + 1) * f.stride, int64_t{f.height}); ++y)
-                for (int x = sx * f.stride; all && x < std::min((sx + 1) * f.stride, f.width); ++x) {
-                    const std::array<float, 4>& w = plan.weights[static_cast<size_t>(y) * f.width + x];
-                    all = w[0] > 0.0f || w[1] > 0.0f || w[2] > 0.0f || w[3] > 0.0f;
-                }
-            plan.weighted[static_cast<size_t>(sy) * f.sw + sx] = all;
-        }
+    plan.weighted.assign(samples.size(), 1);
+    // By row of cells: a cell's pixels' weights and then its flag, in one pass.
+    parallelFor(0, f.sh, 1, [&](int64_t sy) {
+        uint8_t* weighted = &plan.weighted[static_cast<size_t>(sy) * f.sw];
+        for (int y = static_cast<int>(sy) * f.stride; y < std::min((sy + 1) * f.stride, int64_t{f.height});
+             ++y)
+            for (int x = 0; x < f.width; ++x) {
+                const size_t i = static_cast<size_t>(y) * f.width + x;
+                const SurfacePoint& p = plan.surfaces[i];
+                // {-1, 0, 0, 0}: no surface.
+                const std::array<float, 4> w = p.valid() ? interpolationWeights(f, samples, x, y, p)
+                                                         : std::array<float, 4>{-1.0f, 0.0f, 0.0f, 0.0f};
+                plan.weights[i] = w;
+                if (!(w[0] > 0.0f || w[1] > 0.0f || w[2] > 0.0f || w[3] > 0.0f)) weighted[x / f.stride] = 0;
+            }
     });
 }
 
