@@ -168,6 +168,15 @@ std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const F
     return weights;
 }
 
+// Stride > 1: whether any of the (up to) 4 filtered samples around cell (sx, sy) (its first, right, below and
+// below right) is not zero.
+bool cellHasValue(const FilterPass& f, std::span<const uint8_t> filteredNonZero, int sx, int sy) {
+    const size_t k00 = f.sampleIndex(sx, sy);
+    const bool right = sx + 1 < f.ox + f.sw, below = sy + 1 < f.oy + f.sh;
+    return filteredNonZero[k00] || (right && filteredNonZero[k00 + 1]) ||
+           (below && filteredNonZero[k00 + f.sw]) || (right && below && filteredNonZero[k00 + f.sw + 1]);
+}
+
 // Stride > 1, without a plan: whether pixel (x, y), whose surface is p, is zero without its weights — the
 // filtered samples around it are all zero and the first of them, (x / stride, y / stride), lies on its
 // surface, so interpolatePixel would give zero (most of a shadow's change is zero: this saves computing the
@@ -175,10 +184,7 @@ std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const F
 bool zeroAround(const FilterPass& f, std::span<const uint8_t> filteredNonZero, int x, int y, size_t k00,
                 const SurfacePoint& p) {
     const int sx0 = x / f.stride, sy0 = y / f.stride;
-    const bool right = sx0 + 1 < f.ox + f.sw, below = sy0 + 1 < f.oy + f.sh;
-    if (filteredNonZero[k00] || (right && filteredNonZero[k00 + 1]) ||
-        (below && filteredNonZero[k00 + f.sw]) || (right && below && filteredNonZero[k00 + f.sw + 1]))
-        return false;
+    if (cellHasValue(f, filteredNonZero, sx0, sy0)) return false;
     const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
     const float allowance =
         planeAllowance * f.offsetLength[static_cast<size_t>(sy0 * f.stride - y + f.reach) * f.side +
@@ -311,10 +317,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
             if (cellPlan && zeroCells && plan->weighted[k00]) {
                 // Every pixel of the cell weighs some of its samples: where all of them are zero, so is every
                 // pixel (as interpolatePixel would give it), without reading their weights.
-                const bool right = sx + 1 < f.ox + f.sw, below = sy + 1 < f.oy + f.sh;
-                if (!filteredNonZero[k00] && !(right && filteredNonZero[k00 + 1]) &&
-                    !(below && filteredNonZero[k00 + f.sw]) &&
-                    !(right && below && filteredNonZero[k00 + f.sw + 1])) {
+                if (!cellHasValue(f, filteredNonZero, sx, sy)) {
                     std::fill(out.begin() + (static_cast<ptrdiff_t>(y) * f.width + x) * channels,
                               out.begin() + (static_cast<ptrdiff_t>(y) * f.width + cellEnd) * channels, 0.0f);
                     x = cellEnd;

@@ -204,6 +204,21 @@ void refineSparse(std::vector<T>& values, std::span<const SurfacePoint> points, 
 // between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),
 // and the pixels that have none are traced as well, or blended from a finer grid of them (fillHoles). With
 // stride 1 every pixel is traced and filtered.
+// The valid points' pixels at every stride-th pixel of every stride-th row of `bounds` (which holds all valid
+// points), for a trace. An empty list would mean every pixel: where there is none, pixel 0 alone, a place
+// that is then invalid (inside `bounds` it would be listed, outside it no point is valid).
+inline std::vector<uint32_t> validPixels(std::span<const SurfacePoint> points, const PixelRect& bounds,
+                                         int width, int stride) {
+    std::vector<uint32_t> pixels;
+    for (int y = (bounds.y0 + stride - 1) / stride * stride; y < bounds.y1; y += stride)
+        for (int x = (bounds.x0 + stride - 1) / stride * stride; x < bounds.x1; x += stride) {
+            const size_t i = static_cast<size_t>(y) * width + x;
+            if (points[i].valid()) pixels.push_back(static_cast<uint32_t>(i));
+        }
+    if (pixels.empty()) pixels.push_back(0);
+    return pixels;
+}
+
 // `bounds` holds all valid points.
 template <typename T, typename Trace>
 std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect& bounds,
@@ -211,30 +226,16 @@ std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect
                            Trace&& trace, const SparseRefinement& refine = {}) {
     if (stride <= 1) {
         // Where `bounds` is less than the image (the objects' pixels), its pixels are listed, so that the
-        // pass does not visit every point of the image to find the valid ones.
-        std::vector<uint32_t> listed;
-        if (static_cast<size_t>(bounds.x1 - bounds.x0) * (bounds.y1 - bounds.y0) < points.size()) {
-            for (int y = bounds.y0; y < bounds.y1; ++y)
-                for (int x = bounds.x0; x < bounds.x1; ++x) {
-                    const size_t i = static_cast<size_t>(y) * camera.width + x;
-                    if (points[i].valid()) listed.push_back(static_cast<uint32_t>(i));
-                }
-            // An empty list would mean every pixel: with no valid point in `bounds` there is none at all, and
-            // pixel 0 is an invalid one.
-            if (listed.empty()) listed.push_back(0);
-        }
+        // pass does not visit every point of the image to find the valid ones; else the empty list: all.
+        const std::vector<uint32_t> listed =
+            static_cast<size_t>(bounds.x1 - bounds.x0) * (bounds.y1 - bounds.y0) < points.size()
+                ? validPixels(points, bounds, camera.width, 1)
+                : std::vector<uint32_t>{};
         std::vector<T> values = trace(std::span<const uint32_t>(listed));
         denoiseInPlace(values, perPixel, points, camera, filter, nullptr, &bounds);
         return values;
     }
-    std::vector<uint32_t> samples;
-    for (int y = (bounds.y0 + stride - 1) / stride * stride; y < bounds.y1; y += stride)
-        for (int x = (bounds.x0 + stride - 1) / stride * stride; x < bounds.x1; x += stride) {
-            const size_t i = static_cast<size_t>(y) * camera.width + x;
-            if (points[i].valid()) samples.push_back(static_cast<uint32_t>(i));
-        }
-    // An empty list would mean every pixel. Pixel 0 is a sample position, so here it is invalid: nothing.
-    if (samples.empty()) samples.push_back(0);
+    const std::vector<uint32_t> samples = validPixels(points, bounds, camera.width, stride);
     std::vector<T> values = trace(std::span<const uint32_t>(samples));
     // The same number of samples as the filter at stride 1 (at least the 3x3 around each pixel), spaced out.
     DenoiseSettings fill = filter;
