@@ -1,6 +1,7 @@
 #include "pipeline/bounce_light.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <optional>
 
@@ -186,20 +187,38 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
              : glm::dvec3(0.0);
     glm::dvec3 gatheredSoFar(0.0);  // the passes' bounces before this one, summed alike
     SurfaceRadiance previous;       // indirect before the last pass (tail with bounces > 1)
+    // Rays read level 0 where they land: only the cones need the coarser levels, built every pass. The rays'
+    // level 0 is made once and its surface voxels set again each pass: the same voxels as made anew.
+    std::optional<MipVolume> rayLight;
     for (int bounce = 0; bounce < bounces; ++bounce) {
         if (tail && bounce == bounces - 1 && bounces > 1) previous = indirect;
         // The light so far: direct plus the bounces gathered before (at the surface voxels; adding zero
         // elsewhere keeps the bits a sum with a zero grid had).
-        PackedGrid3 total = PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + glm::vec4(0.0f); });
-        if (bounce > 0)
+        auto lightSoFar = [&](size_t k, size_t i) { return direct[i] + glm::vec4(indirect[k], 0.0f); };
+        std::optional<MipVolume> coneLight;
+        if (byRays && rayLight) {
+            PackedGrid3& level0 = rayLight->levelForUpdate(0);
+            std::atomic<bool> zerosChanged{false};
             forEachSurfaceVoxel(geometry, [&](size_t, size_t k, size_t i) {
-                total.set(i, direct[i] + glm::vec4(indirect[k], 0.0f));
+                const bool wasZero = zeroVoxel(level0, i);
+                level0.set(i, lightSoFar(k, i));
+                if (zeroVoxel(level0, i) != wasZero) zerosChanged.store(true, std::memory_order_relaxed);
             });
-        // Rays read level 0 where they land: only the cones need the coarser levels.
-        std::vector<PackedGrid3> levels;
-        levels.push_back(std::move(total));
-        const MipVolume light =
-            byRays ? MipVolume(region, std::move(levels)) : buildMipChain(region, std::move(levels.front()));
+            if (zerosChanged) rayLight->setOccupiedBounds(nonZeroBounds(level0, level0.window()));
+        } else {
+            PackedGrid3 total =
+                PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + glm::vec4(0.0f); });
+            if (bounce > 0)
+                forEachSurfaceVoxel(geometry,
+                                    [&](size_t, size_t k, size_t i) { total.set(i, lightSoFar(k, i)); });
+            std::vector<PackedGrid3> levels;
+            levels.push_back(std::move(total));
+            if (byRays)
+                rayLight.emplace(region, std::move(levels));
+            else
+                coneLight.emplace(buildMipChain(region, std::move(levels.front())));
+        }
+        const MipVolume& light = byRays ? *rayLight : *coneLight;
         // Gather at each surface voxel of the coarse level.
         parallelFor(0, static_cast<int64_t>(m) * m, 4, [&](int64_t row) {
             const int z = static_cast<int>(row / m), y = static_cast<int>(row % m);

@@ -532,9 +532,12 @@ void forEachRow(const VoxelBox& box, RowBody&& rowBody) {
 inline bool zeroVoxel(const Grid3& grid, int x, int y, int z) {
     return grid.at(x, y, z) == glm::vec4(0.0f);
 }
-inline bool zeroVoxel(const PackedGrid3& grid, int x, int y, int z) {
+inline bool zeroVoxel(const PackedGrid3& grid, size_t i) {
     constexpr PackedVoxel kAllButSigns = 0x7FFF7FFF7FFF7FFFull;
-    return !grid.window().contains(x, y, z) || (grid.packed(grid.index(x, y, z)) & kAllButSigns) == 0;
+    return (grid.packed(i) & kAllButSigns) == 0;
+}
+inline bool zeroVoxel(const PackedGrid3& grid, int x, int y, int z) {
+    return !grid.window().contains(x, y, z) || zeroVoxel(grid, grid.index(x, y, z));
 }
 
 template <typename Grid>
