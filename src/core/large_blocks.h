@@ -17,6 +17,8 @@
 
 #include <cstddef>
 #include <memory>
+#include <new>
+#include <utility>
 
 namespace deltagi {
 
@@ -47,6 +49,29 @@ struct LargeBlockAllocator {
     template <typename U>
     bool operator==(const LargeBlockAllocator<U>&) const {
         return true;
+    }
+};
+
+// LargeBlockAllocator whose elements made without a value are left uninitialized (an integer, a glm vector
+// without GLM_FORCE_CTOR_INIT, a struct of them without default member initializers): for arrays that are
+// written in full next.
+template <typename T>
+struct UnsetAllocator : LargeBlockAllocator<T> {
+    using value_type = T;
+    template <typename U>
+    struct rebind {
+        using other = UnsetAllocator<U>;
+    };
+    UnsetAllocator() = default;
+    template <typename U>
+    UnsetAllocator(const UnsetAllocator<U>&) {}
+    template <typename U>
+    void construct(U* p) noexcept {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <typename U, typename... Args>
+    void construct(U* p, Args&&... args) {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
     }
 };
 

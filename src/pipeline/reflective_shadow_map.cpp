@@ -259,12 +259,15 @@ std::optional<RsmTexel> retraceTexel(const RayScene& scene, const MapLayout& lay
     return texelFromHit(hit, ray, regionBounds, texelIndex(res, face, i, j), viewpoint);
 }
 
-// Appends `rows` in order to `texels`, grown once to their total.
+// Appends `rows` in order to `texels`, grown once to their total and copied into place in parallel (tens of
+// MiB for a point light's cube map).
 void appendRows(const std::vector<std::vector<RsmTexel>>& rows, RsmTexels& texels) {
-    size_t total = texels.size();
-    for (const auto& row : rows) total += row.size();
-    texels.reserve(total);
-    for (const auto& row : rows) texels.insert(texels.end(), row.begin(), row.end());
+    std::vector<size_t> start(rows.size() + 1, texels.size());
+    for (size_t r = 0; r < rows.size(); ++r) start[r + 1] = start[r] + rows[r].size();
+    texels.resize(start.back());  // not initialized: every new texel is copied below
+    parallelFor(0, static_cast<int64_t>(rows.size()), 16, [&](int64_t r) {
+        std::copy(rows[r].begin(), rows[r].end(), texels.begin() + static_cast<ptrdiff_t>(start[r]));
+    });
 }
 
 // Renders every face row by row, rows in parallel. `rowTexels(face, j, out)` appends row j's texels in column

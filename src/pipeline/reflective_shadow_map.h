@@ -14,17 +14,18 @@
 
 namespace deltagi {
 
+// No default member initializers: a map's texels are sized without a value and copied in (RsmTexels);
+// RsmTexel{} is all zeros.
 struct RsmTexel {
-    glm::vec3 position{0.0f};
-    glm::vec3 normal{0.0f};  // the shading normal (without normal maps), facing the light
-    glm::vec3 flux{
-        0.0f};          // reflected flux (W): Material::volumeReflectance() * flux arriving through the texel
-    float area = 0.0f;  // surface area the texel covers (world units^2)
-    uint32_t index = 0;  // face * resolution^2 + row * resolution + column: the texel's place in the map
+    glm::vec3 position;
+    glm::vec3 normal;  // the shading normal (without normal maps), facing the light
+    glm::vec3 flux;    // reflected flux (W): Material::volumeReflectance() * flux arriving through the texel
+    float area;        // surface area the texel covers (world units^2)
+    uint32_t index;    // face * resolution^2 + row * resolution + column: the texel's place in the map
 };
 
-// A map's texels: large blocks (core/large_blocks.h), recycled from map to map.
-using RsmTexels = std::vector<RsmTexel, LargeBlockAllocator<RsmTexel>>;
+// A map's texels: large blocks (core/large_blocks.h), recycled from map to map, sized without a value.
+using RsmTexels = std::vector<RsmTexel, UnsetAllocator<RsmTexel>>;
 
 struct ReflectiveShadowMap {
     int resolution = 0;  // texels per face side

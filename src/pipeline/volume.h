@@ -66,28 +66,6 @@ struct VoxelBox {
     }
 };
 
-// LargeBlockAllocator whose elements made without a value are left uninitialized (an integer, or a glm
-// vector without GLM_FORCE_CTOR_INIT): for arrays that are written in full next.
-template <typename T>
-struct UnsetAllocator : LargeBlockAllocator<T> {
-    using value_type = T;
-    template <typename U>
-    struct rebind {
-        using other = UnsetAllocator<U>;
-    };
-    UnsetAllocator() = default;
-    template <typename U>
-    UnsetAllocator(const UnsetAllocator<U>&) {}
-    template <typename U>
-    void construct(U* p) noexcept {
-        ::new (static_cast<void*>(p)) U;
-    }
-    template <typename U, typename... Args>
-    void construct(U* p, Args&&... args) {
-        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
-    }
-};
-
 // Every element of `values` set to `value`, in parallel: a volume's tens of MiB on one thread took
 // milliseconds of a frame in which the other core waited.
 template <typename T, typename Allocator>

@@ -93,7 +93,7 @@ TEST(Inject, TheSurfaceVoxelsAloneGiveTheSameVolume) {
     RayScene rays(s, SceneContent::RealOnly);
     std::vector<ReflectiveShadowMap> rsm = {
         renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 64)};
-    RsmTexel stray;
+    RsmTexel stray{};
     stray.position = glm::vec3(-0.55f, 0.7f, 0.45f);  // in the air
     stray.normal = glm::vec3(0, 1, 0);
     stray.flux = glm::vec3(0.01f);
