@@ -160,7 +160,8 @@ RayLanding voxelSurfaceAlong(const RayScene& scene, glm::vec3 centre, glm::vec3 
 }
 
 SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
-                            const Options& options, int bounces, glm::vec3 viewpoint, const RayScene* rays) {
+                            const Options& options, int bounces, glm::vec3 viewpoint, const RayScene* rays,
+                            const InjectedVoxels* written) {
     const int n = direct.resolution();
     const int level = gatherLevel(visibility);
     SurfaceRadiance indirect(geometry.surfaceVoxels.size(), glm::vec3(0.0f));
@@ -211,9 +212,15 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
             if (bounce > 0)
                 forEachSurfaceVoxel(geometry,
                                     [&](size_t, size_t k, size_t i) { total.set(i, lightSoFar(k, i)); });
+            // Its non-zero voxels found among those the injection wrote, where it lists them.
+            const VoxelGeometry* geometries[] = {&geometry};
+            const std::optional<VoxelBox> occupied =
+                byRays && written ? injectedBounds(total, geometries, *written) : std::nullopt;
             std::vector<PackedGrid3> levels;
             levels.push_back(std::move(total));
-            if (byRays)
+            if (occupied)
+                rayLight.emplace(region, std::move(levels), *occupied);
+            else if (byRays)
                 rayLight.emplace(region, std::move(levels));
             else
                 coneLight.emplace(buildMipChain(region, std::move(levels.front())));

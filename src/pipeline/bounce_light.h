@@ -18,6 +18,7 @@
 
 #include "core/ray_scene.h"
 #include "deltagi/options.h"
+#include "pipeline/inject.h"
 #include "pipeline/volume.h"
 #include "pipeline/voxelize.h"
 
@@ -48,9 +49,10 @@ RayLanding voxelSurfaceAlong(const RayScene& scene, glm::vec3 centre, glm::vec3 
 // options.render.bounce_tail the last bounce is added again times r / (1 - r), r the ratio of its light to
 // the one before's over the geometry's surfaces (per colour channel). Deterministic for any thread count;
 // zero for bounces <= 0.
+// `written`: the voxels injectLight may have made non-zero in `direct` over `geometry` alone (null: any).
 SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, const MipVolume& visibility,
                             const Options& options, int bounces, glm::vec3 viewpoint,
-                            const RayScene* rays = nullptr);
+                            const RayScene* rays = nullptr, const InjectedVoxels* written = nullptr);
 
 // light += bounced at the surface voxels of `geometry` (occupancy unchanged), where `bounced` is
 // bounceLight's result over it; in parallel.

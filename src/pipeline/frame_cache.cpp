@@ -198,6 +198,7 @@ void FrameCache::emptyLight(bool keepRsms) {
         l.rsmSides.clear();
     }
     l.injected.reset();
+    l.injectedBounds.reset();
     l.bounce.reset();
     l.bounceSides.clear();
     light.version = ++nextVersion_;

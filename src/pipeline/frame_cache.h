@@ -66,6 +66,8 @@ struct LightWork {
     std::vector<int8_t> rsmSides;
     std::optional<Grid3> injected;          // from `rsms`, plus `bounce`
     std::optional<SurfaceRadiance> bounce;  // the further bounces (options.render.light_bounces)
+    std::optional<VoxelBox>
+        injectedBounds;  // around `injected`'s non-zero voxels, where injectedBounds found it
     std::vector<bool> bounceSides;
     // The maps of the light before, when it changed: a light that did not change (a lamp beside a light
     // camera's environment) takes its map from here as long as the region's voxels and the viewpoint's sides

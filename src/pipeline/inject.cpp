@@ -141,7 +141,8 @@ bool surfacesListed(std::span<const VoxelGeometry* const> geometry) {
 }  // namespace
 
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
-                  std::span<const VoxelGeometry* const> geometry) {
+                  std::span<const VoxelGeometry* const> geometry, InjectedVoxels* written) {
+    if (written) *written = InjectedVoxels{};
     const int n = region.resolution;
     // voxelLight is zero where no texel landed and no surface is: with the surface voxels listed, only they
     // and the lit voxels off them (a texel rounded into the voxel beside its surface) are visited.
@@ -204,7 +205,52 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     parallelFor(0, slabCount, 1, [&](int64_t s) {
         for (uint32_t i : offSurfaces[s]) finish(i);
     });
+    if (written) {
+        written->listed = true;
+        for (const std::vector<uint32_t>& slab : offSurfaces)
+            written->offSurface.insert(written->offSurface.end(), slab.begin(), slab.end());
+    }
     return light;
+}
+
+namespace {
+
+template <typename Grid, typename NonZero>
+std::optional<VoxelBox> boundsOfListed(const Grid& grid, std::span<const VoxelGeometry* const> geometry,
+                                       const InjectedVoxels& written, NonZero&& nonZero) {
+    if (!written.listed || !grid.whole()) return std::nullopt;
+    const size_t n = static_cast<size_t>(grid.resolution());
+    auto box = [n](size_t i) {
+        return VoxelBox::voxel(
+            glm::ivec3(static_cast<int>(i % n), static_cast<int>(i / n % n), static_cast<int>(i / (n * n))));
+    };
+    // Each row of surface voxels its own box (one task per row), joined after: min and max, the same in any
+    // order.
+    VoxelBox bounds;
+    for (const VoxelGeometry* g : geometry) {
+        const size_t rows = g->surfaceRowStart.empty() ? 0 : g->surfaceRowStart.size() - 1;
+        std::vector<VoxelBox> rowBounds(rows);
+        forEachSurfaceVoxel(*g, [&](size_t row, size_t, size_t i) {
+            if (nonZero(i)) rowBounds[row].extend(box(i));
+        });
+        for (const VoxelBox& b : rowBounds) bounds.extend(b);
+    }
+    for (const uint32_t i : written.offSurface)
+        if (nonZero(i)) bounds.extend(box(i));
+    return bounds;
+}
+
+}  // namespace
+
+std::optional<VoxelBox> injectedBounds(const Grid3& grid, std::span<const VoxelGeometry* const> geometry,
+                                       const InjectedVoxels& written) {
+    return boundsOfListed(grid, geometry, written, [&](size_t i) { return grid[i] != glm::vec4(0.0f); });
+}
+
+std::optional<VoxelBox> injectedBounds(const PackedGrid3& grid,
+                                       std::span<const VoxelGeometry* const> geometry,
+                                       const InjectedVoxels& written) {
+    return boundsOfListed(grid, geometry, written, [&](size_t i) { return !zeroVoxel(grid, i); });
 }
 
 PackedGrid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly) {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -13,15 +14,33 @@
 
 namespace deltagi {
 
+// The voxels injectLight may have made non-zero (its `written`): every other voxel of its grid is zero.
+struct InjectedVoxels {
+    // Whether they are listed: the geometries' surface voxels (VoxelGeometry::surfaceVoxels) and
+    // `offSurface`, the lit voxels beside them (a texel rounded into the voxel next to its surface). False:
+    // any voxel.
+    bool listed = false;
+    std::vector<uint32_t> offSurface;
+};
+
 // Radiance of a voxel = the mean radiance of the texels that landed in it (reflected flux / (pi * footprint
 // area)), times the lit fraction of the geometry's surface area in the voxel (footprint / area; where the map
 // has many texels across a voxel, saturating at 3/4, which absorbs their count's jitter: lightRadiance in
 // inject.cpp). Voxels are (radiance * occupancy, occupancy), with occupancy 1 where any of `geometry` touches
 // the voxel. Emissive geometry adds its emitted radiance, averaged over the voxel's surface area: the cones
 // then carry the light of emitters (one bounce of it: emitted light is not reflected into the volume again).
-// Deterministic for any thread count.
+// Deterministic for any thread count. `written` (if given) gets the voxels it may have made non-zero.
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
-                  std::span<const VoxelGeometry* const> geometry);
+                  std::span<const VoxelGeometry* const> geometry, InjectedVoxels* written = nullptr);
+
+// nonZeroBounds over the whole of `grid` (a level-0 grid stored whole: injectLight's, packed or not, and
+// changed since at the geometries' surface voxels only), found among the voxels `written` lists instead of
+// reading every voxel; nullopt when they are not listed.
+std::optional<VoxelBox> injectedBounds(const Grid3& grid, std::span<const VoxelGeometry* const> geometry,
+                                       const InjectedVoxels& written);
+std::optional<VoxelBox> injectedBounds(const PackedGrid3& grid,
+                                       std::span<const VoxelGeometry* const> geometry,
+                                       const InjectedVoxels& written);
 
 // full - sceneOnly in the radiance channels; the occupancy of `full` (which covers both). Packed as it is
 // made (no float grid in between: 32 MiB at 128^3 that a first frame would fault in for nothing).

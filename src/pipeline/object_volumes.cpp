@@ -87,7 +87,8 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
     // beyond the binned ones under the same light bin them all.
     if (!sceneTexels_ || !sceneTexels_->voxels.contains(changed))
         sceneTexels_ = binTexels(real.rsms, region_, newLight ? changed : VoxelRows::all(region_.resolution));
-    if (!sceneLightBounds_) sceneLightBounds_ = nonZeroBounds(real.light, all);
+    if (!sceneLightBounds_)
+        sceneLightBounds_ = real.lightBounds ? *real.lightBounds : nonZeroBounds(real.light, all);
     if (newLight) {
         // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).
         freshFull_.emplace(real.light);

@@ -41,6 +41,8 @@ struct RealSceneVolumes {
     // Another value whenever `rsms`, `light` or `bounce` differ from the last frame's (the real light
     // changed).
     uint64_t lightVersion = 0;
+    // The box around the non-zero voxels of `light` (injectedBounds), or null: found by reading it.
+    const VoxelBox* lightBounds = nullptr;
 };
 
 // What ObjectVolumes::roomChange is made from: the real scene's voxels with albedo, and the rays of the relit

@@ -217,18 +217,21 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     // 3. Light injection: the full light volume and the delta volume = full - scene alone.
     const VoxelGeometry* sceneAlone[] = {&*real.geometry};
     if (!light.injected) {
-        light.injected = injectLight(*light.rsms, region, sceneAlone);
+        InjectedVoxels written;
+        light.injected = injectLight(*light.rsms, region, sceneAlone, &written);
         if (bounces > 0) {
             timer.lap("inject");
             light.bounce = bounceLight(*light.injected, *real.geometry, sceneVisibility, scene.options,
-                                       bounces, viewpoint, &realOnly);
+                                       bounces, viewpoint, &realOnly, &written);
             light.bounceSides = bounceViewSides(sceneVisibility, viewpoint);
             addBounce(*light.injected, *light.bounce, *real.geometry);
             timer.lap("bounce");
         }
+        // The bounces changed the surface voxels alone: the injection's voxels still hold every non-zero one.
+        light.injectedBounds = injectedBounds(*light.injected, sceneAlone, written);
     }
     objects.inject({*real.geometry, *light.rsms, *light.injected, light.bounce ? &*light.bounce : nullptr,
-                    cache.light.version},
+                    cache.light.version, light.injectedBounds ? &*light.injectedBounds : nullptr},
                    updates);
     timer.lap("inject");
     // 4. Mipmaps of all four volumes. With further bounces the objects reflect the room's light they receive

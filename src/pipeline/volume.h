@@ -401,6 +401,13 @@ class MipVolume {
         whole_ = std::all_of(levels_.begin(), levels_.end(), [](const PackedGrid3& g) { return g.whole(); });
         findOccupiedBounds();
     }
+    // The same where the caller knows the box around level 0's non-zero voxels (what nonZeroBounds would
+    // find), e.g. injectedBounds.
+    MipVolume(VolumeRegion region, std::vector<PackedGrid3> levels, const VoxelBox& occupied)
+        : region_(region), levels_(std::move(levels)) {
+        whole_ = std::all_of(levels_.begin(), levels_.end(), [](const PackedGrid3& g) { return g.whole(); });
+        setOccupiedBounds(occupied);
+    }
 
     const VolumeRegion& region() const { return region_; }
     int levelCount() const { return static_cast<int>(levels_.size()); }

@@ -233,6 +233,52 @@ TEST(ObjectVolumes, WholeMapsRetracedAndLargeJumpsEqualVolumesFromScratch) {
 // ceiling from the floor beneath it, so the floor there reflects less light than the room's own volumes say.
 // roomChange() holds that change (negative under the ball), only near the ball, and the objects' rays read it
 // with the full light volume (the floor under the ball darker); with no gather rays it is not made.
+// The injection lists the voxels it may make non-zero (InjectedVoxels), so that the box around them is found
+// without reading the whole grid (injectedBounds): the same box as the scan's, of the float light and of its
+// packed level 0, before and after the further bounces; and the bounces the same with the listed voxels as
+// without.
+TEST(ObjectVolumes, InjectedBoundsAreTheScansOfTheWholeGrid) {
+    const Scene s = floorWithBall();
+    const RayScene rays(s, SceneContent::RealOnly);
+    const VoxelGeometry geometry = voxelize(s.real, kRegion, true, true);
+    std::vector<ReflectiveShadowMap> rsms;
+    for (const Light& l : s.lights) rsms.push_back(renderReflectiveShadowMap(rays, l, kRegion, 96));
+    // A texel off every surface, in the region's far corner (the injection's off-surface voxels are a texel's
+    // position rounded into the voxel beside its surface): it widens the box.
+    RsmTexel stray{};
+    stray.position = glm::vec3(0.75f, 1.25f, 0.75f);
+    stray.normal = glm::vec3(0.0f, 1.0f, 0.0f);
+    stray.flux = glm::vec3(0.01f);
+    stray.area = 1e-3f;
+    rsms[0].texels.push_back(stray);
+    const VoxelGeometry* alone[] = {&geometry};
+    InjectedVoxels written;
+    Grid3 light = injectLight(rsms, kRegion, alone, &written);
+    ASSERT_TRUE(written.listed);
+    // Every non-zero voxel is listed: a surface voxel, or one off the surfaces (the stray texel's).
+    EXPECT_EQ(written.offSurface.size(), 1u);
+    std::vector<char> listed(light.size(), 0);
+    for (const uint32_t i : geometry.surfaceVoxels) listed[i] = 1;
+    for (const uint32_t i : written.offSurface) listed[i] = 1;
+    for (size_t i = 0; i < light.size(); ++i)
+        if (light[i] != glm::vec4(0.0f)) ASSERT_TRUE(listed[i]) << "voxel " << i << " is not listed";
+    const VoxelBox all = VoxelBox::all(kRegion.resolution);
+    ASSERT_EQ(nonZeroBounds(light, all).hi, glm::ivec3(kRegion.resolution));  // the stray texel's voxel
+    EXPECT_EQ(injectedBounds(light, alone, written), nonZeroBounds(light, all));
+    const PackedGrid3 packed(light);
+    EXPECT_EQ(injectedBounds(packed, alone, written), nonZeroBounds(packed, all));
+
+    const MipVolume visibility = buildMipChain(kRegion, geometry.visibility.clone());
+    const glm::vec3 viewpoint(0.0f, 0.5f, 1.5f);
+    const SurfaceRadiance bounce =
+        bounceLight(light, geometry, visibility, Options{}, 2, viewpoint, &rays, &written);
+    const SurfaceRadiance scanned = bounceLight(light, geometry, visibility, Options{}, 2, viewpoint, &rays);
+    ASSERT_EQ(bounce.size(), scanned.size());
+    for (size_t k = 0; k < bounce.size(); ++k) ASSERT_EQ(bounce[k], scanned[k]) << "surface voxel " << k;
+    addBounce(light, bounce, geometry);
+    EXPECT_EQ(injectedBounds(light, alone, written), nonZeroBounds(light, all));
+}
+
 TEST(ObjectVolumes, TheRoomChangeUnderABallIsTheCeilingLightItHides) {
     const VolumeRegion region{glm::vec3(0.0f, -0.05f, 0.0f), 1.0f, 32};
     Scene s;
