@@ -1,7 +1,6 @@
 #include "pipeline/bounce_light.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <optional>
 
@@ -191,6 +190,14 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
     // Rays read level 0 where they land: only the cones need the coarser levels, built every pass. The rays'
     // level 0 is made once and its surface voxels set again each pass: the same voxels as made anew.
     std::optional<MipVolume> rayLight;
+    // The box around the rays' level 0's non-zero voxels: found among those the injection wrote where it
+    // lists them, else by reading the whole grid.
+    const VoxelGeometry* geometries[] = {&geometry};
+    auto occupiedBounds = [&](const PackedGrid3& level0) {
+        const std::optional<VoxelBox> listed =
+            written ? injectedBounds(level0, geometries, *written) : std::nullopt;
+        return listed ? *listed : nonZeroBounds(level0, level0.window());
+    };
     for (int bounce = 0; bounce < bounces; ++bounce) {
         if (tail && bounce == bounces - 1 && bounces > 1) previous = indirect;
         // The light so far: direct plus the bounces gathered before (at the surface voxels; adding zero
@@ -199,31 +206,23 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
         std::optional<MipVolume> coneLight;
         if (byRays && rayLight) {
             PackedGrid3& level0 = rayLight->levelForUpdate(0);
-            std::atomic<bool> zerosChanged{false};
-            forEachSurfaceVoxel(geometry, [&](size_t, size_t k, size_t i) {
-                const bool wasZero = zeroVoxel(level0, i);
-                level0.set(i, lightSoFar(k, i));
-                if (zeroVoxel(level0, i) != wasZero) zerosChanged.store(true, std::memory_order_relaxed);
-            });
-            if (zerosChanged) rayLight->setOccupiedBounds(nonZeroBounds(level0, level0.window()));
+            forEachSurfaceVoxel(geometry,
+                                [&](size_t, size_t k, size_t i) { level0.set(i, lightSoFar(k, i)); });
+            rayLight->setOccupiedBounds(occupiedBounds(level0));
         } else {
             PackedGrid3 total =
                 PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + glm::vec4(0.0f); });
             if (bounce > 0)
                 forEachSurfaceVoxel(geometry,
                                     [&](size_t, size_t k, size_t i) { total.set(i, lightSoFar(k, i)); });
-            // Its non-zero voxels found among those the injection wrote, where it lists them.
-            const VoxelGeometry* geometries[] = {&geometry};
-            const std::optional<VoxelBox> occupied =
-                byRays && written ? injectedBounds(total, geometries, *written) : std::nullopt;
-            std::vector<PackedGrid3> levels;
-            levels.push_back(std::move(total));
-            if (occupied)
-                rayLight.emplace(region, std::move(levels), *occupied);
-            else if (byRays)
-                rayLight.emplace(region, std::move(levels));
-            else
-                coneLight.emplace(buildMipChain(region, std::move(levels.front())));
+            if (byRays) {
+                const VoxelBox occupied = occupiedBounds(total);
+                std::vector<PackedGrid3> levels;
+                levels.push_back(std::move(total));
+                rayLight.emplace(region, std::move(levels), occupied);
+            } else {
+                coneLight.emplace(buildMipChain(region, std::move(total)));
+            }
         }
         const MipVolume& light = byRays ? *rayLight : *coneLight;
         // Gather at each surface voxel of the coarse level.

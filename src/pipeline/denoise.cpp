@@ -26,6 +26,11 @@ T powInt(T x, int n) {
     return r;
 }
 
+// The filter's sample at a point (invalid where the pass holds no value there: `traced` false).
+FilterSample filterSampleOf(const SurfacePoint& q, bool traced = true) {
+    return {q.position, q.normal, q.valid() && traced};
+}
+
 // Everything one filter pass reads, shared by its rows.
 struct FilterPass {
     std::span<float> values;
@@ -243,7 +248,7 @@ void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
         for (int sx = 0; sx < f.sw; ++sx) {
             const SurfacePoint& q = plan.surfaces[static_cast<size_t>(sy) * f.stride * f.width +
                                                   static_cast<size_t>(sx) * f.stride];
-            samples[static_cast<size_t>(sy) * f.sw + sx] = {q.position, q.normal, q.valid()};
+            samples[static_cast<size_t>(sy) * f.sw + sx] = filterSampleOf(q);
         }
     });
     plan.stride = f.stride;
@@ -455,8 +460,7 @@ void denoiseInto(std::span<float> values, int channels, std::span<const SurfaceP
     const PixelRect& changed = s.planChanged;
     auto sampleOfPoint = [&](int sx, int sy) {
         const size_t j = static_cast<size_t>(sy) * stride * width + static_cast<size_t>(sx) * stride;
-        return FilterSample{points[j].position, points[j].normal,
-                            points[j].valid() && (s.traced.empty() || s.traced[j] != 0)};
+        return filterSampleOf(points[j], s.traced.empty() || s.traced[j] != 0);
     };
     if (planSamples) {
         f.samples = plan->samples;

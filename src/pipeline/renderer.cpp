@@ -267,10 +267,11 @@ Image renderRealScene(const Scene& scene, const RayScene& realOnly, std::span<co
     const std::vector<Light> shaded = directLights(scene);
     const VoxelGeometry* geometries[] = {&geometry};
     const MipVolume visibility = buildMipChain(region, std::move(geometry.packedVisibility));
-    Grid3 direct = injectLight(rsms, region, geometries);
+    InjectedVoxels written;
+    Grid3 direct = injectLight(rsms, region, geometries, &written);
     if (bounces > 0) {
         const SurfaceRadiance bounced =
-            bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene), &realOnly);
+            bounceLight(direct, geometry, visibility, o, bounces, viewpointOf(scene), &realOnly, &written);
         addBounce(direct, bounced, geometry);
     }
     const MipVolume light = buildMipChain(region, std::move(direct));

@@ -199,11 +199,6 @@ void refineSparse(std::vector<T>& values, std::span<const SurfacePoint> points, 
     });
 }
 
-// Cone results `trace(pixels)` (perPixel values of T per pixel of `points`, for the listed pixels) at every
-// stride-th pixel of every stride-th row, then filtered: the edge-aware filter interpolates the pixels
-// between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),
-// and the pixels that have none are traced as well, or blended from a finer grid of them (fillHoles). With
-// stride 1 every pixel is traced and filtered.
 // The valid points' pixels at every stride-th pixel of every stride-th row of `bounds` (which holds all valid
 // points), for a trace. An empty list would mean every pixel: where there is none, pixel 0 alone, a place
 // that is then invalid (inside `bounds` it would be listed, outside it no point is valid).
@@ -219,6 +214,11 @@ inline std::vector<uint32_t> validPixels(std::span<const SurfacePoint> points, c
     return pixels;
 }
 
+// Cone results `trace(pixels)` (perPixel values of T per pixel of `points`, for the listed pixels) at every
+// stride-th pixel of every stride-th row, then filtered: the edge-aware filter interpolates the pixels
+// between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),
+// and the pixels that have none are traced as well, or blended from a finer grid of them (fillHoles). With
+// stride 1 every pixel is traced and filtered.
 // `bounds` holds all valid points.
 template <typename T, typename Trace>
 std::vector<T> traceSparse(std::span<const SurfacePoint> points, const PixelRect& bounds,
