@@ -48,6 +48,7 @@ struct FilterPass {
     int ox, oy, sw, sh;
     std::vector<float> spatial{};       // (2r+1)^2 window weights
     std::vector<float> offsetLength{};  // sqrt(px^2 + py^2 + 1) for every pixel offset a window can have
+    std::vector<float> fraction{};      // d / stride for d in [0, stride): a pixel's place between samples
     std::vector<FilterSample> samples{};
     std::vector<float> sampleValues{};
     // Per window centre ((sw + 1) x (sh + 1): a centre may lie one past the last sample): whether any sample
@@ -123,47 +124,65 @@ bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float
     return true;
 }
 
-// Stride > 1, the interpolation weights of pixel (x, y), whose surface is p, over the (up to) 4 samples
-// around it: bilinear, and like the filter's only for the samples on the pixel's surface; normalized, in
-// InterpolationPlan's order. All zero when none of them is on its surface.
-// The four samples' weights are worked out side by side in the lanes of 4-float vectors, each lane as
-// neighbourWeight and powInt work one out (the same operations in the same order: the same weights).
-std::array<float, 4> interpolationWeights(const FilterPass& f, std::span<const FilterSample> samples, int x,
-                                          int y, const SurfacePoint& p) {
-    using Float4 = float __attribute__((vector_size(16)));
-    using Int4 = int32_t __attribute__((vector_size(16)));
-    const int stride = f.stride;
-    const int sx0 = x / stride, sy0 = y / stride;
-    const float fx = static_cast<float>(x - sx0 * stride) / static_cast<float>(stride);
-    const float fy = static_cast<float>(y - sy0 * stride) / static_cast<float>(stride);
-    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
-    // A small floor under the bilinear weight: a pixel on a sample's row still reads the row below when the
-    // sample is on another surface.
-    constexpr float kMinBilinear = 1e-3f;
-    // Neighbour n is sample (sx0 + (n & 1), sy0 + (n >> 1)); one past the last row or column is none.
-    Float4 qx{}, qy{}, qz{}, nx{}, ny{}, nz{}, allowance{}, bilinear{};
+using Float4 = float __attribute__((vector_size(16)));
+using Int4 = int32_t __attribute__((vector_size(16)));
+
+// Stride > 1, the (up to) 4 samples around the pixels of cell (sx0, sy0) of the stride's grid, those whose
+// first sample it is: (sx0, sy0), (sx0 + 1, sy0), (sx0, sy0 + 1), (sx0 + 1, sy0 + 1), in the lanes of 4-float
+// vectors (one past the last row or column is none: not valid). The same for every pixel of the cell, so
+// that a pass loads them once a cell and row instead of once a pixel.
+struct CellSamples {
+    int sx0, sy0;
+    Float4 qx{}, qy{}, qz{}, nx{}, ny{}, nz{};
     Int4 valid{};
+};
+CellSamples cellSamples(const FilterPass& f, std::span<const FilterSample> samples, int sx0, int sy0) {
+    CellSamples c{sx0, sy0};
     for (int n = 0; n < 4; ++n) {
-        const int dx = n & 1, dy = n >> 1;
-        const int sx = sx0 + dx, sy = sy0 + dy;
-        bilinear[n] = (dx ? fx : 1.0f - fx) * (dy ? fy : 1.0f - fy);
+        const int sx = sx0 + (n & 1), sy = sy0 + (n >> 1);
         if (sx >= f.ox + f.sw || sy >= f.oy + f.sh) continue;
         const FilterSample& q = samples[f.sampleIndex(sx, sy)];
         if (!q.valid) continue;
-        valid[n] = -1;
-        qx[n] = q.position.x, qy[n] = q.position.y, qz[n] = q.position.z;
-        nx[n] = q.normal.x, ny[n] = q.normal.y, nz[n] = q.normal.z;
-        allowance[n] =
-            planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
-                                            sx * stride - x + f.reach];
+        c.valid[n] = -1;
+        c.qx[n] = q.position.x, c.qy[n] = q.position.y, c.qz[n] = q.position.z;
+        c.nx[n] = q.normal.x, c.ny[n] = q.normal.y, c.nz[n] = q.normal.z;
     }
+    return c;
+}
+
+// Pixel (x, y) of cell c, whose surface is p: the filter's weight of each of the cell's samples as its
+// neighbour (neighbourWeight, without the spatial factor; 0 where not usable), worked out side by side in
+// the lanes, each lane as neighbourWeight and powInt work one out (the same operations in the same order:
+// the same weights).
+Float4 cellNeighbourWeights(const FilterPass& f, const CellSamples& c, int x, int y, const SurfacePoint& p) {
+    const int stride = f.stride;
+    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    // The sample (sx, sy)'s allowance is planeAllowance times offsetLength at its offset from the pixel.
+    const size_t row0 = static_cast<size_t>(c.sy0 * stride - y + f.reach) * f.side;
+    const size_t col0 = static_cast<size_t>(c.sx0 * stride - x + f.reach);
+    const size_t below = static_cast<size_t>(stride) * f.side;
+    const Float4 allowance =
+        Float4{f.offsetLength[row0 + col0], f.offsetLength[row0 + col0 + stride],
+               f.offsetLength[row0 + below + col0], f.offsetLength[row0 + below + col0 + stride]} *
+        planeAllowance;
     // sameSurfaceWeight in each lane: facing the same side, near p's tangent plane, cos^normalPower.
-    const Float4 cosN = (p.normal.x * nx + p.normal.y * ny) + p.normal.z * nz;
-    const Float4 offPlane = (p.normal.x * (qx - p.position.x) + p.normal.y * (qy - p.position.y)) +
-                            p.normal.z * (qz - p.position.z);
+    const Float4 cosN = (p.normal.x * c.nx + p.normal.y * c.ny) + p.normal.z * c.nz;
+    const Float4 offPlane = (p.normal.x * (c.qx - p.position.x) + p.normal.y * (c.qy - p.position.y)) +
+                            p.normal.z * (c.qz - p.position.z);
     const Float4 distance = offPlane < 0.0f ? -offPlane : offPlane;
-    const Int4 usable = valid & ~(cosN <= 0.0f) & ~(distance > allowance);
-    Float4 w = usable ? powInt(cosN, f.s.normalPower) : Float4{};
+    const Int4 usable = c.valid & ~(cosN <= 0.0f) & ~(distance > allowance);
+    return usable ? powInt(cosN, f.s.normalPower) : Float4{};
+}
+
+// Stride > 1, the interpolation weights of pixel (x, y) of cell c from its samples' neighbour weights
+// (cellNeighbourWeights): bilinear, and like the filter's only for the samples on the pixel's surface;
+// normalized, in InterpolationPlan's order. All zero when none of them is on its surface.
+std::array<float, 4> interpolationWeights(const FilterPass& f, const CellSamples& c, int x, int y, Float4 w) {
+    const float fx = f.fraction[x - c.sx0 * f.stride], fy = f.fraction[y - c.sy0 * f.stride];
+    // A small floor under the bilinear weight: a pixel on a sample's row still reads the row below when the
+    // sample is on another surface.
+    constexpr float kMinBilinear = 1e-3f;
+    const Float4 bilinear = Float4{1.0f - fx, fx, 1.0f - fx, fx} * Float4{1.0f - fy, 1.0f - fy, fy, fy};
     w *= bilinear < kMinBilinear ? Float4{} + kMinBilinear : bilinear;
     // The sum in the neighbours' order (a zero adds nothing).
     const float weightSum = ((w[0] + w[1]) + w[2]) + w[3];
@@ -180,21 +199,6 @@ bool cellHasValue(const FilterPass& f, std::span<const uint8_t> filteredNonZero,
     const bool right = sx + 1 < f.ox + f.sw, below = sy + 1 < f.oy + f.sh;
     return filteredNonZero[k00] || (right && filteredNonZero[k00 + 1]) ||
            (below && filteredNonZero[k00 + f.sw]) || (right && below && filteredNonZero[k00 + f.sw + 1]);
-}
-
-// Stride > 1, without a plan: whether pixel (x, y), whose surface is p, is zero without its weights — the
-// filtered samples around it are all zero and the first of them, (x / stride, y / stride), lies on its
-// surface, so interpolatePixel would give zero (most of a shadow's change is zero: this saves computing the
-// other weights there).
-bool zeroAround(const FilterPass& f, std::span<const uint8_t> filteredNonZero, int x, int y, size_t k00,
-                const SurfacePoint& p) {
-    const int sx0 = x / f.stride, sy0 = y / f.stride;
-    if (cellHasValue(f, filteredNonZero, sx0, sy0)) return false;
-    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
-    const float allowance =
-        planeAllowance * f.offsetLength[static_cast<size_t>(sy0 * f.stride - y + f.reach) * f.side +
-                                        sx0 * f.stride - x + f.reach];
-    return neighbourWeight(f, p, f.samples[k00], allowance) > 0.0f;
 }
 
 // Stride > 1, the pixels between the samples: the filtered values of the (up to) 4 samples around the pixel
@@ -259,14 +263,19 @@ void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
         uint8_t* weighted = &plan.weighted[static_cast<size_t>(sy) * f.sw];
         for (int y = static_cast<int>(sy) * f.stride; y < std::min((sy + 1) * f.stride, int64_t{f.height});
              ++y)
-            for (int x = 0; x < f.width; ++x) {
-                const size_t i = static_cast<size_t>(y) * f.width + x;
-                const SurfacePoint& p = plan.surfaces[i];
-                // {-1, 0, 0, 0}: no surface.
-                const std::array<float, 4> w = p.valid() ? interpolationWeights(f, samples, x, y, p)
-                                                         : std::array<float, 4>{-1.0f, 0.0f, 0.0f, 0.0f};
-                plan.weights[i] = w;
-                if (!(w[0] > 0.0f || w[1] > 0.0f || w[2] > 0.0f || w[3] > 0.0f)) weighted[x / f.stride] = 0;
+            for (int sx = 0; sx < f.sw; ++sx) {
+                const CellSamples cell = cellSamples(f, samples, sx, static_cast<int>(sy));
+                for (int x = sx * f.stride; x < std::min((sx + 1) * f.stride, f.width); ++x) {
+                    const size_t i = static_cast<size_t>(y) * f.width + x;
+                    const SurfacePoint& p = plan.surfaces[i];
+                    // {-1, 0, 0, 0}: no surface.
+                    const std::array<float, 4> w =
+                        p.valid()
+                            ? interpolationWeights(f, cell, x, y, cellNeighbourWeights(f, cell, x, y, p))
+                            : std::array<float, 4>{-1.0f, 0.0f, 0.0f, 0.0f};
+                    plan.weights[i] = w;
+                    if (!(w[0] > 0.0f || w[1] > 0.0f || w[2] > 0.0f || w[3] > 0.0f)) weighted[sx] = 0;
+                }
             }
     });
 }
@@ -329,6 +338,11 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
                     continue;
                 }
             }
+            // Without the plan: the cell's samples, loaded once for its pixels of the row, and whether the
+            // filtered values around it are all zero.
+            const CellSamples cell =
+                interpolate && !cellPlan ? cellSamples(f, f.samples, sx, sy) : CellSamples{};
+            const bool cellNonZero = interpolate && !cellPlan && cellHasValue(f, filteredNonZero, sx, sy);
             for (; x < cellEnd; ++x) {
                 const size_t i = static_cast<size_t>(y) * f.width + x;
                 if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
@@ -341,14 +355,20 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
                 } else {
                     const SurfacePoint& p = f.points[i];
                     if (!p.valid()) continue;
-                    if (interpolate && zeroAround(f, filteredNonZero, x, y, k00, p)) {
-                        std::fill_n(&out[i * channels], channels, 0.0f);
-                        continue;
+                    if (interpolate) {
+                        const Float4 w = cellNeighbourWeights(f, cell, x, y, p);
+                        // The filtered samples around it all zero and the first on its surface: zero,
+                        // as interpolatePixel would give it (most of a shadow's change), without its
+                        // interpolation weights.
+                        if (!cellNonZero && w[0] > 0.0f) {
+                            std::fill_n(&out[i * channels], channels, 0.0f);
+                            continue;
+                        }
+                        ok = interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, &p,
+                                                 interpolationWeights(f, cell, x, y, w), &out[i * channels]);
+                    } else {
+                        ok = filterPixel<C>(f, x, y, p, &out[i * channels]);
                     }
-                    ok = interpolate ? interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, &p,
-                                                           interpolationWeights(f, f.samples, x, y, p),
-                                                           &out[i * channels])
-                                     : filterPixel<C>(f, x, y, p, &out[i * channels]);
                 }
                 if (!ok) rowHoles[y].push_back(i);
             }
@@ -449,6 +469,8 @@ void denoiseInto(std::span<float> values, int channels, std::span<const SurfaceP
         for (int px = -reach; px <= reach; ++px)
             f.offsetLength[static_cast<size_t>(py + reach) * f.side + px + reach] =
                 std::sqrt(static_cast<float>(px * px + py * py + 1));
+    f.fraction.resize(stride);
+    for (int d = 0; d < stride; ++d) f.fraction[d] = static_cast<float>(d) / static_cast<float>(stride);
 
     const int sw = f.sw, sh = f.sh;
     // With a plan over the whole image the samples are the plan's (its surfaces' at every stride-th pixel),
