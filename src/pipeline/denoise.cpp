@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include "core/parallel.h"
 
@@ -174,6 +175,17 @@ Float4 cellNeighbourWeights(const FilterPass& f, const CellSamples& c, int x, in
     return usable ? powInt(cosN, f.s.normalPower) : Float4{};
 }
 
+// Stride > 1: the filter's weight of cell (sx, sy)'s first sample, k00, as a neighbour of its pixel (x, y),
+// whose surface is p (lane 0 of cellNeighbourWeights, the same bits).
+float firstSampleWeight(const FilterPass& f, const SurfacePoint& p, int x, int y, int sx, int sy,
+                        size_t k00) {
+    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    const float allowance =
+        planeAllowance * f.offsetLength[static_cast<size_t>(sy * f.stride - y + f.reach) * f.side +
+                                        sx * f.stride - x + f.reach];
+    return neighbourWeight(f, p, f.samples[k00], allowance);
+}
+
 // Stride > 1, the interpolation weights of pixel (x, y) of cell c from its samples' neighbour weights
 // (cellNeighbourWeights): bilinear, and like the filter's only for the samples on the pixel's surface;
 // normalized, in InterpolationPlan's order. All zero when none of them is on its surface.
@@ -286,6 +298,46 @@ InterpolationPlan* usablePlan(const FilterPass& f) {
     return interpolate && f.s.plan && f.s.plan->surfaces.size() == f.points.size() ? f.s.plan : nullptr;
 }
 
+// The pixels [x0, x1) of row y without a plan: each filtered over its window, or (settings.interpolate, the
+// pixels of cell column sx) interpolated from the filtered samples around them. The holes are appended to
+// `holes`.
+template <int C>
+[[gnu::noinline]] void filterCellRow(const FilterPass& f, std::span<const float> filtered,
+                                     std::span<const uint8_t> filteredNonZero, int sx, int y, int x0, int x1,
+                                     std::span<float> out, std::vector<size_t>& holes) {
+    const int channels = C > 0 ? C : f.channels;
+    const bool interpolate = f.stride > 1 && f.s.interpolate;
+    const int sy = y / f.stride;
+    const size_t k00 = f.sampleIndex(sx, sy);
+    // Whether the filtered values around the cell are all zero, and its samples, loaded once for its pixels
+    // that need their weights (where its values are all zero, only those off its first sample's surface).
+    const bool cellNonZero = interpolate && cellHasValue(f, filteredNonZero, sx, sy);
+    std::optional<CellSamples> cell;
+    for (int x = x0; x < x1; ++x) {
+        const size_t i = static_cast<size_t>(y) * f.width + x;
+        if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
+        const SurfacePoint& p = f.points[i];
+        if (!p.valid()) continue;
+        bool ok;
+        if (interpolate) {
+            // The filtered samples around it all zero and the first on its surface: zero, as interpolatePixel
+            // would give it (most of a shadow's change), without its weights.
+            if (!cellNonZero && firstSampleWeight(f, p, x, y, sx, sy, k00) > 0.0f) {
+                std::fill_n(&out[i * channels], channels, 0.0f);
+                continue;
+            }
+            if (!cell) cell = cellSamples(f, f.samples, sx, sy);
+            ok = interpolatePixel<C>(
+                f, filtered, filteredNonZero, x, y, k00, &p,
+                interpolationWeights(f, *cell, x, y, cellNeighbourWeights(f, *cell, x, y, p)),
+                &out[i * channels]);
+        } else {
+            ok = filterPixel<C>(f, x, y, p, &out[i * channels]);
+        }
+        if (!ok) holes.push_back(i);
+    }
+}
+
 // The whole pass for C channels: every pixel filtered, or (settings.interpolate) the samples filtered and the
 // pixels between interpolated from them.
 template <int C>
@@ -338,39 +390,22 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
                     continue;
                 }
             }
-            // Without the plan: the cell's samples, loaded once for its pixels of the row, and whether the
-            // filtered values around it are all zero.
-            const CellSamples cell =
-                interpolate && !cellPlan ? cellSamples(f, f.samples, sx, sy) : CellSamples{};
-            const bool cellNonZero = interpolate && !cellPlan && cellHasValue(f, filteredNonZero, sx, sy);
-            for (; x < cellEnd; ++x) {
-                const size_t i = static_cast<size_t>(y) * f.width + x;
-                if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
-                bool ok;
-                if (cellPlan) {
+            if (cellPlan) {
+                for (; x < cellEnd; ++x) {
+                    const size_t i = static_cast<size_t>(y) * f.width + x;
+                    if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
                     const std::array<float, 4>& w = plan->weights[i];
                     if (w[0] < 0.0f) continue;  // no surface
-                    ok = interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, nullptr, w,
-                                             &out[i * channels]);
-                } else {
-                    const SurfacePoint& p = f.points[i];
-                    if (!p.valid()) continue;
-                    if (interpolate) {
-                        const Float4 w = cellNeighbourWeights(f, cell, x, y, p);
-                        // The filtered samples around it all zero and the first on its surface: zero,
-                        // as interpolatePixel would give it (most of a shadow's change), without its
-                        // interpolation weights.
-                        if (!cellNonZero && w[0] > 0.0f) {
-                            std::fill_n(&out[i * channels], channels, 0.0f);
-                            continue;
-                        }
-                        ok = interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, &p,
-                                                 interpolationWeights(f, cell, x, y, w), &out[i * channels]);
-                    } else {
-                        ok = filterPixel<C>(f, x, y, p, &out[i * channels]);
-                    }
+                    if (!interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, nullptr, w,
+                                             &out[i * channels]))
+                        rowHoles[y].push_back(i);
                 }
-                if (!ok) rowHoles[y].push_back(i);
+            } else {
+                // Without interpolation (and so without a plan) every pixel is filtered alone: the rest of
+                // the row at once.
+                const int end = interpolate ? cellEnd : rect.x1;
+                filterCellRow<C>(f, filtered, filteredNonZero, sx, y, x, end, out, rowHoles[y]);
+                x = end;
             }
         }
     });
