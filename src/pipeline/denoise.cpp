@@ -59,6 +59,15 @@ struct FilterPass {
     // Sample (sx, sy) of the image's stride grid in the kept grid, and window centre (cx, cy).
     size_t sampleIndex(int sx, int sy) const { return static_cast<size_t>(sy - oy) * sw + (sx - ox); }
     size_t centreIndex(int cx, int cy) const { return static_cast<size_t>(cy - oy) * (sw + 1) + (cx - ox); }
+    // How far a neighbour may lie off the tangent plane of the surface at `position`, per unit of
+    // offsetLength: settings.planeDistance pixel sizes there.
+    float planeAllowance(glm::vec3 position) const {
+        return s.planeDistance * pixelAngle * glm::length(position - eye);
+    }
+    // offsetLength's entry for sample (sx, sy) seen from pixel (x, y).
+    size_t offsetIndex(int sx, int sy, int x, int y) const {
+        return static_cast<size_t>(sy * stride - y + reach) * side + sx * stride - x + reach;
+    }
 };
 
 // Whether sample k is a usable neighbour of pixel p: on the same side, near p's tangent plane. Returns its
@@ -91,10 +100,9 @@ bool filterPixel(const FilterPass& f, int x, int y, const SurfacePoint& p, float
     const int xCentre = (x + stride / 2) / stride, yCentre = (y + stride / 2) / stride;
     const int sxBegin = std::max(xCentre - r, f.ox), sxEnd = std::min(xCentre + r, f.ox + f.sw - 1);
     const int syBegin = std::max(yCentre - r, f.oy), syEnd = std::min(yCentre + r, f.oy + f.sh - 1);
-    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
+    const float planeAllowance = f.planeAllowance(p.position);
     auto allowance = [&](int sx, int sy) {
-        return planeAllowance * f.offsetLength[static_cast<size_t>(sy * stride - y + f.reach) * f.side +
-                                               sx * stride - x + f.reach];
+        return planeAllowance * f.offsetLength[f.offsetIndex(sx, sy, x, y)];
     };
     if (!f.windowHasValue[f.centreIndex(xCentre, yCentre)]) {
         // All zeros: the result is zero if any sample is usable, else the pixel is a hole.
@@ -157,15 +165,11 @@ CellSamples cellSamples(const FilterPass& f, std::span<const FilterSample> sampl
 // the same weights).
 Float4 cellNeighbourWeights(const FilterPass& f, const CellSamples& c, int x, int y, const SurfacePoint& p) {
     const int stride = f.stride;
-    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
     // The sample (sx, sy)'s allowance is planeAllowance times offsetLength at its offset from the pixel.
-    const size_t row0 = static_cast<size_t>(c.sy0 * stride - y + f.reach) * f.side;
-    const size_t col0 = static_cast<size_t>(c.sx0 * stride - x + f.reach);
-    const size_t below = static_cast<size_t>(stride) * f.side;
-    const Float4 allowance =
-        Float4{f.offsetLength[row0 + col0], f.offsetLength[row0 + col0 + stride],
-               f.offsetLength[row0 + below + col0], f.offsetLength[row0 + below + col0 + stride]} *
-        planeAllowance;
+    const size_t first = f.offsetIndex(c.sx0, c.sy0, x, y), below = static_cast<size_t>(stride) * f.side;
+    const Float4 allowance = Float4{f.offsetLength[first], f.offsetLength[first + stride],
+                                    f.offsetLength[first + below], f.offsetLength[first + below + stride]} *
+                             f.planeAllowance(p.position);
     // sameSurfaceWeight in each lane: facing the same side, near p's tangent plane, cos^normalPower.
     const Float4 cosN = (p.normal.x * c.nx + p.normal.y * c.ny) + p.normal.z * c.nz;
     const Float4 offPlane = (p.normal.x * (c.qx - p.position.x) + p.normal.y * (c.qy - p.position.y)) +
@@ -179,11 +183,8 @@ Float4 cellNeighbourWeights(const FilterPass& f, const CellSamples& c, int x, in
 // whose surface is p (lane 0 of cellNeighbourWeights, the same bits).
 float firstSampleWeight(const FilterPass& f, const SurfacePoint& p, int x, int y, int sx, int sy,
                         size_t k00) {
-    const float planeAllowance = f.s.planeDistance * f.pixelAngle * glm::length(p.position - f.eye);
-    const float allowance =
-        planeAllowance * f.offsetLength[static_cast<size_t>(sy * f.stride - y + f.reach) * f.side +
-                                        sx * f.stride - x + f.reach];
-    return neighbourWeight(f, p, f.samples[k00], allowance);
+    return neighbourWeight(f, p, f.samples[k00],
+                           f.planeAllowance(p.position) * f.offsetLength[f.offsetIndex(sx, sy, x, y)]);
 }
 
 // Stride > 1, the interpolation weights of pixel (x, y) of cell c from its samples' neighbour weights
