@@ -299,22 +299,29 @@ InterpolationPlan* usablePlan(const FilterPass& f) {
     return interpolate && f.s.plan && f.s.plan->surfaces.size() == f.points.size() ? f.s.plan : nullptr;
 }
 
-// The pixels [x0, x1) of row y without a plan: each filtered over its window, or (settings.interpolate, the
-// pixels of cell column sx) interpolated from the filtered samples around them. The holes are appended to
-// `holes`.
+// The pixels [x0, x1) of row y without a plan: each filtered over its window, or (settings.interpolate)
+// interpolated from the filtered samples around them, cell by cell. The holes are appended to `holes`.
 template <int C>
-[[gnu::noinline]] void filterCellRow(const FilterPass& f, std::span<const float> filtered,
-                                     std::span<const uint8_t> filteredNonZero, int sx, int y, int x0, int x1,
-                                     std::span<float> out, std::vector<size_t>& holes) {
+[[gnu::noinline]] void filterRowWithoutPlan(const FilterPass& f, std::span<const float> filtered,
+                                            std::span<const uint8_t> filteredNonZero, int y, int x0, int x1,
+                                            std::span<float> out, std::vector<size_t>& holes) {
     const int channels = C > 0 ? C : f.channels;
     const bool interpolate = f.stride > 1 && f.s.interpolate;
     const int sy = y / f.stride;
-    const size_t k00 = f.sampleIndex(sx, sy);
+    int sx = 0, cellEnd = x0;  // the cell column of the pixels before cellEnd
+    size_t k00 = 0;
     // Whether the filtered values around the cell are all zero, and its samples, loaded once for its pixels
     // that need their weights (where its values are all zero, only those off its first sample's surface).
-    const bool cellNonZero = interpolate && cellHasValue(f, filteredNonZero, sx, sy);
+    bool cellNonZero = false;
     std::optional<CellSamples> cell;
     for (int x = x0; x < x1; ++x) {
+        if (interpolate && x >= cellEnd) {  // a new cell
+            sx = x / f.stride;
+            cellEnd = (sx + 1) * f.stride;
+            k00 = f.sampleIndex(sx, sy);
+            cellNonZero = cellHasValue(f, filteredNonZero, sx, sy);
+            cell.reset();
+        }
         const size_t i = static_cast<size_t>(y) * f.width + x;
         if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
         const SurfacePoint& p = f.points[i];
@@ -377,11 +384,20 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
         // misses `changed` read it.
         const int sy = y / stride, cy = sy * stride;
         const bool rowMisses = changed.empty() || cy + stride < changed.y0 || cy >= changed.y1;
+        if (!plan) {
+            filterRowWithoutPlan<C>(f, filtered, filteredNonZero, y, rect.x0, rect.x1, out, rowHoles[y]);
+            return;
+        }
         for (int x = rect.x0; x < rect.x1;) {
             const int sx = x / stride, cx = sx * stride, cellEnd = std::min(cx + stride, rect.x1);
-            const bool cellPlan = plan && (rowMisses || cx + stride < changed.x0 || cx >= changed.x1);
+            const bool cellPlan = rowMisses || cx + stride < changed.x0 || cx >= changed.x1;
             const size_t k00 = f.sampleIndex(sx, sy);
-            if (cellPlan && zeroCells && plan->weighted[k00]) {
+            if (!cellPlan) {  // its points may differ from the plan's surfaces
+                filterRowWithoutPlan<C>(f, filtered, filteredNonZero, y, x, cellEnd, out, rowHoles[y]);
+                x = cellEnd;
+                continue;
+            }
+            if (zeroCells && plan->weighted[k00]) {
                 // Every pixel of the cell weighs some of its samples: where all of them are zero, so is every
                 // pixel (as interpolatePixel would give it), without reading their weights.
                 if (!cellHasValue(f, filteredNonZero, sx, sy)) {
@@ -391,22 +407,14 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
                     continue;
                 }
             }
-            if (cellPlan) {
-                for (; x < cellEnd; ++x) {
-                    const size_t i = static_cast<size_t>(y) * f.width + x;
-                    if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
-                    const std::array<float, 4>& w = plan->weights[i];
-                    if (w[0] < 0.0f) continue;  // no surface
-                    if (!interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, nullptr, w,
-                                             &out[i * channels]))
-                        rowHoles[y].push_back(i);
-                }
-            } else {
-                // Without interpolation (and so without a plan) every pixel is filtered alone: the rest of
-                // the row at once.
-                const int end = interpolate ? cellEnd : rect.x1;
-                filterCellRow<C>(f, filtered, filteredNonZero, sx, y, x, end, out, rowHoles[y]);
-                x = end;
+            for (; x < cellEnd; ++x) {
+                const size_t i = static_cast<size_t>(y) * f.width + x;
+                if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
+                const std::array<float, 4>& w = plan->weights[i];
+                if (w[0] < 0.0f) continue;  // no surface
+                if (!interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, nullptr, w,
+                                         &out[i * channels]))
+                    rowHoles[y].push_back(i);
             }
         }
     });
