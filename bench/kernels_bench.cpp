@@ -168,7 +168,9 @@ BENCHMARK(BM_RealSurfaces)->Unit(benchmark::kMillisecond);
 // interpolated): kept 1 a warm frame's, with the stride's kept plan built before timing; kept 0 a moving
 // camera's, without one. Args(1, 0) the objects' own pass (every pixel, radius 2) over a rectangle of 160 x
 // 150 pixels, about what the benchmark scene's statue covers. Items are the pixels filtered.
-void BM_EdgeAwareFilter(benchmark::State& state) {
+// The values: a smooth change with a little noise, zero in a corner; with `shadowChange`, zero but for a disk
+// a sixth of the image's height across, as a relit shadow pass's change (most cells all zero).
+void edgeAwareFilter(benchmark::State& state, bool shadowChange) {
     const int stride = static_cast<int>(state.range(0));
     const bool kept = state.range(1) != 0;
     const BoxView view;
@@ -177,9 +179,11 @@ void BM_EdgeAwareFilter(benchmark::State& state) {
     const SurfacePoints points = renderRealSurfaces(camera, realOnly);
     const int w = camera.width, h = camera.height;
     std::vector<float> input(static_cast<size_t>(w) * h * 3);
-    for (size_t i = 0; i < input.size(); ++i)  // a smooth change with a little noise, zero in a corner
-        input[i] =
-            (i / 3) % w < w / 8 ? 0.0f : 0.1f + 0.05f * std::sin(0.001f * i) + 0.01f * ((i * 7919) % 13);
+    for (size_t i = 0; i < input.size(); ++i) {
+        const int x = static_cast<int>((i / 3) % w), y = static_cast<int>((i / 3) / w);
+        const bool zero = shadowChange ? std::hypot(x - w / 2, y - h / 2) > h / 12.0f : x < w / 8;
+        input[i] = zero ? 0.0f : 0.1f + 0.05f * std::sin(0.001f * i) + 0.01f * ((i * 7919) % 13);
+    }
     DenoiseSettings s;
     PixelRect rect{0, 0, w, h};
     InterpolationPlan plan;
@@ -205,6 +209,12 @@ void BM_EdgeAwareFilter(benchmark::State& state) {
     }
     state.SetItemsProcessed(state.iterations() * (rect.x1 - rect.x0) * (rect.y1 - rect.y0));
 }
+void BM_EdgeAwareFilter(benchmark::State& state) {
+    edgeAwareFilter(state, false);
+}
+void BM_EdgeAwareFilterShadowChange(benchmark::State& state) {
+    edgeAwareFilter(state, true);
+}
 BENCHMARK(BM_EdgeAwareFilter)
     ->Args({1, 0})
     ->Args({2, 1})
@@ -215,6 +225,12 @@ BENCHMARK(BM_EdgeAwareFilter)
     ->Args({4, 0})
     ->Args({8, 0})
     ->Args({16, 0})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_EdgeAwareFilterShadowChange)
+    ->Args({2, 1})
+    ->Args({2, 0})
+    ->Args({4, 0})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
