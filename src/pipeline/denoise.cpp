@@ -64,6 +64,8 @@ struct FilterPass {
     float planeAllowance(glm::vec3 position) const {
         return s.planeDistance * pixelAngle * glm::length(position - eye);
     }
+    // Whether the pixels between the samples are interpolated from them (settings.interpolate at a stride).
+    bool interpolates() const { return stride > 1 && s.interpolate; }
     // offsetLength's entry for sample (sx, sy) seen from pixel (x, y).
     size_t offsetIndex(int sx, int sy, int x, int y) const {
         return static_cast<size_t>(sy * stride - y + reach) * side + sx * stride - x + reach;
@@ -295,7 +297,7 @@ void buildPlan(const FilterPass& f, InterpolationPlan& plan) {
 
 // The pass's plan, if it has one it can use (built by then: denoiseInto).
 InterpolationPlan* usablePlan(const FilterPass& f) {
-    const bool interpolate = f.stride > 1 && f.s.interpolate;
+    const bool interpolate = f.interpolates();
     return interpolate && f.s.plan && f.s.plan->surfaces.size() == f.points.size() ? f.s.plan : nullptr;
 }
 
@@ -306,7 +308,7 @@ template <int C>
                                             std::span<const uint8_t> filteredNonZero, int y, int x0, int x1,
                                             std::span<float> out, std::vector<size_t>& holes) {
     const int channels = C > 0 ? C : f.channels;
-    const bool interpolate = f.stride > 1 && f.s.interpolate;
+    const bool interpolate = f.interpolates();
     const int sy = y / f.stride;
     int sx = 0, cellEnd = x0;  // the cell column of the pixels before cellEnd
     size_t k00 = 0;
@@ -354,7 +356,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
     const int channels = C > 0 ? C : f.channels;
     std::vector<float> filtered;
     std::vector<uint8_t> filteredNonZero;
-    const bool interpolate = f.stride > 1 && f.s.interpolate;
+    const bool interpolate = f.interpolates();
     if (interpolate) {
         filtered.assign(f.samples.size() * channels, 0.0f);
         filteredNonZero.assign(f.samples.size(), 0);
