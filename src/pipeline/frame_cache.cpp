@@ -157,6 +157,9 @@ void LightWork::forget() {
         kept.lights = std::move(rsmLights);
         kept.sides = std::move(rsmSides);
         kept.voxels = rsmVoxels;
+        kept.injected.reset();
+        if (injected)
+            kept.injected = std::make_unique<RecycledGrid>(std::move(*injected), std::move(injectedVoxels));
     }
     *this = LightWork{};
     spare = std::move(kept);
@@ -198,6 +201,7 @@ void FrameCache::emptyLight(bool keepRsms) {
         l.rsmSides.clear();
     }
     l.injected.reset();
+    l.injectedVoxels = {};
     l.injectedBounds.reset();
     l.bounce.reset();
     l.bounceSides.clear();

@@ -65,18 +65,20 @@ struct LightWork {
     int rsmsKept = 0;  // of them, taken from the spare ones
     std::vector<int8_t> rsmSides;
     std::optional<Grid3> injected;          // from `rsms`, plus `bounce`
+    InjectedVoxels injectedVoxels;          // the voxels injectLight wrote into `injected`
     std::optional<SurfaceRadiance> bounce;  // the further bounces (options.render.light_bounces)
     std::optional<VoxelBox>
         injectedBounds;  // around `injected`'s non-zero voxels, where injectedBounds found it
     std::vector<bool> bounceSides;
     // The maps of the light before, when it changed: a light that did not change (a lamp beside a light
     // camera's environment) takes its map from here as long as the region's voxels and the viewpoint's sides
-    // are those it was made for (spareRsm).
+    // are those it was made for (spareRsm). The next injection recycles its grid over the same voxels.
     struct Spare {
         std::vector<ReflectiveShadowMap> rsms;
         std::vector<Light> lights;
         std::vector<int8_t> sides;
         uint64_t voxels = 0;
+        std::unique_ptr<RecycledGrid> injected;
     } spare;
     // Empties it for another light; its maps become the spare ones.
     void forget();

@@ -138,10 +138,37 @@ bool surfacesListed(std::span<const VoxelGeometry* const> geometry) {
     });
 }
 
+// body(i) for every voxel that `written` lists (the geometries' surface voxels and the lit voxels off them),
+// in parallel; a voxel on two geometries' surfaces is visited once for each.
+template <typename Body>
+void forEachListedVoxel(std::span<const VoxelGeometry* const> geometry, const InjectedVoxels& written,
+                        Body&& body) {
+    for (const VoxelGeometry* g : geometry)
+        forEachSurfaceVoxel(*g, [&](size_t, size_t, size_t i) { body(i); });
+    constexpr int64_t kGrain = 4096;
+    const std::vector<uint32_t>& off = written.offSurface;
+    parallelFor(0, (static_cast<int64_t>(off.size()) + kGrain - 1) / kGrain, 1, [&](int64_t c) {
+        const size_t end = std::min(off.size(), static_cast<size_t>((c + 1) * kGrain));
+        for (size_t k = static_cast<size_t>(c * kGrain); k < end; ++k) body(size_t{off[k]});
+    });
+}
+
+// injectLight's grid of n^3 voxels, all zero: `recycled`'s, zeroed where it wrote, when it has the size and
+// its voxels are listed; else a new one.
+Grid3 zeroGrid(int n, std::span<const VoxelGeometry* const> geometry, bool listed, RecycledGrid* recycled) {
+    if (!recycled || !listed || !recycled->written.listed || recycled->grid.resolution() != n ||
+        !recycled->grid.whole())
+        return Grid3(n);
+    Grid3 grid = std::move(recycled->grid);
+    forEachListedVoxel(geometry, recycled->written, [&](size_t i) { grid[i] = glm::vec4(0.0f); });
+    return grid;
+}
+
 }  // namespace
 
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
-                  std::span<const VoxelGeometry* const> geometry, InjectedVoxels* written) {
+                  std::span<const VoxelGeometry* const> geometry, InjectedVoxels* written,
+                  RecycledGrid* recycled) {
     if (written) *written = InjectedVoxels{};
     const int n = region.resolution;
     // voxelLight is zero where no texel landed and no surface is: with the surface voxels listed, only they
@@ -150,7 +177,7 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
 
     // Per voxel: the lights' summed radiance, and (w) 1 where any texel landed; then the light volume, in
     // place.
-    Grid3 light(n);
+    Grid3 light = zeroGrid(n, geometry, listed, recycled);
     const TexelVoxels texelVoxel(region);
     const int slabCount = (n + kSlabThickness - 1) / kSlabThickness;
     const size_t slabVoxels = static_cast<size_t>(kSlabThickness) * n * n;
@@ -211,6 +238,14 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
             written->offSurface.insert(written->offSurface.end(), slab.begin(), slab.end());
     }
     return light;
+}
+
+PackedGrid3 packInjected(const Grid3& grid, std::span<const VoxelGeometry* const> geometry,
+                         const InjectedVoxels& written) {
+    if (!written.listed || !grid.whole()) return PackedGrid3(grid);
+    PackedGrid3 packed(grid.resolution());
+    forEachListedVoxel(geometry, written, [&](size_t i) { packed.set(i, grid[i]); });
+    return packed;
 }
 
 namespace {

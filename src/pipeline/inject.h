@@ -30,8 +30,16 @@ struct InjectedVoxels {
 // the voxel. Emissive geometry adds its emitted radiance, averaged over the voxel's surface area: the cones
 // then carry the light of emitters (one bounce of it: emitted light is not reflected into the volume again).
 // Deterministic for any thread count. `written` (if given) gets the voxels it may have made non-zero.
+// `recycled` (if given): a grid injectLight made for the same `geometry` before, and the voxels it wrote
+// (plus any changes at the geometries' surface voxels since, as addBounce's). Its memory is taken, and only
+// those voxels are zeroed, where a new grid zeroes every voxel (32 MiB at 128^3, at every light change).
+struct RecycledGrid {
+    Grid3 grid;
+    InjectedVoxels written;
+};
 Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion& region,
-                  std::span<const VoxelGeometry* const> geometry, InjectedVoxels* written = nullptr);
+                  std::span<const VoxelGeometry* const> geometry, InjectedVoxels* written = nullptr,
+                  RecycledGrid* recycled = nullptr);
 
 // nonZeroBounds over the whole of `grid` (a level-0 grid stored whole: injectLight's, packed or not, and
 // changed since at the geometries' surface voxels only), found among the voxels `written` lists instead of
@@ -41,6 +49,12 @@ std::optional<VoxelBox> injectedBounds(const Grid3& grid, std::span<const VoxelG
 std::optional<VoxelBox> injectedBounds(const PackedGrid3& grid,
                                        std::span<const VoxelGeometry* const> geometry,
                                        const InjectedVoxels& written);
+
+// PackedGrid3(grid) for injectLight's grid (changed since at the geometries' surface voxels only): only the
+// voxels `written` lists are packed, into a grid zeroed first (a third of the bytes that reading every voxel
+// of `grid` takes); every voxel when they are not listed.
+PackedGrid3 packInjected(const Grid3& grid, std::span<const VoxelGeometry* const> geometry,
+                         const InjectedVoxels& written);
 
 // full - sceneOnly in the radiance channels; the occupancy of `full` (which covers both). Packed as it is
 // made (no float grid in between: 32 MiB at 128^3 that a first frame would fault in for nothing).

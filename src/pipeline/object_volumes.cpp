@@ -91,7 +91,9 @@ void ObjectVolumes::inject(const RealSceneVolumes& real, std::span<const RsmUpda
         sceneLightBounds_ = real.lightBounds ? *real.lightBounds : nonZeroBounds(real.light, all);
     if (newLight) {
         // Outside `changed` the full volume is the scene's, bit for bit (the same texels, summed alike).
-        freshFull_.emplace(real.light);
+        const VoxelGeometry* scene[] = {&real.geometry};
+        freshFull_.emplace(real.lightVoxels ? packInjected(real.light, scene, *real.lightVoxels)
+                                            : PackedGrid3(real.light));
         if (wholeDelta) freshDelta_.emplace(deltaVolume(real.light, real.light));
     }
     reinjectLight(changed, *sceneTexels_, real.rsms, changes, both, real.light,

@@ -43,6 +43,9 @@ struct RealSceneVolumes {
     uint64_t lightVersion = 0;
     // The box around the non-zero voxels of `light` (injectedBounds), or null: found by reading it.
     const VoxelBox* lightBounds = nullptr;
+    // The voxels injectLight wrote into `light` (which the bounces changed at `geometry`'s surface voxels
+    // only), or null: any.
+    const InjectedVoxels* lightVoxels = nullptr;
 };
 
 // What ObjectVolumes::roomChange is made from: the real scene's voxels with albedo, and the rays of the relit

@@ -194,6 +194,9 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     timer.lap("voxelize");
     // 2. Reflective shadow maps: scene alone, and scene + objects (the texels that can see the objects traced
     // again).
+    // The injected grid of the light before, recycled below when it was made over these voxels.
+    std::unique_ptr<RecycledGrid> recycled;
+    if (light.spare.voxels == cache.voxels.version) recycled = std::move(light.spare.injected);
     if (!light.rsms) {
         light.rsmSides = rsmViewSides(scene.real, viewpoint);
         light.rsmsKept = 0;
@@ -218,7 +221,8 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
     const VoxelGeometry* sceneAlone[] = {&*real.geometry};
     if (!light.injected) {
         InjectedVoxels written;
-        light.injected = injectLight(*light.rsms, region, sceneAlone, &written);
+        light.injected = injectLight(*light.rsms, region, sceneAlone, &written, recycled.get());
+        recycled.reset();
         if (bounces > 0) {
             timer.lap("inject");
             light.bounce = bounceLight(*light.injected, *real.geometry, sceneVisibility, scene.options,
@@ -229,10 +233,12 @@ DgiVolumes buildVolumes(const Scene& scene, std::span<const Light> lights, const
         }
         // The bounces changed the surface voxels alone: the injection's voxels still hold every non-zero one.
         light.injectedBounds = injectedBounds(*light.injected, sceneAlone, written);
+        light.injectedVoxels = std::move(written);
     }
-    objects.inject({*real.geometry, *light.rsms, *light.injected, light.bounce ? &*light.bounce : nullptr,
-                    cache.light.version, light.injectedBounds ? &*light.injectedBounds : nullptr},
-                   updates);
+    objects.inject(
+        {*real.geometry, *light.rsms, *light.injected, light.bounce ? &*light.bounce : nullptr,
+         cache.light.version, light.injectedBounds ? &*light.injectedBounds : nullptr, &light.injectedVoxels},
+        updates);
     timer.lap("inject");
     // 4. Mipmaps of all four volumes. With further bounces the objects reflect the room's light they receive
     // too.

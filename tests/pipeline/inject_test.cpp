@@ -118,6 +118,58 @@ TEST(Inject, TheSurfaceVoxelsAloneGiveTheSameVolume) {
     EXPECT_GT(a.at(8, 11, 8).x, 0.0f);  // the ball's lit top
 }
 
+// A grid recycled from an injection under another light (its memory taken, only the voxels that injection
+// wrote zeroed: the surface voxels and a lit voxel in the air) gives the new light's volume bit for bit, and
+// so does its packing from the listed voxels alone. The recycled grid's air voxel would stay lit, and every
+// voxel both lights reach would hold both, if it were not zeroed.
+TEST(Inject, ARecycledGridAndItsPackingFromTheListedVoxelsAreTheFreshOnes) {
+    Scene s = floorOnly(0.5f);
+    s.real.push_back(test::placed(makeSphere(0.2f, 24), {0.1f, 0.26f, 0.0f}, test::diffuse(glm::vec3(0.7f))));
+    const RayScene rays(s, SceneContent::RealOnly);
+    const VoxelGeometry listed = voxelize(s.real, kRegion, true, true);
+    const VoxelGeometry* geometry[] = {&listed};
+    Light lamp;
+    lamp.type = Light::Type::Point;
+    lamp.position = glm::vec3(-0.3f, 0.8f, 0.2f);
+    lamp.intensity = 1.5f;
+    std::vector<ReflectiveShadowMap> before = {renderReflectiveShadowMap(rays, lamp, kRegion, 32)};
+    RsmTexel stray{};
+    stray.position = glm::vec3(-0.55f, 0.7f, 0.45f);  // in the air
+    stray.normal = glm::vec3(0, 1, 0);
+    stray.flux = glm::vec3(0.01f);
+    stray.area = 1e-3f;
+    before[0].texels.push_back(stray);
+    lamp.position = glm::vec3(0.4f, 0.6f, -0.3f);
+    const std::vector<ReflectiveShadowMap> after = {renderReflectiveShadowMap(rays, lamp, kRegion, 32)};
+
+    RecycledGrid recycled;
+    recycled.grid = injectLight(before, kRegion, geometry, &recycled.written);
+    ASSERT_TRUE(recycled.written.listed);
+    ASSERT_FALSE(recycled.written.offSurface.empty());
+    const glm::ivec3 air = TexelVoxels(kRegion)(stray.position);
+    ASSERT_GT(recycled.grid.at(air.x, air.y, air.z).x, 0.0f);
+    const glm::vec4* memory = &recycled.grid[0];
+    InjectedVoxels written;
+    const Grid3 again = injectLight(after, kRegion, geometry, &written, &recycled);
+    EXPECT_EQ(&again[0], memory);  // the recycled grid's
+    const Grid3 fresh = injectLight(after, kRegion, geometry);
+    ASSERT_EQ(again.size(), fresh.size());
+    size_t differing = 0, lit = 0;
+    for (size_t i = 0; i < fresh.size(); ++i) {
+        differing += std::memcmp(&again[i], &fresh[i], sizeof(glm::vec4)) != 0;
+        lit += fresh[i].x > 0.0f;
+    }
+    EXPECT_EQ(differing, 0u);
+    EXPECT_GT(lit, 100u);
+    EXPECT_EQ(again.at(air.x, air.y, air.z), glm::vec4(0.0f));
+
+    const PackedGrid3 packed = packInjected(again, geometry, written), whole(fresh);
+    ASSERT_EQ(packed.size(), whole.size());
+    differing = 0;
+    for (size_t i = 0; i < whole.size(); ++i) differing += packed.packed(i) != whole.packed(i);
+    EXPECT_EQ(differing, 0u);
+}
+
 // A glossy floor reflects its glossy share into the volume too, spread over the hemisphere: albedo 0.3 and
 // specular 0.2 light the voxels as a Lambertian 0.5 does.
 TEST(Inject, GlossySurfacesReflectTheirWholeReflectanceIntoTheVolume) {
