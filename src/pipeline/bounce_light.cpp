@@ -210,8 +210,11 @@ SurfaceRadiance bounceLight(const Grid3& direct, const VoxelGeometry& geometry, 
                                 [&](size_t, size_t k, size_t i) { level0.set(i, lightSoFar(k, i)); });
             rayLight->setOccupiedBounds(occupiedBounds(level0));
         } else {
-            PackedGrid3 total =
-                PackedGrid3::fromEach(n, [&](size_t i) { return direct[i] + glm::vec4(0.0f); });
+            // Where the injection lists its voxels only they are non-zero.
+            auto directLight = [&](size_t i) { return direct[i] + glm::vec4(0.0f); };
+            PackedGrid3 total = written && written->listed && direct.whole()
+                                    ? packListed(n, geometries, *written, directLight)
+                                    : PackedGrid3::fromEach(n, directLight);
             if (bounce > 0)
                 forEachSurfaceVoxel(geometry,
                                     [&](size_t, size_t k, size_t i) { total.set(i, lightSoFar(k, i)); });

@@ -138,21 +138,6 @@ bool surfacesListed(std::span<const VoxelGeometry* const> geometry) {
     });
 }
 
-// body(i) for every voxel that `written` lists (the geometries' surface voxels and the lit voxels off them),
-// in parallel; a voxel on two geometries' surfaces is visited once for each.
-template <typename Body>
-void forEachListedVoxel(std::span<const VoxelGeometry* const> geometry, const InjectedVoxels& written,
-                        Body&& body) {
-    for (const VoxelGeometry* g : geometry)
-        forEachSurfaceVoxel(*g, [&](size_t, size_t, size_t i) { body(i); });
-    constexpr int64_t kGrain = 4096;
-    const std::vector<uint32_t>& off = written.offSurface;
-    parallelFor(0, (static_cast<int64_t>(off.size()) + kGrain - 1) / kGrain, 1, [&](int64_t c) {
-        const size_t end = std::min(off.size(), static_cast<size_t>((c + 1) * kGrain));
-        for (size_t k = static_cast<size_t>(c * kGrain); k < end; ++k) body(size_t{off[k]});
-    });
-}
-
 // injectLight's grid of n^3 voxels, all zero: `recycled`'s, zeroed where it wrote, when it has the size and
 // its voxels are listed; else a new one.
 Grid3 zeroGrid(int n, std::span<const VoxelGeometry* const> geometry, bool listed, RecycledGrid* recycled) {
@@ -243,9 +228,7 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
 PackedGrid3 packInjected(const Grid3& grid, std::span<const VoxelGeometry* const> geometry,
                          const InjectedVoxels& written) {
     if (!written.listed || !grid.whole()) return PackedGrid3(grid);
-    PackedGrid3 packed(grid.resolution());
-    forEachListedVoxel(geometry, written, [&](size_t i) { packed.set(i, grid[i]); });
-    return packed;
+    return packListed(grid.resolution(), geometry, written, [&](size_t i) { return grid[i]; });
 }
 
 namespace {

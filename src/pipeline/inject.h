@@ -4,11 +4,13 @@
 // light that reached real surfaces, positive on the lit virtual objects.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <span>
 #include <vector>
 
+#include "core/parallel.h"
 #include "pipeline/reflective_shadow_map.h"
 #include "pipeline/voxelize.h"
 
@@ -49,6 +51,31 @@ std::optional<VoxelBox> injectedBounds(const Grid3& grid, std::span<const VoxelG
 std::optional<VoxelBox> injectedBounds(const PackedGrid3& grid,
                                        std::span<const VoxelGeometry* const> geometry,
                                        const InjectedVoxels& written);
+
+// body(i) for every voxel that `written` (listed) lists: the geometries' surface voxels and the lit voxels
+// off them, in parallel; a voxel on two geometries' surfaces is visited once for each.
+template <typename Body>
+void forEachListedVoxel(std::span<const VoxelGeometry* const> geometry, const InjectedVoxels& written,
+                        Body&& body) {
+    for (const VoxelGeometry* g : geometry)
+        forEachSurfaceVoxel(*g, [&](size_t, size_t, size_t i) { body(i); });
+    constexpr int64_t kGrain = 4096;
+    const std::vector<uint32_t>& off = written.offSurface;
+    parallelFor(0, (static_cast<int64_t>(off.size()) + kGrain - 1) / kGrain, 1, [&](int64_t c) {
+        const size_t end = std::min(off.size(), static_cast<size_t>((c + 1) * kGrain));
+        for (size_t k = static_cast<size_t>(c * kGrain); k < end; ++k) body(size_t{off[k]});
+    });
+}
+
+// An n^3 grid, zeroed, with value(i) (a glm::vec4) packed at each voxel `written` (listed) lists: as
+// PackedGrid3::fromEach(n, value) where value is zero at every other voxel, for a third of its bytes.
+template <typename Value>
+PackedGrid3 packListed(int n, std::span<const VoxelGeometry* const> geometry, const InjectedVoxels& written,
+                       Value&& value) {
+    PackedGrid3 packed(n);
+    forEachListedVoxel(geometry, written, [&](size_t i) { packed.set(i, glm::vec4(value(i))); });
+    return packed;
+}
 
 // PackedGrid3(grid) for injectLight's grid (changed since at the geometries' surface voxels only): only the
 // voxels `written` lists are packed, into a grid zeroed first (a third of the bytes that reading every voxel

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <vector>
 
 #include "core/ray_scene.h"
@@ -190,6 +191,47 @@ TEST(BounceLight, AFloorGetsABrightCeilingSpotsLightByRays) {
     ASSERT_GT(count, 20);
     EXPECT_NEAR(sumRays / count, expected, 0.15f * expected);
     EXPECT_LT(sumCones / count, 0.6f * expected);
+}
+
+// With the injection's voxels listed (its direct light is non-zero at the surface voxels alone), the light
+// it gathers from is packed from those voxels into a zeroed grid: the same bounces bit for bit, by rays over
+// two passes and by cones.
+TEST(BounceLight, TheInjectionsListedVoxelsGiveTheSameBounces) {
+    Scene s;
+    s.real.push_back(
+        test::placed(makeQuad({0.98f, 0.98f}), {0.5f, 0.1f, 0.5f}, test::diffuse(glm::vec3(0.5f))));
+    TriangleMesh ceiling = makeQuad({0.98f, 0.98f});
+    for (glm::uvec3& t : ceiling.triangles) std::swap(t.y, t.z);
+    s.real.push_back(test::placed(std::move(ceiling), {0.5f, 0.9f, 0.5f}, test::diffuse(glm::vec3(0.7f))));
+    const VolumeRegion region{glm::vec3(0.0f), 1.0f, 32};
+    const VoxelGeometry geometry = voxelize(s.real, region, true, true);
+    Grid3 direct(region.resolution);
+    forEachSurfaceVoxel(geometry, [&](size_t, size_t k, size_t i) {
+        const float occupancy = geometry.visibility[i].x;
+        direct[i] = glm::vec4(glm::vec3(0.3f + 0.1f * static_cast<float>(k % 7)) * occupancy, occupancy);
+    });
+    InjectedVoxels written;
+    written.listed = true;
+    const MipVolume visibility = buildMipChain(region, geometry.visibility.clone());
+    const RayScene rays(s, SceneContent::RealOnly);
+    Options options;
+    options.render.bounceRays = 64;
+    const glm::vec3 viewpoint(0.5f);
+    for (const RayScene* byRays : {&rays, static_cast<const RayScene*>(nullptr)}) {
+        SCOPED_TRACE(byRays ? "rays" : "cones");
+        const SurfaceRadiance whole =
+            bounceLight(direct, geometry, visibility, options, 2, viewpoint, byRays);
+        const SurfaceRadiance listed =
+            bounceLight(direct, geometry, visibility, options, 2, viewpoint, byRays, &written);
+        ASSERT_EQ(whole.size(), listed.size());
+        size_t differing = 0, lit = 0;
+        for (size_t k = 0; k < whole.size(); ++k) {
+            differing += std::memcmp(&whole[k], &listed[k], sizeof(glm::vec3)) != 0;
+            lit += whole[k].x > 0.0f;
+        }
+        EXPECT_EQ(differing, 0u);
+        EXPECT_GT(lit, whole.size() / 2);
+    }
 }
 
 TEST(BounceLight, BlackWallsReflectNothing) {
