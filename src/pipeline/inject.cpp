@@ -169,11 +169,16 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
     std::vector<uint32_t> voxels;
     std::vector<std::vector<uint32_t>> offSurfaces(listed ? slabCount : 0);  // lit voxels, by slab
     for (const ReflectiveShadowMap& rsm : rsms) {
-        voxels.resize(rsm.texels.size());
-        parallelFor(0, static_cast<int64_t>(voxels.size()), 1 << 14,
-                    [&](int64_t t) { voxels[t] = texelVoxel.index(rsm.texels[t].position); });
-        const SlabBins bins = binBySlab(voxels.size(), slabCount, [&](size_t t) {
-            const int s = static_cast<int>(voxels[t] / (static_cast<size_t>(n) * n)) / kSlabThickness;
+        // Each texel's voxel: the map's own where it holds them for this region.
+        std::span<const uint32_t> voxelOf = rsm.voxelsIn(region);
+        if (voxelOf.size() != rsm.texels.size()) {
+            voxels.resize(rsm.texels.size());
+            parallelFor(0, static_cast<int64_t>(voxels.size()), 1 << 14,
+                        [&](int64_t t) { voxels[t] = texelVoxel.index(rsm.texels[t].position); });
+            voxelOf = voxels;
+        }
+        const SlabBins bins = binBySlab(voxelOf.size(), slabCount, [&](size_t t) {
+            const int s = static_cast<int>(voxelOf[t] / (static_cast<size_t>(n) * n)) / kSlabThickness;
             return std::pair{s, s};
         });
         parallelFor(0, slabCount, 1, [&](int64_t s) {
@@ -182,12 +187,12 @@ Grid3 injectLight(std::span<const ReflectiveShadowMap> rsms, const VolumeRegion&
             thread_local std::vector<TexelSum> accum;
             if (accum.size() != slabVoxels) accum.assign(slabVoxels, TexelSum{});
             const size_t first = static_cast<size_t>(s) * slabVoxels;
-            for (uint32_t t : bins.slab(s)) accum[voxels[t] - first].add(rsm.texels[t]);
+            for (uint32_t t : bins.slab(s)) accum[voxelOf[t] - first].add(rsm.texels[t]);
             // Each voxel of the slab once (at its first texel), in the slab's order.
             for (uint32_t t : bins.slab(s)) {
-                TexelSum& sum = accum[voxels[t] - first];
+                TexelSum& sum = accum[voxelOf[t] - first];
                 if (sum.area > 0.0f) {
-                    const uint32_t v = voxels[t];
+                    const uint32_t v = voxelOf[t];
                     light[v] += glm::vec4(lightRadiance(sum, geometryArea(geometry, AtGridIndex{v})), 0.0f);
                     if (listed && light[v].w == 0.0f && !onASurface(geometry, v)) offSurfaces[s].push_back(v);
                     light[v].w = 1.0f;
@@ -347,9 +352,14 @@ TexelBins binTexels(std::span<const ReflectiveShadowMap> rsms, const VolumeRegio
     std::vector<uint32_t> rowOf(texels);
     std::vector<uint16_t> xOf(texels);
     size_t first = 0;
+    const uint32_t un = static_cast<uint32_t>(n);
     for (const ReflectiveShadowMap& rsm : rsms) {
+        // The map's voxels where it holds them (a few bytes a texel, not its position's).
+        const std::span<const uint32_t> known = rsm.voxelsIn(region);
+        const bool held = known.size() == rsm.texels.size();
         parallelFor(0, static_cast<int64_t>(rsm.texels.size()), 1 << 14, [&](int64_t t) {
-            const glm::ivec3 v = texelVoxel(rsm.texels[t].position);
+            const glm::ivec3 v = held ? glm::ivec3(known[t] % un, known[t] / un % un, known[t] / (un * un))
+                                      : texelVoxel(rsm.texels[t].position);
             rowOf[first + t] =
                 voxels.contains(v.x, v.y, v.z) ? static_cast<uint32_t>(v.z * n + v.y) : kOutside;
             xOf[first + t] = static_cast<uint16_t>(v.x);

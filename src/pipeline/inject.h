@@ -87,28 +87,6 @@ PackedGrid3 packInjected(const Grid3& grid, std::span<const VoxelGeometry* const
 // made (no float grid in between: 32 MiB at 128^3 that a first frame would fault in for nothing).
 PackedGrid3 deltaVolume(const Grid3& full, const Grid3& sceneOnly);
 
-// The level-0 voxel that a texel at a position is injected into (the region's far faces count to the last
-// voxel).
-class TexelVoxels {
-  public:
-    explicit TexelVoxels(const VolumeRegion& region)
-        : origin_(region.origin), invVoxel_(1.0f / region.voxelSize()), n_(region.resolution) {}
-    glm::ivec3 operator()(glm::vec3 position) const {
-        return glm::clamp(glm::ivec3(glm::floor((position - origin_) * invVoxel_)), glm::ivec3(0),
-                          glm::ivec3(n_ - 1));
-    }
-    // Its index in the level-0 grid.
-    uint32_t index(glm::vec3 position) const {
-        const glm::ivec3 v = (*this)(position);
-        return static_cast<uint32_t>((static_cast<size_t>(v.z) * n_ + v.y) * n_ + v.x);
-    }
-
-  private:
-    glm::vec3 origin_;
-    float invVoxel_;
-    int n_;
-};
-
 // ---- Injecting again where the objects change the light, frame after frame (FrameRenderer) ----
 //
 // With the objects, the RSMs differ from the real scene's own only in a few texels, and the full light volume

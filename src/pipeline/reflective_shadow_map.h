@@ -27,11 +27,44 @@ struct RsmTexel {
 // A map's texels: large blocks (core/large_blocks.h), recycled from map to map, sized without a value.
 using RsmTexels = std::vector<RsmTexel, UnsetAllocator<RsmTexel>>;
 
+// The level-0 voxel that a texel at a position is injected into (the region's far faces count to the last
+// voxel).
+class TexelVoxels {
+  public:
+    explicit TexelVoxels(const VolumeRegion& region)
+        : origin_(region.origin), invVoxel_(1.0f / region.voxelSize()), n_(region.resolution) {}
+    glm::ivec3 operator()(glm::vec3 position) const {
+        // Truncated rather than floored: the two differ only below 0, where both are clamped to 0.
+        return glm::clamp(glm::ivec3((position - origin_) * invVoxel_), glm::ivec3(0), glm::ivec3(n_ - 1));
+    }
+    // Its index in the level-0 grid.
+    uint32_t index(glm::vec3 position) const {
+        const glm::ivec3 v = (*this)(position);
+        return static_cast<uint32_t>((static_cast<size_t>(v.z) * n_ + v.y) * n_ + v.x);
+    }
+
+  private:
+    glm::vec3 origin_;
+    float invVoxel_;
+    int n_;
+};
+
 struct ReflectiveShadowMap {
     int resolution = 0;  // texels per face side
     int faces = 0;       // 1 (a frustum fitted to the region, or orthographic) or 6 (light inside the region)
     float rayStart = 0.0f;  // directional lights: how far behind the region's centre the rays start
     RsmTexels texels;       // the texels that hit a surface inside the region, in texel order
+    // Each texel's voxel in `voxelRegion` (TexelVoxels::index), in texel order: found as the map is rendered,
+    // while its texels are at hand, so that the injection need not read their positions again (a few MiB
+    // of texels a light, read twice at every light change). A map put together otherwise has none.
+    std::vector<uint32_t, UnsetAllocator<uint32_t>> voxels;
+    VolumeRegion voxelRegion;
+    // The texels' voxels in `region`, or an empty span where the map does not hold them.
+    std::span<const uint32_t> voxelsIn(const VolumeRegion& region) const {
+        const bool held = voxels.size() == texels.size() && voxelRegion.origin == region.origin &&
+                          voxelRegion.size == region.size && voxelRegion.resolution == region.resolution;
+        return held ? std::span<const uint32_t>(voxels) : std::span<const uint32_t>{};
+    }
 };
 
 // The face resolution of each light's map (options.rsm.resolution): the given one for all, or "auto": the

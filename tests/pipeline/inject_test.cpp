@@ -118,6 +118,49 @@ TEST(Inject, TheSurfaceVoxelsAloneGiveTheSameVolume) {
     EXPECT_GT(a.at(8, 11, 8).x, 0.0f);  // the ball's lit top
 }
 
+// A rendered map holds each texel's voxel in its region, which the injection and the texels' bins read
+// instead of the positions: the same volume and bins as a map without them; another region's voxels are
+// found from the positions.
+TEST(ReflectiveShadowMap, HoldsItsTexelsVoxelsForTheInjection) {
+    Scene s = floorOnly(0.5f);
+    s.real.push_back(test::placed(makeSphere(0.2f, 24), {0.1f, 0.26f, 0.0f}, test::diffuse(glm::vec3(0.7f))));
+    const RayScene rays(s, SceneContent::RealOnly);
+    Light lamp;
+    lamp.type = Light::Type::Point;
+    lamp.position = glm::vec3(-0.3f, 0.8f, 0.2f);
+    lamp.intensity = 1.5f;
+    const std::vector<ReflectiveShadowMap> held = {renderReflectiveShadowMap(rays, lamp, kRegion, 32)};
+    ASSERT_GT(held[0].texels.size(), 500u);
+    ASSERT_EQ(held[0].voxels.size(), held[0].texels.size());
+    const TexelVoxels texelVoxel(kRegion);
+    size_t wrong = 0;
+    for (size_t t = 0; t < held[0].texels.size(); ++t)
+        wrong += held[0].voxels[t] != texelVoxel.index(held[0].texels[t].position);
+    EXPECT_EQ(wrong, 0u);
+    VolumeRegion other = kRegion;
+    other.resolution = 8;
+    EXPECT_TRUE(held[0].voxelsIn(other).empty());
+
+    std::vector<ReflectiveShadowMap> positions(1);
+    positions[0].resolution = held[0].resolution;
+    positions[0].faces = held[0].faces;
+    positions[0].texels = held[0].texels;
+    ASSERT_TRUE(positions[0].voxelsIn(kRegion).empty());
+    const VoxelGeometry listed = voxelize(s.real, kRegion, true, true);
+    const VoxelGeometry* geometry[] = {&listed};
+    const Grid3 a = injectLight(held, kRegion, geometry), b = injectLight(positions, kRegion, geometry);
+    size_t differing = 0;
+    for (size_t i = 0; i < a.size(); ++i) differing += std::memcmp(&a[i], &b[i], sizeof(glm::vec4)) != 0;
+    EXPECT_EQ(differing, 0u);
+    const VoxelRows all = VoxelRows::all(kRegion.resolution);
+    const TexelBins binsHeld = binTexels(held, kRegion, all),
+                    binsPositions = binTexels(positions, kRegion, all);
+    EXPECT_EQ(binsHeld.rowStart, binsPositions.rowStart);
+    ASSERT_EQ(binsHeld.entries.size(), binsPositions.entries.size());
+    EXPECT_EQ(0, std::memcmp(binsHeld.entries.data(), binsPositions.entries.data(),
+                             binsHeld.entries.size() * sizeof(TexelBins::Entry)));
+}
+
 // A grid recycled from an injection under another light (its memory taken, only the voxels that injection
 // wrote zeroed: the surface voxels and a lit voxel in the air) gives the new light's volume bit for bit, and
 // so does its packing from the listed voxels alone. The recycled grid's air voxel would stay lit, and every
