@@ -259,22 +259,32 @@ std::optional<RsmTexel> retraceTexel(const RayScene& scene, const MapLayout& lay
     return texelFromHit(hit, ray, regionBounds, texelIndex(res, face, i, j), viewpoint);
 }
 
-// Appends `rows` in order to `out`, grown once to their total and copied into place in parallel (tens of
-// MiB for a point light's cube map).
-template <typename T, typename Out>
-void appendRows(const std::vector<std::vector<T>>& rows, Out& out) {
-    std::vector<size_t> start(rows.size() + 1, out.size());
+// Appends `rows` in order to `texels`, grown once to their total and copied into place in parallel (tens of
+// MiB for a point light's cube map); with `texelVoxel`, each texel's voxel is appended to `voxels` as it is
+// copied.
+void appendRows(const std::vector<std::vector<RsmTexel>>& rows, RsmTexels& texels,
+                const TexelVoxels* texelVoxel = nullptr,
+                std::vector<uint32_t, UnsetAllocator<uint32_t>>* voxels = nullptr) {
+    std::vector<size_t> start(rows.size() + 1, texels.size());
     for (size_t r = 0; r < rows.size(); ++r) start[r + 1] = start[r] + rows[r].size();
-    out.resize(start.back());  // not initialized: every new element is copied below
+    texels.resize(start.back());  // not initialized: every new texel (and voxel) is written below
+    if (texelVoxel) voxels->resize(start.back());
     parallelFor(0, static_cast<int64_t>(rows.size()), 16, [&](int64_t r) {
-        std::copy(rows[r].begin(), rows[r].end(), out.begin() + static_cast<ptrdiff_t>(start[r]));
+        if (!texelVoxel) {
+            std::copy(rows[r].begin(), rows[r].end(), texels.begin() + static_cast<ptrdiff_t>(start[r]));
+            return;
+        }
+        for (size_t k = 0, t = start[r]; k < rows[r].size(); ++k, ++t) {
+            texels[t] = rows[r][k];
+            (*voxels)[t] = texelVoxel->index(rows[r][k].position);
+        }
     });
 }
 
 // Renders every face row by row, rows in parallel. `rowTexels(face, j, out)` appends row j's texels in column
-// order to `out`; each texel's voxel in `region` is found right after, while the row is at hand. The rows are
-// then joined into one block of exactly their size: only the texels that hit a surface in the region take
-// memory (a map whose rays mostly miss it, an environment light's, stays small).
+// order to `out`. The rows are then joined into one block of exactly their size, each texel's voxel in
+// `region` found as it is copied: only the texels that hit a surface in the region take memory (a map whose
+// rays mostly miss it, an environment light's, stays small).
 template <typename RowTexels>
 ReflectiveShadowMap renderRows(const MapLayout& layout, int res, const VolumeRegion& region,
                                RowTexels&& rowTexels) {
@@ -283,21 +293,11 @@ ReflectiveShadowMap renderRows(const MapLayout& layout, int res, const VolumeReg
     rsm.faces = layout.faceCount();
     rsm.rayStart = layout.rayStart();
     rsm.voxelRegion = region;
-    const TexelVoxels texelVoxel(region);
     std::vector<std::vector<RsmTexel>> rows(static_cast<size_t>(rsm.faces) * res);
     parallelFor(0, static_cast<int64_t>(rows.size()), 4,
                 [&](int64_t r) { rowTexels(static_cast<int>(r / res), static_cast<int>(r % res), rows[r]); });
-    // Joined as appendRows joins them, each texel's voxel found as it is copied.
-    std::vector<size_t> start(rows.size() + 1, 0);
-    for (size_t r = 0; r < rows.size(); ++r) start[r + 1] = start[r] + rows[r].size();
-    rsm.texels.resize(start.back());  // not initialized: every texel and voxel is written below
-    rsm.voxels.resize(start.back());
-    parallelFor(0, static_cast<int64_t>(rows.size()), 16, [&](int64_t r) {
-        for (size_t k = 0, t = start[r]; k < rows[r].size(); ++k, ++t) {
-            rsm.texels[t] = rows[r][k];
-            rsm.voxels[t] = texelVoxel.index(rows[r][k].position);
-        }
-    });
+    const TexelVoxels texelVoxel(region);
+    appendRows(rows, rsm.texels, &texelVoxel, &rsm.voxels);
     return rsm;
 }
 

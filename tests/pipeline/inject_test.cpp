@@ -34,6 +34,34 @@ Light directionalDown(float irradiance) {
     return l;
 }
 
+// A lit texel away from every surface, as a grazing texel rounded into the voxel beside its surface.
+RsmTexel texelInTheAir() {
+    RsmTexel t{};
+    t.position = glm::vec3(-0.55f, 0.7f, 0.45f);
+    t.normal = glm::vec3(0, 1, 0);
+    t.flux = glm::vec3(0.01f);
+    t.area = 1e-3f;
+    return t;
+}
+
+// A point light of intensity 1.5 at `position`.
+Light lampAt(glm::vec3 position) {
+    Light l;
+    l.type = Light::Type::Point;
+    l.position = position;
+    l.intensity = 1.5f;
+    return l;
+}
+
+// The voxels whose bits differ between two grids of the same size.
+size_t differingVoxels(const Grid3& a, const Grid3& b) {
+    EXPECT_EQ(a.size(), b.size());
+    size_t differing = 0;
+    for (size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+        differing += std::memcmp(&a[i], &b[i], sizeof(glm::vec4)) != 0;
+    return differing;
+}
+
 // The light volume of `s`'s real surfaces under directionalDown(2) through a map of `resolution`.
 Grid3 lightUnderDirectionalDown(const Scene& s, int resolution) {
     RayScene rays(s, SceneContent::RealOnly);
@@ -93,11 +121,7 @@ TEST(Inject, TheSurfaceVoxelsAloneGiveTheSameVolume) {
     RayScene rays(s, SceneContent::RealOnly);
     std::vector<ReflectiveShadowMap> rsm = {
         renderReflectiveShadowMap(rays, directionalDown(2.0f), kRegion, 64)};
-    RsmTexel stray{};
-    stray.position = glm::vec3(-0.55f, 0.7f, 0.45f);  // in the air
-    stray.normal = glm::vec3(0, 1, 0);
-    stray.flux = glm::vec3(0.01f);
-    stray.area = 1e-3f;
+    const RsmTexel stray = texelInTheAir();
     rsm[0].texels.push_back(stray);
     const VoxelGeometry floorListed = voxelize(std::span(s.real).first(1), kRegion, true, true);
     const VoxelGeometry ballListed = voxelize(objects.real, kRegion, true, true);
@@ -108,10 +132,7 @@ TEST(Inject, TheSurfaceVoxelsAloneGiveTheSameVolume) {
     const VoxelGeometry* listed[] = {&floorListed, &ballListed};
     const VoxelGeometry* all[] = {&floorAll, &ballAll};
     const Grid3 a = injectLight(rsm, kRegion, listed), b = injectLight(rsm, kRegion, all);
-    ASSERT_EQ(a.size(), b.size());
-    size_t differing = 0;
-    for (size_t i = 0; i < a.size(); ++i) differing += std::memcmp(&a[i], &b[i], sizeof(glm::vec4)) != 0;
-    EXPECT_EQ(differing, 0u);
+    EXPECT_EQ(differingVoxels(a, b), 0u);
     const glm::ivec3 v = TexelVoxels(kRegion)(stray.position);
     EXPECT_GT(a.at(v.x, v.y, v.z).x, 0.0f);
     EXPECT_EQ(a.at(v.x, v.y, v.z).w, 1.0f);
@@ -125,10 +146,7 @@ TEST(ReflectiveShadowMap, HoldsItsTexelsVoxelsForTheInjection) {
     Scene s = floorOnly(0.5f);
     s.real.push_back(test::placed(makeSphere(0.2f, 24), {0.1f, 0.26f, 0.0f}, test::diffuse(glm::vec3(0.7f))));
     const RayScene rays(s, SceneContent::RealOnly);
-    Light lamp;
-    lamp.type = Light::Type::Point;
-    lamp.position = glm::vec3(-0.3f, 0.8f, 0.2f);
-    lamp.intensity = 1.5f;
+    const Light lamp = lampAt({-0.3f, 0.8f, 0.2f});
     const std::vector<ReflectiveShadowMap> held = {renderReflectiveShadowMap(rays, lamp, kRegion, 32)};
     ASSERT_GT(held[0].texels.size(), 500u);
     ASSERT_EQ(held[0].voxels.size(), held[0].texels.size());
@@ -148,10 +166,8 @@ TEST(ReflectiveShadowMap, HoldsItsTexelsVoxelsForTheInjection) {
     ASSERT_TRUE(positions[0].voxelsIn(kRegion).empty());
     const VoxelGeometry listed = voxelize(s.real, kRegion, true, true);
     const VoxelGeometry* geometry[] = {&listed};
-    const Grid3 a = injectLight(held, kRegion, geometry), b = injectLight(positions, kRegion, geometry);
-    size_t differing = 0;
-    for (size_t i = 0; i < a.size(); ++i) differing += std::memcmp(&a[i], &b[i], sizeof(glm::vec4)) != 0;
-    EXPECT_EQ(differing, 0u);
+    EXPECT_EQ(
+        differingVoxels(injectLight(held, kRegion, geometry), injectLight(positions, kRegion, geometry)), 0u);
     const VoxelRows all = VoxelRows::all(kRegion.resolution);
     const TexelBins binsHeld = binTexels(held, kRegion, all),
                     binsPositions = binTexels(positions, kRegion, all);
@@ -171,19 +187,12 @@ TEST(Inject, ARecycledGridAndItsPackingFromTheListedVoxelsAreTheFreshOnes) {
     const RayScene rays(s, SceneContent::RealOnly);
     const VoxelGeometry listed = voxelize(s.real, kRegion, true, true);
     const VoxelGeometry* geometry[] = {&listed};
-    Light lamp;
-    lamp.type = Light::Type::Point;
-    lamp.position = glm::vec3(-0.3f, 0.8f, 0.2f);
-    lamp.intensity = 1.5f;
-    std::vector<ReflectiveShadowMap> before = {renderReflectiveShadowMap(rays, lamp, kRegion, 32)};
-    RsmTexel stray{};
-    stray.position = glm::vec3(-0.55f, 0.7f, 0.45f);  // in the air
-    stray.normal = glm::vec3(0, 1, 0);
-    stray.flux = glm::vec3(0.01f);
-    stray.area = 1e-3f;
+    std::vector<ReflectiveShadowMap> before = {
+        renderReflectiveShadowMap(rays, lampAt({-0.3f, 0.8f, 0.2f}), kRegion, 32)};
+    const RsmTexel stray = texelInTheAir();
     before[0].texels.push_back(stray);
-    lamp.position = glm::vec3(0.4f, 0.6f, -0.3f);
-    const std::vector<ReflectiveShadowMap> after = {renderReflectiveShadowMap(rays, lamp, kRegion, 32)};
+    const std::vector<ReflectiveShadowMap> after = {
+        renderReflectiveShadowMap(rays, lampAt({0.4f, 0.6f, -0.3f}), kRegion, 32)};
 
     RecycledGrid recycled;
     recycled.grid = injectLight(before, kRegion, geometry, &recycled.written);
@@ -196,19 +205,15 @@ TEST(Inject, ARecycledGridAndItsPackingFromTheListedVoxelsAreTheFreshOnes) {
     const Grid3 again = injectLight(after, kRegion, geometry, &written, &recycled);
     EXPECT_EQ(&again[0], memory);  // the recycled grid's
     const Grid3 fresh = injectLight(after, kRegion, geometry);
-    ASSERT_EQ(again.size(), fresh.size());
-    size_t differing = 0, lit = 0;
-    for (size_t i = 0; i < fresh.size(); ++i) {
-        differing += std::memcmp(&again[i], &fresh[i], sizeof(glm::vec4)) != 0;
-        lit += fresh[i].x > 0.0f;
-    }
-    EXPECT_EQ(differing, 0u);
+    EXPECT_EQ(differingVoxels(again, fresh), 0u);
+    size_t lit = 0;
+    for (size_t i = 0; i < fresh.size(); ++i) lit += fresh[i].x > 0.0f;
     EXPECT_GT(lit, 100u);
     EXPECT_EQ(again.at(air.x, air.y, air.z), glm::vec4(0.0f));
 
     const PackedGrid3 packed = packInjected(again, geometry, written), whole(fresh);
     ASSERT_EQ(packed.size(), whole.size());
-    differing = 0;
+    size_t differing = 0;
     for (size_t i = 0; i < whole.size(); ++i) differing += packed.packed(i) != whole.packed(i);
     EXPECT_EQ(differing, 0u);
 }
