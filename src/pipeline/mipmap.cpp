@@ -40,11 +40,23 @@ PackedGrid3 downsample(const PackedGrid3& fine) {
     return coarse;
 }
 
-MipVolume buildMipChain(const VolumeRegion& region, PackedGrid3 level0) {
+namespace {
+
+std::vector<PackedGrid3> mipLevels(PackedGrid3 level0) {
     std::vector<PackedGrid3> levels;
     levels.push_back(std::move(level0));
     while (levels.back().resolution() > 1) levels.push_back(downsample(levels.back()));
-    return MipVolume(region, std::move(levels));
+    return levels;
+}
+
+}  // namespace
+
+MipVolume buildMipChain(const VolumeRegion& region, PackedGrid3 level0) {
+    return MipVolume(region, mipLevels(std::move(level0)));
+}
+
+MipVolume buildMipChain(const VolumeRegion& region, PackedGrid3 level0, const VoxelBox& occupied) {
+    return MipVolume(region, mipLevels(std::move(level0)), occupied);
 }
 
 MipVolume buildMipChain(const VolumeRegion& region, const Grid3& level0) {

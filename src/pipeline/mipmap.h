@@ -9,6 +9,9 @@ namespace deltagi {
 
 // Takes the level-0 grid (resolution a power of two) and returns it with levels down to 1^3.
 MipVolume buildMipChain(const VolumeRegion& region, PackedGrid3 level0);
+// The same where the caller knows a box around level 0's non-zero voxels (MipVolume::occupiedBounds: a
+// superset gives the same lookups), which is then not found by reading every voxel.
+MipVolume buildMipChain(const VolumeRegion& region, PackedGrid3 level0, const VoxelBox& occupied);
 // The same from a level 0 in floats, rounded to bfloat16 first.
 MipVolume buildMipChain(const VolumeRegion& region, const Grid3& level0);
 

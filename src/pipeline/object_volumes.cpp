@@ -266,13 +266,22 @@ void ObjectVolumes::buildLightMips() {
         updateMipChain(objectVisibility_, box, nonZeroBounds(level0, objects_.bounds));
     }
     // Outside lightDiffers_ both are non-zero only where the scene's light is.
-    auto update = [&](MipVolume& volume) {
+    auto occupiedOf = [&](const PackedGrid3& level0) {
         VoxelBox occupied = *sceneLightBounds_;
-        occupied.extend(nonZeroBounds(volume.level(0), lightDiffers_.bounds()));
-        updateMipChain(volume, lightChanged_, occupied);
+        occupied.extend(nonZeroBounds(level0, lightDiffers_.bounds()));
+        return occupied;
+    };
+    auto update = [&](MipVolume& volume) {
+        updateMipChain(volume, lightChanged_, occupiedOf(volume.level(0)));
     };
     if (freshFull_) {
-        fullLight_ = buildMipChain(region_, std::move(*freshFull_));
+        // Its occupied box from the scene's light's where that is known, not read from every voxel.
+        if (sceneLightBounds_) {
+            const VoxelBox occupied = occupiedOf(*freshFull_);
+            fullLight_ = buildMipChain(region_, std::move(*freshFull_), occupied);
+        } else {
+            fullLight_ = buildMipChain(region_, std::move(*freshFull_));
+        }
         freshFull_.reset();
         if (freshDelta_)
             deltaLight_ = buildMipChain(region_, std::move(*freshDelta_));
