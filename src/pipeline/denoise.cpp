@@ -3,10 +3,20 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <optional>
 
+#include "core/large_blocks.h"
 #include "core/parallel.h"
+
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define DELTAGI_FILTER_LANES 1
+#include <immintrin.h>
+// The 8-float helpers are always inlined into the kernel: the note that 32-byte vectors are passed
+// differently with AVX than without does not apply.
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
 
 namespace deltagi {
 
@@ -348,6 +358,255 @@ template <int C>
     }
 }
 
+#if DELTAGI_FILTER_LANES
+// ---- The pixels between the samples eight at a time (filterRowWithoutPlan's interpolation, in lanes) ----
+//
+// Eight neighbouring pixels of a row in the lanes of 8-float vectors: each lane works its pixel's weights and
+// value out with the same operations in the same order as cellNeighbourWeights, interpolationWeights and
+// interpolatePixel (no fused multiply-adds: compiled for AVX2 alone), so that the result is the same bits.
+// The cell samples a lane reads come from a copy of the pass's samples in planes (LaneSamples), moved into
+// the lanes by one permutation per plane and corner. Pixels without a sample on their surface take the full
+// filter, as there, one at a time.
+#define DELTAGI_FILTER_KERNEL __attribute__((target("avx2")))
+#define DELTAGI_FILTER_INLINE [[gnu::always_inline]] inline __attribute__((target("avx2")))
+
+using FloatL = float __attribute__((vector_size(32)));
+using IntL = int32_t __attribute__((vector_size(32)));
+constexpr int kLanes = 8;
+
+// Whether the CPU runs the lanes' kernel.
+bool filterLanesAvailable() {
+    static const bool available = __builtin_cpu_supports("avx2");
+    return available;
+}
+
+// The pass's samples and filtered values in planes of floats, (sw + kPad) x (sh + 1) of them: the pad columns
+// and the last row are not valid (the samples past the kept grid's edge, as cellSamples leaves them).
+struct LaneSamples {
+    static constexpr int kPad = kLanes + 1;
+    template <typename T>
+    using Plane = std::vector<T, UnsetAllocator<T>>;  // written in full by laneSamples()
+    int width = 0;                                    // sw + kPad
+    size_t planeSize = 0;
+    Plane<float> qx, qy, qz, nx, ny, nz;
+    Plane<int32_t> valid, nonZero;  // -1 or 0
+    Plane<float> values;            // channel c's plane from c * planeSize
+
+    size_t index(const FilterPass& f, int sx, int sy) const {
+        return static_cast<size_t>(sy - f.oy) * width + (sx - f.ox);
+    }
+};
+
+LaneSamples laneSamples(const FilterPass& f, std::span<const float> filtered,
+                        std::span<const uint8_t> filteredNonZero, int channels) {
+    LaneSamples s;
+    s.width = f.sw + LaneSamples::kPad;
+    s.planeSize = static_cast<size_t>(s.width) * (f.sh + 1);
+    for (LaneSamples::Plane<float>* plane : {&s.qx, &s.qy, &s.qz, &s.nx, &s.ny, &s.nz})
+        plane->resize(s.planeSize);
+    s.valid.resize(s.planeSize);
+    s.nonZero.resize(s.planeSize);
+    s.values.resize(s.planeSize * channels);
+    // Every entry, the pads' and the invalid samples' as zeros.
+    parallelFor(0, f.sh + 1, 16, [&](int64_t row) {
+        for (int col = 0; col < s.width; ++col) {
+            const size_t j = static_cast<size_t>(row) * s.width + col;
+            const size_t k = static_cast<size_t>(row) * f.sw + col;
+            const bool valid = row < f.sh && col < f.sw && f.samples[k].valid;
+            const FilterSample q =
+                valid ? f.samples[k] : FilterSample{glm::vec3(0.0f), glm::vec3(0.0f), false};
+            s.valid[j] = valid ? -1 : 0;
+            s.qx[j] = q.position.x, s.qy[j] = q.position.y, s.qz[j] = q.position.z;
+            s.nx[j] = q.normal.x, s.ny[j] = q.normal.y, s.nz[j] = q.normal.z;
+            s.nonZero[j] = valid && filteredNonZero[k] ? -1 : 0;
+            for (int c = 0; c < channels; ++c)
+                s.values[c * s.planeSize + j] = valid ? filtered[k * channels + c] : 0.0f;
+        }
+    });
+    return s;
+}
+
+// powInt in lanes (the same multiplications).
+DELTAGI_FILTER_INLINE FloatL powIntL(FloatL x, int n) {
+    if (n == 16) {
+        x *= x;
+        x *= x;
+        x *= x;
+        return x * x;
+    }
+    FloatL r = FloatL{} + 1.0f;
+    for (; n > 0; n >>= 1, x *= x)
+        if (n & 1) r *= x;
+    return r;
+}
+DELTAGI_FILTER_INLINE FloatL sqrtL(FloatL x) {
+    return reinterpret_cast<FloatL>(_mm256_sqrt_ps(reinterpret_cast<__m256>(x)));
+}
+DELTAGI_FILTER_INLINE FloatL toFloatL(IntL x) {
+    return reinterpret_cast<FloatL>(_mm256_cvtepi32_ps(reinterpret_cast<__m256i>(x)));
+}
+DELTAGI_FILTER_INLINE IntL splatInt(int32_t x) {
+    return IntL{} + x;
+}
+DELTAGI_FILTER_INLINE bool anyOf(IntL mask) {
+    return !_mm256_testz_si256(reinterpret_cast<__m256i>(mask), reinterpret_cast<__m256i>(mask));
+}
+DELTAGI_FILTER_INLINE bool allOf(IntL mask) {
+    return _mm256_testc_si256(reinterpret_cast<__m256i>(mask), reinterpret_cast<__m256i>(splatInt(-1)));
+}
+DELTAGI_FILTER_INLINE FloatL splat(float x) {
+    return FloatL{} + x;
+}
+DELTAGI_FILTER_INLINE FloatL loadL(const float* p) {
+    FloatL v;
+    std::memcpy(&v, p, sizeof(v));
+    return v;
+}
+DELTAGI_FILTER_INLINE IntL loadL(const int32_t* p) {
+    IntL v;
+    std::memcpy(&v, p, sizeof(v));
+    return v;
+}
+// Lane l of the result is p[offset[l]] (offsets 0..7).
+DELTAGI_FILTER_INLINE FloatL permuted(const float* p, IntL offset) {
+    return reinterpret_cast<FloatL>(
+        _mm256_permutevar8x32_ps(reinterpret_cast<__m256>(loadL(p)), reinterpret_cast<__m256i>(offset)));
+}
+DELTAGI_FILTER_INLINE IntL permuted(const int32_t* p, IntL offset) {
+    return reinterpret_cast<IntL>(
+        _mm256_permutevar8x32_epi32(reinterpret_cast<__m256i>(loadL(p)), reinterpret_cast<__m256i>(offset)));
+}
+
+// The pixels [x0, x1) of row y as filterRowWithoutPlan<C> with settings.interpolate gives them.
+template <int C>
+DELTAGI_FILTER_KERNEL void interpolateRowInLanes(const FilterPass& f, const LaneSamples& s, int y, int x0,
+                                                 int x1, std::span<float> out, std::vector<size_t>& holes) {
+    const int stride = f.stride, sy = y / stride;
+    const float fy = static_cast<float>(y - sy * stride) / static_cast<float>(stride);
+    const size_t rowAbove = s.index(f, f.ox, sy), rowBelow = rowAbove + s.width;
+    // The vertical offsets (in pixels) of the cell's rows of samples from the row.
+    const IntL pyAbove = splatInt(sy * stride - y), pyBelow = splatInt((sy + 1) * stride - y);
+    const float allowanceScale = f.s.planeDistance * f.pixelAngle;
+    // A point's position, normal and material (null: no surface) as offsets of floats from its first.
+    constexpr int kPointFloats = sizeof(SurfacePoint) / sizeof(float);
+    static_assert(sizeof(SurfacePoint) % sizeof(float) == 0 && offsetof(SurfacePoint, material) % 8 == 0);
+    constexpr int kMaterial = offsetof(SurfacePoint, material) / sizeof(float);
+    const IntL laneIndex = {0, 1, 2, 3, 4, 5, 6, 7}, pointLane = laneIndex * kPointFloats;
+    const float strideF = static_cast<float>(stride);
+    for (int x = x0; x < x1; x += kLanes) {
+        // The lanes' pixels: those past x1 are not read. Their points gathered, every load a float of them.
+        const IntL inRow = laneIndex < x1 - x;
+        const size_t i0 = static_cast<size_t>(y) * f.width + x;
+        const float* point = reinterpret_cast<const float*>(&f.points[i0]);
+        auto gather = [&](int at) __attribute__((always_inline, target("avx2"))) {
+            return reinterpret_cast<FloatL>(_mm256_mask_i32gather_ps(
+                _mm256_setzero_ps(), point + at, reinterpret_cast<__m256i>(pointLane),
+                reinterpret_cast<__m256>(inRow), sizeof(float)));
+        };
+        const IntL material =
+            reinterpret_cast<IntL>(gather(kMaterial)) | reinterpret_cast<IntL>(gather(kMaterial + 1));
+        IntL on = inRow & (material != 0);
+        if (!f.s.filtered.empty()) {
+            uint64_t bytes = 0;
+            std::memcpy(&bytes, &f.s.filtered[i0], static_cast<size_t>(std::min(x1 - x, kLanes)));
+            on &= reinterpret_cast<IntL>(
+                      _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(static_cast<int64_t>(bytes)))) != 0;
+        }
+        if (!anyOf(on)) continue;
+        alignas(32) int32_t active[kLanes];
+        std::memcpy(active, &on, sizeof(on));
+        // Each pixel's cell (first sample sx), by a division of floats that is exact for such integers.
+        const IntL xs = x + laneIndex;
+        const IntL sx =
+            reinterpret_cast<IntL>(_mm256_cvttps_epi32(reinterpret_cast<__m256>(toFloatL(xs) / strideF)));
+        const int first = sx[0];
+        const IntL lane = sx - first;
+        const IntL toSample = sx * stride - xs;  // the cell's first sample's x offset from the pixel
+        const FloatL ppx = gather(0), ppy = gather(1), ppz = gather(2);
+        const FloatL pnxL = gather(3), pnyL = gather(4), pnzL = gather(5);
+        // planeAllowance(p.position), lane by lane.
+        const FloatL ex = ppx - f.eye.x, ey = ppy - f.eye.y, ez = ppz - f.eye.z;
+        const FloatL planeAllowance = allowanceScale * sqrtL((ex * ex + ey * ey) + ez * ez);
+        const size_t base = static_cast<size_t>(first - f.ox);
+        auto corner = [&](int n) { return (n >> 1 ? rowBelow : rowAbove) + base + (n & 1); };
+        IntL nonZero[4];
+        for (int n = 0; n < 4; ++n) nonZero[n] = permuted(&s.nonZero[corner(n)], lane);
+        // Corner n's weight as a neighbour (cellNeighbourWeights' lane n).
+        auto neighbourWeight = [&](int n) __attribute__((always_inline, target("avx2"))) {
+            const size_t at = corner(n);
+            const FloatL qx = permuted(&s.qx[at], lane), qy = permuted(&s.qy[at], lane),
+                         qz = permuted(&s.qz[at], lane);
+            const FloatL nx = permuted(&s.nx[at], lane), ny = permuted(&s.ny[at], lane),
+                         nz = permuted(&s.nz[at], lane);
+            const IntL valid = permuted(&s.valid[at], lane);
+            // offsetLength: sqrt(px^2 + py^2 + 1) for the sample's offset from the pixel.
+            const IntL ox = toSample + (n & 1) * stride, oy = n >> 1 ? pyBelow : pyAbove;
+            const FloatL allowance = sqrtL(toFloatL(ox * ox + oy * oy + 1)) * planeAllowance;
+            const FloatL cosN = (pnxL * nx + pnyL * ny) + pnzL * nz;
+            const FloatL offPlane = (pnxL * (qx - ppx) + pnyL * (qy - ppy)) + pnzL * (qz - ppz);
+            const FloatL distance = offPlane < 0.0f ? -offPlane : offPlane;
+            const IntL usable = valid & ~(cosN <= 0.0f) & ~(distance > allowance);
+            return usable ? powIntL(cosN, f.s.normalPower) : FloatL{};
+        };
+        FloatL weight[4];
+        weight[0] = neighbourWeight(0);
+        // The cell's samples all zero and the first on the pixel's surface: zero (filterRowWithoutPlan's
+        // shortcut); when so for every pixel, the other corners are not needed.
+        const IntL zeroCell = ~(nonZero[0] | nonZero[1] | nonZero[2] | nonZero[3]) & (weight[0] > 0.0f);
+        if (allOf(zeroCell | ~on)) {
+            for (int l = 0; l < kLanes; ++l)
+                if (active[l]) std::fill_n(&out[(static_cast<size_t>(y) * f.width + x + l) * C], C, 0.0f);
+            continue;
+        }
+        for (int n = 1; n < 4; ++n) weight[n] = neighbourWeight(n);
+        // interpolationWeights.
+        const FloatL fx = toFloatL(-toSample) / static_cast<float>(stride);
+        constexpr float kMinBilinear = 1e-3f;
+        const FloatL bilinear[4] = {(1.0f - fx) * (1.0f - fy), fx * (1.0f - fy), (1.0f - fx) * fy, fx * fy};
+        for (int n = 0; n < 4; ++n)
+            weight[n] *= bilinear[n] < kMinBilinear ? splat(kMinBilinear) : bilinear[n];
+        const FloatL weightSum = ((weight[0] + weight[1]) + weight[2]) + weight[3];
+        const IntL positive = weightSum > 0.0f, keep = positive | (weightSum != weightSum);
+        for (int n = 0; n < 4; ++n) {
+            weight[n] = positive ? weight[n] / weightSum : weight[n];
+            weight[n] = keep ? weight[n] : FloatL{};
+        }
+        // interpolatePixel.
+        IntL any = IntL{}, anyNonZero = IntL{};
+        for (int n = 0; n < 4; ++n) {
+            any |= weight[n] > 0.0f;
+            anyNonZero |= (weight[n] > 0.0f) & nonZero[n];
+        }
+        alignas(32) float sums[C][kLanes];
+        for (int c = 0; c < C; ++c) {
+            FloatL sum{};
+            for (int n = 0; n < 4; ++n) {
+                const FloatL v = permuted(&s.values[c * s.planeSize + corner(n)], lane);
+                sum = weight[n] != 0.0f ? sum + v * weight[n] : sum;
+            }
+            sum = anyNonZero ? sum : FloatL{};
+            std::memcpy(sums[c], &sum, sizeof(sum));
+        }
+        alignas(32) int32_t zero[kLanes], fallback[kLanes];
+        const IntL zeroL = zeroCell, fallbackL = ~zeroCell & ~any;
+        std::memcpy(zero, &zeroL, sizeof(zeroL));
+        std::memcpy(fallback, &fallbackL, sizeof(fallbackL));
+        for (int l = 0; l < kLanes; ++l) {
+            if (!active[l]) continue;
+            const size_t i = static_cast<size_t>(y) * f.width + x + l;
+            float* dst = &out[i * C];
+            if (zero[l]) {
+                std::fill_n(dst, C, 0.0f);
+            } else if (fallback[l]) {
+                if (!filterPixel<C>(f, x + l, y, f.points[i], dst)) holes.push_back(i);
+            } else {
+                for (int c = 0; c < C; ++c) dst[c] = sums[c][l];
+            }
+        }
+    }
+}
+#endif
+
 // The whole pass for C channels: every pixel filtered, or (settings.interpolate) the samples filtered and the
 // pixels between interpolated from them.
 template <int C>
@@ -376,6 +635,25 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
         });
     }
     InterpolationPlan* plan = usablePlan(f);
+    // The pixels without a plan in lanes, where the CPU has them.
+    auto rowWithoutPlan = [&](int y, int x0, int x1) {
+        filterRowWithoutPlan<C>(f, filtered, filteredNonZero, y, x0, x1, out, rowHoles[y]);
+    };
+#if DELTAGI_FILTER_LANES
+    std::optional<LaneSamples> lanes;
+    if constexpr (C > 0) {
+        if (interpolate && f.s.lanes && filterLanesAvailable())
+            lanes.emplace(laneSamples(f, filtered, filteredNonZero, channels));
+    }
+    auto rowInLanes = [&](int y, int x0, int x1) {
+        if constexpr (C > 0) {
+            if (lanes) return interpolateRowInLanes<C>(f, *lanes, y, x0, x1, out, rowHoles[y]);
+        }
+        rowWithoutPlan(y, x0, x1);
+    };
+#else
+    auto rowInLanes = rowWithoutPlan;
+#endif
     // With a plan: the pixels whose points, or the samples around them, may differ from the plan's surfaces.
     const PixelRect changed = f.s.planChanged;
     const int stride = f.stride;
@@ -387,7 +665,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
         const int sy = y / stride, cy = sy * stride;
         const bool rowMisses = changed.empty() || cy + stride < changed.y0 || cy >= changed.y1;
         if (!plan) {
-            filterRowWithoutPlan<C>(f, filtered, filteredNonZero, y, rect.x0, rect.x1, out, rowHoles[y]);
+            rowInLanes(y, rect.x0, rect.x1);
             return;
         }
         for (int x = rect.x0; x < rect.x1;) {
@@ -395,7 +673,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
             const bool cellPlan = rowMisses || cx + stride < changed.x0 || cx >= changed.x1;
             const size_t k00 = f.sampleIndex(sx, sy);
             if (!cellPlan) {  // its points may differ from the plan's surfaces
-                filterRowWithoutPlan<C>(f, filtered, filteredNonZero, y, x, cellEnd, out, rowHoles[y]);
+                rowInLanes(y, x, cellEnd);
                 x = cellEnd;
                 continue;
             }
@@ -423,6 +701,14 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
 }
 
 }  // namespace
+
+bool denoiseLanesAvailable() {
+#if DELTAGI_FILTER_LANES
+    return filterLanesAvailable();
+#else
+    return false;
+#endif
+}
 
 float surfaceWeight(const SurfacePoint& p, const SurfacePoint& q, glm::vec2 offset, glm::vec3 eye,
                     float pixelAngle, const DenoiseSettings& settings) {

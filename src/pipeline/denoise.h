@@ -51,6 +51,9 @@ struct DenoiseSettings {
     std::span<const uint8_t> traced;
     // Per pixel of the image, whether to filter it (the others are left as they are). Empty: every one.
     std::span<const uint8_t> filtered;
+    // With interpolate: the pixels between the samples eight at a time in vector lanes where the CPU has
+    // AVX2 (the same bits); false: one at a time, the definition (tests compare the two).
+    bool lanes = true;
 };
 
 // The interpolation weights (DenoiseSettings::interpolate) of every pixel of a fixed set of surfaces, such as
@@ -85,6 +88,9 @@ std::vector<float> denoise(std::span<const float> values, int channels, std::spa
 void denoiseInto(std::span<float> values, int channels, std::span<const SurfacePoint> points, int width,
                  int height, glm::vec3 eye, float pixelAngle, const DenoiseSettings& settings,
                  std::vector<size_t>* holes = nullptr, const PixelRect* bounds = nullptr);
+
+// Whether DenoiseSettings::lanes runs in vector lanes on this CPU (it has AVX2 and the build has the kernel).
+bool denoiseLanesAvailable();
 
 // The filter's weight of q as a neighbour of p, q `offset` pixels away in the image (without the window's
 // spatial factor): dot(normals)^settings.normalPower where q lies on p's side and within

@@ -189,6 +189,85 @@ TEST(Denoise, InterpolationPlanGivesTheSameBits) {
     }
 }
 
+// The pixels between the samples interpolated eight at a time in vector lanes (DenoiseSettings::lanes) give
+// the bits and holes of one pixel at a time: over a view of a floor, a wall, a bumpy ball in front of them
+// and a pole thinner than a cell (depth edges, normals of every direction, pixels without a surface, pixels
+// without a sample on their surface: the full filter, and holes), at strides 2 to 16, odd ones too, with
+// 1, 3 and 6 channels, radius 1 and 2, another normal power, over the whole image and a rectangle, with and
+// without a mask of pixels to filter, the values smooth with zeros around a disk and a lone spike.
+TEST(Denoise, InterpolationInLanesGivesTheSameBits) {
+    if (!denoiseLanesAvailable())
+        GTEST_SKIP() << "this CPU has no AVX2: the filter interpolates one pixel at a time";
+    constexpr int kW = 93, kH = 61;
+    Material material;
+    std::vector<SurfacePoint> points(static_cast<size_t>(kW) * kH);
+    for (int y = 0; y < kH; ++y)
+        for (int x = 0; x < kW; ++x) {
+            SurfacePoint& p = points[static_cast<size_t>(y) * kW + x];
+            const float u = 0.01f * static_cast<float>(x), v = 0.01f * static_cast<float>(y);
+            const glm::vec2 d(static_cast<float>(x - 50), static_cast<float>(y - 30));
+            if ((x * 7 + y * 13) % 97 == 0) continue;  // no surface
+            if (glm::length(d) < 18.0f) {              // the ball, bumpy
+                const float r = glm::length(d) / 18.0f;
+                const glm::vec3 n =
+                    glm::normalize(glm::vec3(d.x / 18.0f, d.y / 18.0f,
+                                             std::sqrt(std::max(1.0f - r * r, 0.0f)) +
+                                                 0.1f * std::sin(0.9f * x) * std::cos(0.7f * y)));
+                p = pointOf(material, {u, v, 1.0f + 0.18f * n.z}, n);
+            } else if (x >= 20 && x < 25) {
+                p = pointOf(material, {u, v, 0.6f},
+                            {0, 0, 1});  // a pole before the wall, thinner than a cell
+            } else if (y < 35) {
+                p = pointOf(material, {u, v, 0.0f}, {0, 0, 1});  // the wall
+            } else {
+                p = pointOf(material, {u, 0.35f, 0.01f * (y - 35)}, {0, 1, 0});  // the floor
+            }
+        }
+    const glm::vec3 eye(0.45f, 0.3f, 2.0f);
+    std::vector<uint8_t> mask(points.size());
+    for (size_t i = 0; i < mask.size(); ++i) mask[i] = (i * 2654435761u >> 7) % 5 != 0;
+    size_t holes = 0;
+    for (const int channels : {1, 3, 6})
+        for (const int stride : {2, 3, 4, 8, 16})
+            for (int variant = 0; variant < 4; ++variant) {
+                std::vector<float> values(points.size() * channels, 0.0f);
+                for (size_t i = 0; i < points.size(); ++i) {
+                    const int x = static_cast<int>(i % kW), y = static_cast<int>(i / kW);
+                    const bool zero = std::hypot(x - 30.0f, y - 20.0f) > 12.0f + 8.0f * (variant & 1);
+                    for (int c = 0; c < channels; ++c)
+                        values[i * channels + c] =
+                            zero ? 0.0f : 0.2f + 0.1f * std::sin(0.3f * x + 0.5f * y + c) - 0.05f * c;
+                }
+                values[(static_cast<size_t>(48) * kW + 80) * channels] = 2.0f;  // a spike among zeros
+                DenoiseSettings settings;
+                settings.stride = stride;
+                settings.interpolate = true;
+                settings.radius = variant < 2 ? 1 : 2;
+                if (variant == 3) settings.normalPower = 5;
+                if (variant == 2) settings.filtered = mask;
+                const PixelRect rect = variant == 1 ? PixelRect{7, 5, 88, 58} : PixelRect{0, 0, kW, kH};
+                std::vector<float> inLanes = values, alone = values;
+                std::vector<size_t> holesInLanes, holesAlone;
+                std::vector<SurfacePoint> view = points;
+                if (variant == 1)  // the rectangle holds every valid point
+                    for (int y = 0; y < kH; ++y)
+                        for (int x = 0; x < kW; ++x)
+                            if (x < rect.x0 || x >= rect.x1 || y < rect.y0 || y >= rect.y1)
+                                view[static_cast<size_t>(y) * kW + x].material = nullptr;
+                denoiseInto(inLanes, channels, view, kW, kH, eye, 0.005f, settings, &holesInLanes, &rect);
+                settings.lanes = false;
+                denoiseInto(alone, channels, view, kW, kH, eye, 0.005f, settings, &holesAlone, &rect);
+                EXPECT_EQ(holesInLanes, holesAlone);
+                for (size_t i = 0; i < alone.size(); ++i)
+                    ASSERT_EQ(std::memcmp(&inLanes[i], &alone[i], sizeof(float)), 0)
+                        << "channels " << channels << " stride " << stride << " variant " << variant
+                        << " value " << i << ": " << inLanes[i] << " against " << alone[i];
+                EXPECT_NE(inLanes, values);
+                holes += holesAlone.size();
+            }
+    EXPECT_GT(holes, 0u);  // the pole's pixels at the largest strides
+}
+
 // A pass over a rectangle that holds every valid point (the objects' pixels) keeps only the rectangle's
 // samples and one more on each side: the same bits and holes as over the whole image, for rectangles whose
 // edges fall on samples and between them, at stride 1 and 3, filtered and interpolated.
