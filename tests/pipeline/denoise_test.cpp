@@ -189,13 +189,14 @@ TEST(Denoise, InterpolationPlanGivesTheSameBits) {
     }
 }
 
-// The pixels between the samples interpolated eight at a time in vector lanes (DenoiseSettings::lanes) give
-// the bits and holes of one pixel at a time: over a view of a floor, a wall, a bumpy ball in front of them
-// and a pole thinner than a cell (depth edges, normals of every direction, pixels without a surface, pixels
-// without a sample on their surface: the full filter, and holes), at strides 2 to 16, odd ones too, with
-// 1, 3 and 6 channels, radius 1 and 2, another normal power, over the whole image and a rectangle, with and
-// without a mask of pixels to filter, the values smooth with zeros around a disk and a lone spike.
-TEST(Denoise, InterpolationInLanesGivesTheSameBits) {
+// The filter eight pixels at a time in vector lanes (DenoiseSettings::lanes: the samples filtered, the pixels
+// between them interpolated, or every pixel filtered) gives the bits and holes of one pixel at a time: over a
+// view of a floor, a wall, a bumpy ball in front of them and a pole thinner than a cell (depth edges, normals
+// of every direction, pixels without a surface, pixels without a sample on their surface: the full filter,
+// and holes), at strides 1 to 16, odd ones too, interpolated or not, with 1, 3 and 6 channels, radius 1 and
+// 2, another normal power, over the whole image and a rectangle, with and without a mask of pixels to filter,
+// the values smooth with zeros around a disk and a lone spike.
+TEST(Denoise, TheFilterInLanesGivesTheSameBits) {
     if (!denoiseLanesAvailable())
         GTEST_SKIP() << "this CPU has no AVX2: the filter interpolates one pixel at a time";
     constexpr int kW = 93, kH = 61;
@@ -228,8 +229,10 @@ TEST(Denoise, InterpolationInLanesGivesTheSameBits) {
     for (size_t i = 0; i < mask.size(); ++i) mask[i] = (i * 2654435761u >> 7) % 5 != 0;
     size_t holes = 0;
     for (const int channels : {1, 3, 6})
-        for (const int stride : {2, 3, 4, 8, 16})
-            for (int variant = 0; variant < 4; ++variant) {
+        for (const int stride : {1, 2, 3, 4, 8, 16})
+            for (int variant = 0; variant < 8; ++variant) {
+                const bool interpolate = variant < 4;
+                if (stride == 1 && interpolate) continue;
                 std::vector<float> values(points.size() * channels, 0.0f);
                 for (size_t i = 0; i < points.size(); ++i) {
                     const int x = static_cast<int>(i % kW), y = static_cast<int>(i / kW);
@@ -241,15 +244,16 @@ TEST(Denoise, InterpolationInLanesGivesTheSameBits) {
                 values[(static_cast<size_t>(48) * kW + 80) * channels] = 2.0f;  // a spike among zeros
                 DenoiseSettings settings;
                 settings.stride = stride;
-                settings.interpolate = true;
-                settings.radius = variant < 2 ? 1 : 2;
-                if (variant == 3) settings.normalPower = 5;
-                if (variant == 2) settings.filtered = mask;
-                const PixelRect rect = variant == 1 ? PixelRect{7, 5, 88, 58} : PixelRect{0, 0, kW, kH};
+                settings.interpolate = interpolate;
+                settings.radius = variant % 4 < 2 ? 1 : 2;
+                if (variant % 4 == 3) settings.normalPower = 5;
+                if (variant % 4 == 2) settings.filtered = mask;
+                const bool inRect = variant % 4 == 1;
+                const PixelRect rect = inRect ? PixelRect{7, 5, 88, 58} : PixelRect{0, 0, kW, kH};
                 std::vector<float> inLanes = values, alone = values;
                 std::vector<size_t> holesInLanes, holesAlone;
                 std::vector<SurfacePoint> view = points;
-                if (variant == 1)  // the rectangle holds every valid point
+                if (inRect)  // the rectangle holds every valid point
                     for (int y = 0; y < kH; ++y)
                         for (int x = 0; x < kW; ++x)
                             if (x < rect.x0 || x >= rect.x1 || y < rect.y0 || y >= rect.y1)
