@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstring>
 #include <optional>
+#include <utility>
 
 #include "core/large_blocks.h"
 #include "core/parallel.h"
@@ -22,9 +23,10 @@ namespace deltagi {
 
 namespace {
 
-// x^n for a float or, lane by lane, a vector of them (interpolationWeights).
+// x^n for a float or, lane by lane, a vector of them (interpolationWeights, the filter in lanes: always
+// inlined, so that it is compiled for their instruction set).
 template <typename T>
-T powInt(T x, int n) {
+[[gnu::always_inline]] inline T powInt(T x, int n) {
     if (n == 16) {  // the filter's normal power: the loop's own squarings, unrolled (the same bits)
         x *= x;
         x *= x;
@@ -451,19 +453,6 @@ void addFiltered(LaneSamples& s, const FilterPass& f, std::span<const float> fil
     });
 }
 
-// powInt in lanes (the same multiplications).
-DELTAGI_FILTER_INLINE FloatL powIntL(FloatL x, int n) {
-    if (n == 16) {
-        x *= x;
-        x *= x;
-        x *= x;
-        return x * x;
-    }
-    FloatL r = FloatL{} + 1.0f;
-    for (; n > 0; n >>= 1, x *= x)
-        if (n & 1) r *= x;
-    return r;
-}
 DELTAGI_FILTER_INLINE FloatL sqrtL(FloatL x) {
     return reinterpret_cast<FloatL>(_mm256_sqrt_ps(reinterpret_cast<__m256>(x)));
 }
@@ -552,7 +541,7 @@ DELTAGI_FILTER_INLINE FloatL sameSurfaceWeightL(const FilterPass& f, const Point
     const FloatL offPlane = (p.nx * (qx - p.x) + p.ny * (qy - p.y)) + p.nz * (qz - p.z);
     const FloatL distance = offPlane < 0.0f ? -offPlane : offPlane;
     const IntL usable = valid & ~(cosN <= 0.0f) & ~(distance > allowance);
-    return usable ? powIntL(cosN, f.s.normalPower) : FloatL{};
+    return usable ? powInt(cosN, f.s.normalPower) : FloatL{};
 }
 
 // Eight pixels of row y through the edge-aware filter (filterPixel<C>), lane l's at x[l] with surface p: its
@@ -647,6 +636,76 @@ DELTAGI_FILTER_KERNEL void filterSamplesInLanes(const FilterPass& f, const LaneS
     }
 }
 
+// interpolatePixel in lanes: the pixels' values from the filtered values of their cells' corners (at
+// corner(n) in the planes, moved into the lanes by `lane`) and their nonZero flags, with their interpolation
+// weights, into sums[c] (zero where every weighed corner is zero). Returns the lanes with a positive weight;
+// the others take the full filter.
+template <int C, typename Corner>
+DELTAGI_FILTER_INLINE IntL interpolateInLanes(const LaneSamples& s, const FloatL (&weight)[4],
+                                              const IntL (&nonZero)[4], Corner&& corner, IntL lane,
+                                              float (&sums)[C][kLanes]) {
+    IntL any{}, anyNonZero{};
+    for (int n = 0; n < 4; ++n) {
+        any |= weight[n] > 0.0f;
+        anyNonZero |= (weight[n] > 0.0f) & nonZero[n];
+    }
+    for (int c = 0; c < C; ++c) {
+        FloatL sum{};
+        for (int n = 0; n < 4; ++n) {
+            const FloatL v = permuted(&s.filtered[c * s.planeSize + corner(n)], lane);
+            sum = weight[n] != 0.0f ? sum + v * weight[n] : sum;
+        }
+        sum = anyNonZero ? sum : FloatL{};
+        std::memcpy(sums[c], &sum, sizeof(sum));
+    }
+    return any;
+}
+
+// The pixels [x0, x1) of row y interpolated with the plan's weights, as filterImage<C> does it one pixel at a
+// time (interpolatePixel with the pixel's weights from the plan).
+template <int C>
+DELTAGI_FILTER_KERNEL void planRowInLanes(const FilterPass& f, const LaneSamples& s,
+                                          const InterpolationPlan& plan, int y, int x0, int x1,
+                                          std::span<float> out, std::vector<size_t>& holes) {
+    const int stride = f.stride, sy = y / stride;
+    const size_t rowAbove = s.index(f, f.ox, sy), rowBelow = rowAbove + s.width;
+    const IntL laneIndex = {0, 1, 2, 3, 4, 5, 6, 7};
+    const float strideF = static_cast<float>(stride);
+    for (int x = x0; x < x1; x += kLanes) {
+        const size_t i0 = static_cast<size_t>(y) * f.width + x;
+        const IntL inRow = (laneIndex < x1 - x) & filteredLanes(f, i0, x1 - x);
+        // The pixels' four weights (-1 first: no surface).
+        const float* weights = plan.weights[i0].data();
+        FloatL weight[4];
+        for (int n = 0; n < 4; ++n)
+            weight[n] = reinterpret_cast<FloatL>(_mm256_mask_i32gather_ps(
+                _mm256_setzero_ps(), weights + n, reinterpret_cast<__m256i>(laneIndex * 4),
+                reinterpret_cast<__m256>(inRow), sizeof(float)));
+        const IntL on = inRow & ~(weight[0] < 0.0f);
+        if (!anyOf(on)) continue;
+        const IntL sx = reinterpret_cast<IntL>(
+            _mm256_cvttps_epi32(reinterpret_cast<__m256>(toFloatL(x + laneIndex) / strideF)));
+        const int first = sx[0];
+        const IntL lane = sx - first;
+        const size_t base = static_cast<size_t>(first - f.ox);
+        auto corner = [&](int n) { return (n >> 1 ? rowBelow : rowAbove) + base + (n & 1); };
+        IntL nonZero[4];
+        for (int n = 0; n < 4; ++n) nonZero[n] = permuted(&s.nonZero[corner(n)], lane);
+        float sums[C][kLanes];
+        const IntL any = interpolateInLanes<C>(s, weight, nonZero, corner, lane, sums);
+        for (int l = 0; l < kLanes; ++l) {
+            if (!on[l]) continue;
+            const size_t i = i0 + l;
+            float* dst = &out[i * C];
+            if (!any[l]) {
+                if (!filterPixel<C>(f, x + l, y, f.points[i], dst)) holes.push_back(i);
+            } else {
+                for (int c = 0; c < C; ++c) dst[c] = sums[c][l];
+            }
+        }
+    }
+}
+
 // The pixels [x0, x1) of row y as filterRowWithoutPlan<C> with settings.interpolate gives them.
 template <int C>
 DELTAGI_FILTER_KERNEL void interpolateRowInLanes(const FilterPass& f, const LaneSamples& s, int y, int x0,
@@ -711,22 +770,8 @@ DELTAGI_FILTER_KERNEL void interpolateRowInLanes(const FilterPass& f, const Lane
             weight[n] = positive ? weight[n] / weightSum : weight[n];
             weight[n] = keep ? weight[n] : FloatL{};
         }
-        // interpolatePixel.
-        IntL any = IntL{}, anyNonZero = IntL{};
-        for (int n = 0; n < 4; ++n) {
-            any |= weight[n] > 0.0f;
-            anyNonZero |= (weight[n] > 0.0f) & nonZero[n];
-        }
-        alignas(32) float sums[C][kLanes];
-        for (int c = 0; c < C; ++c) {
-            FloatL sum{};
-            for (int n = 0; n < 4; ++n) {
-                const FloatL v = permuted(&s.filtered[c * s.planeSize + corner(n)], lane);
-                sum = weight[n] != 0.0f ? sum + v * weight[n] : sum;
-            }
-            sum = anyNonZero ? sum : FloatL{};
-            std::memcpy(sums[c], &sum, sizeof(sum));
-        }
+        float sums[C][kLanes];
+        const IntL any = interpolateInLanes<C>(s, weight, nonZero, corner, lane, sums);
         alignas(32) int32_t zero[kLanes], fallback[kLanes];
         const IntL zeroL = zeroCell, fallbackL = ~zeroCell & ~any;
         std::memcpy(zero, &zeroL, sizeof(zeroL));
@@ -815,6 +860,26 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
     const bool zeroCells = plan && f.s.filtered.empty() && plan->weighted.size() == f.samples.size();
     parallelFor(rect.y0, rect.y1, 4, [&](int64_t y64) {
         const int y = static_cast<int>(y64);
+        // The pixels from planStart to a given one (of whole cells) interpolated with the plan's weights.
+        int planStart = -1;
+        auto planPixels = [&](int y, int end) {
+            if (planStart < 0) return;
+            const int x0 = std::exchange(planStart, -1);
+#if DELTAGI_FILTER_LANES
+            if constexpr (C > 0)
+                if (lanes) return planRowInLanes<C>(f, *lanes, *plan, y, x0, end, out, rowHoles[y]);
+#endif
+            for (int x = x0; x < end; ++x) {
+                const size_t i = static_cast<size_t>(y) * f.width + x;
+                if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
+                const std::array<float, 4>& w = plan->weights[i];
+                if (w[0] < 0.0f) continue;  // no surface
+                if (!interpolatePixel<C>(f, filtered, filteredNonZero, x, y,
+                                         f.sampleIndex(x / stride, y / stride), nullptr, w,
+                                         &out[i * channels]))
+                    rowHoles[y].push_back(i);
+            }
+        };
         // Pixels by cell of samples, [cx, cx + stride] x [cy, cy + stride]: with a plan, those whose cell
         // misses `changed` read it.
         const int sy = y / stride, cy = sy * stride;
@@ -828,6 +893,7 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
             const bool cellPlan = rowMisses || cx + stride < changed.x0 || cx >= changed.x1;
             const size_t k00 = f.sampleIndex(sx, sy);
             if (!cellPlan) {  // its points may differ from the plan's surfaces
+                planPixels(y, x);
                 rowInLanes(y, x, cellEnd);
                 x = cellEnd;
                 continue;
@@ -836,22 +902,17 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
                 // Every pixel of the cell weighs some of its samples: where all of them are zero, so is every
                 // pixel (as interpolatePixel would give it), without reading their weights.
                 if (!cellHasValue(f, filteredNonZero, sx, sy)) {
+                    planPixels(y, x);
                     std::fill(out.begin() + (static_cast<ptrdiff_t>(y) * f.width + x) * channels,
                               out.begin() + (static_cast<ptrdiff_t>(y) * f.width + cellEnd) * channels, 0.0f);
                     x = cellEnd;
                     continue;
                 }
             }
-            for (; x < cellEnd; ++x) {
-                const size_t i = static_cast<size_t>(y) * f.width + x;
-                if (!f.s.filtered.empty() && !f.s.filtered[i]) continue;
-                const std::array<float, 4>& w = plan->weights[i];
-                if (w[0] < 0.0f) continue;  // no surface
-                if (!interpolatePixel<C>(f, filtered, filteredNonZero, x, y, k00, nullptr, w,
-                                         &out[i * channels]))
-                    rowHoles[y].push_back(i);
-            }
+            if (planStart < 0) planStart = x;  // interpolated with the plan's weights with the cells after it
+            x = cellEnd;
         }
+        planPixels(y, rect.x1);
     });
 }
 

@@ -250,24 +250,36 @@ TEST(Denoise, TheFilterInLanesGivesTheSameBits) {
                 if (variant % 4 == 2) settings.filtered = mask;
                 const bool inRect = variant % 4 == 1;
                 const PixelRect rect = inRect ? PixelRect{7, 5, 88, 58} : PixelRect{0, 0, kW, kH};
-                std::vector<float> inLanes = values, alone = values;
-                std::vector<size_t> holesInLanes, holesAlone;
-                std::vector<SurfacePoint> view = points;
-                if (inRect)  // the rectangle holds every valid point
+                // With a plan (whole images only): its surfaces the view, the pass's a block of them hidden.
+                for (const bool withPlan : {false, true}) {
+                    if (withPlan && (!interpolate || inRect)) continue;
+                    std::vector<float> inLanes = values, alone = values;
+                    std::vector<size_t> holesInLanes, holesAlone;
+                    std::vector<SurfacePoint> view = points;
+                    const PixelRect hidden = withPlan ? PixelRect{41, 22, 63, 37} : rect;
                     for (int y = 0; y < kH; ++y)
                         for (int x = 0; x < kW; ++x)
-                            if (x < rect.x0 || x >= rect.x1 || y < rect.y0 || y >= rect.y1)
+                            if ((x >= hidden.x0 && x < hidden.x1 && y >= hidden.y0 && y < hidden.y1) ==
+                                withPlan)
                                 view[static_cast<size_t>(y) * kW + x].material = nullptr;
-                denoiseInto(inLanes, channels, view, kW, kH, eye, 0.005f, settings, &holesInLanes, &rect);
-                settings.lanes = false;
-                denoiseInto(alone, channels, view, kW, kH, eye, 0.005f, settings, &holesAlone, &rect);
-                EXPECT_EQ(holesInLanes, holesAlone);
-                for (size_t i = 0; i < alone.size(); ++i)
-                    ASSERT_EQ(std::memcmp(&inLanes[i], &alone[i], sizeof(float)), 0)
-                        << "channels " << channels << " stride " << stride << " variant " << variant
-                        << " value " << i << ": " << inLanes[i] << " against " << alone[i];
-                EXPECT_NE(inLanes, values);
-                holes += holesAlone.size();
+                    InterpolationPlan planInLanes, planAlone;
+                    planInLanes.surfaces = planAlone.surfaces = points;
+                    settings.planChanged = withPlan ? hidden : PixelRect{};
+                    settings.lanes = true;
+                    settings.plan = withPlan ? &planInLanes : nullptr;
+                    denoiseInto(inLanes, channels, view, kW, kH, eye, 0.005f, settings, &holesInLanes, &rect);
+                    settings.lanes = false;
+                    settings.plan = withPlan ? &planAlone : nullptr;
+                    denoiseInto(alone, channels, view, kW, kH, eye, 0.005f, settings, &holesAlone, &rect);
+                    EXPECT_EQ(holesInLanes, holesAlone);
+                    for (size_t i = 0; i < alone.size(); ++i)
+                        ASSERT_EQ(std::memcmp(&inLanes[i], &alone[i], sizeof(float)), 0)
+                            << "channels " << channels << " stride " << stride << " variant " << variant
+                            << " plan " << withPlan << " value " << i << ": " << inLanes[i] << " against "
+                            << alone[i];
+                    EXPECT_NE(inLanes, values);
+                    holes += holesAlone.size();
+                }
             }
     EXPECT_GT(holes, 0u);  // the pole's pixels at the largest strides
 }
