@@ -376,6 +376,9 @@ using FloatL = float __attribute__((vector_size(32)));
 using IntL = int32_t __attribute__((vector_size(32)));
 constexpr int kLanes = 8;
 
+// The filter runs in lanes where at least 1 / kLaneWindowsShare of a pass's windows hold a value.
+constexpr size_t kLaneWindowsShare = 4;
+
 // Whether the CPU runs the lanes' kernel.
 bool filterLanesAvailable() {
     static const bool available = __builtin_cpu_supports("avx2");
@@ -801,11 +804,17 @@ void filterImage(const FilterPass& f, const PixelRect& rect, std::span<float> ou
     std::vector<float> filtered;
     std::vector<uint8_t> filteredNonZero;
     const bool interpolate = f.interpolates();
-    // The samples in planes for the filter in lanes, where the CPU has them.
+    // The samples in planes for the filter in lanes, where the CPU has them and enough windows hold values:
+    // where nearly all are zeros (a relit shadow's change) the one-pixel code's early outs cost less than the
+    // planes.
 #if DELTAGI_FILTER_LANES
     std::optional<LaneSamples> lanes;
     if constexpr (C > 0)
-        if (f.s.lanes && filterLanesAvailable()) lanes.emplace(laneSamples(f, channels));
+        if (f.s.lanes && filterLanesAvailable() &&
+            static_cast<size_t>(std::count(f.windowHasValue.begin(), f.windowHasValue.end(), 1)) *
+                    kLaneWindowsShare >=
+                f.windowHasValue.size())
+            lanes.emplace(laneSamples(f, channels));
 #endif
     if (interpolate) {
         filtered.assign(f.samples.size() * channels, 0.0f);
