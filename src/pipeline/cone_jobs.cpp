@@ -52,7 +52,7 @@ constexpr float kPart = 1e-3f;
 // light are traced again, each on its own over its area (its sub-samples where the job has them, else the
 // quarters of the pixel on its point's plane: an edge smoothed over the pixel, as the path tracer's is), and
 // keep that; elsewhere a hard light's occlusion is 0 or 1 already. Costs rays along the edges only.
-void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& job,
+void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& job, const PixelRect& bounds,
                         std::span<const Light> lights, const Options& o, const Camera& camera) {
     const int width = camera.width;
     std::vector<int> hard;
@@ -66,8 +66,8 @@ void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& jo
     const auto part = [](float v) { return v > kPart && v < 1.0f - kPart; };
     const size_t n = lights.size();
     std::vector<uint32_t> edge;
-    for (int y = job.bounds.y0; y < job.bounds.y1; ++y)
-        for (int x = job.bounds.x0; x < job.bounds.x1; ++x) {
+    for (int y = bounds.y0; y < bounds.y1; ++y)
+        for (int x = bounds.x0; x < bounds.x1; ++x) {
             const size_t i = static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
             if (!job.points[i].valid()) continue;
             for (int l : hard) {
@@ -103,6 +103,16 @@ void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& jo
             }
             shadows[edge[e] * n + static_cast<size_t>(hard[k])] = sum;
         }
+}
+
+// The pixels a job's shadow pass traces and filters (`stride`, `filter`: the pass's): the job's, or for the
+// real surfaces relit by shadow rays (whose change is zero wherever their rays cannot meet the objects) the
+// rectangle of the objects' shadow volumes with the pass's margin (sparsePassMargin): the same result as over
+// the job's bounds, for a fraction of the pixels where the shadow is small.
+PixelRect shadowBounds(const ConeJob& job, const Options& o, std::span<const Light> lights,
+                       const Camera& camera, int stride, const DenoiseSettings& filter) {
+    if (job.mode != ShadowMode::DeltaShadow || o.shadow.method != ShadowMethod::Rays) return job.bounds;
+    return relitShadowRect(camera, lights, job.rays, job.bounds, sparsePassMargin(stride, filter));
 }
 
 // A sphere light's soft shadow on the objects' glossy pixels in a still (glossyShadowOcclusion): the pixels
@@ -159,9 +169,15 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     std::vector<ConeResults> results(jobs.size());
     forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
+        const int stride = job.shadowStride(o, scene.camera);
+        const DenoiseSettings filter = job.filter(o, stride);
+        const PixelRect bounds = shadowBounds(job, o, directLights, scene.camera, stride, filter);
+        if (bounds.empty()) {  // the objects change no point's shadow
+            results[j].shadows.assign(job.points.size() * directLights.size(), ShadowOcclusion{});
+            return;
+        }
         results[j].shadows = traceSparse<ShadowOcclusion>(
-            job.points, job.bounds, scene.camera, job.shadowStride(o, scene.camera), lights,
-            job.filter(o, job.shadowStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
+            job.points, bounds, scene.camera, stride, lights, filter, [&](std::span<const uint32_t> pixels) {
                 if (o.shadow.method == ShadowMethod::Rays)
                     return traceShadowRays(job.points, directLights, job.rays, o, job.mode, pixels,
                                            job.pixelSamples, scene.camera.width);
@@ -169,7 +185,7 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
                                         job.mode == ShadowMode::DeltaShadow, pixels, job.sceneShadows);
             });
         if (o.shadow.method == ShadowMethod::Rays) {
-            sharpenHardShadows(results[j].shadows, job, directLights, o, scene.camera);
+            sharpenHardShadows(results[j].shadows, job, bounds, directLights, o, scene.camera);
             sharpenGlossyShadows(results[j].shadows, job, directLights, o, scene.camera);
         }
     });

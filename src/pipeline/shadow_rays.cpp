@@ -145,6 +145,145 @@ float shadowRayOffset(const RayScene& scene) {
     return kRayOffsetScale * std::max(bounds.empty() ? 1.0f : bounds.maxExtent(), 1e-3f);
 }
 
+namespace {
+
+Bounds3f grownBy(Bounds3f b, float d) {
+    b.min -= glm::vec3(d);
+    b.max += glm::vec3(d);
+    return b;
+}
+
+Bounds3f intersection(const Bounds3f& a, const Bounds3f& b) {
+    Bounds3f both;
+    both.min = glm::max(a.min, b.min);
+    both.max = glm::min(a.max, b.max);
+    return both;
+}
+
+// The number of slabs the shadow volume of one light is cut into along its rays (shadowVolumeBoxes): each
+// slab's box is tight about its part, where one box about a slanted volume holds much that is not in it.
+constexpr int kShadowVolumeSlabs = 16;
+
+// Boxes that together hold every point of `scene` (the real scene's box, grown by `slack`) from which a ray
+// towards `light` (relitShadowVolume) can meet the objects, appended to `boxes`; false where none are sure
+// to. `slack` covers the rays' offset from their surface and rounding.
+bool shadowVolumeBoxes(const Light& light, const ShadowRayScenes& rays, const Bounds3f& scene, float slack,
+                       std::vector<Bounds3f>& boxes) {
+    auto add = [&](Bounds3f box, float grow) {
+        box = intersection(grownBy(box, grow), scene);
+        if (!box.empty()) boxes.push_back(grownBy(box, slack));
+    };
+    if (light.type == Light::Type::Directional) {
+        // A point p whose ray towards the light (w within its angular radius a of wi) meets the objects at s
+        // = p + t w, inside their box and their sphere (C, R): p - C = (s - C) - t w, in the ball of radius R
+        // plus -t w, t at most the diameter T of the scene and the box. For t in a slab [t0, t1], -t w lies
+        // t0 cos(a) to t1 along -wi and at most t1 sin(a) off it: a box in the frame of wi.
+        if (!(light.angularRadius < kShadowVolumeMaxAngle)) return false;
+        const glm::vec3 wi = -glm::normalize(light.direction);
+        const glm::vec3 centre = rays.objectBounds.center();
+        Bounds3f all = scene;
+        all.extend(grownBy(rays.objectBounds, slack));
+        const float reach = 1.001f * glm::length(all.diagonal()) + slack;
+        const glm::vec3 helper = std::abs(wi.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+        const glm::vec3 e1 = glm::normalize(glm::cross(wi, helper)), e2 = glm::cross(wi, e1);
+        const float cosA = std::cos(light.angularRadius), sinA = std::sin(light.angularRadius);
+        for (int k = 0; k < kShadowVolumeSlabs; ++k) {
+            const float t0 = reach * static_cast<float>(k) / kShadowVolumeSlabs;
+            const float t1 = reach * static_cast<float>(k + 1) / kShadowVolumeSlabs;
+            const float side = t1 * sinA;
+            Bounds3f slab;
+            for (int c = 0; c < 8; ++c)
+                slab.extend(centre - (c & 1 ? t1 : t0 * cosA) * wi + (c & 2 ? side : -side) * e1 +
+                            (c & 4 ? side : -side) * e2);
+            add(slab, rays.boundingRadius() + slack);
+        }
+        return true;
+    }
+    // A point p whose segment towards a point q of the light's disk (within its radius r of L) meets the
+    // objects' box at b: p = q + t (b - q) = L + t (b - L) + (1 - t)(q - L) with t >= 1, and t at most the
+    // scene's diameter over b's distance from q. For t in a slab [t0, t1] the points lie in the hull of the
+    // box's corners moved from L by t0 and by t1 (affine in b and in t), grown by (t1 - 1) r. The slabs grow
+    // geometrically, as the volume widens.
+    const glm::vec3 light0 = light.position;
+    const float radius = light.radius;
+    const Bounds3f box = grownBy(rays.objectBounds, slack);
+    const float nearest =
+        glm::length(glm::max(glm::max(box.min - light0, light0 - box.max), glm::vec3(0.0f)));
+    if (!(nearest > radius + slack)) return false;  // the light's disk reaches into the box
+    Bounds3f all = scene;
+    all.extend(grownBy(Bounds3f{light0, light0}, radius));
+    const float far = std::max(1.0f, 1.001f * (glm::length(all.diagonal()) + slack) / (nearest - radius));
+    for (int k = 0; k < kShadowVolumeSlabs; ++k) {
+        const float t0 = std::pow(far, static_cast<float>(k) / kShadowVolumeSlabs);
+        const float t1 =
+            k + 1 == kShadowVolumeSlabs ? far : std::pow(far, static_cast<float>(k + 1) / kShadowVolumeSlabs);
+        Bounds3f slab;
+        for (int c = 0; c < 8; ++c) {
+            const glm::vec3 corner(c & 1 ? box.max.x : box.min.x, c & 2 ? box.max.y : box.min.y,
+                                   c & 4 ? box.max.z : box.min.z);
+            slab.extend(light0 + t0 * (corner - light0));
+            slab.extend(light0 + t1 * (corner - light0));
+        }
+        add(slab, (t1 - 1.0f) * radius);
+    }
+    return true;
+}
+
+}  // namespace
+
+std::optional<std::vector<Bounds3f>> relitShadowVolume(std::span<const Light> lights,
+                                                       const ShadowRayScenes& rays) {
+    std::vector<Bounds3f> boxes;
+    if (!rays.scene || !rays.objects || rays.objectBounds.empty()) return boxes;
+    const Bounds3f sceneBox = rays.scene->bounds();
+    if (sceneBox.empty()) return boxes;
+    // The rays' offset from their surface (twice: the point and its ray's start), and rounding.
+    const float slack = 2.0f * shadowRayOffset(*rays.scene) + 1e-4f * std::max(sceneBox.maxExtent(), 1e-3f);
+    const Bounds3f scene = grownBy(sceneBox, slack);
+    for (const Light& light : lights)
+        if (!shadowVolumeBoxes(light, rays, scene, slack, boxes)) return std::nullopt;
+    return boxes;
+}
+
+PixelRect relitShadowRect(const Camera& camera, std::span<const Light> lights, const ShadowRayScenes& rays,
+                          const PixelRect& bounds, int margin) {
+    if (bounds.empty()) return {};
+    if (!camera.distortion.none()) return bounds;
+    const std::optional<std::vector<Bounds3f>> boxes = relitShadowVolume(lights, rays);
+    if (!boxes) return bounds;
+    const glm::mat4 cameraFromWorld = glm::inverse(camera.worldFromCamera);
+    float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
+    for (const Bounds3f& box : *boxes) {
+        const float nearest = 1e-6f * std::max(box.maxExtent(), 1e-3f);
+        for (int c = 0; c < 8; ++c) {
+            const glm::vec3 corner(c & 1 ? box.max.x : box.min.x, c & 2 ? box.max.y : box.min.y,
+                                   c & 4 ? box.max.z : box.min.z);
+            const glm::vec3 q(cameraFromWorld * glm::vec4(corner, 1.0f));
+            // The box in front of the camera: its image is inside its corners' (a convex set's perspective
+            // image is its corners' hull); one reaching the camera's plane may cover any pixel.
+            if (!(q.z < -nearest)) return bounds;
+            const glm::vec2 image = camera.imagePoint(q);
+            u0 = std::min(u0, image.x), u1 = std::max(u1, image.x);
+            v0 = std::min(v0, image.y), v1 = std::max(v1, image.y);
+        }
+    }
+    if (!(u0 <= u1) || !(v0 <= v1)) return {};
+    // Pixel x's point lies on the ray through x + 0.5: the pixels from floor(u0 - 0.5) to floor(u1 - 0.5),
+    // one more on each side against rounding, then the margin; clamped before converting (far corners project
+    // far).
+    auto clampedPixel = [](float u, int lo, int hi) {
+        return static_cast<int>(std::clamp(std::floor(u), static_cast<float>(lo), static_cast<float>(hi)));
+    };
+    const float pad = static_cast<float>(margin + 1);
+    PixelRect rect;
+    rect.x0 = clampedPixel(u0 - 0.5f - pad, bounds.x0, bounds.x1);
+    rect.x1 = clampedPixel(u1 - 0.5f + pad, bounds.x0 - 1, bounds.x1 - 1) + 1;
+    rect.y0 = clampedPixel(v0 - 0.5f - pad, bounds.y0, bounds.y1);
+    rect.y1 = clampedPixel(v1 - 0.5f + pad, bounds.y0 - 1, bounds.y1 - 1) + 1;
+    if (rect.empty()) return {};
+    return rect;
+}
+
 int squareSampleCount(int samples) {
     const int side = std::max(1, static_cast<int>(std::sqrt(static_cast<float>(samples)) + 1e-3f));
     return side * side;

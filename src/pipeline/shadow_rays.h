@@ -8,6 +8,7 @@
 // (ShadowOcclusion), is traced at the same sparse pixels and goes through the same edge-aware filter.
 #pragma once
 
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -70,6 +71,22 @@ bool rayMayMeetSphere(glm::vec3 origin, glm::vec3 direction, float tMax, glm::ve
 // Whether a ray from `p` within `halfAngle` of `direction` can pass within `sphereRadius` of `sphereCentre`.
 bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
                        float sphereRadius);
+
+inline constexpr float kShadowVolumeMaxAngle = 1.2f;  // radians, about 69 degrees
+// Boxes that together hold every point of the real scene (`rays.scene`'s box) from which a relit shadow ray
+// (ShadowMode::DeltaShadow, traceShadowRays) towards one of `lights` can meet the objects: a ray from within
+// the rays' offset of the point towards any point of a light's disk (or any direction of a directional
+// light's cone) that meets the objects' box (a directional light: their bounding sphere). No boxes where no
+// ray can meet them (no objects); nullopt where no boxes are sure to hold them (a light's disk reaching into
+// the objects' box, a directional light wider than kShadowVolumeMaxAngle).
+std::optional<std::vector<Bounds3f>> relitShadowVolume(std::span<const Light> lights,
+                                                       const ShadowRayScenes& rays);
+// The part of `camera`'s image that relitShadowVolume's boxes cover, grown by `margin` pixels on every side
+// and clipped to `bounds`: every point outside it gets zeros from traceShadowRays (DeltaShadow). `bounds`
+// itself where the boxes are unknown, reach the camera's plane, or the camera has lens distortion; empty
+// where there are no boxes.
+PixelRect relitShadowRect(const Camera& camera, std::span<const Light> lights, const ShadowRayScenes& rays,
+                          const PixelRect& bounds, int margin);
 
 // How far shadow rays start off their surface, as the path tracer offsets its own (so that DGI and its
 // reference agree on grazing light): kRayOffsetScale times the scene's size.

@@ -214,6 +214,16 @@ inline std::vector<uint32_t> validPixels(std::span<const SurfacePoint> points, c
     return pixels;
 }
 
+// How far around the pixels that may hold values other than zero a sparse pass (traceSparse) at `stride`
+// with `filter` must run to give them, and every other pixel, the same result as over the whole image: twice
+// what the filter reads around a pixel (its window of samples and the cell between them), and a stride. The
+// pixels between that margin's inner part and the image's edge read only samples of zero and take zero, or
+// are holes whose trace gives zero, with or without the pixels beyond.
+inline int sparsePassMargin(int stride, const DenoiseSettings& filter) {
+    const int reach = (std::max(filter.radius, 1) + 1) * stride;
+    return 2 * reach + stride;
+}
+
 // Cone results `trace(pixels)` (perPixel values of T per pixel of `points`, for the listed pixels) at every
 // stride-th pixel of every stride-th row, then filtered: the edge-aware filter interpolates the pixels
 // between from traced neighbours on the same surface (averaging the noise of the jittered cone starts too),

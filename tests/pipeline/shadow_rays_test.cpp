@@ -2,15 +2,21 @@
 // and the penumbra of a disk light behind a straight edge.
 #include "pipeline/shadow_rays.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <numbers>
+#include <optional>
+#include <random>
 #include <span>
 #include <vector>
 
 #include <gtest/gtest.h>
 
+#include "core/brdf_sampling.h"
 #include "deltagi/renderer.h"
+#include "pipeline/sparse_pass.h"
 #include "test_scenes.h"
 
 namespace deltagi {
@@ -312,5 +318,142 @@ TEST(ShadowRays, ARayPassesTheSphereCullWhereItCanMeetTheSphere) {
     EXPECT_TRUE(rayMayMeetSphere({-2.0f, 1.1f, 0}, x, INFINITY, centre, 0.3f));  // a directional light's
 }
 
+// The relit shadow pass runs over the image rectangle of the objects' shadow volumes (relitShadowRect): every
+// real pixel whose relit shadow rays meet the objects lies inside it, for each kind of light (a disk, a hard
+// point, a spot, a directional light with a width, two at once), and the sparse pass over it with its margin
+// (sparsePassMargin) gives the bits of the pass over the whole image.
+TEST(ShadowRays, TheRelitShadowRectangleHoldsEveryPixelTheObjectsChange) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(placed(makeBox({0.3f, 0.6f, 0.3f}), {-0.6f, 0.3f, -0.3f}, diffuse(glm::vec3(0.5f)),
+                                "block"));  // a second surface, partly in the shadows
+    scene.virtuals.push_back(
+        placed(makeSphere(0.15f, 48), {0.1f, 0.35f, 0.1f}, diffuse(glm::vec3(0.5f)), "ball"));
+    scene.camera = test::lookAtCamera({0.0f, 1.6f, 1.9f}, {0, 0.2f, 0}, 160, 120, 60.0f);
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
+    const ShadowRayScenes rays{&realOnly, &objects, scene.virtuals[0].bounds(),
+                               objectSphereRadius(scene.virtuals)};
+    const SurfacePoints points = renderRealSurfaces(scene.camera, realOnly);
+    const int width = scene.camera.width, height = scene.camera.height;
+    const PixelRect image{0, 0, width, height};
+    Options options;
+    options.shadow.raySamples = 16;
+
+    Light disk = test::pointLight({0.4f, 1.4f, 0.3f}, 1.0f);
+    disk.radius = 0.3f;
+    const Light hard = test::pointLight({-0.3f, 1.1f, 0.5f}, 1.0f);
+    Light spot = test::pointLight({0.2f, 1.0f, 0.0f}, 1.0f);
+    spot.type = Light::Type::Spot;
+    spot.radius = 0.05f;
+    spot.direction = {0, -1, 0};
+    spot.innerAngleDeg = 40.0f;
+    spot.outerAngleDeg = 60.0f;
+    Light sun = test::directionalLight({0.5f, -1.0f, -0.3f}, 1.0f);
+    sun.angularRadius = 0.15f;
+    const std::vector<std::vector<Light>> cases = {{disk}, {hard}, {spot}, {sun}, {disk, sun}};
+    for (size_t c = 0; c < cases.size(); ++c) {
+        const std::vector<Light>& lights = cases[c];
+        const PixelRect rect = relitShadowRect(scene.camera, lights, rays, image, 0);
+        const std::vector<ShadowOcclusion> all =
+            traceShadowRays(points, lights, rays, options, ShadowMode::DeltaShadow);
+        int changed = 0;
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x)
+                for (size_t l = 0; l < lights.size(); ++l) {
+                    const ShadowOcclusion& o = all[(static_cast<size_t>(y) * width + x) * lights.size() + l];
+                    if (o.object == 0.0f && o.combined == 0.0f) continue;
+                    ++changed;
+                    EXPECT_TRUE(x >= rect.x0 && x < rect.x1 && y >= rect.y0 && y < rect.y1)
+                        << "case " << c << ": pixel " << x << ", " << y << " outside " << rect.x0 << ".."
+                        << rect.x1 << " x " << rect.y0 << ".." << rect.y1;
+                }
+        EXPECT_GT(changed, 100) << "case " << c;
+        // Tight enough to matter: well under the image.
+        EXPECT_LT(static_cast<long>(rect.x1 - rect.x0) * (rect.y1 - rect.y0), width * height * 6 / 10)
+            << "case " << c;
+
+        // The sparse pass at a stride of 2 and 4 with the filter: the same bits over the rectangle and the
+        // image, holes traced.
+        for (int stride : {2, 4}) {
+            DenoiseSettings filter;
+            filter.interpolate = true;
+            auto trace = [&](std::span<const uint32_t> pixels) {
+                return traceShadowRays(points, lights, rays, options, ShadowMode::DeltaShadow, pixels);
+            };
+            const PixelRect bounds =
+                relitShadowRect(scene.camera, lights, rays, image, sparsePassMargin(stride, filter));
+            const int perPixel = static_cast<int>(lights.size());
+            const std::vector<ShadowOcclusion> whole =
+                traceSparse<ShadowOcclusion>(points, image, scene.camera, stride, perPixel, filter, trace);
+            const std::vector<ShadowOcclusion> part =
+                traceSparse<ShadowOcclusion>(points, bounds, scene.camera, stride, perPixel, filter, trace);
+            ASSERT_EQ(whole.size(), part.size());
+            size_t differ = 0;
+            for (size_t i = 0; i < whole.size(); ++i)
+                differ += std::memcmp(&whole[i], &part[i], sizeof(ShadowOcclusion)) != 0;
+            EXPECT_EQ(differ, 0u) << "case " << c << ", stride " << stride;
+        }
+    }
+}
+
+// The boxes of relitShadowVolume hold every point of the scene from which a ray towards a light meets the
+// objects: random points of the scene's box with random points of a light's disk (or directions of a
+// directional light's cone) whose segment meets the objects' box (or whose ray meets their sphere).
+TEST(ShadowRays, TheRelitShadowVolumeHoldsEveryPointWhoseRaysMeetTheObjects) {
+    Scene scene;
+    scene.real.push_back(placed(makeQuad({4.0f, 4.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor"));
+    scene.real.push_back(
+        placed(makeBox({0.3f, 1.6f, 0.3f}), {-0.6f, 0.8f, -0.3f}, diffuse(glm::vec3(0.5f)), "pillar"));
+    scene.virtuals.push_back(
+        placed(makeBox({0.2f, 0.3f, 0.25f}), {0.1f, 0.35f, 0.1f}, diffuse(glm::vec3(0.5f)), "crate"));
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
+    const ShadowRayScenes rays{&realOnly, &objects, scene.virtuals[0].bounds(),
+                               objectSphereRadius(scene.virtuals)};
+    Light disk = test::pointLight({0.4f, 1.4f, 0.3f}, 1.0f);
+    disk.radius = 0.3f;
+    const Light hard = test::pointLight({-0.3f, 0.9f, 0.5f}, 1.0f);
+    // Level with the crate: its shadow crosses the whole room.
+    Light side = test::pointLight({1.2f, 0.4f, 0.1f}, 1.0f);
+    side.radius = 0.05f;
+    Light sun = test::directionalLight({0.5f, -1.0f, -0.3f}, 1.0f);
+    sun.angularRadius = 0.3f;
+    const Bounds3f room = realOnly.bounds();
+    const glm::vec3 centre = rays.objectBounds.center();
+    const float sphere = rays.boundingRadius();
+    std::mt19937 random(7);
+    std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+    for (const Light& light : {disk, hard, side, sun}) {
+        const std::optional<std::vector<Bounds3f>> boxes = relitShadowVolume(std::span(&light, 1), rays);
+        ASSERT_TRUE(boxes.has_value());
+        int meeting = 0;
+        for (int k = 0; k < 400000; ++k) {
+            const glm::vec3 p =
+                room.min + glm::vec3(unit(random), unit(random), unit(random)) * room.diagonal();
+            bool meets;
+            if (light.type == Light::Type::Directional) {
+                // A direction within the cone: uniform over its solid angle.
+                const float cosTheta = 1.0f - unit(random) * (1.0f - std::cos(light.angularRadius));
+                const float phi = 2.0f * std::numbers::pi_v<float> * unit(random);
+                const float sinTheta = std::sqrt(1.0f - cosTheta * cosTheta);
+                const glm::vec3 w = frameAround(-light.direction) *
+                                    glm::vec3(sinTheta * std::cos(phi), sinTheta * std::sin(phi), cosTheta);
+                meets = rayMayMeetSphere(p, w, 100.0f, centre, sphere);
+            } else {
+                glm::vec3 offset;
+                do offset = 2.0f * glm::vec3(unit(random), unit(random), unit(random)) - 1.0f;
+                while (glm::dot(offset, offset) > 1.0f);
+                meets = segmentMayMeetBox(p, light.position + light.radius * offset, 0.0f, rays.objectBounds);
+            }
+            if (!meets) continue;
+            ++meeting;
+            const bool inside =
+                std::any_of(boxes->begin(), boxes->end(), [&](const Bounds3f& b) { return b.contains(p); });
+            ASSERT_TRUE(inside) << "point " << p.x << ", " << p.y << ", " << p.z;
+        }
+        EXPECT_GT(meeting, 500);
+    }
+}
 }  // namespace
 }  // namespace deltagi
