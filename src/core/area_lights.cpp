@@ -18,6 +18,8 @@ AreaLights::AreaLights(const Scene& scene, SceneContent content) {
             if (!(doubleArea > 0.0f)) continue;  // never sampled, and a ray cannot hit it either
             const glm::vec3 emission = triangleEmission(mesh, i);
             triangles_.push_back({a, b, c, cross / doubleArea, emission, isVirtual});
+            for (const glm::vec3& corner : {a, b, c}) bounds_.extend(corner);
+            anyVirtual_ = anyVirtual_ || isVirtual;
             totalPower_ += 0.5 * static_cast<double>(doubleArea) * emitterWeight(emission);
             cdf_.push_back(totalPower_);
         }

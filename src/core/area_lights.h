@@ -35,6 +35,9 @@ class AreaLights {
 
     bool empty() const { return triangles_.empty(); }
     size_t size() const { return triangles_.size(); }
+    // The box around every sampled point, and whether a virtual object's triangle is among them.
+    const Bounds3f& bounds() const { return bounds_; }
+    bool anyVirtual() const { return anyVirtual_; }
     // uTriangle picks the triangle, (u1, u2) the point on it; all three in [0, 1).
     AreaLightSample sample(float uTriangle, float u1, float u2) const;
     // The density per unit area with which sample() returns a point of a surface emitting `emission`.
@@ -52,6 +55,8 @@ class AreaLights {
     std::vector<Triangle> triangles_;
     std::vector<double> cdf_;  // running sum of area * emitterWeight, one per triangle
     double totalPower_ = 0.0;
+    Bounds3f bounds_;
+    bool anyVirtual_ = false;
 };
 
 }  // namespace deltagi

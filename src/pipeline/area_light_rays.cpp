@@ -68,6 +68,12 @@ ObjectCone objectCone(glm::vec3 origin, glm::vec3 centre, float radius) {
 
 }  // namespace
 
+PixelRect relitEmitterRect(const Camera& camera, const AreaLights& emitters, const ShadowRayScenes& rays,
+                           const PixelRect& bounds, int margin) {
+    if (emitters.anyVirtual()) return bounds;
+    return shadowVolumeRect(camera, relitEmitterVolume(emitters.bounds(), rays), bounds, margin);
+}
+
 std::vector<glm::vec3> traceAreaLightRays(std::span<const SurfacePoint> points, const AreaLights& emitters,
                                           const ShadowRayScenes& rays, const Options& options,
                                           ShadowMode mode, std::span<const uint32_t> pixels) {

@@ -20,6 +20,13 @@
 
 namespace deltagi {
 
+// relitShadowRect for traceAreaLightRays under ShadowMode::DeltaShadow: the image rectangle (grown by
+// `margin`, within `bounds`) outside which the emitters' light on the real surfaces does not change
+// (relitEmitterVolume of the box around their triangles); `bounds` itself where a virtual object emits (its
+// light reaches the room wherever it shines).
+PixelRect relitEmitterRect(const Camera& camera, const AreaLights& emitters, const ShadowRayScenes& rays,
+                           const PixelRect& bounds, int margin);
+
 // The direct radiance each point receives from the emitters `emitters` samples, or its change, under `mode`:
 // Shaded, the light through both the scene and the objects; SceneOnly, through the scene alone (the emitters
 // of the real scene); DeltaShadow, the change the objects make (the light a real emitter no longer sends,

@@ -105,14 +105,21 @@ void sharpenHardShadows(std::vector<ShadowOcclusion>& shadows, const ConeJob& jo
         }
 }
 
-// The pixels a job's shadow pass traces and filters (`stride`, `filter`: the pass's): the job's, or for the
-// real surfaces relit by shadow rays (whose change is zero wherever their rays cannot meet the objects) the
-// rectangle of the objects' shadow volumes with the pass's margin (sparsePassMargin): the same result as over
-// the job's bounds, for a fraction of the pixels where the shadow is small.
-PixelRect shadowBounds(const ConeJob& job, const Options& o, std::span<const Light> lights,
-                       const Camera& camera, int stride, const DenoiseSettings& filter) {
-    if (job.mode != ShadowMode::DeltaShadow || o.shadow.method != ShadowMethod::Rays) return job.bounds;
+// The pixels a job's pass of shadow rays towards `lights` traces and filters (`stride`, `filter`: the
+// pass's): the job's, or for the real surfaces relit (whose change is zero wherever their rays cannot meet
+// the objects) the rectangle of the objects' shadow volumes with the pass's margin (sparsePassMargin): the
+// same result as over the job's bounds, for a fraction of the pixels where the shadow is small.
+PixelRect shadowRayBounds(const ConeJob& job, std::span<const Light> lights, const Camera& camera, int stride,
+                          const DenoiseSettings& filter) {
+    if (job.mode != ShadowMode::DeltaShadow) return job.bounds;
     return relitShadowRect(camera, lights, job.rays, job.bounds, sparsePassMargin(stride, filter));
+}
+
+// The same for the emitting surfaces' rays (relitEmitterRect).
+PixelRect emitterRayBounds(const ConeJob& job, const Camera& camera, int stride,
+                           const DenoiseSettings& filter) {
+    if (job.mode != ShadowMode::DeltaShadow) return job.bounds;
+    return relitEmitterRect(camera, *job.emitters, job.rays, job.bounds, sparsePassMargin(stride, filter));
 }
 
 // A sphere light's soft shadow on the objects' glossy pixels in a still (glossyShadowOcclusion): the pixels
@@ -171,7 +178,9 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
         const ConeJob& job = jobs[j];
         const int stride = job.shadowStride(o, scene.camera);
         const DenoiseSettings filter = job.filter(o, stride);
-        const PixelRect bounds = shadowBounds(job, o, directLights, scene.camera, stride, filter);
+        const PixelRect bounds = o.shadow.method == ShadowMethod::Rays
+                                     ? shadowRayBounds(job, directLights, scene.camera, stride, filter)
+                                     : job.bounds;
         if (bounds.empty()) {  // the objects change no point's shadow
             results[j].shadows.assign(job.points.size() * directLights.size(), ShadowOcclusion{});
             return;
@@ -192,9 +201,15 @@ std::vector<ConeResults> traceCones(std::span<const ConeJob> jobs, const Scene& 
     forEachJob(jobs.size(), [&](size_t j) {
         const ConeJob& job = jobs[j];
         if (!job.emitters || job.emitters->empty()) return;
+        const int stride = job.areaLightStride(o, scene.camera);
+        const DenoiseSettings filter = job.filter(o, stride);
+        const PixelRect bounds = emitterRayBounds(job, scene.camera, stride, filter);
+        if (bounds.empty()) {  // the objects change no point's light from the emitters
+            results[j].areaLight.assign(job.points.size(), glm::vec3(0.0f));
+            return;
+        }
         results[j].areaLight = traceSparse<glm::vec3>(
-            job.points, job.bounds, scene.camera, job.areaLightStride(o, scene.camera), 1,
-            job.filter(o, job.areaLightStride(o, scene.camera)), [&](std::span<const uint32_t> pixels) {
+            job.points, bounds, scene.camera, stride, 1, filter, [&](std::span<const uint32_t> pixels) {
                 return traceAreaLightRays(job.points, *job.emitters, job.rays, o, job.mode, pixels);
             });
     });

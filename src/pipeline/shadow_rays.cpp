@@ -164,6 +164,34 @@ Bounds3f intersection(const Bounds3f& a, const Bounds3f& b) {
 // slab's box is tight about its part, where one box about a slanted volume holds much that is not in it.
 constexpr int kShadowVolumeSlabs = 16;
 
+// Boxes that together hold every point p of `scene` (grown by `slack`) whose segment towards a point q of the
+// box `from` meets the box `objects`, appended to `boxes`; `distance` is at most the distance from any q to
+// any point of `objects`. Such a p is q + t (b - q) = t b + (1 - t) q for a point b of `objects` and t >= 1,
+// t at most the scene's diameter over `distance`. For a given t those points form the box t objects + (1 - t)
+// from; over a slab of t, [t0, t1], the box around the two at t0 and t1 (each bound is linear in t). The
+// slabs grow geometrically, as the volume widens.
+void appendSegmentVolume(const Bounds3f& from, float distance, const Bounds3f& objects, const Bounds3f& scene,
+                         float slack, std::vector<Bounds3f>& boxes) {
+    Bounds3f all = scene;
+    all.extend(from);
+    const float far = std::max(1.0f, 1.001f * (glm::length(all.diagonal()) + slack) / distance);
+    auto at = [&](float t) {
+        Bounds3f b;
+        b.min = t * objects.min + (1.0f - t) * from.max;
+        b.max = t * objects.max + (1.0f - t) * from.min;
+        return b;
+    };
+    for (int k = 0; k < kShadowVolumeSlabs; ++k) {
+        const float t0 = std::pow(far, static_cast<float>(k) / kShadowVolumeSlabs);
+        const float t1 =
+            k + 1 == kShadowVolumeSlabs ? far : std::pow(far, static_cast<float>(k + 1) / kShadowVolumeSlabs);
+        Bounds3f slab = at(t0);
+        slab.extend(at(t1));
+        slab = intersection(slab, scene);
+        if (!slab.empty()) boxes.push_back(grownBy(slab, slack));
+    }
+}
+
 // Boxes that together hold every point of `scene` (the real scene's box, grown by `slack`) from which a ray
 // towards `light` (relitShadowVolume) can meet the objects, appended to `boxes`; false where none are sure
 // to. `slack` covers the rays' offset from their surface and rounding.
@@ -199,34 +227,34 @@ bool shadowVolumeBoxes(const Light& light, const ShadowRayScenes& rays, const Bo
         }
         return true;
     }
-    // A point p whose segment towards a point q of the light's disk (within its radius r of L) meets the
-    // objects' box at b: p = q + t (b - q) = L + t (b - L) + (1 - t)(q - L) with t >= 1, and t at most the
-    // scene's diameter over b's distance from q. For t in a slab [t0, t1] the points lie in the hull of the
-    // box's corners moved from L by t0 and by t1 (affine in b and in t), grown by (t1 - 1) r. The slabs grow
-    // geometrically, as the volume widens.
+    // The light's disk lies in the cube of half-side r about L, each of its points at least |b - L| - r from
+    // a point b of the objects' box.
     const glm::vec3 light0 = light.position;
-    const float radius = light.radius;
     const Bounds3f box = grownBy(rays.objectBounds, slack);
     const float nearest =
         glm::length(glm::max(glm::max(box.min - light0, light0 - box.max), glm::vec3(0.0f)));
-    if (!(nearest > radius + slack)) return false;  // the light's disk reaches into the box
-    Bounds3f all = scene;
-    all.extend(grownBy(Bounds3f{light0, light0}, radius));
-    const float far = std::max(1.0f, 1.001f * (glm::length(all.diagonal()) + slack) / (nearest - radius));
-    for (int k = 0; k < kShadowVolumeSlabs; ++k) {
-        const float t0 = std::pow(far, static_cast<float>(k) / kShadowVolumeSlabs);
-        const float t1 =
-            k + 1 == kShadowVolumeSlabs ? far : std::pow(far, static_cast<float>(k + 1) / kShadowVolumeSlabs);
-        Bounds3f slab;
-        for (int c = 0; c < 8; ++c) {
-            const glm::vec3 corner(c & 1 ? box.max.x : box.min.x, c & 2 ? box.max.y : box.min.y,
-                                   c & 4 ? box.max.z : box.min.z);
-            slab.extend(light0 + t0 * (corner - light0));
-            slab.extend(light0 + t1 * (corner - light0));
-        }
-        add(slab, (t1 - 1.0f) * radius);
-    }
+    if (!(nearest > light.radius + slack)) return false;  // the light's disk reaches into the box
+    appendSegmentVolume(grownBy(Bounds3f{light0, light0}, light.radius), nearest - light.radius, box, scene,
+                        slack, boxes);
     return true;
+}
+
+}  // namespace
+
+namespace {
+
+// The real scene's box for relitShadowVolume and relitEmitterVolume, grown by the slack they allow the rays'
+// offset from their surface (twice: the point and its ray's start) and rounding; nullopt without objects.
+struct VolumeScene {
+    Bounds3f box;
+    float slack;
+};
+std::optional<VolumeScene> volumeScene(const ShadowRayScenes& rays) {
+    if (!rays.scene || !rays.objects || rays.objectBounds.empty()) return std::nullopt;
+    const Bounds3f sceneBox = rays.scene->bounds();
+    if (sceneBox.empty()) return std::nullopt;
+    const float slack = 2.0f * shadowRayOffset(*rays.scene) + 1e-4f * std::max(sceneBox.maxExtent(), 1e-3f);
+    return VolumeScene{grownBy(sceneBox, slack), slack};
 }
 
 }  // namespace
@@ -234,23 +262,35 @@ bool shadowVolumeBoxes(const Light& light, const ShadowRayScenes& rays, const Bo
 std::optional<std::vector<Bounds3f>> relitShadowVolume(std::span<const Light> lights,
                                                        const ShadowRayScenes& rays) {
     std::vector<Bounds3f> boxes;
-    if (!rays.scene || !rays.objects || rays.objectBounds.empty()) return boxes;
-    const Bounds3f sceneBox = rays.scene->bounds();
-    if (sceneBox.empty()) return boxes;
-    // The rays' offset from their surface (twice: the point and its ray's start), and rounding.
-    const float slack = 2.0f * shadowRayOffset(*rays.scene) + 1e-4f * std::max(sceneBox.maxExtent(), 1e-3f);
-    const Bounds3f scene = grownBy(sceneBox, slack);
+    const std::optional<VolumeScene> scene = volumeScene(rays);
+    if (!scene) return boxes;
     for (const Light& light : lights)
-        if (!shadowVolumeBoxes(light, rays, scene, slack, boxes)) return std::nullopt;
+        if (!shadowVolumeBoxes(light, rays, scene->box, scene->slack, boxes)) return std::nullopt;
+    return boxes;
+}
+
+std::optional<std::vector<Bounds3f>> relitEmitterVolume(const Bounds3f& emitters,
+                                                        const ShadowRayScenes& rays) {
+    std::vector<Bounds3f> boxes;
+    const std::optional<VolumeScene> scene = volumeScene(rays);
+    if (!scene || emitters.empty()) return boxes;
+    const Bounds3f objects = grownBy(rays.objectBounds, scene->slack);
+    const float distance = glm::length(
+        glm::max(glm::max(objects.min - emitters.max, emitters.min - objects.max), glm::vec3(0.0f)));
+    if (!(distance > scene->slack)) return std::nullopt;  // the emitters reach into the objects' box
+    appendSegmentVolume(emitters, distance, objects, scene->box, scene->slack, boxes);
     return boxes;
 }
 
 PixelRect relitShadowRect(const Camera& camera, std::span<const Light> lights, const ShadowRayScenes& rays,
                           const PixelRect& bounds, int margin) {
+    return shadowVolumeRect(camera, relitShadowVolume(lights, rays), bounds, margin);
+}
+
+PixelRect shadowVolumeRect(const Camera& camera, const std::optional<std::vector<Bounds3f>>& boxes,
+                           const PixelRect& bounds, int margin) {
     if (bounds.empty()) return {};
-    if (!camera.distortion.none()) return bounds;
-    const std::optional<std::vector<Bounds3f>> boxes = relitShadowVolume(lights, rays);
-    if (!boxes) return bounds;
+    if (!boxes || !camera.distortion.none()) return bounds;
     const glm::mat4 cameraFromWorld = glm::inverse(camera.worldFromCamera);
     float u0 = INFINITY, u1 = -INFINITY, v0 = INFINITY, v1 = -INFINITY;
     for (const Bounds3f& box : *boxes) {

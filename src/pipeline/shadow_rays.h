@@ -81,10 +81,17 @@ inline constexpr float kShadowVolumeMaxAngle = 1.2f;  // radians, about 69 degre
 // the objects' box, a directional light wider than kShadowVolumeMaxAngle).
 std::optional<std::vector<Bounds3f>> relitShadowVolume(std::span<const Light> lights,
                                                        const ShadowRayScenes& rays);
-// The part of `camera`'s image that relitShadowVolume's boxes cover, grown by `margin` pixels on every side
-// and clipped to `bounds`: every point outside it gets zeros from traceShadowRays (DeltaShadow). `bounds`
-// itself where the boxes are unknown, reach the camera's plane, or the camera has lens distortion; empty
-// where there are no boxes.
+// The same for rays towards points of the box `emitters` (traceAreaLightRays' real emitters): nullopt where
+// the box reaches into the objects'.
+std::optional<std::vector<Bounds3f>> relitEmitterVolume(const Bounds3f& emitters,
+                                                        const ShadowRayScenes& rays);
+// The part of `camera`'s image that `boxes` (relitShadowVolume's, relitEmitterVolume's) cover, grown by
+// `margin` pixels on every side and clipped to `bounds`: every point outside it gets zeros from their rays.
+// `bounds` itself where the boxes are unknown (nullopt), reach the camera's plane, or the camera has lens
+// distortion; empty where there are no boxes.
+PixelRect shadowVolumeRect(const Camera& camera, const std::optional<std::vector<Bounds3f>>& boxes,
+                           const PixelRect& bounds, int margin);
+// shadowVolumeRect of relitShadowVolume(lights, rays).
 PixelRect relitShadowRect(const Camera& camera, std::span<const Light> lights, const ShadowRayScenes& rays,
                           const PixelRect& bounds, int margin);
 

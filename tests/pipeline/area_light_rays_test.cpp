@@ -3,11 +3,13 @@
 #include "pipeline/area_light_rays.h"
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
 
 #include <gtest/gtest.h>
 
 #include "deltagi/renderer.h"
+#include "pipeline/sparse_pass.h"
 #include "test_scenes.h"
 
 namespace deltagi {
@@ -101,6 +103,65 @@ TEST(AreaLightRays, AnObjectCastsAShadowFromAnEmittingPanelEndToEnd) {
     scene.options.shadow.method = ShadowMethod::Cones;
     const RenderOutput cones = render(scene);
     EXPECT_GT(cones.delta.at(under.x, under.y, 0), out.delta.at(under.x, under.y, 0));
+}
+
+// The emitters' relit pass runs over the image rectangle of the objects' shadow volume from the panel
+// (relitEmitterRect): every floor pixel whose light from the panel the ball changes lies in it, it is smaller
+// than the image, and the sparse pass over it with its margin gives the bits of the pass over the whole
+// image. An emitting object lights the room wherever it shines: the whole image.
+TEST(AreaLightRays, TheRelitEmittersRectangleHoldsEveryPixelTheObjectsChange) {
+    Scene scene = panelScene();
+    scene.real[0] = placed(makeQuad({6.0f, 6.0f}), {0, 0, 0}, diffuse(glm::vec3(0.5f)), "floor");
+    // A wider panel, higher up: a wide penumbra.
+    TriangleMesh& panel = scene.real[1];
+    transformMesh(panel, glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, 1.5f, 0.0f)) *
+                             glm::scale(glm::mat4(1.0f), glm::vec3(2.5f, 1.0f, 2.5f)) *
+                             glm::translate(glm::mat4(1.0f), glm::vec3(0.0f, -1.0f, 0.0f)));
+    scene.virtuals.push_back(
+        placed(makeSphere(0.05f, 48), {0.2f, 0.6f, 0.1f}, diffuse(glm::vec3(0.5f)), "ball"));
+    scene.camera = test::lookAtCamera({0.0f, 1.4f, 2.2f}, {0, 0, 0}, 160, 120, 70.0f);
+    const RayScene realOnly(scene, SceneContent::RealOnly);
+    const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
+    const AreaLights emitters(scene, SceneContent::RealAndVirtual);
+    const ShadowRayScenes rays{&realOnly, &objects, scene.virtuals[0].bounds(),
+                               objectSphereRadius(scene.virtuals)};
+    const SurfacePoints points = renderRealSurfaces(scene.camera, realOnly);
+    const int width = scene.camera.width, height = scene.camera.height;
+    const PixelRect image{0, 0, width, height};
+    Options options;
+    options.shadow.areaRaySamples = 16;
+    auto trace = [&](std::span<const uint32_t> pixels) {
+        return traceAreaLightRays(points, emitters, rays, options, ShadowMode::DeltaShadow, pixels);
+    };
+    const PixelRect rect = relitEmitterRect(scene.camera, emitters, rays, image, 0);
+    const std::vector<glm::vec3> all = trace({});
+    int changed = 0;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            if (all[static_cast<size_t>(y) * width + x] == glm::vec3(0.0f)) continue;
+            ++changed;
+            EXPECT_TRUE(x >= rect.x0 && x < rect.x1 && y >= rect.y0 && y < rect.y1)
+                << "pixel " << x << ", " << y << " outside " << rect.x0 << ".." << rect.x1 << " x " << rect.y0
+                << ".." << rect.y1;
+        }
+    EXPECT_GT(changed, 100);
+    EXPECT_LT(static_cast<long>(rect.x1 - rect.x0) * (rect.y1 - rect.y0), width * height / 2);
+    DenoiseSettings filter;
+    filter.interpolate = true;
+    const int stride = 2;
+    const PixelRect bounds =
+        relitEmitterRect(scene.camera, emitters, rays, image, sparsePassMargin(stride, filter));
+    const std::vector<glm::vec3> whole =
+        traceSparse<glm::vec3>(points, image, scene.camera, stride, 1, filter, trace);
+    const std::vector<glm::vec3> part =
+        traceSparse<glm::vec3>(points, bounds, scene.camera, stride, 1, filter, trace);
+    ASSERT_EQ(whole.size(), part.size());
+    EXPECT_EQ(std::memcmp(whole.data(), part.data(), whole.size() * sizeof(glm::vec3)), 0);
+
+    scene.virtuals[0].material.emission = glm::vec3(1.0f);
+    const AreaLights glowing(scene, SceneContent::RealAndVirtual);
+    const PixelRect lit = relitEmitterRect(scene.camera, glowing, rays, image, 0);
+    EXPECT_TRUE(lit.x0 == 0 && lit.y0 == 0 && lit.x1 == width && lit.y1 == height);
 }
 
 // The stand-in light of a panel set under a ceiling faces down only, carries the panel's power (L A per
