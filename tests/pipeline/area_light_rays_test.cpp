@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "deltagi/renderer.h"
-#include "pipeline/sparse_pass.h"
+#include "relit_surfaces.h"
 #include "test_scenes.h"
 
 namespace deltagi {
@@ -120,48 +120,28 @@ TEST(AreaLightRays, TheRelitEmittersRectangleHoldsEveryPixelTheObjectsChange) {
     scene.virtuals.push_back(
         placed(makeSphere(0.05f, 48), {0.2f, 0.6f, 0.1f}, diffuse(glm::vec3(0.5f)), "ball"));
     scene.camera = test::lookAtCamera({0.0f, 1.4f, 2.2f}, {0, 0, 0}, 160, 120, 70.0f);
-    const RayScene realOnly(scene, SceneContent::RealOnly);
-    const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
+    const test::RelitSurfaces relit(scene);
     const AreaLights emitters(scene, SceneContent::RealAndVirtual);
-    const ShadowRayScenes rays{&realOnly, &objects, scene.virtuals[0].bounds(),
-                               objectSphereRadius(scene.virtuals)};
-    const SurfacePoints points = renderRealSurfaces(scene.camera, realOnly);
-    const int width = scene.camera.width, height = scene.camera.height;
-    const PixelRect image{0, 0, width, height};
     Options options;
     options.shadow.areaRaySamples = 16;
     auto trace = [&](std::span<const uint32_t> pixels) {
-        return traceAreaLightRays(points, emitters, rays, options, ShadowMode::DeltaShadow, pixels);
+        return traceAreaLightRays(relit.points, emitters, relit.rays, options, ShadowMode::DeltaShadow,
+                                  pixels);
     };
-    const PixelRect rect = relitEmitterRect(scene.camera, emitters, rays, image, 0);
-    const std::vector<glm::vec3> all = trace({});
-    int changed = 0;
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
-            if (all[static_cast<size_t>(y) * width + x] == glm::vec3(0.0f)) continue;
-            ++changed;
-            EXPECT_TRUE(x >= rect.x0 && x < rect.x1 && y >= rect.y0 && y < rect.y1)
-                << "pixel " << x << ", " << y << " outside " << rect.x0 << ".." << rect.x1 << " x " << rect.y0
-                << ".." << rect.y1;
-        }
-    EXPECT_GT(changed, 100);
-    EXPECT_LT(static_cast<long>(rect.x1 - rect.x0) * (rect.y1 - rect.y0), width * height / 2);
+    const PixelRect rect = relitEmitterRect(scene.camera, emitters, relit.rays, relit.image, 0);
+    EXPECT_GT(relit.changedPixels(trace({}), 1, rect, "panel"), 100);
+    EXPECT_TRUE(relit.smallerThan(rect, 0.5f));
     DenoiseSettings filter;
     filter.interpolate = true;
     const int stride = 2;
     const PixelRect bounds =
-        relitEmitterRect(scene.camera, emitters, rays, image, sparsePassMargin(stride, filter));
-    const std::vector<glm::vec3> whole =
-        traceSparse<glm::vec3>(points, image, scene.camera, stride, 1, filter, trace);
-    const std::vector<glm::vec3> part =
-        traceSparse<glm::vec3>(points, bounds, scene.camera, stride, 1, filter, trace);
-    ASSERT_EQ(whole.size(), part.size());
-    EXPECT_EQ(std::memcmp(whole.data(), part.data(), whole.size() * sizeof(glm::vec3)), 0);
+        relitEmitterRect(scene.camera, emitters, relit.rays, relit.image, sparsePassMargin(stride, filter));
+    EXPECT_TRUE(relit.sameAsWholeImage<glm::vec3>(bounds, stride, 1, filter, trace));
 
     scene.virtuals[0].material.emission = glm::vec3(1.0f);
     const AreaLights glowing(scene, SceneContent::RealAndVirtual);
-    const PixelRect lit = relitEmitterRect(scene.camera, glowing, rays, image, 0);
-    EXPECT_TRUE(lit.x0 == 0 && lit.y0 == 0 && lit.x1 == width && lit.y1 == height);
+    const PixelRect lit = relitEmitterRect(scene.camera, glowing, relit.rays, relit.image, 0);
+    EXPECT_TRUE(lit.x0 == 0 && lit.y0 == 0 && lit.x1 == scene.camera.width && lit.y1 == scene.camera.height);
 }
 
 // The stand-in light of a panel set under a ceiling faces down only, carries the panel's power (L A per

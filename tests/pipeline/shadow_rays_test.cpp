@@ -16,7 +16,7 @@
 
 #include "core/brdf_sampling.h"
 #include "deltagi/renderer.h"
-#include "pipeline/sparse_pass.h"
+#include "relit_surfaces.h"
 #include "test_scenes.h"
 
 namespace deltagi {
@@ -330,13 +330,7 @@ TEST(ShadowRays, TheRelitShadowRectangleHoldsEveryPixelTheObjectsChange) {
     scene.virtuals.push_back(
         placed(makeSphere(0.15f, 48), {0.1f, 0.35f, 0.1f}, diffuse(glm::vec3(0.5f)), "ball"));
     scene.camera = test::lookAtCamera({0.0f, 1.6f, 1.9f}, {0, 0.2f, 0}, 160, 120, 60.0f);
-    const RayScene realOnly(scene, SceneContent::RealOnly);
-    const RayScene objects(scene, SceneContent::VirtualOnly, &realOnly);
-    const ShadowRayScenes rays{&realOnly, &objects, scene.virtuals[0].bounds(),
-                               objectSphereRadius(scene.virtuals)};
-    const SurfacePoints points = renderRealSurfaces(scene.camera, realOnly);
-    const int width = scene.camera.width, height = scene.camera.height;
-    const PixelRect image{0, 0, width, height};
+    const test::RelitSurfaces relit(scene);
     Options options;
     options.shadow.raySamples = 16;
 
@@ -354,45 +348,23 @@ TEST(ShadowRays, TheRelitShadowRectangleHoldsEveryPixelTheObjectsChange) {
     const std::vector<std::vector<Light>> cases = {{disk}, {hard}, {spot}, {sun}, {disk, sun}};
     for (size_t c = 0; c < cases.size(); ++c) {
         const std::vector<Light>& lights = cases[c];
-        const PixelRect rect = relitShadowRect(scene.camera, lights, rays, image, 0);
-        const std::vector<ShadowOcclusion> all =
-            traceShadowRays(points, lights, rays, options, ShadowMode::DeltaShadow);
-        int changed = 0;
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x)
-                for (size_t l = 0; l < lights.size(); ++l) {
-                    const ShadowOcclusion& o = all[(static_cast<size_t>(y) * width + x) * lights.size() + l];
-                    if (o.object == 0.0f && o.combined == 0.0f) continue;
-                    ++changed;
-                    EXPECT_TRUE(x >= rect.x0 && x < rect.x1 && y >= rect.y0 && y < rect.y1)
-                        << "case " << c << ": pixel " << x << ", " << y << " outside " << rect.x0 << ".."
-                        << rect.x1 << " x " << rect.y0 << ".." << rect.y1;
-                }
-        EXPECT_GT(changed, 100) << "case " << c;
-        // Tight enough to matter: well under the image.
-        EXPECT_LT(static_cast<long>(rect.x1 - rect.x0) * (rect.y1 - rect.y0), width * height * 6 / 10)
-            << "case " << c;
-
-        // The sparse pass at a stride of 2 and 4 with the filter: the same bits over the rectangle and the
-        // image, holes traced.
+        auto trace = [&](std::span<const uint32_t> pixels) {
+            return traceShadowRays(relit.points, lights, relit.rays, options, ShadowMode::DeltaShadow,
+                                   pixels);
+        };
+        const PixelRect rect = relitShadowRect(scene.camera, lights, relit.rays, relit.image, 0);
+        const std::string what = "case " + std::to_string(c);
+        EXPECT_GT(relit.changedPixels(trace({}), lights.size(), rect, what), 100) << what;
+        EXPECT_TRUE(relit.smallerThan(rect, 0.6f)) << what;  // tight enough to matter
+        // The sparse pass at a stride of 2 and 4 with the filter, holes traced.
         for (int stride : {2, 4}) {
             DenoiseSettings filter;
             filter.interpolate = true;
-            auto trace = [&](std::span<const uint32_t> pixels) {
-                return traceShadowRays(points, lights, rays, options, ShadowMode::DeltaShadow, pixels);
-            };
-            const PixelRect bounds =
-                relitShadowRect(scene.camera, lights, rays, image, sparsePassMargin(stride, filter));
-            const int perPixel = static_cast<int>(lights.size());
-            const std::vector<ShadowOcclusion> whole =
-                traceSparse<ShadowOcclusion>(points, image, scene.camera, stride, perPixel, filter, trace);
-            const std::vector<ShadowOcclusion> part =
-                traceSparse<ShadowOcclusion>(points, bounds, scene.camera, stride, perPixel, filter, trace);
-            ASSERT_EQ(whole.size(), part.size());
-            size_t differ = 0;
-            for (size_t i = 0; i < whole.size(); ++i)
-                differ += std::memcmp(&whole[i], &part[i], sizeof(ShadowOcclusion)) != 0;
-            EXPECT_EQ(differ, 0u) << "case " << c << ", stride " << stride;
+            const PixelRect bounds = relitShadowRect(scene.camera, lights, relit.rays, relit.image,
+                                                     sparsePassMargin(stride, filter));
+            EXPECT_TRUE(relit.sameAsWholeImage<ShadowOcclusion>(
+                bounds, stride, static_cast<int>(lights.size()), filter, trace))
+                << what << ", stride " << stride;
         }
     }
 }
