@@ -32,7 +32,8 @@ namespace {
 PackedGrid3 downsample(const PackedGrid3& fine) {
     assert(fine.resolution() % 2 == 0);
     const int n = fine.resolution() / 2;
-    PackedGrid3 coarse(n, fine.window().parents());
+    // Every voxel of its window is set below: no zeroing first.
+    PackedGrid3 coarse = PackedGrid3::unset(n, fine.window().parents());
     const VoxelBox& box = coarse.window();
     forEachRow(box, [&](int y, int z) {
         for (int x = box.lo.x; x < box.hi.x; ++x) coarse.set(x, y, z, childMean(fine, x, y, z));

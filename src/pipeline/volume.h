@@ -210,6 +210,9 @@ class PackedGrid3 {
     // zeroes it first.
     template <typename Value>
     static PackedGrid3 fromEach(int n, Value&& value);
+    // Its window's voxels left as the allocator gives them: the caller sets every one before any is read (a
+    // mip level made from the level below, voxel by voxel).
+    static PackedGrid3 unset(int n, const VoxelBox& window) { return PackedGrid3(n, window, Unset{}); }
     PackedGrid3(PackedGrid3&&) noexcept = default;
     PackedGrid3& operator=(PackedGrid3&&) noexcept = default;
     PackedGrid3(const PackedGrid3&) = delete;
