@@ -163,6 +163,9 @@ Bounds3f intersection(const Bounds3f& a, const Bounds3f& b) {
 // The number of slabs the shadow volume of one light is cut into along its rays (shadowVolumeBoxes): each
 // slab's box is tight about its part, where one box about a slanted volume holds much that is not in it.
 constexpr int kShadowVolumeSlabs = 16;
+// The widest directional light (angular radius, radians: about 69 degrees) whose shadow volume is bounded
+// (relitShadowVolume); wider ones change the whole image.
+constexpr float kShadowVolumeMaxAngle = 1.2f;
 
 // Boxes that together hold every point p of `scene` (grown by `slack`) whose segment towards a point q of the
 // box `from` meets the box `objects`, appended to `boxes`; `distance` is at most the distance from any q to
@@ -238,10 +241,6 @@ bool shadowVolumeBoxes(const Light& light, const ShadowRayScenes& rays, const Bo
                         slack, boxes);
     return true;
 }
-
-}  // namespace
-
-namespace {
 
 // The real scene's box for relitShadowVolume and relitEmitterVolume, grown by the slack they allow the rays'
 // offset from their surface (twice: the point and its ray's start) and rounding; nullopt without objects.

@@ -72,13 +72,12 @@ bool rayMayMeetSphere(glm::vec3 origin, glm::vec3 direction, float tMax, glm::ve
 bool coneMayMeetSphere(glm::vec3 p, glm::vec3 direction, float halfAngle, glm::vec3 sphereCentre,
                        float sphereRadius);
 
-inline constexpr float kShadowVolumeMaxAngle = 1.2f;  // radians, about 69 degrees
 // Boxes that together hold every point of the real scene (`rays.scene`'s box) from which a relit shadow ray
 // (ShadowMode::DeltaShadow, traceShadowRays) towards one of `lights` can meet the objects: a ray from within
 // the rays' offset of the point towards any point of a light's disk (or any direction of a directional
 // light's cone) that meets the objects' box (a directional light: their bounding sphere). No boxes where no
 // ray can meet them (no objects); nullopt where no boxes are sure to hold them (a light's disk reaching into
-// the objects' box, a directional light wider than kShadowVolumeMaxAngle).
+// the objects' box, a directional light wider than about 69 degrees).
 std::optional<std::vector<Bounds3f>> relitShadowVolume(std::span<const Light> lights,
                                                        const ShadowRayScenes& rays);
 // The same for rays towards points of the box `emitters` (traceAreaLightRays' real emitters): nullopt where
